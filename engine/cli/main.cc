@@ -1,0 +1,51 @@
+// The `gesweep` command: builds the CLI11 app from the registered subcommands, runs the chosen one,
+// and turns a person's bad input into one line on stderr and exit code 2.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <exception>
+#include <functional>
+#include <iostream>
+#include <memory>
+
+#include "engine/cli/command.h"
+#include "engine/common/errors.h"
+
+namespace gesweep::cli {
+std::vector<Command>& CommandRegistry() {
+  static std::vector<Command> registry;
+  return registry;
+}
+}  // namespace gesweep::cli
+
+int main(int argc, char** argv) {
+  using gesweep::cli::CommandRegistry;
+  CLI::App app{"gesweep: batch parametric and sensitivity studies of airplane longitudinal dynamics "
+               "in ground effect"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("gesweep ") + GESWEEP_VERSION + " (" + GESWEEP_GIT_COMMIT + ")");
+  auto& registry = CommandRegistry();
+  std::sort(registry.begin(), registry.end(),
+            [](const auto& a, const auto& b) { return a.name < b.name; });
+  std::vector<std::pair<CLI::App*, std::function<int()>>> actions;
+  for (auto& command : registry) {
+    CLI::App* sub = app.add_subcommand(command.name, command.description);
+    actions.emplace_back(sub, command.setup(*sub));
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    for (auto& [sub, action] : actions) {
+      if (sub->parsed()) return action();
+    }
+  } catch (const gesweep::InputError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 2;
+  }
+  return 2;
+}

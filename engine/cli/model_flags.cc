@@ -1,0 +1,104 @@
+#include "engine/cli/model_flags.h"
+
+#include <charconv>
+#include <cmath>
+#include <sstream>
+
+#include "engine/common/errors.h"
+
+namespace gesweep::cli {
+namespace {
+
+double ParseNumber(const std::string& token, const std::string& flag, bool allow_infinity) {
+  std::string trimmed = token;
+  trimmed.erase(0, trimmed.find_first_not_of(" \t"));
+  trimmed.erase(trimmed.find_last_not_of(" \t") + 1);
+  if (allow_infinity && (trimmed == "inf" || trimmed == "infinity")) {
+    return std::numeric_limits<double>::infinity();
+  }
+  double value = 0;
+  const char* begin = trimmed.data();
+  const char* end = begin + trimmed.size();
+  auto [ptr, ec] = std::from_chars(begin, end, value);
+  if (trimmed.empty() || ec != std::errc() || ptr != end || !std::isfinite(value)) {
+    throw InputError("command line", flag, "'" + token + "'",
+                     allow_infinity ? "expected a finite number or inf" : "expected a finite number");
+  }
+  return value;
+}
+
+}  // namespace
+
+void ModelFlags::AddTo(CLI::App& app, bool aircraft_required) {
+  auto* option = app.add_option("--aircraft", aircraft_path, "Aircraft file (TOML), e.g. studies/aircraft/ance.toml");
+  if (aircraft_required) option->required();
+  app.add_option("--cdh", cdh, "CDh model: polar (default, d(k CLo^2)/dh) or zero");
+  app.add_flag("--no-h-derivatives", no_h_derivatives, "Leave out Xh, Zh and Mh");
+  app.add_option("--interpolation", interpolation, "Table interpolation: linear (default) or pchip");
+}
+
+ModelOptions ModelFlags::Options() const {
+  ModelOptions options;
+  auto cdh_mode = ParseCdhMode(cdh);
+  if (!cdh_mode) throw InputError("command line", "--cdh", "'" + cdh + "'", "expected polar or zero");
+  auto interpolation_kind = ParseInterpolation(interpolation);
+  if (!interpolation_kind) {
+    throw InputError("command line", "--interpolation", "'" + interpolation + "'", "expected linear or pchip");
+  }
+  options.cdh = *cdh_mode;
+  options.interpolation = *interpolation_kind;
+  options.h_derivatives = !no_h_derivatives;
+  return options;
+}
+
+LongitudinalModel ModelFlags::BuildModel() const {
+  const ModelOptions options = Options();
+  return LongitudinalModel(LoadAircraftFile(aircraft_path), options);
+}
+
+std::vector<double> ParseNumberList(const std::string& text, const std::string& flag, bool allow_infinity) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string token;
+  while (std::getline(stream, token, ',')) values.push_back(ParseNumber(token, flag, allow_infinity));
+  if (values.empty()) throw InputError("command line", flag, "''", "expected at least one number");
+  return values;
+}
+
+std::vector<double> ParseRange(const std::string& text, const std::string& flag) {
+  if (text.find(':') == std::string::npos) return ParseNumberList(text, flag, false);
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  std::string token;
+  while (std::getline(stream, token, ':')) parts.push_back(token);
+  if (parts.size() != 3) throw InputError("command line", flag, "'" + text + "'", "expected a:b:n");
+  const double a = ParseNumber(parts[0], flag, false);
+  const double b = ParseNumber(parts[1], flag, false);
+  const double n = ParseNumber(parts[2], flag, false);
+  if (n < 1 || n != std::floor(n) || n > 1e6) {
+    throw InputError("command line", flag, "'" + text + "'", "expected a:b:n with a whole n from 1 to 1e6");
+  }
+  const int count = static_cast<int>(n);
+  std::vector<double> values;
+  for (int i = 0; i < count; ++i) values.push_back(count == 1 ? a : a + (b - a) * i / (count - 1));
+  return values;
+}
+
+void RequirePositiveSpeed(double speed_mps, const std::string& flag) {
+  if (!(speed_mps > 0.0) || !std::isfinite(speed_mps)) {
+    std::ostringstream value;
+    value << speed_mps;
+    throw InputError("command line", flag, value.str(), "expected a speed > 0 m/s");
+  }
+}
+
+std::string FormatNumber(double value, int significant) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  std::ostringstream out;
+  out.precision(significant);
+  out << value;
+  return out.str();
+}
+
+}  // namespace gesweep::cli

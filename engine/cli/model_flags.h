@@ -1,0 +1,40 @@
+#pragma once
+/// Flags shared by every subcommand that builds a model: --aircraft and the model options of
+/// docs/MODEL.md (--cdh, --no-h-derivatives, --interpolation).
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "engine/dynamics/longitudinal_model.h"
+
+namespace gesweep::cli {
+
+struct ModelFlags {
+  std::string aircraft_path;
+  std::string cdh = "polar";
+  std::string interpolation = "linear";
+  bool no_h_derivatives = false;
+
+  /// Adds the flags; `aircraft_required` makes --aircraft mandatory.
+  void AddTo(CLI::App& app, bool aircraft_required = true);
+  /// Loads the aircraft and builds the model; throws InputError on bad values.
+  LongitudinalModel BuildModel() const;
+  /// The options alone (validated).
+  ModelOptions Options() const;
+};
+
+/// Parses a comma-separated list of numbers given to `flag` ("inf" allowed when allow_infinity).
+std::vector<double> ParseNumberList(const std::string& text, const std::string& flag, bool allow_infinity);
+
+/// Parses "a:b:n" (n ≥ 1 evenly spaced values from a to b) or a single number or a comma list.
+std::vector<double> ParseRange(const std::string& text, const std::string& flag);
+
+/// Throws InputError unless speed is finite and > 0.
+void RequirePositiveSpeed(double speed_mps, const std::string& flag);
+
+/// Formats a double for table/CSV output: shortest round-trip form; "inf", "nan".
+std::string FormatNumber(double value, int significant = 10);
+
+}  // namespace gesweep::cli

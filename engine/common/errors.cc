@@ -1,0 +1,29 @@
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+std::string Compose(const std::string& source, const std::string& key, const std::string& value,
+                    const std::string& expected, int line) {
+  std::string message;
+  message.reserve(source.size() + key.size() + value.size() + expected.size() + 24);
+  message.append(source);
+  if (line > 0) message.append(":").append(std::to_string(line));
+  if (!key.empty()) message.append(": ").append(key);
+  if (!value.empty()) message.append(" = ").append(value);
+  message.append(": ").append(expected);
+  return message;
+}
+
+}  // namespace
+
+InputError::InputError(std::string source, std::string key, std::string value, std::string expected,
+                       int line)
+    : std::runtime_error(Compose(source, key, value, expected, line)),
+      source_(std::move(source)),
+      key_(std::move(key)),
+      value_(std::move(value)),
+      expected_(std::move(expected)),
+      line_(line) {}
+
+}  // namespace gesweep

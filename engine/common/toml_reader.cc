@@ -1,0 +1,213 @@
+#include "engine/common/toml_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace gesweep {
+namespace {
+
+std::size_t EditDistance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> previous(b.size() + 1), current(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) previous[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    current[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const bool same = std::tolower(static_cast<unsigned char>(a[i - 1])) ==
+                        std::tolower(static_cast<unsigned char>(b[j - 1]));
+      current[j] = std::min({previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (same ? 0 : 1)});
+    }
+    std::swap(previous, current);
+  }
+  return previous[b.size()];
+}
+
+int NodeLine(const toml::node& node) {
+  const auto& region = node.source();
+  return static_cast<int>(region.begin.line);
+}
+
+}  // namespace
+
+std::string NearestName(std::string_view key, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(2, key.size() / 3) + 1;
+  for (const auto& candidate : candidates) {
+    const std::size_t d = EditDistance(key, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+std::string ReadTextFile(const std::filesystem::path& path, std::string_view what) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    throw InputError(path.string(), "", "",
+                     std::string("cannot read ") + std::string(what) + ": no such file" +
+                         (ec ? " (" + ec.message() + ")" : ""));
+  }
+  if (std::filesystem::is_directory(status)) {
+    throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
+                                                " file, found a directory");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw InputError(path.string(), "", "",
+                     std::string("cannot open ") + std::string(what) + " (permission denied?)");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path.string(), "", "", "read error");
+  return text.str();
+}
+
+toml::table ParseToml(std::string_view text, const std::string& source) {
+  try {
+    return toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::string description(e.description());
+    throw InputError(source, "", "", "TOML syntax error: " + description,
+                     static_cast<int>(e.source().begin.line));
+  }
+}
+
+std::string DescribeNode(const toml::node& node) {
+  if (auto s = node.as_string()) return "\"" + s->get() + "\"";
+  if (auto i = node.as_integer()) return std::to_string(i->get());
+  if (auto f = node.as_floating_point()) {
+    std::ostringstream out;
+    out << f->get();
+    return out.str();
+  }
+  if (auto b = node.as_boolean()) return b->get() ? "true" : "false";
+  if (node.is_array()) return "[...]";
+  if (node.is_table()) return "{...}";
+  return "?";
+}
+
+std::string TomlSection::KeyOf(std::string_view key) const {
+  if (prefix_.empty()) return std::string(key);
+  return prefix_ + "." + std::string(key);
+}
+
+const toml::node* TomlSection::Node(std::string_view key) const { return table_->get(key); }
+
+int TomlSection::LineOf(std::string_view key) const {
+  if (const toml::node* node = Node(key)) return NodeLine(*node);
+  return NodeLine(*table_);
+}
+
+void TomlSection::Fail(std::string_view key, std::string value, std::string expected) const {
+  throw InputError(source_, KeyOf(key), std::move(value), std::move(expected), LineOf(key));
+}
+
+void TomlSection::RejectUnknownKeys(const std::vector<std::string>& allowed) const {
+  for (const auto& [name, node] : *table_) {
+    const std::string key(name.str());
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    const std::string near = NearestName(key, allowed);
+    throw InputError(source_, KeyOf(key), "",
+                     near.empty() ? "unknown key" : "unknown key (did you mean '" + near + "'?)",
+                     NodeLine(node));
+  }
+}
+
+TomlSection TomlSection::Section(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) Fail(key, "", "missing table [" + KeyOf(key) + "]");
+  if (!node->is_table()) Fail(key, DescribeNode(*node), "expected a table");
+  return TomlSection(*node->as_table(), source_, KeyOf(key));
+}
+
+std::optional<TomlSection> TomlSection::OptionalSection(std::string_view key) const {
+  if (!Has(key)) return std::nullopt;
+  return Section(key);
+}
+
+std::optional<double> TomlSection::OptionalNumber(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) return std::nullopt;
+  double value;
+  if (auto f = node->as_floating_point()) {
+    value = f->get();
+  } else if (auto i = node->as_integer()) {
+    value = static_cast<double>(i->get());
+  } else {
+    Fail(key, DescribeNode(*node), "expected a number");
+  }
+  if (!std::isfinite(value)) Fail(key, DescribeNode(*node), "expected a finite number");
+  return value;
+}
+
+double TomlSection::Number(std::string_view key) const {
+  auto value = OptionalNumber(key);
+  if (!value) Fail(key, "", "missing key, expected a number");
+  return *value;
+}
+
+double TomlSection::PositiveNumber(std::string_view key) const {
+  const double value = Number(key);
+  if (!(value > 0.0)) Fail(key, DescribeNode(*Node(key)), "expected a number > 0");
+  return value;
+}
+
+std::optional<std::string> TomlSection::OptionalString(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) return std::nullopt;
+  if (auto s = node->as_string()) return s->get();
+  Fail(key, DescribeNode(*node), "expected a string");
+}
+
+std::string TomlSection::String(std::string_view key) const {
+  auto value = OptionalString(key);
+  if (!value) Fail(key, "", "missing key, expected a string");
+  return *value;
+}
+
+std::optional<bool> TomlSection::OptionalBool(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) return std::nullopt;
+  if (auto b = node->as_boolean()) return b->get();
+  Fail(key, DescribeNode(*node), "expected true or false");
+}
+
+std::optional<long long> TomlSection::OptionalInteger(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) return std::nullopt;
+  if (auto i = node->as_integer()) return static_cast<long long>(i->get());
+  Fail(key, DescribeNode(*node), "expected an integer");
+}
+
+std::vector<double> TomlSection::NumberArray(std::string_view key) const {
+  const toml::node* node = Node(key);
+  if (!node) Fail(key, "", "missing key, expected an array of numbers");
+  const toml::array* array = node->as_array();
+  if (!array) Fail(key, DescribeNode(*node), "expected an array of numbers");
+  std::vector<double> values;
+  values.reserve(array->size());
+  for (std::size_t i = 0; i < array->size(); ++i) {
+    const toml::node& element = *array->get(i);
+    double value;
+    if (auto f = element.as_floating_point()) {
+      value = f->get();
+    } else if (auto n = element.as_integer()) {
+      value = static_cast<double>(n->get());
+    } else {
+      throw InputError(source_, KeyOf(key) + "[" + std::to_string(i) + "]", DescribeNode(element),
+                       "expected a number", NodeLine(element));
+    }
+    if (!std::isfinite(value)) {
+      throw InputError(source_, KeyOf(key) + "[" + std::to_string(i) + "]", DescribeNode(element),
+                       "expected a finite number", NodeLine(element));
+    }
+    values.push_back(value);
+  }
+  return values;
+}
+
+}  // namespace gesweep

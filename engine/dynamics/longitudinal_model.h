@@ -1,0 +1,76 @@
+#pragma once
+/// The linear longitudinal model of docs/MODEL.md §4–§5: the dimensional derivatives of the paper's
+/// Table 1 and the 5-state matrices A, B of its Eq. (1), at any height and speed.
+
+#include <Eigen/Core>
+
+#include "engine/aircraft/aircraft.h"
+#include "engine/dynamics/coefficient_table.h"
+#include "engine/dynamics/model_options.h"
+
+namespace gesweep {
+
+using Matrix5d = Eigen::Matrix<double, 5, 5>;
+using Vector5d = Eigen::Matrix<double, 5, 1>;
+
+/// State indices of x = [Δu, Δw, q, Δθ, ΔH] (MODEL.md §1).
+enum StateIndex : int { kDeltaU = 0, kDeltaW = 1, kPitchRate = 2, kDeltaTheta = 3, kDeltaH = 4 };
+inline constexpr int kStateCount = 5;
+
+/// Dimensional stability derivatives (paper's Table 1; MODEL.md §4). X and Z in m/s² per unit of
+/// the state they multiply, M in rad/s² per unit; Xh, Zh, Mh per metre of ΔH.
+struct DimensionalDerivatives {
+  double Xu = 0, Xw = 0, Xh = 0, Xde = 0;
+  double Zu = 0, Zw = 0, Zh = 0, Zde = 0;
+  double Mu = 0, Mw = 0, Mw_dot = 0, Mq = 0, Mh = 0, Mde = 0;
+};
+
+/// Mass and geometry that the derivatives use (after any sweep overrides).
+struct MassGeometry {
+  double mass_kg = 0;
+  double pitch_inertia_kgm2 = 0;
+  double mean_chord_m = 0;
+  double wing_area_m2 = 0;
+  double CDo = 0, CDu = 0, CLu = 0, CMu = 0, CDde = 0;
+};
+
+/// Table 1 of the paper, evaluated for one coefficient row, density ρ (kg/m³) and speed u (m/s):
+/// Q = ½ρu². Pure function; the h-derivatives are included.
+DimensionalDerivatives ComputeDerivatives(const CoefficientRow& coefficients, const MassGeometry& mg,
+                                          double density_kgpm3, double speed_mps);
+
+/// Eq. (1): A from the derivatives and the kinematic reference speed u0 (row Δw col q; row ΔH col Δθ).
+Matrix5d AssembleStateMatrix(const DimensionalDerivatives& d, double reference_speed_mps);
+/// Eq. (1): B, the elevator column [Xδe, Zδe, Mδe + Mẇ·Zδe, 0, 0].
+Vector5d AssembleInputMatrix(const DimensionalDerivatives& d);
+
+/// One aircraft under one set of model options.
+class LongitudinalModel {
+ public:
+  /// Throws InputError when the options do not apply (see CoefficientTable) or overrides are not > 0.
+  LongitudinalModel(Aircraft aircraft, const ModelOptions& options);
+
+  const Aircraft& aircraft() const { return aircraft_; }
+  const ModelOptions& options() const { return options_; }
+  const CoefficientTable& table() const { return table_; }
+  const MassGeometry& mass_geometry() const { return mass_geometry_; }
+
+  /// Coefficients at height H, m (MODEL.md §2).
+  CoefficientRow CoefficientsAt(double height_m) const { return table_.At(height_m); }
+  /// ISA density at field elevation + H, kg/m³ (sea-level density for H = ∞).
+  double DensityAt(double height_m) const;
+  /// Derivatives at height H and speed u; Xh = Zh = Mh = 0 when h-derivatives are off.
+  DimensionalDerivatives DerivativesAt(double height_m, double speed_mps) const;
+  /// A of Eq. (1) at H, with the derivatives at speed u and the kinematic entries at u.
+  Matrix5d StateMatrix(double height_m, double speed_mps) const;
+  /// B of Eq. (1) at H and u.
+  Vector5d InputMatrix(double height_m, double speed_mps) const;
+
+ private:
+  Aircraft aircraft_;
+  ModelOptions options_;
+  CoefficientTable table_;
+  MassGeometry mass_geometry_;
+};
+
+}  // namespace gesweep

@@ -1,0 +1,58 @@
+#pragma once
+/// The model options of docs/MODEL.md: every **choice** there is an option here, MODEL.md's choice the
+/// default. Also the per-run modifications a sweep can make to an aircraft (scale factors, mass, CG).
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "engine/aircraft/coefficient.h"
+
+namespace gesweep {
+
+/// How CDh is obtained (MODEL.md §3).
+enum class CdhMode {
+  kPolar,  ///< d(k·CLo²)/dh by finite differences on the table rows (default)
+  kZero,   ///< CDh = 0
+};
+
+/// How the table is interpolated between finite rows (MODEL.md §2).
+enum class Interpolation {
+  kLinear,  ///< piecewise linear in H (default)
+  kPchip,   ///< monotone piecewise-cubic Hermite (Fritsch–Carlson, Boost.Math pchip)
+};
+
+/// Options of the model; a default-constructed value is MODEL.md's model.
+struct ModelOptions {
+  /// false: Xh = Zh = Mh = 0 and nothing else changes (MODEL.md §4).
+  bool h_derivatives = true;
+  CdhMode cdh = CdhMode::kPolar;
+  Interpolation interpolation = Interpolation::kLinear;
+
+  /// Multiplicative factors on each coefficient column, applied to the tabulated rows and the
+  /// free-flight row before anything is derived. A factor on k also scales the polar CDh; the
+  /// factor on CDh scales the derived column.
+  CoefficientRow coefficient_scale = UnitScale();
+  double CDo_scale = 1.0;  ///< multiplicative factor on CDo
+
+  std::optional<double> mass_kg;             ///< overrides the aircraft's mass when set
+  std::optional<double> pitch_inertia_kgm2;  ///< overrides the aircraft's Iy when set
+  /// CG moved aft by this fraction of the mean chord (negative: forward). Moment coefficients are
+  /// transferred to the new CG: CMx += CLx·shift for x in {o, α, α̇, q, δe, h} (docs/model.md).
+  double cg_shift_over_chord = 0.0;
+
+  static CoefficientRow UnitScale() {
+    CoefficientRow scale;
+    scale.fill(1.0);
+    return scale;
+  }
+};
+
+std::string_view ToString(CdhMode mode);
+std::string_view ToString(Interpolation interpolation);
+/// Parses "polar" / "zero"; nullopt otherwise.
+std::optional<CdhMode> ParseCdhMode(std::string_view text);
+/// Parses "linear" / "pchip"; nullopt otherwise.
+std::optional<Interpolation> ParseInterpolation(std::string_view text);
+
+}  // namespace gesweep

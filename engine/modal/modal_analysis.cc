@@ -1,0 +1,129 @@
+#include "engine/common/errors.h"
+#include "engine/modal/modal_analysis.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+namespace gesweep {
+namespace {
+
+// An eigenvalue counts as real when its imaginary part is this small relative to its magnitude:
+// EigenSolver returns exact zeros for real roots of a real matrix, so any threshold well below the
+// smallest physical |Im λ| works; this one guards against a pair that has just split.
+constexpr double kRealRootRelativeTolerance = 1e-12;
+
+bool IsReal(std::complex<double> z) {
+  return std::abs(z.imag()) <= kRealRootRelativeTolerance * std::max(1.0, std::abs(z));
+}
+
+}  // namespace
+
+std::string_view ToString(ModeClassification classification) {
+  switch (classification) {
+    case ModeClassification::kStandard: return "standard";
+    case ModeClassification::kPhugoidSplit: return "phugoid_split";
+    case ModeClassification::kShortPeriodSplit: return "short_period_split";
+    case ModeClassification::kAllReal: return "all_real";
+  }
+  return "unknown";
+}
+
+ModeProperties DescribeMode(std::complex<double> lambda) {
+  ModeProperties mode;
+  mode.oscillatory = !IsReal(lambda);
+  if (!mode.oscillatory) lambda = {lambda.real(), 0.0};
+  if (mode.oscillatory && lambda.imag() < 0) lambda = std::conj(lambda);
+  mode.eigenvalue = lambda;
+  mode.natural_frequency_radps = std::abs(lambda);
+  mode.neutral = !mode.oscillatory && std::abs(lambda) <= kNeutralEigenvalueTolerance_per_s;
+  mode.damping_ratio = mode.natural_frequency_radps > 0 ? -lambda.real() / mode.natural_frequency_radps
+                                                        : std::numeric_limits<double>::quiet_NaN();
+  if (mode.neutral) mode.damping_ratio = std::numeric_limits<double>::quiet_NaN();
+  mode.period_s = mode.oscillatory ? 2.0 * std::numbers::pi / std::abs(lambda.imag())
+                                   : std::numeric_limits<double>::infinity();
+  mode.time_to_half_or_double_s = lambda.real() != 0.0 ? std::numbers::ln2 / std::abs(lambda.real())
+                                                       : std::numeric_limits<double>::infinity();
+  return mode;
+}
+
+ModalAnalysis AnalyzeModes(const Matrix5d& A) {
+  ModalAnalysis result;
+  if (!A.allFinite()) {
+    result.finite = false;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    result.eigenvalues.fill({nan, nan});
+    result.stability_margin_per_s = nan;
+    return result;
+  }
+  Eigen::EigenSolver<Matrix5d> solver(A, /*computeEigenvectors=*/false);
+  const auto& values = solver.eigenvalues();
+
+  std::vector<std::complex<double>> pairs;  // one representative (Im > 0) per complex pair
+  std::vector<double> reals;
+  for (int i = 0; i < 5; ++i) {
+    const std::complex<double> z = values[i];
+    if (IsReal(z)) {
+      reals.push_back(z.real());
+    } else if (z.imag() > 0) {
+      pairs.push_back(z);
+    }
+  }
+  // Real roots by descending magnitude; pairs by descending |Im λ|.
+  std::sort(reals.begin(), reals.end(), [](double a, double b) { return std::abs(a) > std::abs(b); });
+  std::sort(pairs.begin(), pairs.end(),
+            [](auto a, auto b) { return std::abs(a.imag()) > std::abs(b.imag()); });
+
+  auto put_pair = [&](int slot, std::complex<double> z) {
+    result.eigenvalues[slot] = z;
+    result.eigenvalues[slot + 1] = std::conj(z);
+  };
+  auto put_split = [&](int slot, double a, double b) {
+    result.eigenvalues[slot] = std::max(a, b);
+    result.eigenvalues[slot + 1] = std::min(a, b);
+  };
+
+  if (pairs.size() == 2 && reals.size() == 1) {
+    result.classification = ModeClassification::kStandard;
+    put_pair(0, pairs[0]);
+    put_pair(2, pairs[1]);
+    result.eigenvalues[4] = reals[0];
+  } else if (pairs.size() == 1 && reals.size() == 3) {
+    const bool pair_is_short_period = std::abs(pairs[0]) > std::abs(reals[0]);
+    result.classification =
+        pair_is_short_period ? ModeClassification::kPhugoidSplit : ModeClassification::kShortPeriodSplit;
+    const int pair_slot = pair_is_short_period ? 0 : 2;
+    const int split_slot = pair_is_short_period ? 2 : 0;
+    put_pair(pair_slot, pairs[0]);
+    put_split(split_slot, reals[0], reals[1]);
+    result.eigenvalues[4] = reals[2];
+  } else {
+    GESWEEP_DEMAND(reals.size() == 5);
+    result.classification = ModeClassification::kAllReal;
+    put_split(0, reals[0], reals[1]);
+    put_split(2, reals[2], reals[3]);
+    result.eigenvalues[4] = reals[4];
+  }
+
+  result.short_period = DescribeMode(result.eigenvalues[0]);
+  result.phugoid = DescribeMode(result.eigenvalues[2]);
+  result.height = DescribeMode(result.eigenvalues[4]);
+
+  double sigma = -std::numeric_limits<double>::infinity();
+  for (const auto& z : result.eigenvalues) {
+    const bool neutral = IsReal(z) && std::abs(z) <= kNeutralEigenvalueTolerance_per_s;
+    if (!neutral) sigma = std::max(sigma, z.real());
+  }
+  result.stability_margin_per_s = sigma;
+  result.stable = sigma < 0.0;
+  return result;
+}
+
+double StabilityMargin(const LongitudinalModel& model, double height_m, double speed_mps) {
+  return AnalyzeModes(model.StateMatrix(height_m, speed_mps)).stability_margin_per_s;
+}
+
+}  // namespace gesweep

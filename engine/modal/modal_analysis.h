@@ -1,0 +1,62 @@
+#pragma once
+/// Eigen-analysis of the 5-state model with mode identification and the stability margin
+/// (docs/MODEL.md §6).
+
+#include <array>
+#include <complex>
+#include <string_view>
+
+#include "engine/dynamics/longitudinal_model.h"
+
+namespace gesweep {
+
+/// A real eigenvalue of magnitude at most this is the neutral free-flight height mode (MODEL.md §6).
+inline constexpr double kNeutralEigenvalueTolerance_per_s = 1e-9;
+
+/// Properties of one mode, from its representative eigenvalue λ (Im λ ≥ 0 for a pair).
+struct ModeProperties {
+  std::complex<double> eigenvalue;
+  double natural_frequency_radps = 0;  ///< ωn = |λ|
+  double damping_ratio = 0;            ///< ζ = −Re λ/|λ| (NaN for a neutral root)
+  double period_s = 0;                 ///< 2π/|Im λ|; +∞ for a real root
+  /// ln2/|Re λ|: time to half amplitude when Re λ < 0, to double amplitude when Re λ > 0; +∞ when 0.
+  double time_to_half_or_double_s = 0;
+  bool oscillatory = false;  ///< a complex pair
+  bool neutral = false;      ///< a real root with |λ| ≤ kNeutralEigenvalueTolerance_per_s
+};
+
+/// How the eigenvalues were assigned to modes.
+enum class ModeClassification {
+  kStandard,          ///< two complex pairs and one real root
+  kPhugoidSplit,      ///< the phugoid pair split into two real roots
+  kShortPeriodSplit,  ///< the short-period pair split into two real roots
+  kAllReal,           ///< both pairs split; assigned by magnitude
+};
+std::string_view ToString(ModeClassification classification);
+
+/// The result of one eigen-analysis.
+struct ModalAnalysis {
+  /// Ordered: short period (two), phugoid (two), height (one). A pair is written with Im > 0 first;
+  /// a split pair with the larger real part first.
+  std::array<std::complex<double>, 5> eigenvalues;
+  ModeProperties short_period, phugoid, height;
+  ModeClassification classification = ModeClassification::kStandard;
+  /// σ = the largest Re λ, the neutral height root left out (MODEL.md §6).
+  double stability_margin_per_s = 0;
+  bool stable = false;  ///< σ < 0
+  bool finite = true;   ///< false when A had a non-finite entry (then nothing else is meaningful)
+};
+
+/// Eigenvalues of A (any real 5×5), modes identified by MODEL.md §6. When a pair has split, the
+/// remaining complex pair is the short period if its |λ| exceeds every real root's, otherwise the
+/// phugoid; the split mode takes the two real roots of largest magnitude and the height mode the
+/// remaining one. With no pair left, roots are assigned by magnitude.
+ModalAnalysis AnalyzeModes(const Matrix5d& A);
+
+/// Properties of one eigenvalue (MODEL.md §6).
+ModeProperties DescribeMode(std::complex<double> eigenvalue);
+
+/// σ(H, u) of a model: AnalyzeModes(model.StateMatrix(H, u)).stability_margin_per_s.
+double StabilityMargin(const LongitudinalModel& model, double height_m, double speed_mps);
+
+}  // namespace gesweep

@@ -1,0 +1,48 @@
+# Shared set-up for scripts/test, scripts/demo and scripts/bench: installs any missing Debian
+# packages (non-interactive, idempotent, quiet when all are present) and configures + builds.
+# Source it; it defines gesweep_install_deps and gesweep_build.
+
+GESWEEP_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+
+# Debian packages the build, the tests and the scripts need. Keep in step with docs/dependencies.md.
+GESWEEP_PACKAGES=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libboost-dev libboost-math-dev libhdf5-dev hdf5-tools libtbb-dev
+  libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
+  libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5
+  libopenmpi-dev openmpi-bin
+  python3 python3-numpy python3-scipy python3-h5py python3-matplotlib python3-jsonschema
+)
+
+gesweep_install_deps() {
+  local missing=()
+  local p
+  for p in "$@" "${GESWEEP_PACKAGES[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$p")
+    fi
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  echo "gesweep: installing missing Debian packages: ${missing[*]}" >&2
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq >/dev/null
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+# gesweep_build BUILD_DIR [extra cmake args...]: configure (once) and build with all cores.
+gesweep_build() {
+  local dir="$1"; shift
+  local generator=()
+  command -v ninja >/dev/null && generator=(-G Ninja)
+  if [ ! -f "$dir/CMakeCache.txt" ]; then
+    cmake -S "$GESWEEP_ROOT" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+  else
+    cmake -S "$GESWEEP_ROOT" -B "$dir" "$@" >/dev/null
+  fi
+  cmake --build "$dir" -j "$(nproc)"
+}
+
+# The python the scripts use: Debian's, which has numpy, scipy, h5py and matplotlib.
+GESWEEP_PYTHON=/usr/bin/python3
