@@ -7,6 +7,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <string>
 
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
@@ -31,6 +32,19 @@ int main(int argc, char** argv) {
   for (auto& command : registry) {
     CLI::App* sub = app.add_subcommand(command.name, command.description);
     actions.emplace_back(sub, command.setup(*sub));
+  }
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string word = argv[1];
+    std::string names;
+    bool known = false;
+    for (const auto& command : registry) {
+      known = known || command.name == word;
+      names += (names.empty() ? "" : ", ") + command.name;
+    }
+    if (!known) {
+      std::cerr << "gesweep: error: unknown subcommand '" << word << "' (expected one of: " << names << ")\n";
+      return 2;
+    }
   }
   try {
     app.parse(argc, argv);

@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""End-to-end checks of `gesweep modes` and `gesweep boundary` (issue 2's "done when").
+
+The oracles: the paper's boundary bracket (between its rows H/b = 0.4 and 0.578), the JSON shape
+the issue specifies, and the error contract (one line on stderr, exit code 2)."""
+import json
+import subprocess
+import sys
+import unittest
+
+GESWEEP = sys.argv.pop(1)
+ANCE = "studies/aircraft/ance.toml"
+
+
+def run(*args):
+    return subprocess.run([GESWEEP, *args], capture_output=True, text=True, timeout=60)
+
+
+class Boundary(unittest.TestCase):
+    def test_paper_speed_boundary_between_rows(self):
+        out = run("boundary", "--aircraft", ANCE, "--speed-mps", "32.0208", "--format", "json")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        b = json.loads(out.stdout)["boundaries"][0]
+        self.assertGreater(b["height_m"], 2.0748)
+        self.assertLess(b["height_m"], 2.9987)
+        self.assertGreater(b["height_over_span"], 0.4)
+        self.assertLess(b["height_over_span"], 0.5781)
+
+    def test_no_boundary_without_h_derivatives(self):
+        out = run("boundary", "--aircraft", ANCE, "--speed-mps", "32.0208", "--no-h-derivatives", "--format", "json")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        b = json.loads(out.stdout)["boundaries"][0]
+        self.assertIsNone(b["height_m"])
+        self.assertIn("stable", b["reason"])
+
+    def test_speed_range(self):
+        out = run("boundary", "--aircraft", ANCE, "--speeds-mps", "30:50:3", "--format", "json")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        speeds = [b["speed_mps"] for b in json.loads(out.stdout)["boundaries"]]
+        self.assertEqual(speeds, [30.0, 40.0, 50.0])
+
+
+class Modes(unittest.TestCase):
+    def test_table_heights_json_shape(self):
+        out = run("modes", "--aircraft", ANCE, "--speed-mps", "32.0208", "--table-heights", "--format", "json")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        rows = json.loads(out.stdout)["rows"]
+        self.assertEqual(len(rows), 12)  # 11 finite rows + free flight
+        self.assertEqual(rows[-1]["height_m"], "inf")
+        for row in rows:
+            self.assertEqual(len(row["eigenvalues"]), 5)
+            for mode in ("short_period", "phugoid", "height"):
+                self.assertTrue({"re", "im", "natural_frequency_radps", "damping_ratio"} <= set(row["modes"][mode]))
+            self.assertEqual(row["stable"], row["stability_margin_per_s"] < 0)
+        # The paper: unstable at and below H/b = 0.5 (2.5935 m), stable above.
+        by_height = {r["height_m"]: r["stable"] for r in rows}
+        self.assertFalse(by_height[2.0748])
+        self.assertTrue(by_height[2.9987])
+        self.assertTrue(by_height[5.5922])
+
+    def test_table_and_csv_formats(self):
+        table = run("modes", "--aircraft", ANCE, "--speed-mps", "32.0208", "--table-heights")
+        self.assertEqual(table.returncode, 0, table.stderr)
+        self.assertIn("short period", table.stdout)
+        csv = run("modes", "--aircraft", ANCE, "--speed-mps", "32.0208", "--heights-m", "1,2,inf", "--format", "csv")
+        self.assertEqual(csv.returncode, 0, csv.stderr)
+        lines = csv.stdout.strip().splitlines()
+        self.assertEqual(len(lines), 4)
+        self.assertTrue(lines[0].startswith("height_m,height_over_span,"))
+
+
+class BadInput(unittest.TestCase):
+    CASES = [
+        (("modes", "--aircraft", "no/such/file.toml", "--speed-mps", "30", "--table-heights"), "no/such/file.toml"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "-3", "--table-heights"), "--speed-mps"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "0", "--table-heights"), "speed > 0"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "1,abc"), "'abc'"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "0.5"), "wheel-contact"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "1", "--cdh", "cubic"), "--cdh"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "1", "--format", "xml"), "--format"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "30"), "--heights-m"),
+        (("boundary", "--aircraft", ANCE), "--speed-mps"),
+        (("boundary", "--aircraft", ANCE, "--speeds-mps", "30:40"), "a:b:n"),
+        (("boundary", "--aircraft", ANCE, "--speed-mps", "nan"), "--speed-mps"),
+        (("modes", "--aircraft", "README.md", "--speed-mps", "30", "--table-heights"), "README.md"),
+        (("nosuchcommand",), "nosuchcommand"),
+    ]
+
+    def test_each_bad_input_gives_one_line_and_exit_2(self):
+        for args, fragment in self.CASES:
+            with self.subTest(args=args):
+                out = run(*args)
+                self.assertEqual(out.returncode, 2, out.stderr)
+                lines = out.stderr.strip().splitlines()
+                self.assertEqual(len(lines), 1, out.stderr)
+                self.assertIn(fragment, lines[0])
+                self.assertEqual(out.stdout, "")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
