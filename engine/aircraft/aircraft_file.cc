@@ -26,13 +26,13 @@ void ReadTable(const TomlSection& table, Aircraft& aircraft) {
   }
   for (std::size_t i = 0; i < heights.size(); ++i) {
     if (!(heights[i] > 0.0)) {
-      table.Fail("height_m", std::to_string(heights[i]),
-                 "expected heights > 0 (row " + std::to_string(i) + ")");
+      table.Fail("height_m", ShortNumber(heights[i]),
+                 "expected heights > 0 (entry " + std::to_string(i + 1) + ")");
     }
     if (i > 0 && !(heights[i] > heights[i - 1])) {
-      table.Fail("height_m", std::to_string(heights[i]),
-                 "expected strictly increasing heights (row " + std::to_string(i) + " is not above " +
-                     std::to_string(heights[i - 1]) + ")");
+      table.Fail("height_m", ShortNumber(heights[i]),
+                 "expected strictly increasing heights (entry " + std::to_string(i + 1) + " is not above " +
+                     ShortNumber(heights[i - 1]) + ")");
     }
   }
   aircraft.rows.assign(heights.size(), CoefficientRow{});
@@ -92,7 +92,7 @@ Aircraft ParseAircraft(std::string_view text, const std::string& source) {
   const TomlSection aerodynamics = root.Section("aerodynamics");
   aerodynamics.RejectUnknownKeys({"CDo", "CDu", "CLu", "CMu", "CDde"});
   aircraft.CDo = aerodynamics.Number("CDo");
-  if (aircraft.CDo < 0) aerodynamics.Fail("CDo", std::to_string(aircraft.CDo), "expected CDo >= 0");
+  if (aircraft.CDo < 0) aerodynamics.Fail("CDo", ShortNumber(aircraft.CDo), "expected CDo >= 0");
   aircraft.CDu = aerodynamics.OptionalNumber("CDu").value_or(0.0);
   aircraft.CLu = aerodynamics.OptionalNumber("CLu").value_or(0.0);
   aircraft.CMu = aerodynamics.OptionalNumber("CMu").value_or(0.0);
@@ -104,7 +104,7 @@ Aircraft ParseAircraft(std::string_view text, const std::string& source) {
   aircraft.wheel_contact_height_m = limits.PositiveNumber("wheel_contact_height_m");
   aircraft.field_elevation_m = limits.OptionalNumber("field_elevation_m").value_or(0.0);
   if (aircraft.field_elevation_m < -500 || aircraft.field_elevation_m > 9000) {
-    limits.Fail("field_elevation_m", std::to_string(aircraft.field_elevation_m),
+    limits.Fail("field_elevation_m", ShortNumber(aircraft.field_elevation_m),
                 "expected a field elevation in [-500, 9000] m (ISA troposphere)");
   }
 

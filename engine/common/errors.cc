@@ -1,5 +1,7 @@
 #include "engine/common/errors.h"
 
+#include <sstream>
+
 namespace gesweep {
 namespace {
 
@@ -16,6 +18,13 @@ std::string Compose(const std::string& source, const std::string& key, const std
 }
 
 }  // namespace
+
+std::string ShortNumber(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
 
 InputError::InputError(std::string source, std::string key, std::string value, std::string expected,
                        int line)

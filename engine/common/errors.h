@@ -33,6 +33,9 @@ class InputError : public std::runtime_error {
   int line_ = 0;
 };
 
+/// A number as a person would write it in a message: shortest form up to 10 significant digits.
+std::string ShortNumber(double value);
+
 /// Aborts with file, line and message when an internal invariant is broken (Drake's DEMAND).
 #define GESWEEP_DEMAND(condition)                                                              \
   do {                                                                                         \

@@ -55,7 +55,7 @@ LongitudinalModel::LongitudinalModel(Aircraft aircraft, const ModelOptions& opti
     : aircraft_(std::move(aircraft)), options_(options), table_(aircraft_, options_) {
   auto require_positive = [&](const std::optional<double>& value, const char* key) {
     if (value && !(*value > 0.0 && std::isfinite(*value))) {
-      throw InputError(aircraft_.source_path, key, std::to_string(*value), "expected a finite number > 0");
+      throw InputError(aircraft_.source_path, key, ShortNumber(*value), "expected a finite number > 0");
     }
   };
   require_positive(options_.mass_kg, "mass_kg");
