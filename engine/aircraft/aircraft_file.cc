@@ -109,6 +109,11 @@ Aircraft ParseAircraft(std::string_view text, const std::string& source) {
   }
 
   ReadTable(root.Section("table"), aircraft);
+  if (!(aircraft.wheel_contact_height_m < aircraft.table_heights_m.back())) {
+    limits.Fail("wheel_contact_height_m", ShortNumber(aircraft.wheel_contact_height_m),
+                "expected a wheel-contact height below the last finite table height " +
+                    ShortNumber(aircraft.table_heights_m.back()) + " m");
+  }
   return aircraft;
 }
 

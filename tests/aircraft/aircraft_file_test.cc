@@ -138,6 +138,8 @@ TEST(AircraftFile, RejectsBadInputNamingKeyAndProblem) {
   ExpectRejected(Replace(ok, "CMq = [0.1, 0.2, 0.3]", "CMq = [0.1, inf, 0.3]"), {"table.CMq[1]", "finite"});
   ExpectRejected(Replace(ok, "CLo = [0.1, 0.2, 0.3]\n", ""), {"table.CLo", "missing"});
   ExpectRejected(Replace(ok, "[geometry]", "[geometry\n"), {"TOML syntax error"});
+  ExpectRejected(Replace(ok, "wheel_contact_height_m = 0.5", "wheel_contact_height_m = 2.5"),
+                 {"limits.wheel_contact_height_m", "below the last finite table height 2"});
   ExpectRejected(ok + "extra = 1\n", {"table.free_flight.extra", "unknown key"});
 }
 
