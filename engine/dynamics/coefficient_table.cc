@@ -37,6 +37,17 @@ std::vector<double> PolarCdh(const std::vector<double>& heights_m, const std::ve
 
 namespace {
 
+// The end slope of a PCHIP at a table end, by the three-point shape-preserving formula of MATLAB's
+// pchip and SciPy's PchipInterpolator (Moler, Numerical Computing with MATLAB, §3.4): h0, m0 belong to
+// the end interval, h1, m1 to its neighbour. Boost's default (the end secant) would differ from both.
+double PchipEndSlope(double h0, double h1, double m0, double m1) {
+  auto sign = [](double v) { return (v > 0) - (v < 0); };
+  const double d = ((2.0 * h0 + h1) * m0 - h0 * m1) / (h0 + h1);
+  if (sign(d) != sign(m0)) return 0.0;
+  if (sign(m0) != sign(m1) && std::abs(d) > 3.0 * std::abs(m0)) return 3.0 * m0;
+  return d;
+}
+
 void TransferToCg(CoefficientRow& row, double shift) {
   if (shift == 0.0) return;
   // Moment about a CG `shift` chords aft of the reference: CM' = CM + CL·shift.
@@ -87,7 +98,11 @@ CoefficientTable::CoefficientTable(const Aircraft& aircraft, const ModelOptions&
       std::vector<double> x = heights_m_;
       std::vector<double> y;
       for (const auto& row : rows_) y.push_back(row[c]);
-      pchip_->columns.emplace_back(std::move(x), std::move(y));
+      const std::size_t n = x.size();
+      auto secant = [&](std::size_t i) { return (y[i + 1] - y[i]) / (x[i + 1] - x[i]); };
+      const double left = PchipEndSlope(x[1] - x[0], x[2] - x[1], secant(0), secant(1));
+      const double right = PchipEndSlope(x[n - 1] - x[n - 2], x[n - 2] - x[n - 3], secant(n - 2), secant(n - 3));
+      pchip_->columns.emplace_back(std::move(x), std::move(y), left, right);
     }
   }
 }
