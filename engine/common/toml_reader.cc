@@ -46,10 +46,13 @@ std::string NearestName(std::string_view key, const std::vector<std::string>& ca
 std::string ReadTextFile(const std::filesystem::path& path, std::string_view what) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) {
+  if (ec && ec != std::errc::no_such_file_or_directory) {
+    // e.g. a symlink loop ("Too many levels of symbolic links") or a permission problem on a folder.
     throw InputError(path.string(), "", "",
-                     std::string("cannot read ") + std::string(what) + ": no such file" +
-                         (ec ? " (" + ec.message() + ")" : ""));
+                     std::string("cannot read ") + std::string(what) + ": " + ec.message());
+  }
+  if (!std::filesystem::exists(status)) {
+    throw InputError(path.string(), "", "", std::string("cannot read ") + std::string(what) + ": no such file");
   }
   if (std::filesystem::is_directory(status)) {
     throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
