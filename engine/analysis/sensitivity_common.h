@@ -1,0 +1,77 @@
+#pragma once
+/// Pieces shared by the global sensitivity estimators (docs/sensitivity.md): the range of a sampled
+/// parameter, the failed-run policy, the status of an analysis and bootstrap percentile intervals.
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gesweep {
+
+/// One sampled parameter: its name and the interval it is sampled on, in its own unit; uniform in the
+/// value, or in its logarithm (as the sweep's `distribution = "loguniform"`).
+struct ParameterRange {
+  std::string name;
+  double lower = 0;
+  double upper = 1;
+  bool log_uniform = false;  ///< uniform in log(value); needs 0 < lower
+
+  /// The value at unit coordinate u ∈ [0, 1]: lower + u·(upper − lower), or its log-space analogue.
+  double FromUnit(double u) const;
+  /// The unit coordinate of a value (the inverse of FromUnit).
+  double ToUnit(double value) const;
+};
+
+/// What an estimator does when the output of a run is missing (docs/sensitivity.md, "Failed runs").
+enum class FailedRunPolicy {
+  kDropBlocks,  ///< drop every Saltelli block (Morris trajectory) that holds a failed row; report how many
+  kError,       ///< stop: no indices, status kStoppedOnFailedRuns and a message naming the first failure
+};
+std::string_view ToString(FailedRunPolicy policy);
+/// Parses "drop_blocks" / "error"; nullopt otherwise.
+std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text);
+
+/// Outcome of an analysis. Anything but kOk leaves the indices NaN and says why in `message`; the
+/// CLI prints the message and exits with code 3 (runs failed) or 1 (degenerate output).
+enum class SensitivityStatus {
+  kOk,
+  kStoppedOnFailedRuns,  ///< failed rows and FailedRunPolicy::kError
+  kTooFewBlocks,         ///< fewer than two usable blocks (trajectories) remain
+  kZeroVariance,         ///< the output does not vary over the usable rows
+};
+std::string_view ToString(SensitivityStatus status);
+
+/// A two-sided interval [lower, upper]; NaN when not computed.
+struct ConfidenceInterval {
+  double lower = 0;
+  double upper = 0;
+  bool Contains(double value) const { return lower <= value && value <= upper; }
+};
+
+/// Settings common to the bootstrap of every estimator.
+struct BootstrapOptions {
+  /// Number of resamples (with replacement, of whole blocks or trajectories); 0: no intervals.
+  int resamples = 1000;
+  /// Two-sided level of the percentile interval, in (0, 1).
+  double confidence_level = 0.95;
+  /// Seed of the Boost.Random mt19937_64 that draws the resamples: same seed, same intervals.
+  unsigned long long seed = 20240607;
+};
+
+/// The percentile bootstrap interval of level `confidence_level` from the resampled statistics: the
+/// (1−c)/2 and (1+c)/2 sample quantiles with linear interpolation between order statistics
+/// (Hyndman–Fan type 7, numpy's default). Non-finite values are left out; NaN interval when fewer
+/// than two finite values remain. Precondition: 0 < confidence_level < 1.
+ConfidenceInterval PercentileInterval(std::vector<double> statistics, double confidence_level);
+
+/// Throws InputError (source `source`, keys `bootstrap` / `confidence_level`) unless resamples ≥ 0
+/// and 0 < confidence_level < 1.
+void ValidateBootstrapOptions(const BootstrapOptions& options, const std::string& source);
+
+/// Row r failed when `succeeded` is non-empty and says false, or when the output is not finite.
+/// Precondition: `succeeded` is empty or as long as `outputs`.
+std::vector<bool> FailedRows(std::span<const double> outputs, const std::vector<bool>& succeeded);
+
+}  // namespace gesweep

@@ -1,0 +1,200 @@
+#include "engine/archive/archive_reader.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include "engine/archive/archive_format.h"
+#include "engine/archive/archive_writer.h"
+#include "engine/archive/provenance.h"
+#include "engine/common/errors.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace gesweep {
+namespace {
+
+using hdf5::Check;
+using hdf5::Handle;
+
+std::string Hex(std::uint64_t value) {
+  std::ostringstream out;
+  out << std::hex;
+  out.width(16);
+  out.fill('0');
+  out << value;
+  return out.str();
+}
+
+herr_t CollectDataset(hid_t, const char* name, const H5O_info_t* info, void* data) {
+  if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->emplace_back(name);
+  return 0;
+}
+
+}  // namespace
+
+ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
+    : path_(std::move(path)), file_(std::move(file)), snapshot_(snapshot) {}
+
+ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
+  hdf5::Quiet();
+  const std::string shown = path.string();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(shown, "", "", "no such archive");
+  if (std::filesystem::is_directory(path, ec)) throw InputError(shown, "", "", "is a directory, not an archive");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
+  Handle fapl = hdf5::FileAccess();
+  bool snapshot = false;
+  hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
+  std::string first_error;
+  if (id < 0) {
+    first_error = hdf5::LastError();
+    H5Eclear2(H5E_DEFAULT);
+    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot.
+    id = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get());
+    snapshot = id >= 0;
+    H5Eclear2(H5E_DEFAULT);
+  }
+  if (id < 0) {
+    throw InputError(shown, "", "",
+                     "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
+                         "); if no gesweep is writing it, it may be damaged");
+  }
+  ArchiveReader reader(path, Handle(id), snapshot);
+  const auto format = hdf5::ReadStringAttribute(id, "format");
+  if (!format || *format != archive::kFormatName) {
+    throw InputError(shown, "format", format.value_or(""), "not a gesweep archive (no format = \"gesweep-archive\")");
+  }
+  const auto version = hdf5::ReadIntegerAttribute(id, "format_version");
+  if (!version || *version > archive::kFormatVersion) {
+    throw InputError(shown, "format_version", version ? std::to_string(*version) : "",
+                     "expected format version <= " + std::to_string(archive::kFormatVersion) +
+                         " (this engine is older than the archive)");
+  }
+  reader.run_count_ = reader.IntegerAttribute("run_count");
+  return reader;
+}
+
+void ArchiveReader::Close() { file_.Reset(); }
+
+std::string ArchiveReader::StringAttribute(const std::string& name) const {
+  return hdf5::ReadStringAttribute(file_.get(), name).value_or("");
+}
+
+std::int64_t ArchiveReader::IntegerAttribute(const std::string& name) const {
+  const auto value = hdf5::ReadIntegerAttribute(file_.get(), name);
+  if (!value) throw ArchiveError(path_.string() + ": missing root attribute " + name);
+  return *value;
+}
+
+std::vector<std::string> ArchiveReader::StringListAttribute(const std::string& name) const {
+  return hdf5::ReadStringListAttribute(file_.get(), name);
+}
+
+std::vector<std::string> ArchiveReader::Datasets() const {
+  std::vector<std::string> names;
+  Check(H5Ovisit2(file_.get(), H5_INDEX_NAME, H5_ITER_INC, CollectDataset, &names, H5O_INFO_BASIC),
+        "list datasets of " + path_.string());
+  return names;
+}
+
+void ArchiveReader::ReadRows(const std::string& path, std::int64_t first, std::int64_t count, hid_t memory_type,
+                             void* out) const {
+  Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
+  Handle memory;
+  Handle space = hdf5::SelectRows(dataset.get(), first, count, &memory);
+  Check(H5Dread(dataset.get(), memory_type, memory.get(), space.get(), H5P_DEFAULT, out),
+        "read " + path + " of " + path_.string());
+}
+
+std::vector<double> ArchiveReader::ReadDoubles(const std::string& path, std::int64_t first, std::int64_t count) const {
+  Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
+  const auto dims = hdf5::Dimensions(dataset.get());
+  const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
+  std::vector<double> values(static_cast<std::size_t>(count * width));
+  ReadRows(path, first, count, H5T_NATIVE_DOUBLE, values.data());
+  return values;
+}
+
+std::vector<std::int8_t> ArchiveReader::ReadStatus(std::int64_t first, std::int64_t count) const {
+  std::vector<std::int8_t> status(static_cast<std::size_t>(count));
+  ReadRows(archive::kRunStatus, first, count, H5T_NATIVE_INT8, status.data());
+  return status;
+}
+
+std::vector<std::int64_t> ArchiveReader::CompleteBlocks(int chunk_runs) const {
+  std::vector<std::int64_t> blocks;
+  for (std::int64_t first = 0, block = 0; first < run_count_; first += chunk_runs, ++block) {
+    const std::int64_t count = std::min<std::int64_t>(chunk_runs, run_count_ - first);
+    const auto status = ReadStatus(first, count);
+    if (std::all_of(status.begin(), status.end(), [](std::int8_t s) { return s != 0; })) blocks.push_back(block);
+  }
+  return blocks;
+}
+
+void ArchiveReader::CheckSameSweep(const SweepPlan& plan, const std::string& shown) const {
+  auto refuse = [&](const std::string& what, const std::string& theirs, const std::string& ours) {
+    throw InputError("command line", "-o", shown,
+                     "cannot resume: the archive has " + what + " " + theirs + " but this run has " + ours +
+                         "; use --force to replace it, or another -o");
+  };
+  if (StringAttribute("study_fingerprint") != Hex(plan.study().fingerprint)) {
+    refuse("study fingerprint", StringAttribute("study_fingerprint") + " (study " + StringAttribute("study_path") + ")",
+           Hex(plan.study().fingerprint) + " (study " + plan.study().path + "; a changed study or aircraft file)");
+  }
+  if (StringAttribute("engine_version") != EngineVersion() || StringAttribute("git_commit") != EngineGitCommit()) {
+    refuse("engine", StringAttribute("engine_version") + " " + StringAttribute("git_commit"),
+           EngineVersion() + " " + EngineGitCommit());
+  }
+  const std::string shard = std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count);
+  if (StringAttribute("shard") != shard) refuse("shard", StringAttribute("shard"), shard);
+  if (IntegerAttribute("design_runs") != plan.design_runs() || IntegerAttribute("first_run") != plan.first_run() ||
+      run_count_ != plan.run_count()) {
+    refuse("design size", std::to_string(IntegerAttribute("design_runs")), std::to_string(plan.design_runs()));
+  }
+}
+
+void ArchiveReader::VerifyRunIds(const SweepPlan& plan, const std::vector<std::int64_t>& blocks,
+                                 const std::string& shown) const {
+  std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
+  for (std::int64_t block : blocks) {
+    const std::int64_t local = block * plan.chunk_runs();
+    std::int64_t index = 0;
+    std::uint64_t id = 0;
+    ReadRows(archive::kRunIndex, local, 1, H5T_NATIVE_INT64, &index);
+    ReadRows(archive::kRunId, local, 1, H5T_NATIVE_UINT64, &id);
+    plan.design().Row(plan.first_run() + local, row.data());
+    if (index != plan.first_run() + local || id != plan.RunId(row.data())) {
+      throw InputError("command line", "-o", shown,
+                       "cannot resume: run " + std::to_string(plan.first_run() + local) +
+                           " of the archive has other parameters than this study gives it; use --force to replace it");
+    }
+  }
+}
+
+void ArchiveReader::CopyBlock(ArchiveWriter& writer, std::int64_t block, int chunk_runs) const {
+  const std::int64_t first = block * chunk_runs;
+  const std::int64_t count = std::min<std::int64_t>(chunk_runs, run_count_ - first);
+  std::vector<unsigned char> buffer;
+  auto copy = [&](const std::string& path, hid_t target) {
+    Handle source(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
+    Handle type(H5Dget_type(source.get()), "type of " + path);
+    const auto dims = hdf5::Dimensions(source.get());
+    const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
+    buffer.resize(static_cast<std::size_t>(count * width) * H5Tget_size(type.get()));
+    ReadRows(path, first, count, type.get(), buffer.data());
+    Handle memory;
+    Handle space = hdf5::SelectRows(target, first, count, &memory);
+    Check(H5Dwrite(target, type.get(), memory.get(), space.get(), H5P_DEFAULT, buffer.data()), "copy " + path);
+  };
+  const SweepPlan& plan = writer.plan_;
+  for (std::size_t c = 0; c < writer.design_.size(); ++c) {
+    copy(archive::DesignPath(ParameterCatalog()[static_cast<std::size_t>(plan.design().spec().parameters[c].id)].name),
+         writer.design_[c].get());
+  }
+  for (std::size_t c = 0; c < writer.results_.size(); ++c) copy(plan.schema().columns[c].path, writer.results_[c].get());
+  copy(archive::kRunIndex, writer.index_.get());
+  copy(archive::kRunId, writer.id_.get());
+  copy(archive::kRunMessage, writer.message_.get());
+  copy(archive::kRunStatus, writer.status_.get());
+}
+
+}  // namespace gesweep

@@ -1,0 +1,77 @@
+#pragma once
+/// Reading an archive (schemas/archive.md): attributes, the dataset list, rows of any dataset in
+/// pieces (memory bounded by the piece, not the run count). Opens a file that a sweep is writing,
+/// or whose writer died, in HDF5's SWMR-read mode: a consistent snapshot of the complete batches.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "engine/archive/hdf5_util.h"
+
+namespace gesweep {
+
+class SweepPlan;
+class ArchiveWriter;
+
+/// A read-only view of one archive.
+class ArchiveReader {
+ public:
+  /// Opens an archive. Throws InputError (source = the path) when it is missing, not HDF5, not a
+  /// gesweep archive, of a newer format version, or cannot be opened at all (e.g. a writer is
+  /// setting it up right now: "archive in use").
+  static ArchiveReader Open(const std::filesystem::path& path);
+
+  ArchiveReader(ArchiveReader&&) = default;
+  ArchiveReader& operator=(ArchiveReader&&) = default;
+
+  /// True when opened as a snapshot (SWMR read): a sweep is writing it, or its writer stopped
+  /// without closing it (killed). Runs with status 0 may then still be coming.
+  bool snapshot() const { return snapshot_; }
+  const std::filesystem::path& path() const { return path_; }
+  hid_t file() const { return file_.get(); }
+
+  /// Root attributes. StringAttribute gives "" and StringListAttribute {} when absent;
+  /// IntegerAttribute throws ArchiveError when absent.
+  std::string StringAttribute(const std::string& name) const;
+  std::int64_t IntegerAttribute(const std::string& name) const;
+  std::vector<std::string> StringListAttribute(const std::string& name) const;
+
+  /// Runs in this archive (the length of every per-run dataset).
+  std::int64_t run_count() const { return run_count_; }
+
+  /// Every dataset's path, depth-first in name order ("design/height_m", "results/modes/...").
+  std::vector<std::string> Datasets() const;
+
+  /// Reads rows [first, first + count) of a per-run dataset (all columns of a 2-D one) converted
+  /// to `memory_type` into `out`.
+  void ReadRows(const std::string& path, std::int64_t first, std::int64_t count, hid_t memory_type, void* out) const;
+  /// Rows of a numeric per-run dataset as doubles (integers converted).
+  std::vector<double> ReadDoubles(const std::string& path, std::int64_t first, std::int64_t count) const;
+  /// Statuses of runs [first, first + count) (0 pending, 1 ok, 2 failed).
+  std::vector<std::int8_t> ReadStatus(std::int64_t first, std::int64_t count) const;
+
+  /// Batches (of `chunk_runs` runs) whose every run has a nonzero status, ascending.
+  std::vector<std::int64_t> CompleteBlocks(int chunk_runs) const;
+
+  /// Throws InputError unless this archive was made by the same study (fingerprint), engine
+  /// version and commit, for the same shard of the same design as `plan`.
+  void CheckSameSweep(const SweepPlan& plan, const std::string& shown) const;
+  /// Throws InputError unless the first run of each of `blocks` has the index and id `plan` gives.
+  void VerifyRunIds(const SweepPlan& plan, const std::vector<std::int64_t>& blocks, const std::string& shown) const;
+
+  /// Copies batch `block` (of `chunk_runs` runs) of every dataset of `writer`'s plan into it.
+  void CopyBlock(ArchiveWriter& writer, std::int64_t block, int chunk_runs) const;
+
+  void Close();
+
+ private:
+  ArchiveReader(std::filesystem::path path, hdf5::Handle file, bool snapshot);
+  std::filesystem::path path_;
+  hdf5::Handle file_;
+  bool snapshot_ = false;
+  std::int64_t run_count_ = 0;
+};
+
+}  // namespace gesweep

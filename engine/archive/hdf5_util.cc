@@ -1,0 +1,297 @@
+#include "engine/archive/hdf5_util.h"
+
+#include <cstring>
+#include <sstream>
+
+namespace gesweep::hdf5 {
+namespace {
+
+herr_t InnermostMessage(unsigned n, const H5E_error2_t* error, void* data) {
+  auto* message = static_cast<std::string*>(data);
+  if (n == 0 && error->desc != nullptr) *message = error->desc;
+  return 0;
+}
+
+}  // namespace
+
+void Quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+std::string LastError() {
+  std::string message;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, InnermostMessage, &message);
+  return message;
+}
+
+std::int64_t Check(std::int64_t status, const std::string& what) {
+  if (status < 0) {
+    const std::string detail = LastError();
+    H5Eclear2(H5E_DEFAULT);
+    throw ArchiveError(detail.empty() ? what : what + ": " + detail);
+  }
+  return status;
+}
+
+void Handle::Reset() {
+  if (id_ < 0) return;
+  switch (H5Iget_type(id_)) {
+    case H5I_FILE: H5Fclose(id_); break;
+    case H5I_GROUP: H5Gclose(id_); break;
+    case H5I_DATASET: H5Dclose(id_); break;
+    case H5I_DATASPACE: H5Sclose(id_); break;
+    case H5I_DATATYPE: H5Tclose(id_); break;
+    case H5I_ATTR: H5Aclose(id_); break;
+    case H5I_GENPROP_LST: H5Pclose(id_); break;
+    default: break;
+  }
+  id_ = H5I_INVALID_HID;
+}
+
+void Handle::Close(const std::string& what) {
+  if (id_ < 0) return;
+  herr_t status = 0;
+  switch (H5Iget_type(id_)) {
+    case H5I_FILE: status = H5Fclose(id_); break;
+    case H5I_DATASET: status = H5Dclose(id_); break;
+    default: Reset(); return;
+  }
+  id_ = H5I_INVALID_HID;
+  Check(status, what);
+}
+
+Handle FileAccess() {
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), "file access property list");
+  Check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST), "libver bounds");
+  // Lock where the file system supports locks; carry on where it does not (some cluster
+  // file systems), instead of failing.
+  Check(H5Pset_file_locking(fapl.get(), true, true), "file locking");
+  return fapl;
+}
+
+bool Exists(hid_t location, const std::string& path) {
+  std::string partial;
+  std::stringstream stream(path);
+  std::string part;
+  while (std::getline(stream, part, '/')) {
+    if (part.empty()) continue;
+    partial += (partial.empty() ? "" : "/") + part;
+    const htri_t exists = H5Lexists(location, partial.c_str(), H5P_DEFAULT);
+    if (exists <= 0) return false;
+  }
+  return true;
+}
+
+void CreateGroups(hid_t location, const std::string& path) {
+  std::string partial;
+  std::stringstream stream(path);
+  std::string part;
+  while (std::getline(stream, part, '/')) {
+    if (part.empty()) continue;
+    partial += (partial.empty() ? "" : "/") + part;
+    if (H5Lexists(location, partial.c_str(), H5P_DEFAULT) > 0) continue;
+    Handle group(H5Gcreate2(location, partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + partial);
+  }
+}
+
+namespace {
+
+void Replace(hid_t object, const std::string& name) {
+  if (H5Aexists(object, name.c_str()) > 0) Check(H5Adelete(object, name.c_str()), "delete attribute " + name);
+}
+
+Handle VariableString() {
+  Handle type(H5Tcopy(H5T_C_S1), "string type");
+  Check(H5Tset_size(type.get(), H5T_VARIABLE), "string size");
+  Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
+  return type;
+}
+
+template <typename T>
+void WriteNumbers(hid_t object, const std::string& name, hid_t file_type, hid_t memory_type, const T* values,
+                  std::size_t count, bool scalar) {
+  Replace(object, name);
+  hsize_t dims[1] = {count};
+  Handle space(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, dims, nullptr), "attribute space");
+  Handle attribute(H5Acreate2(object, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                   "create attribute " + name);
+  if (count == 0 && !scalar) return;  // an empty list: nothing to write
+  Check(H5Awrite(attribute.get(), memory_type, values), "write attribute " + name);
+}
+
+}  // namespace
+
+void WriteAttribute(hid_t object, const std::string& name, const std::string& value) {
+  Replace(object, name);
+  Handle type = VariableString();
+  Handle space(H5Screate(H5S_SCALAR), "attribute space");
+  Handle attribute(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                   "create attribute " + name);
+  const char* pointer = value.c_str();
+  Check(H5Awrite(attribute.get(), type.get(), &pointer), "write attribute " + name);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, const char* value) {
+  WriteAttribute(object, name, std::string(value));
+}
+
+void WriteAttribute(hid_t object, const std::string& name, std::int64_t value) {
+  WriteNumbers(object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &value, 1, true);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, double value) {
+  WriteNumbers(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &value, 1, true);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, const std::vector<double>& values) {
+  WriteNumbers(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), false);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, const std::vector<std::int64_t>& values) {
+  WriteNumbers(object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, values.data(), values.size(), false);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, const std::vector<std::string>& values) {
+  Replace(object, name);
+  Handle type = VariableString();
+  hsize_t dims[1] = {values.size()};
+  Handle space(H5Screate_simple(1, dims, nullptr), "attribute space");
+  Handle attribute(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                   "create attribute " + name);
+  std::vector<const char*> pointers;
+  for (const auto& value : values) pointers.push_back(value.c_str());
+  if (pointers.empty()) return;  // an empty list: nothing to write
+  Check(H5Awrite(attribute.get(), type.get(), pointers.data()), "write attribute " + name);
+}
+
+std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name) {
+  if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle file_type(H5Aget_type(attribute.get()), "attribute type");
+  if (H5Tget_class(file_type.get()) != H5T_STRING) throw ArchiveError("attribute " + name + " is not a string");
+  Handle space(H5Aget_space(attribute.get()), "attribute space");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) throw ArchiveError("attribute " + name + " is not one string");
+  if (H5Tis_variable_str(file_type.get()) > 0) {
+    Handle type = VariableString();
+    char* pointer = nullptr;
+    Check(H5Aread(attribute.get(), type.get(), &pointer), "read attribute " + name);
+    std::string value = pointer ? pointer : "";
+    H5free_memory(pointer);
+    return value;
+  }
+  const std::size_t size = H5Tget_size(file_type.get());
+  std::vector<char> buffer(size + 1, '\0');
+  Check(H5Aread(attribute.get(), file_type.get(), buffer.data()), "read attribute " + name);
+  return std::string(buffer.data(), strnlen(buffer.data(), size));
+}
+
+std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name) {
+  if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle file_type(H5Aget_type(attribute.get()), "attribute type");
+  if (H5Tget_class(file_type.get()) != H5T_INTEGER) throw ArchiveError("attribute " + name + " is not an integer");
+  std::int64_t value = 0;
+  Check(H5Aread(attribute.get(), H5T_NATIVE_INT64, &value), "read attribute " + name);
+  return value;
+}
+
+std::optional<double> ReadDoubleAttribute(hid_t object, const std::string& name) {
+  if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  double value = 0;
+  Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value), "read attribute " + name);
+  return value;
+}
+
+std::vector<std::string> ReadStringListAttribute(hid_t object, const std::string& name) {
+  if (H5Aexists(object, name.c_str()) <= 0) return {};
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle space(H5Aget_space(attribute.get()), "attribute space");
+  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
+  if (count == 0) return {};
+  Handle type = VariableString();
+  std::vector<char*> pointers(count, nullptr);
+  Check(H5Aread(attribute.get(), type.get(), pointers.data()), "read attribute " + name);
+  std::vector<std::string> values;
+  for (char* pointer : pointers) {
+    values.emplace_back(pointer ? pointer : "");
+    H5free_memory(pointer);
+  }
+  return values;
+}
+
+namespace {
+
+struct CopyContext {
+  hid_t to;
+  std::string error;
+};
+
+herr_t CopyOne(hid_t location, const char* name, const H5A_info_t*, void* data) {
+  auto* context = static_cast<CopyContext*>(data);
+  try {
+    Handle attribute(H5Aopen(location, name, H5P_DEFAULT), std::string("open attribute ") + name);
+    Handle type(H5Aget_type(attribute.get()), "attribute type");
+    Handle space(H5Aget_space(attribute.get()), "attribute space");
+    const auto points = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
+    std::vector<unsigned char> buffer(H5Tget_size(type.get()) * std::max<std::size_t>(points, 1));
+    Replace(context->to, name);
+    Handle copy(H5Acreate2(context->to, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                std::string("create attribute ") + name);
+    if (points == 0) return 0;
+    Check(H5Aread(attribute.get(), type.get(), buffer.data()), std::string("read attribute ") + name);
+    Check(H5Awrite(copy.get(), type.get(), buffer.data()), std::string("write attribute ") + name);
+    // Variable-length strings were allocated by the read.
+    if (H5Tdetect_class(type.get(), H5T_VLEN) > 0 || H5Tis_variable_str(type.get()) > 0) {
+      H5Dvlen_reclaim(type.get(), space.get(), H5P_DEFAULT, buffer.data());
+    }
+  } catch (const ArchiveError& e) {
+    context->error = e.what();
+    return -1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void CopyAttributes(hid_t from, hid_t to) {
+  CopyContext context{to, ""};
+  hsize_t index = 0;
+  const herr_t status = H5Aiterate2(from, H5_INDEX_NAME, H5_ITER_INC, &index, CopyOne, &context);
+  if (status < 0) throw ArchiveError(context.error.empty() ? "copy attributes: " + LastError() : context.error);
+}
+
+Handle ComplexType() {
+  Handle type(H5Tcreate(H5T_COMPOUND, 2 * sizeof(double)), "complex type");
+  Check(H5Tinsert(type.get(), "re", 0, H5T_IEEE_F64LE), "complex re");
+  Check(H5Tinsert(type.get(), "im", sizeof(double), H5T_IEEE_F64LE), "complex im");
+  return type;
+}
+
+Handle FixedStringType(int length) {
+  Handle type(H5Tcopy(H5T_C_S1), "string type");
+  Check(H5Tset_size(type.get(), static_cast<std::size_t>(length)), "string size");
+  Check(H5Tset_strpad(type.get(), H5T_STR_NULLPAD), "string padding");
+  Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
+  return type;
+}
+
+std::vector<std::int64_t> Dimensions(hid_t dataset) {
+  Handle space(H5Dget_space(dataset), "dataset space");
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(static_cast<std::size_t>(std::max(rank, 0)));
+  if (rank > 0) H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return std::vector<std::int64_t>(dims.begin(), dims.end());
+}
+
+Handle SelectRows(hid_t dataset, std::int64_t first, std::int64_t count, Handle* memory) {
+  Handle space(H5Dget_space(dataset), "dataset space");
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  hsize_t start[2] = {static_cast<hsize_t>(first), 0};
+  hsize_t extent[2] = {static_cast<hsize_t>(count), rank == 2 ? dims[1] : 1};
+  Check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, extent, nullptr), "select rows");
+  *memory = Handle(H5Screate_simple(rank, extent, nullptr), "memory space");
+  return space;
+}
+
+}  // namespace gesweep::hdf5

@@ -1,0 +1,51 @@
+// gesweep merge: merges shard archives into one (docs/sweep.md, "Sharding and merge").
+//   gesweep merge A.h5 B.h5 ... -o ALL.h5 [--force]
+#include <iostream>
+
+#include "engine/archive/archive_merge.h"
+#include "engine/archive/hdf5_util.h"
+#include "engine/cli/command.h"
+#include "engine/common/errors.h"
+
+namespace gesweep::cli {
+namespace {
+
+struct MergeFlags {
+  std::vector<std::string> inputs;
+  std::string output;
+  bool force = false;
+  bool quiet = false;
+};
+
+int Merge(const MergeFlags& flags) {
+  std::vector<std::filesystem::path> inputs(flags.inputs.begin(), flags.inputs.end());
+  std::string command_line = "gesweep merge";
+  for (const auto& input : flags.inputs) command_line += " " + input;
+  command_line += " -o " + flags.output + (flags.force ? " --force" : "");
+  try {
+    const MergeReport report = MergeArchives(inputs, flags.output, flags.force, command_line);
+    if (!flags.quiet) {
+      std::cerr << "gesweep: merged " << report.shards << " shard" << (report.shards > 1 ? "s" : "") << ": "
+                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed << " failed) -> "
+                << flags.output << "\n";
+    }
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "merge", "Merge shard archives of one study into one archive, checking they cover the design exactly once",
+    [](CLI::App& app) -> std::function<int()> {
+      auto flags = std::make_shared<MergeFlags>();
+      app.add_option("archives", flags->inputs, "Shard archives (from gesweep run --shard i/N)")->required();
+      app.add_option("-o,--output", flags->output, "Merged archive to write")->required();
+      app.add_flag("--force", flags->force, "Replace an existing output archive");
+      app.add_flag("-q,--quiet", flags->quiet, "No summary line");
+      return [flags] { return Merge(*flags); };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli

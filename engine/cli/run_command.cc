@@ -1,0 +1,311 @@
+// gesweep run: runs a study file's sweep into an HDF5 archive (docs/sweep.md).
+//   gesweep run STUDY -o ARCHIVE [--threads N] [--shard i/N] [--resume] [--force] [--dry-run]
+// Exit codes: 0 every run ok, 3 some runs failed, 2 bad input, 1 an I/O error, 128+signal when
+// stopped by SIGINT/SIGTERM (the archive is then closed cleanly and resumable).
+#include <unistd.h>
+
+#include <tbb/info.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "engine/archive/archive_writer.h"
+#include "engine/cli/command.h"
+#include "engine/cli/json_util.h"
+#include "engine/common/errors.h"
+#include "engine/sweep/runner.h"
+#include "engine/sweep/study.h"
+
+namespace gesweep::cli {
+namespace {
+
+// Dry-run calibration: a few runs spread over the shard, within a second.
+constexpr int kCalibrationRuns = 16;
+constexpr double kCalibrationBudget_s = 1.0;
+// Progress: a live bar refreshes this often on a terminal; a log line this often otherwise.
+constexpr double kBarInterval_s = 0.25;
+constexpr double kLogInterval_s = 5.0;
+
+std::atomic<bool> g_cancel{false};
+std::atomic<int> g_signal{0};
+
+extern "C" void OnSignal(int signal) {
+  g_signal.store(signal);
+  g_cancel.store(true);
+}
+
+struct RunFlags {
+  std::string study;
+  std::string output;
+  int threads = 0;
+  std::string shard;
+  bool resume = false;
+  bool force = false;
+  bool dry_run = false;
+  bool quiet = false;
+  std::string format = "text";
+};
+
+std::string FormatDuration(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "?";
+  std::ostringstream out;
+  if (seconds < 60) {
+    out << std::fixed << std::setprecision(seconds < 10 ? 1 : 0) << seconds << " s";
+    return out.str();
+  }
+  const auto total = static_cast<long long>(std::llround(seconds));
+  if (total >= 86400) out << total / 86400 << "d ";
+  const long long h = total / 3600 % 24, m = total / 60 % 60, s = total % 60;
+  if (total >= 3600) {
+    out << h << ":" << std::setw(2) << std::setfill('0') << m << ":" << std::setw(2) << s;
+  } else {
+    out << m << ":" << std::setw(2) << std::setfill('0') << s;
+  }
+  return out.str();
+}
+
+std::string CommandLine(const RunFlags& flags) {
+  std::string line = "gesweep run " + flags.study + " -o " + flags.output;
+  if (flags.threads) line += " --threads " + std::to_string(flags.threads);
+  if (!flags.shard.empty()) line += " --shard " + flags.shard;
+  if (flags.resume) line += " --resume";
+  if (flags.force) line += " --force";
+  return line;
+}
+
+// Prints progress on stderr until stopped: a live bar on a terminal, a line every few seconds
+// otherwise (logs, batch jobs).
+class ProgressPrinter {
+ public:
+  ProgressPrinter(const SweepProgress& progress, bool enabled)
+      : progress_(progress), terminal_(isatty(STDERR_FILENO) != 0), enabled_(enabled) {
+    if (enabled_) thread_ = std::thread([this] { Loop(); });
+  }
+  ~ProgressPrinter() { Stop(); }
+  void Stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void Loop() {
+    const auto start = std::chrono::steady_clock::now();
+    const double interval = terminal_ ? kBarInterval_s : kLogInterval_s;
+    std::unique_lock<std::mutex> lock(mutex_);
+    bool printed = false;
+    while (!wake_.wait_for(lock, std::chrono::duration<double>(interval), [this] { return stopping_; })) {
+      Print(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      printed = true;
+    }
+    if (printed) {
+      Print(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      if (terminal_) std::cerr << "\n";
+    }
+  }
+
+  void Print(double elapsed_s) {
+    const std::int64_t done = progress_.runs_done.load();
+    const std::int64_t total = progress_.runs_to_do;
+    const std::int64_t failed = progress_.runs_failed.load();
+    const double rate = elapsed_s > 0 ? done / elapsed_s : 0;
+    const double eta = rate > 0 ? (total - done) / rate : NAN;
+    const double fraction = total > 0 ? static_cast<double>(done) / total : 1.0;
+    std::ostringstream line;
+    if (terminal_) {
+      constexpr int kWidth = 30;
+      const int filled = static_cast<int>(fraction * kWidth);
+      line << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
+           << std::string(static_cast<std::size_t>(kWidth - filled), ' ') << "] ";
+    } else {
+      line << "gesweep: ";
+    }
+    line << done << "/" << total << " runs (" << std::fixed << std::setprecision(1) << 100.0 * fraction << "%), "
+         << std::setprecision(rate < 100 ? 1 : 0) << rate << " runs/s, ETA " << FormatDuration(eta);
+    if (failed) line << ", " << failed << " failed";
+    std::cerr << line.str() << (terminal_ ? "   " : "\n") << std::flush;
+  }
+
+  const SweepProgress& progress_;
+  bool terminal_;
+  bool enabled_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stopping_ = false;
+};
+
+int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
+  int samples = 0;
+  const double per_run_s = MeasureRunCost(plan, kCalibrationRuns, kCalibrationBudget_s, &samples);
+  const double estimate_s = per_run_s * static_cast<double>(plan.run_count()) / threads;
+  const auto& storage = plan.storage();
+  const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
+  const Study& study = plan.study();
+  if (format == "json") {
+    nlohmann::json out = {{"study", study.path},
+                          {"name", study.name},
+                          {"design_kind", std::string(ToString(study.design.kind))},
+                          {"design_runs", plan.design_runs()},
+                          {"shard", std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count)},
+                          {"first_run", plan.first_run()},
+                          {"run_count", plan.run_count()},
+                          {"chunk_runs", plan.chunk_runs()},
+                          {"bytes_per_run", storage.bytes_per_run},
+                          {"series_bytes_per_run", storage.series_bytes_per_run},
+                          {"storage_bytes", shard_bytes},
+                          {"design_storage_bytes", storage.design_bytes},
+                          {"seconds_per_run", per_run_s},
+                          {"calibration_runs", samples},
+                          {"threads", threads},
+                          {"estimated_seconds", estimate_s}};
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << "study        " << study.name << " (" << study.path << ")\n";
+  std::cout << "analyses    ";
+  for (const auto& analysis : study.analyses) std::cout << " " << analysis->name();
+  std::cout << "\n";
+  std::cout << "design       " << ToString(study.design.kind) << ", " << plan.design_runs() << " runs";
+  if (plan.shard().count > 1) {
+    std::cout << "; shard " << plan.shard().index << "/" << plan.shard().count << " runs " << plan.first_run() << ".."
+              << plan.first_run() + plan.run_count() - 1 << " (" << plan.run_count() << " runs)";
+  }
+  std::cout << "\n";
+  std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes)) << " before compression ("
+            << FormatBytes(static_cast<double>(storage.bytes_per_run)) << " per run"
+            << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
+  std::cout << "time         about " << FormatDuration(estimate_s) << " on " << threads << " thread"
+            << (threads > 1 ? "s" : "") << " (" << std::setprecision(3) << per_run_s * 1e6 << " us per run, from "
+            << samples << " sample run" << (samples > 1 ? "s" : "") << ")\n";
+  std::cout << "batches      " << plan.block_count() << " of " << plan.chunk_runs() << " runs\n";
+  return 0;
+}
+
+int Run(const RunFlags& flags) {
+  if (flags.format != "text" && flags.format != "json") {
+    throw InputError("command line", "--format", "'" + flags.format + "'", "expected text or json");
+  }
+  if (flags.resume && flags.force) {
+    throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
+  }
+  if (flags.threads < 0 || flags.threads > 4096) {
+    throw InputError("command line", "--threads", std::to_string(flags.threads), "expected 1 to 4096 (0: all cores)");
+  }
+  ShardSpec shard;
+  if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
+  Study study = LoadStudy(flags.study);
+  SweepPlan plan(std::move(study), shard);
+  const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
+  if (flags.dry_run) return DryRun(plan, threads, flags.format);
+  if (flags.output.empty()) throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
+
+  ArchiveOpenReport opened;
+  std::unique_ptr<ArchiveWriter> writer;
+  try {
+    writer = ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
+                                 flags.resume ? ArchiveOpenMode::kResume
+                                              : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
+                                 &opened);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+
+  SweepProgress progress;
+  progress.runs_skipped = opened.runs_complete;
+  progress.runs_to_do = plan.run_count() - opened.runs_complete;
+  if (!flags.quiet) {
+    std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
+    if (plan.shard().count > 1) {
+      std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count << " = runs " << plan.first_run()
+                << ".." << plan.first_run() + plan.run_count() - 1;
+    }
+    std::cerr << ", " << threads << " thread" << (threads > 1 ? "s" : "") << " -> " << flags.output << "\n";
+    if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
+      std::cerr << "gesweep: resuming" << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
+                                               ? " after an unclean stop (complete batches copied to a fresh file)"
+                                               : "")
+                << ": " << opened.runs_complete << " runs already complete, " << progress.runs_to_do << " to run\n";
+    }
+  }
+
+  g_cancel.store(false);
+  auto previous_int = std::signal(SIGINT, OnSignal);
+  auto previous_term = std::signal(SIGTERM, OnSignal);
+  const auto start = std::chrono::steady_clock::now();
+  SweepOutcome outcome;
+  int exit_code = 0;
+  {
+    ProgressPrinter printer(progress, !flags.quiet && progress.runs_to_do > 0);
+    RunnerOptions options;
+    options.threads = threads;
+    options.cancel = &g_cancel;
+    try {
+      outcome = RunSweep(plan, opened.pending_blocks, *writer, options, &progress);
+    } catch (const std::exception& e) {
+      printer.Stop();
+      std::signal(SIGINT, previous_int);
+      std::signal(SIGTERM, previous_term);
+      std::cerr << "\ngesweep: error: " << e.what() << " (the runs written so far are kept; fix the cause and "
+                << "rerun with --resume)\n";
+      return 1;
+    }
+  }
+  std::signal(SIGINT, previous_int);
+  std::signal(SIGTERM, previous_term);
+  try {
+    writer->Finish();
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::int64_t ran = progress.runs_done.load();
+  if (!flags.quiet || writer->runs_failed() > 0 || outcome.cancelled) {
+    std::cerr << "gesweep: " << ran << " runs in " << FormatDuration(elapsed) << " (" << std::fixed
+              << std::setprecision(1) << (elapsed > 0 ? ran / elapsed : 0.0) << " runs/s); archive: "
+              << writer->runs_ok() << " ok, " << writer->runs_failed() << " failed, " << writer->runs_pending()
+              << " pending -> " << flags.output << "\n";
+  }
+  if (outcome.cancelled) {
+    std::cerr << "gesweep: stopped by signal " << g_signal.load() << "; continue with --resume\n";
+    return 128 + g_signal.load();
+  }
+  if (writer->runs_failed() > 0) {
+    std::cerr << "gesweep: " << writer->runs_failed()
+              << " runs failed; their status is 'failed' and runs/message says why\n";
+    exit_code = 3;
+  }
+  return exit_code;
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "run", "Run a study file's sweep into an HDF5 archive (exit 0 all ok, 3 some runs failed, 2 bad input)",
+    [](CLI::App& app) -> std::function<int()> {
+      auto flags = std::make_shared<RunFlags>();
+      app.add_option("study", flags->study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
+      app.add_option("-o,--output", flags->output, "Archive to write (HDF5), e.g. results/stability_map.h5");
+      app.add_option("--threads", flags->threads, "Worker threads (default: all cores)");
+      app.add_option("--shard", flags->shard, "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
+      app.add_flag("--resume", flags->resume, "Continue an existing archive: skip complete runs, run the rest");
+      app.add_flag("--force", flags->force, "Replace an existing archive");
+      app.add_flag("--dry-run", flags->dry_run, "Print the run count, storage and time estimates; run nothing");
+      app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
+      app.add_flag("-q,--quiet", flags->quiet, "No progress output");
+      return [flags] { return Run(*flags); };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli

@@ -1,0 +1,109 @@
+#pragma once
+/// Parameters of the automatic landing of docs/MODEL.md §8 (the paper's Section III, after Stevens &
+/// Lewis): start state, glide path, LQR design, flare, elevator limits, plant convention and
+/// integration. Every field has a documented default; docs/landing.md explains each choice.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "engine/aircraft/aircraft.h"
+
+namespace gesweep {
+
+/// Number of states of the paper's augmented glide-slope system, Eq. (14).
+inline constexpr int kLandingStateCount = 9;
+
+/// Names of the states of Eq. (14) in order, as used for weights and gains:
+/// delta_u, delta_w, pitch_rate, delta_theta, delta_h, elevator, deviation, compensator,
+/// error_integral. (Units: m/s, m/s, rad/s, rad, m, rad, m, m·s, m·s.)
+const std::array<std::string_view, kLandingStateCount>& LandingStateNames();
+
+/// What the ΔH that multiplies Xh, Zh, Mh in the plant is measured from (docs/landing.md §3).
+enum class PlantHeightReference {
+  /// The reference trajectory: the glide path before the flare, the flare's H_ref after it. Eq. (1) is
+  /// linearised about the commanded flight, so ΔH is the deviation d (or H − H_ref). Default.
+  kReferencePath,
+  /// A fixed trim height (LandingConfig::plant_fixed_reference_height_m), as the open-loop run measures
+  /// ΔH from its start height.
+  kFixedHeight,
+};
+std::string_view ToString(PlantHeightReference reference);
+/// Parses "path" / "fixed"; nullopt otherwise.
+std::optional<PlantHeightReference> ParsePlantHeightReference(std::string_view text);
+
+/// Everything SimulateLanding needs besides the aircraft model. Angles are in degrees at this
+/// interface (they are written by people); the engine converts once.
+struct LandingConfig {
+  // --- Start state (the paper's Eq. (30): [u0 0 0 0 H0 0 0 0 0]) ---
+  double start_height_m = 500.0;          ///< H at t = 0, m (> flare height)
+  /// u at t = 0, m/s; also the plant's reference speed u0 (Δu = u − u0, kinematic entries of Eq. (1)).
+  double start_speed_mps = 52.21;
+  double start_pitch_deg = 0.0;           ///< Δθ at t = 0, deg (the reference flight is level, θ0 = 0)
+  double start_glide_path_offset_m = 0.0; ///< d at t = 0, m, positive above the glide path
+
+  // --- Glide path ---
+  /// Glide-slope angle γ, deg, positive for a descent; the reference flight-path angle is γr = −γ.
+  double glide_slope_deg = 2.5;
+
+  // --- LQR design (paper: Matlab lqry on Eq. (16), identity weights) ---
+  /// Height of the linear model used for the gain, m. Unset: the aircraft's wheel-contact height, where
+  /// the ground effect (and the open-loop instability) is strongest. +∞ designs on the free-flight row.
+  std::optional<double> design_height_m;
+  /// Speed of the linear model used for the gain, m/s. Unset: start_speed_mps.
+  std::optional<double> design_speed_mps;
+  /// Include Xh, Zh, Mh in the design model (the paper's recommendation). Independent of the plant's
+  /// model option, so that the paper's experiment flies one gain in two plants.
+  bool design_h_derivatives = true;
+  /// Diagonal of the output weight Q on the 9 states of Eq. (14) (order: LandingStateNames()); ≥ 0.
+  /// The ΔH weight adds to the deviation weight, since the design model measures both as one state.
+  std::array<double, kLandingStateCount> q_weights = {1, 1, 1, 1, 1, 1, 1, 1, 1};
+  double r_weight = 1.0;                     ///< weight R on the elevator command ηe (rad²); > 0
+  double actuator_pole_per_s = 10.0;         ///< Sδ of Tf3 = Sδ/(s + Sδ) (paper Eq. (29)); > 0
+  double compensator_pole_per_s = 10.0;      ///< S_d of Tf2 = 1/(s + S_d) (paper Eq. (29)); > 0
+
+  // --- Flare (paper Eq. (22)–(27)) ---
+  double flare_height_m = 10.0;              ///< Ho: the flare starts when H falls to it, m
+  /// τ of Ḣ_ref = −H_ref/τ, s. Unset: Ho/(u0·sin γ), so the commanded sink rate is continuous at Ho.
+  std::optional<double> flare_time_constant_s;
+
+  // --- Elevator (positive trailing edge down) ---
+  double elevator_min_deg = -25.0;           ///< the command ηe is clipped to [min, max], deg
+  double elevator_max_deg = 25.0;
+
+  // --- Plant ---
+  PlantHeightReference plant_height_reference = PlantHeightReference::kReferencePath;
+  /// Used with kFixedHeight: ΔH = H − this, m. Unset: the aircraft's highest finite table height (where
+  /// the h-derivatives start to be non-zero).
+  std::optional<double> plant_fixed_reference_height_m;
+
+  // --- Integration (adaptive Dormand–Prince 5(4), as the paper's ode45) ---
+  double relative_tolerance = 1e-3;          ///< ode45's default, the paper's value
+  double absolute_tolerance = 1e-6;          ///< ode45's default
+  double max_step_s = 1.0;                   ///< bounds the step so that no event is stepped over
+  /// Outcome no_touchdown when reached in flight, s. Unset: twice NominalLandingTime, so that a sweep over
+  /// the glide slope or the start height needs no retuning.
+  std::optional<double> time_limit_s;
+  double output_interval_s = 0.1;            ///< series sampling, s; 0: no series
+  /// |Δθ| beyond this ends the run as diverged, deg: the small-angle model no longer means anything.
+  double divergence_pitch_deg = 60.0;
+};
+
+/// Throws InputError(source, <field name>, value, expectation) when a field is out of range. The
+/// aircraft's limits apply: flare, start and design heights above its wheel-contact height, the start
+/// speed above its stall speed.
+void ValidateLandingConfig(const LandingConfig& config, const Aircraft& aircraft, const std::string& source);
+
+/// The flare time constant used: config's, or Ho/(u0·sin γ), s.
+double FlareTimeConstant(const LandingConfig& config);
+
+/// Time the reference trajectory takes from the start to the wheels, s: down the glide path to Ho at
+/// u0·γ (γ in rad, the small-angle kinematics of Eq. (1)), then H_ref = Ho·e^(−t/τ) down to the
+/// wheel-contact height.
+double NominalLandingTime(const LandingConfig& config, double wheel_contact_height_m);
+
+/// The time limit used: config's, or 2·NominalLandingTime, s.
+double LandingTimeLimit(const LandingConfig& config, double wheel_contact_height_m);
+
+}  // namespace gesweep

@@ -1,0 +1,86 @@
+#include "engine/control/landing_design.h"
+
+namespace gesweep {
+
+LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, double u0, double actuator_pole_per_s,
+                                           double compensator_pole_per_s) {
+  const Matrix5d A5 = AssembleStateMatrix(d, u0);
+  const Vector5d B5 = AssembleInputMatrix(d);
+  LandingDesignModel m;
+  m.A.setZero();
+  m.B.setZero();
+  // Rows Δu, Δw, q, Δθ of Eq. (1): the elevator column comes from B, the ΔH column acts on e.
+  m.A.block<4, 4>(0, 0) = A5.block<4, 4>(0, 0);
+  m.A.block<4, 1>(0, kDesignElevator) = B5.head<4>();
+  m.A.block<4, 1>(0, kDesignTrackingError) = A5.block<4, 1>(0, kDeltaH);
+  // Actuator Tf3 = Sδ/(s + Sδ).
+  m.A(kDesignElevator, kDesignElevator) = -actuator_pole_per_s;
+  m.B(kDesignElevator) = actuator_pole_per_s;
+  // ė = u0·Δθ − Δw (+ exogenous −u0·γr or H_ref/τ), the ΔH row of Eq. (1).
+  m.A.block<1, 4>(kDesignTrackingError, 0) = A5.block<1, 4>(kDeltaH, 0);
+  // Compensator: ẋ_c = −S_d·x_c + ε_c (Tf2), ε̇_c = r − e (Tf1).
+  m.A(kDesignCompensator, kDesignCompensator) = -compensator_pole_per_s;
+  m.A(kDesignCompensator, kDesignErrorIntegral) = 1.0;
+  m.A(kDesignErrorIntegral, kDesignTrackingError) = -1.0;
+  // Outputs: the 9 states of Eq. (14); ΔH and d both read e.
+  constexpr int kSource[kLandingStateCount] = {kDesignDeltaU,        kDesignDeltaW,    kDesignPitchRate,
+                                               kDesignDeltaTheta,    kDesignTrackingError, kDesignElevator,
+                                               kDesignTrackingError, kDesignCompensator, kDesignErrorIntegral};
+  m.C.setZero();
+  for (int i = 0; i < kLandingStateCount; ++i) m.C(i, kSource[i]) = 1.0;
+  return m;
+}
+
+void BuildAugmentedSystem(const DimensionalDerivatives& d, double u0, double actuator_pole_per_s,
+                          double compensator_pole_per_s, Eigen::MatrixXd& A, Eigen::MatrixXd& B) {
+  enum : int { kH = 4, kDe = 5, kD = 6, kX = 7, kEps = 8 };
+  const Matrix5d A5 = AssembleStateMatrix(d, u0);
+  const Vector5d B5 = AssembleInputMatrix(d);
+  A = Eigen::MatrixXd::Zero(kLandingStateCount, kLandingStateCount);
+  B = Eigen::MatrixXd::Zero(kLandingStateCount, 1);
+  A.block<5, 5>(0, 0) = A5;
+  A.block<5, 1>(0, kDe) = B5;
+  A(kDe, kDe) = -actuator_pole_per_s;
+  B(kDe, 0) = actuator_pole_per_s;
+  A.block<1, 5>(kD, 0) = A5.row(kH);  // ḋ = u0·Δθ − Δw, the same signal as ΔH's
+  A(kX, kX) = -compensator_pole_per_s;
+  A(kX, kEps) = 1.0;
+  A(kEps, kD) = -1.0;
+}
+
+LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config) {
+  LandingDesign design;
+  design.design_height_m = config.design_height_m.value_or(model.aircraft().wheel_contact_height_m);
+  design.design_speed_mps = config.design_speed_mps.value_or(config.start_speed_mps);
+  design.design_h_derivatives = config.design_h_derivatives;
+  // The table's derivatives with the h-derivatives in, whatever the plant's option says.
+  DimensionalDerivatives d = ComputeDerivatives(model.CoefficientsAt(design.design_height_m),
+                                                model.mass_geometry(), model.DensityAt(design.design_height_m),
+                                                design.design_speed_mps);
+  if (!design.design_h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
+  design.model = BuildLandingDesignModel(d, design.design_speed_mps, config.actuator_pole_per_s,
+                                         config.compensator_pole_per_s);
+
+  StateSpace system;
+  system.A = design.model.A;
+  system.B = design.model.B;
+  system.C = design.model.C;
+  system.D = Eigen::MatrixXd::Zero(kLandingStateCount, 1);
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(kLandingStateCount, kLandingStateCount);
+  for (int i = 0; i < kLandingStateCount; ++i) Q(i, i) = config.q_weights[i];
+  const LqrResult lqr = Lqry(system, Q, Eigen::MatrixXd::Constant(1, 1, config.r_weight));
+  design.status = lqr.status;
+  design.message = lqr.message;
+  if (!lqr.ok()) return design;
+  design.design_gain = lqr.K;
+  design.riccati_solution = lqr.S;
+  design.closed_loop_eigenvalues = lqr.closed_loop_eigenvalues;
+  // Back to the paper's 9 states: K_ΔH = 0, the rest read off ζ.
+  const auto& k = design.design_gain;
+  design.gain = {k(kDesignDeltaU), k(kDesignDeltaW),       k(kDesignPitchRate),
+                 k(kDesignDeltaTheta), 0.0,                 k(kDesignElevator),
+                 k(kDesignTrackingError), k(kDesignCompensator), k(kDesignErrorIntegral)};
+  return design;
+}
+
+}  // namespace gesweep

@@ -1,0 +1,338 @@
+#include "engine/control/landing_simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "engine/common/errors.h"
+#include "engine/simulation/derivative_kernel.h"
+#include "engine/simulation/integrator.h"
+
+namespace gesweep {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Extremes are monitored at this interval when no series is requested: fine enough to catch the peak of
+/// a 20 rad/s closed-loop short-period oscillation to a few per cent.
+constexpr double kMonitorInterval_s = 0.05;
+
+/// Simulation state: the plant's [Δu, Δw, q, Δθ] and the absolute height H (Ḣ = u0·Δθ − Δw, the ΔH row
+/// of Eq. (1)), the actuator δe and the compensator. The tracking error e (d or H − H_ref) is not a
+/// state: with ḋ = Ḣ − u0·γr it is exactly H minus the reference trajectory (docs/landing.md §3).
+enum SimIndex : int { kSimDu, kSimDw, kSimQ, kSimTheta, kSimH, kSimElevator, kSimCompensator, kSimIntegral };
+constexpr int kSimDimension = 8;
+
+enum EventIndex : int {
+  kFlareEvent,
+  kTouchdownEvent,
+  kStallEvent,
+  kDivergenceEvent,
+  kUpperEnter,
+  kUpperLeave,
+  kLowerEnter,
+  kLowerLeave,
+  kEventTotal
+};
+
+class LandingProblem {
+ public:
+  static constexpr int kDimension = kSimDimension;
+  static constexpr int kEventCount = kEventTotal;
+  using State = OdeState<kDimension>;
+
+  LandingProblem(const LongitudinalModel& plant, const LandingConfig& config, const LandingDesign& design,
+                 LandingResult& result, bool store_series)
+      : plant_(plant),
+        result_(result),
+        store_series_(store_series),
+        u0_(config.start_speed_mps),
+        gamma_r_rad_(-config.glide_slope_deg * kRadPerDeg),
+        path_start_m_(config.start_height_m - config.start_glide_path_offset_m),
+        flare_height_m_(config.flare_height_m),
+        tau_s_(FlareTimeConstant(config)),
+        touchdown_height_m_(plant.aircraft().wheel_contact_height_m),
+        stall_speed_mps_(plant.aircraft().stall_speed_mps),
+        divergence_rad_(config.divergence_pitch_deg * kRadPerDeg),
+        elevator_min_rad_(config.elevator_min_deg * kRadPerDeg),
+        elevator_max_rad_(config.elevator_max_deg * kRadPerDeg),
+        actuator_pole_(config.actuator_pole_per_s),
+        compensator_pole_(config.compensator_pole_per_s),
+        fixed_reference_(config.plant_height_reference == PlantHeightReference::kFixedHeight),
+        fixed_reference_height_m_(result.plant_fixed_reference_height_m),
+        gain_(design.gain) {}
+
+  /// Height of the reference trajectory at t: the glide path, or the flare's exponential.
+  double ReferenceHeight(double t) const {
+    if (phase_ == LandingPhase::kGlideSlope) return path_start_m_ + u0_ * gamma_r_rad_ * t;
+    return flare_height_m_ * std::exp(-(t - flare_start_s_) / tau_s_);
+  }
+
+  /// ηe = −K·z with z the states of Eq. (14) (K_ΔH = 0 by design).
+  double Command(double t, const State& x) const {
+    const double e = x[kSimH] - ReferenceHeight(t);
+    return -(gain_[0] * x[kSimDu] + gain_[1] * x[kSimDw] + gain_[2] * x[kSimQ] + gain_[3] * x[kSimTheta] +
+             gain_[5] * x[kSimElevator] + gain_[6] * e + gain_[7] * x[kSimCompensator] +
+             gain_[8] * x[kSimIntegral]);
+  }
+
+  void Derivative(double t, const State& x, int /*segment*/, State& dxdt) const {
+    const double height_m = x[kSimH];
+    const double speed_mps = u0_ + x[kSimDu];
+    const double e = height_m - ReferenceHeight(t);
+    const Equation1Entries entries = EntriesFromDerivatives(plant_.DerivativesAt(height_m, speed_mps), u0_);
+    const double delta_h = fixed_reference_ ? height_m - fixed_reference_height_m_ : e;
+    const double x5[5] = {x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h};
+    double dx5[5];
+    Equation1Derivative(entries, u0_, x5, x[kSimElevator], dx5);
+    for (int i = 0; i < 4; ++i) dxdt[i] = dx5[i];
+    dxdt[kSimH] = dx5[kDeltaH];
+    const double command = std::clamp(Command(t, x), elevator_min_rad_, elevator_max_rad_);
+    dxdt[kSimElevator] = actuator_pole_ * (command - x[kSimElevator]);
+    dxdt[kSimCompensator] = -compensator_pole_ * x[kSimCompensator] + x[kSimIntegral];
+    dxdt[kSimIntegral] = -e;  // ε̇ = r − e with r = 0
+  }
+
+  void EventValues(double t, const State& x, int /*segment*/, std::array<double, kEventCount>& g) const {
+    g[kFlareEvent] = phase_ == LandingPhase::kGlideSlope ? x[kSimH] - flare_height_m_ : 1.0;
+    g[kTouchdownEvent] = x[kSimH] - touchdown_height_m_;
+    g[kStallEvent] = u0_ + x[kSimDu] - stall_speed_mps_;
+    g[kDivergenceEvent] = divergence_rad_ - std::abs(x[kSimTheta]);
+    const double command = Command(t, x);
+    g[kUpperEnter] = elevator_max_rad_ - command;
+    g[kUpperLeave] = command - elevator_max_rad_;
+    g[kLowerEnter] = command - elevator_min_rad_;
+    g[kLowerLeave] = elevator_min_rad_ - command;
+  }
+
+  EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
+    Monitor(t, x);
+    switch (event) {
+      case kFlareEvent:
+        result_.flare_start_time_s = t;
+        result_.glide_path_error_at_flare_m = x[kSimH] - ReferenceHeight(t);
+        phase_ = LandingPhase::kFlare;
+        flare_start_s_ = t;
+        // The tracking error jumps from d to H − H_ref = 0, and with it the command: re-read saturation.
+        UpdateSaturation(t, IsSaturated(Command(t, x)));
+        return EventAction::kRestart;
+      case kTouchdownEvent:
+      case kStallEvent:
+      case kDivergenceEvent:
+        return EventAction::kStop;
+      case kUpperEnter:
+      case kLowerEnter:
+        UpdateSaturation(t, true);
+        return EventAction::kContinue;
+      case kUpperLeave:
+      case kLowerLeave:
+        UpdateSaturation(t, false);  // the command is back at the limit it crossed
+        return EventAction::kContinue;
+      default:
+        GESWEEP_DEMAND(false);
+    }
+    return EventAction::kContinue;
+  }
+
+  void OnStep(double t, const State& x, int /*segment*/) { Monitor(t, x); }
+
+  void OnOutput(double t, const State& x, int /*segment*/) {
+    Monitor(t, x);
+    if (!store_series_) return;
+    LandingSample s;
+    s.time_s = t;
+    s.phase = phase_;
+    s.height_m = x[kSimH];
+    s.reference_height_m = ReferenceHeight(t);
+    s.tracking_error_m = s.height_m - s.reference_height_m;
+    s.speed_mps = u0_ + x[kSimDu];
+    s.delta_w_mps = x[kSimDw];
+    s.pitch_rate_radps = x[kSimQ];
+    s.pitch_rad = x[kSimTheta];
+    s.sink_rate_mps = SinkRate(x);
+    s.elevator_rad = x[kSimElevator];
+    s.elevator_command_rad = Command(t, x);
+    s.compensator = x[kSimCompensator];
+    s.error_integral = x[kSimIntegral];
+    result_.series.push_back(s);
+  }
+
+  /// Starts the saturation bookkeeping at the initial state.
+  void Start(double t, const State& x) {
+    saturated_ = IsSaturated(Command(t, x));
+    saturated_since_s_ = t;
+  }
+
+  /// Closes an open saturation interval at the end of the run.
+  void Finish(double t) { UpdateSaturation(t, false); }
+
+  double SinkRate(const State& x) const { return x[kSimDw] - u0_ * x[kSimTheta]; }
+  LandingPhase phase() const { return phase_; }
+
+ private:
+  bool IsSaturated(double command) const { return command > elevator_max_rad_ || command < elevator_min_rad_; }
+
+  void UpdateSaturation(double t, bool saturated) {
+    if (saturated == saturated_) return;
+    if (saturated_) {
+      const double length = t - saturated_since_s_;
+      result_.saturated_time_s += length;
+      result_.longest_saturation_s = std::max(result_.longest_saturation_s, length);
+    }
+    saturated_ = saturated;
+    saturated_since_s_ = t;
+  }
+
+  void Monitor(double t, const State& x) {
+    result_.max_abs_elevator_deg = std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
+    result_.max_abs_elevator_command_deg =
+        std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x)) * kDegPerRad);
+    result_.max_abs_pitch_rate_degps = std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
+    const double speed = u0_ + x[kSimDu];
+    result_.min_speed_mps = std::min(result_.min_speed_mps, speed);
+    result_.max_speed_mps = std::max(result_.max_speed_mps, speed);
+  }
+
+  const LongitudinalModel& plant_;
+  LandingResult& result_;
+  bool store_series_;
+  double u0_;
+  double gamma_r_rad_;
+  double path_start_m_;
+  double flare_height_m_;
+  double tau_s_;
+  double touchdown_height_m_;
+  double stall_speed_mps_;
+  double divergence_rad_;
+  double elevator_min_rad_;
+  double elevator_max_rad_;
+  double actuator_pole_;
+  double compensator_pole_;
+  bool fixed_reference_;
+  double fixed_reference_height_m_;
+  std::array<double, kLandingStateCount> gain_;
+  LandingPhase phase_ = LandingPhase::kGlideSlope;
+  double flare_start_s_ = 0.0;
+  bool saturated_ = false;
+  double saturated_since_s_ = 0.0;
+};
+
+std::string Format(double value, int precision = 4) {
+  std::ostringstream out;
+  out.precision(precision);
+  out << value;
+  return out.str();
+}
+
+}  // namespace
+
+std::string_view ToString(LandingOutcome outcome) {
+  switch (outcome) {
+    case LandingOutcome::kLanded: return "landed";
+    case LandingOutcome::kNoTouchdown: return "no_touchdown";
+    case LandingOutcome::kStall: return "stall";
+    case LandingOutcome::kDiverged: return "diverged";
+    case LandingOutcome::kDesignFailed: return "design_failed";
+  }
+  return "unknown";
+}
+
+std::string_view ToString(LandingPhase phase) {
+  return phase == LandingPhase::kGlideSlope ? "glide_slope" : "flare";
+}
+
+LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config) {
+  const Aircraft& aircraft = plant.aircraft();
+  ValidateLandingConfig(config, aircraft, "landing config");
+
+  LandingResult result;
+  result.flare_height_m = config.flare_height_m;
+  result.flare_time_constant_s = FlareTimeConstant(config);
+  result.glide_slope_deg = config.glide_slope_deg;
+  result.plant_fixed_reference_height_m =
+      config.plant_fixed_reference_height_m.value_or(aircraft.table_heights_m.back());
+  result.plant_h_derivatives = plant.options().h_derivatives;
+  result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
+  for (double* field : {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
+                        &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
+                        &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
+    *field = kNaN;
+  }
+  result.min_speed_mps = std::numeric_limits<double>::infinity();
+  result.max_speed_mps = -std::numeric_limits<double>::infinity();
+
+  result.design = DesignLandingController(plant, config);
+  if (!result.design.ok()) {
+    result.outcome = LandingOutcome::kDesignFailed;
+    result.message = "LQR design failed (" + std::string(ToString(result.design.status)) + "): " + result.design.message;
+    result.final_height_m = config.start_height_m;
+    result.min_speed_mps = result.max_speed_mps = config.start_speed_mps;
+    return result;
+  }
+
+  const bool store_series = config.output_interval_s > 0.0;
+  LandingProblem problem(plant, config, result.design, result, store_series);
+  LandingProblem::State x0{};
+  x0[kSimTheta] = config.start_pitch_deg * kRadPerDeg;
+  x0[kSimH] = config.start_height_m;
+  if (store_series) {
+    result.series.reserve(static_cast<std::size_t>(result.time_limit_s / config.output_interval_s) + 2);
+  }
+  problem.Start(0.0, x0);
+
+  IntegratorOptions options;
+  options.kind = IntegratorKind::kDopri5;
+  options.relative_tolerance = config.relative_tolerance;
+  options.absolute_tolerance = config.absolute_tolerance;
+  options.max_step_s = config.max_step_s;
+  options.step_s = std::min(0.01, config.max_step_s);
+  options.output_interval_s = store_series ? config.output_interval_s : kMonitorInterval_s;
+  const IntegrationResult<kSimDimension> run = Integrate(problem, x0, 0.0, result.time_limit_s, {}, options);
+  problem.Finish(run.end_time_s);
+
+  const auto& xf = run.final_state;
+  result.final_time_s = run.end_time_s;
+  result.final_height_m = xf[kSimH];
+  result.accepted_steps = run.accepted_steps;
+  result.rejected_steps = run.rejected_steps;
+  result.rhs_calls = run.rhs_calls;
+  const std::string at = " at t = " + Format(run.end_time_s, 6) + " s";
+  switch (run.status) {
+    case IntegrationStatus::kReachedEnd:
+      result.outcome = LandingOutcome::kNoTouchdown;
+      result.message = "time limit reached in flight at H = " + Format(xf[kSimH]) + " m";
+      break;
+    case IntegrationStatus::kNonFinite:
+    case IntegrationStatus::kStepSizeUnderflow:
+      result.outcome = LandingOutcome::kDiverged;
+      result.message = "the state stopped being finite (" + std::string(ToString(run.status)) + ")" + at;
+      break;
+    case IntegrationStatus::kStoppedByEvent:
+      if (run.stopping_event == kTouchdownEvent) {
+        result.outcome = LandingOutcome::kLanded;
+        result.message = "touchdown" + at + " in the " + std::string(ToString(problem.phase())) + " phase";
+        result.touchdown_time_s = run.end_time_s;
+        const double gamma_rad = config.glide_slope_deg * kRadPerDeg;
+        const double transmitter_time_s =
+            (config.start_height_m - config.start_glide_path_offset_m) / (config.start_speed_mps * gamma_rad);
+        result.touchdown_distance_past_transmitter_m =
+            config.start_speed_mps * (run.end_time_s - transmitter_time_s);
+        result.touchdown_sink_rate_mps = problem.SinkRate(xf);
+        result.touchdown_pitch_deg = xf[kSimTheta] * kDegPerRad;
+        result.touchdown_speed_mps = config.start_speed_mps + xf[kSimDu];
+      } else if (run.stopping_event == kStallEvent) {
+        result.outcome = LandingOutcome::kStall;
+        result.message = "stall speed reached" + at + " at H = " + Format(xf[kSimH]) + " m";
+      } else {
+        result.outcome = LandingOutcome::kDiverged;
+        result.message = "|pitch| reached " + Format(config.divergence_pitch_deg) + " deg" + at;
+      }
+      break;
+  }
+  return result;
+}
+
+}  // namespace gesweep

@@ -1,0 +1,179 @@
+#pragma once
+/// The hot path of every time response: Eq. (1) of the paper with its derivatives re-evaluated at
+/// the current height and speed (docs/MODEL.md §4, §5, §7). Three pieces, each replaceable by the
+/// generic path of LongitudinalModel and tested against it:
+///  - Equation1Entries / Equation1Derivative: the 13 non-kinematic entries of A and B and ẋ = A x + B δe
+///    written out (A is sparse; the kinematic entries are constants); the frozen-A floor.
+///  - DensityPolynomial: ISA ρ(H) as a degree-6 polynomial (Estrin's scheme) over the heights a landing flies
+///    through, within 1e-15 of IsaDensity (a pow per call otherwise).
+///  - LinearDerivativeTable: for linear interpolation, each dimensional derivative is
+///    ρ·u^p·R(H) with R affine in the coefficients, hence linear in H within a table segment; R is
+///    precomputed per segment (value and slope), so one evaluation is 14 fused multiply-adds after a
+///    segment check that almost always hits the previous segment.
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "engine/aircraft/atmosphere.h"
+#include "engine/dynamics/longitudinal_model.h"
+
+/// Forces inlining of the few functions on the per-stage path: GCC otherwise keeps
+/// Equation1Derivative out of line (called from five places), which measured 40 % of the
+/// frozen-A run.
+#define GESWEEP_ALWAYS_INLINE [[gnu::always_inline]] inline
+
+namespace gesweep {
+
+/// The entries of Eq. (1) that depend on the flight condition (MODEL.md §5). Row q holds the
+/// composite entries: m_u = Mu + Mẇ·Zu, m_w = Mw + Mẇ·Zw, m_q = Mq + Mẇ·u0, m_h = Mh + Mẇ·Zh,
+/// m_de = Mδe + Mẇ·Zδe. Units as in DimensionalDerivatives (per second, per metre, per radian).
+struct Equation1Entries {
+  double x_u = 0, x_w = 0, x_h = 0, x_de = 0;
+  double z_u = 0, z_w = 0, z_h = 0, z_de = 0;
+  double m_u = 0, m_w = 0, m_q = 0, m_h = 0, m_de = 0;
+};
+
+/// The entries of Eq. (1) from the derivatives; the Mẇ·u0 term uses the kinematic reference speed
+/// u0 (m/s), as the kinematic entries do (MODEL.md §7).
+inline Equation1Entries EntriesFromDerivatives(const DimensionalDerivatives& d, double reference_speed_mps) {
+  Equation1Entries e;
+  e.x_u = d.Xu;
+  e.x_w = d.Xw;
+  e.x_h = d.Xh;
+  e.x_de = d.Xde;
+  e.z_u = d.Zu;
+  e.z_w = d.Zw;
+  e.z_h = d.Zh;
+  e.z_de = d.Zde;
+  e.m_u = d.Mu + d.Mw_dot * d.Zu;
+  e.m_w = d.Mw + d.Mw_dot * d.Zw;
+  e.m_q = d.Mq + d.Mw_dot * reference_speed_mps;
+  e.m_h = d.Mh + d.Mw_dot * d.Zh;
+  e.m_de = d.Mde + d.Mw_dot * d.Zde;
+  return e;
+}
+
+/// ẋ = A x + B δe of Eq. (1) for x = [Δu, Δw, q, Δθ, ΔH] (SI), elevator δe in rad, kinematic
+/// reference speed u0 in m/s. Equal to AssembleStateMatrix(d, u0)·x + AssembleInputMatrix(d)·δe.
+GESWEEP_ALWAYS_INLINE void Equation1Derivative(const Equation1Entries& e, double reference_speed_mps, const double* x,
+                                double elevator_rad, double* dxdt) {
+  const double du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
+  dxdt[0] = e.x_u * du + e.x_w * dw - kGravity_mps2 * dtheta + e.x_h * dh + e.x_de * elevator_rad;
+  dxdt[1] = e.z_u * du + e.z_w * dw + reference_speed_mps * q + e.z_h * dh + e.z_de * elevator_rad;
+  dxdt[2] = e.m_u * du + e.m_w * dw + e.m_q * q + e.m_h * dh + e.m_de * elevator_rad;
+  dxdt[3] = q;
+  dxdt[4] = -dw + reference_speed_mps * dtheta;
+}
+
+/// ISA density ρ(field elevation + H) in kg/m³ without a pow per call: a Taylor polynomial of
+/// ρ0 (1 − L z/T0)^(g/(R L) − 1) about the middle of kPolynomialLow_m … kPolynomialHigh_m above
+/// the field, evaluated by Estrin's scheme; outside that band, IsaDensity itself. Truncation error < 1e-18
+/// relative in the band (the next term), so the result is IsaDensity to rounding (tested to 1e-14).
+class DensityPolynomial {
+ public:
+  static constexpr double kPolynomialLow_m = -100.0;   ///< band of H over which the polynomial is used
+  static constexpr double kPolynomialHigh_m = 600.0;   ///< (covers the landing from 500 m)
+  static constexpr int kDegree = 6;  ///< At() writes the degree-6 Estrin scheme out
+  static_assert(kDegree == 6);
+
+  /// field_elevation_m: ISA altitude of the ground, m (within the troposphere).
+  explicit DensityPolynomial(double field_elevation_m);
+
+  /// ρ at height H above the field, kg/m³. NaN outside the troposphere (as IsaDensity).
+  GESWEEP_ALWAYS_INLINE double At(double height_m) const {
+    const double y = height_m - center_m_;
+    if (!(std::abs(y) <= half_width_m_)) return IsaDensity(field_elevation_m_ + height_m);
+    // Estrin's scheme: the same polynomial as Horner's with half the dependent operations.
+    const auto& c = coefficients_;
+    const double y2 = y * y;
+    const double y4 = y2 * y2;
+    return ((c[0] + c[1] * y) + (c[2] + c[3] * y) * y2) + ((c[4] + c[5] * y) + c[6] * y2) * y4;
+  }
+
+ private:
+  double field_elevation_m_;
+  double center_m_;
+  double half_width_m_;
+  std::array<double, kDegree + 1> coefficients_{};
+};
+
+/// Derivatives of MODEL.md §4 for a model with linear interpolation, arranged per table segment.
+/// Each derivative is D = ρ·u^p·R(H) with p = 1 (Xu, Xw, Zu, Zw, Mu, Mw, Mq), p = 2 (Xh, Xδe, Zh,
+/// Zδe, Mh, Mδe) or p = 0 (Mẇ), and R(H) = ComputeDerivatives(C(H), mg, ρ = 1, u = 1) is affine in
+/// the coefficient row C(H), which is linear in H between two table rows: so R is exactly linear
+/// in each segment, constant below the first row and constant (the free-flight row) above the last.
+class LinearDerivativeTable {
+ public:
+  /// Precondition: model.options().interpolation == Interpolation::kLinear (GESWEEP_DEMAND).
+  explicit LinearDerivativeTable(const LongitudinalModel& model);
+
+  /// Index of the segment containing H, to seed `segment_hint` of At.
+  int SegmentOf(double height_m) const;
+
+  /// Derivatives at height H (m) and speed u (m/s); Xh = Zh = Mh = 0 without h-derivatives.
+  /// Same values as model.DerivativesAt(H, u) to rounding, with ρ from DensityPolynomial.
+  /// segment_hint: any segment index on entry (the previous call's is best); on return, H's.
+  DimensionalDerivatives DerivativesAt(double height_m, double speed_mps, int& segment_hint) const;
+
+  /// ẋ of Eq. (1) at x = [Δu, Δw, q, Δθ, ΔH] (SI) and elevator δe (rad), with H = H0 + ΔH and
+  /// u = u0 + Δu for the derivatives and the reference u0 (m/s) in the kinematic entries. The hot
+  /// path: the speed and density factors come out of the sums, so that the products with the
+  /// state run while ρ(H) is being computed, and row q is written q̇ = ΣM·x + Mẇ·ẇ, which is row q
+  /// of Eq. (1) (Mẇ·(Zu Δu + Zw Δw + u0 q + Zh ΔH + Zδe δe) = Mẇ·ẇ). segment_hint as above.
+  GESWEEP_ALWAYS_INLINE void Equation1(double start_height_m, double reference_speed_mps, const double* x, double elevator_rad,
+                 double* dxdt, int& segment_hint) const {
+    const double du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
+    const double height_m = start_height_m + dh;
+    const double speed_mps = reference_speed_mps + du;
+    const Segment& seg = SegmentFor(height_m, segment_hint);
+    const double y = height_m - seg.reference_m;
+    std::array<double, kReducedCount> r;
+    for (int j = 0; j < kReducedCount; ++j) r[j] = seg.slope[j] * y + seg.value[j];
+    // The products with the state do not need ρ or u; ρ(H) is computed alongside them and enters
+    // last, so the dependent chain from the state to ẋ is u → u² → sums → ×ρ (about 45 cycles
+    // rather than 60 with ρ·u formed first; measured 197 → 186 µs for the 30 s run).
+    const double x_1 = r[kXu] * du + r[kXw] * dw;
+    const double x_2 = r[kXh] * dh + r[kXde] * elevator_rad;
+    const double z_1 = r[kZu] * du + r[kZw] * dw;
+    const double z_2 = r[kZh] * dh + r[kZde] * elevator_rad;
+    const double m_1 = (r[kMu] * du + r[kMw] * dw) + r[kMq] * q;
+    const double m_2 = r[kMh] * dh + r[kMde] * elevator_rad;
+    const double rho = density_.At(height_m);
+    const double mw_dot = rho * r[kMwDot];
+    const double u2 = speed_mps * speed_mps;
+    const double w_dot = rho * (speed_mps * z_1 + u2 * z_2) + reference_speed_mps * q;
+    dxdt[0] = rho * (speed_mps * x_1 + u2 * x_2) - kGravity_mps2 * dtheta;
+    dxdt[1] = w_dot;
+    dxdt[2] = rho * (speed_mps * m_1 + u2 * m_2) + mw_dot * w_dot;
+    dxdt[3] = q;
+    dxdt[4] = reference_speed_mps * dtheta - dw;
+  }
+
+  /// Number of segments: one below the first row, one per pair of rows, one above the last.
+  int segment_count() const { return static_cast<int>(segments_.size()); }
+
+ private:
+  enum Reduced : int { kXu, kXw, kXh, kXde, kZu, kZw, kZh, kZde, kMu, kMw, kMq, kMh, kMde, kMwDot, kReducedCount };
+  /// One segment (low, high]: R(H) = value + slope·(H − reference).
+  struct Segment {
+    std::array<double, kReducedCount> value{};
+    std::array<double, kReducedCount> slope{};
+    double reference_m = 0;
+    double low_m = 0;
+    double high_m = 0;
+  };
+  int Locate(double height_m, int start) const;
+  GESWEEP_ALWAYS_INLINE const Segment& SegmentFor(double height_m, int& segment_hint) const {
+    int s = segment_hint;
+    if (!(height_m > segments_[s].low_m && height_m <= segments_[s].high_m)) s = Locate(height_m, s);
+    segment_hint = s;
+    return segments_[s];
+  }
+  static std::array<double, kReducedCount> Reduce(const DimensionalDerivatives& d);
+
+  std::vector<Segment> segments_;
+  DensityPolynomial density_;
+};
+
+}  // namespace gesweep

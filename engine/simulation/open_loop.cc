@@ -1,0 +1,314 @@
+#include "engine/simulation/open_loop.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "engine/common/errors.h"
+#include "engine/simulation/derivative_kernel.h"
+
+namespace gesweep {
+
+std::string_view ToString(ElevatorInputKind kind) {
+  switch (kind) {
+    case ElevatorInputKind::kNone:
+      return "none";
+    case ElevatorInputKind::kPulse:
+      return "pulse";
+    case ElevatorInputKind::kStep:
+      return "step";
+    case ElevatorInputKind::kDoublet:
+      return "doublet";
+  }
+  return "unknown";
+}
+
+std::optional<ElevatorInputKind> ParseElevatorInputKind(std::string_view text) {
+  if (text == "none") return ElevatorInputKind::kNone;
+  if (text == "pulse") return ElevatorInputKind::kPulse;
+  if (text == "step") return ElevatorInputKind::kStep;
+  if (text == "doublet") return ElevatorInputKind::kDoublet;
+  return std::nullopt;
+}
+
+std::string_view ToString(OpenLoopEndEvent event) {
+  switch (event) {
+    case OpenLoopEndEvent::kTouchdown:
+      return "touchdown";
+    case OpenLoopEndEvent::kStall:
+      return "stall";
+    case OpenLoopEndEvent::kTimeLimit:
+      return "time_limit";
+    case OpenLoopEndEvent::kDiverged:
+      return "diverged";
+  }
+  return "unknown";
+}
+
+ElevatorSchedule MakeElevatorSchedule(const ElevatorInput& input) {
+  const double a = input.amplitude_rad;
+  const double t0 = input.start_s;
+  const double d = input.duration_s;
+  switch (input.kind) {
+    case ElevatorInputKind::kNone:
+      return {{}, {0.0}};
+    case ElevatorInputKind::kPulse:
+      return {{t0, t0 + d}, {0.0, a, 0.0}};
+    case ElevatorInputKind::kStep:
+      return {{t0}, {0.0, a}};
+    case ElevatorInputKind::kDoublet:
+      return {{t0, t0 + d, t0 + 2.0 * d}, {0.0, a, -a, 0.0}};
+  }
+  return {{}, {0.0}};
+}
+
+namespace {
+
+std::string Text(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
+
+double TouchdownHeight(const LongitudinalModel& model, const OpenLoopConfig& config) {
+  return config.touchdown_height_m.value_or(model.aircraft().wheel_contact_height_m);
+}
+
+double StallSpeed(const LongitudinalModel& model, const OpenLoopConfig& config) {
+  return config.stall_speed_mps.value_or(model.aircraft().stall_speed_mps);
+}
+
+// Where ẋ comes from: three sources with one interface, so that each instantiation of the problem
+// inlines its own.
+struct FrozenSource {
+  Equation1Entries entries;  // A and B at the start condition
+  GESWEEP_ALWAYS_INLINE void Derivative(double /*h0*/, double u0, const double* x, double elevator_rad, double* dxdt) {
+    Equation1Derivative(entries, u0, x, elevator_rad, dxdt);
+  }
+};
+
+struct TableSource {
+  const LinearDerivativeTable* table;
+  int segment_hint;
+  GESWEEP_ALWAYS_INLINE void Derivative(double h0, double u0, const double* x, double elevator_rad, double* dxdt) {
+    table->Equation1(h0, u0, x, elevator_rad, dxdt, segment_hint);
+  }
+};
+
+struct ModelSource {
+  const LongitudinalModel* model;
+  void Derivative(double h0, double u0, const double* x, double elevator_rad, double* dxdt) {
+    const DimensionalDerivatives d = model->DerivativesAt(h0 + x[kDeltaH], u0 + x[kDeltaU]);
+    Equation1Derivative(EntriesFromDerivatives(d, u0), u0, x, elevator_rad, dxdt);
+  }
+};
+
+enum OpenLoopEvent : int { kTouchdownEvent = 0, kStallEvent = 1, kHeightMinimumEvent = 2 };
+
+// Eq. (1) as an OdeProblem (integrator.h).
+template <class Source>
+class OpenLoopProblem {
+ public:
+  static constexpr int kDimension = 5;
+  static constexpr int kEventCount = 3;
+  using State = OdeState<kDimension>;
+
+  OpenLoopProblem(Source source, double start_height_m, double reference_speed_mps,
+                  const std::vector<double>& elevator_by_segment, double touchdown_height_m, double stall_speed_mps,
+                  OpenLoopSeries* series)
+      : source_(source),
+        start_height_m_(start_height_m),
+        u0_(reference_speed_mps),
+        elevator_by_segment_(elevator_by_segment.data()),
+        touchdown_height_m_(touchdown_height_m),
+        stall_speed_mps_(stall_speed_mps),
+        series_(series) {}
+
+  GESWEEP_ALWAYS_INLINE void Derivative(double /*t*/, const State& x, int segment, State& dxdt) {
+    source_.Derivative(start_height_m_, u0_, x.data(), elevator_by_segment_[segment], dxdt.data());
+  }
+
+  void EventValues(double /*t*/, const State& x, int /*segment*/, std::array<double, kEventCount>& g) const {
+    g[kTouchdownEvent] = start_height_m_ + x[kDeltaH] - touchdown_height_m_;
+    g[kStallEvent] = u0_ + x[kDeltaU] - stall_speed_mps_;
+    // Ḣ = −Δw + u0·Δθ (row ΔH of Eq. 1); −Ḣ falls through zero at a local minimum of H.
+    g[kHeightMinimumEvent] = x[kDeltaW] - u0_ * x[kDeltaTheta];
+  }
+
+  EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
+    if (event == kHeightMinimumEvent) {
+      NoteHeight(t, x);
+      return EventAction::kContinue;
+    }
+    stopping_event_ = event;
+    return EventAction::kStop;
+  }
+
+  void OnStep(double t, const State& x, int /*segment*/) {
+    NoteHeight(t, x);
+    max_abs_pitch_rate_radps_ = std::max(max_abs_pitch_rate_radps_, std::abs(x[kPitchRate]));
+  }
+
+  void OnOutput(double t, const State& x, int segment) {
+    if (series_ == nullptr) return;
+    series_->time_s.push_back(t);
+    series_->delta_speed_mps.push_back(x[kDeltaU]);
+    series_->delta_normal_velocity_mps.push_back(x[kDeltaW]);
+    series_->pitch_rate_radps.push_back(x[kPitchRate]);
+    series_->delta_pitch_rad.push_back(x[kDeltaTheta]);
+    series_->delta_height_m.push_back(x[kDeltaH]);
+    series_->height_m.push_back(start_height_m_ + x[kDeltaH]);
+    series_->speed_mps.push_back(u0_ + x[kDeltaU]);
+    series_->elevator_rad.push_back(elevator_by_segment_[segment]);
+  }
+
+  double min_height_m() const { return min_height_m_; }
+  double min_height_time_s() const { return min_height_time_s_; }
+  double max_abs_pitch_rate_radps() const { return max_abs_pitch_rate_radps_; }
+  int stopping_event() const { return stopping_event_; }
+
+ private:
+  void NoteHeight(double t, const State& x) {
+    const double height_m = start_height_m_ + x[kDeltaH];
+    if (height_m < min_height_m_) {
+      min_height_m_ = height_m;
+      min_height_time_s_ = t;
+    }
+  }
+
+  Source source_;
+  double start_height_m_;
+  double u0_;
+  const double* elevator_by_segment_;
+  double touchdown_height_m_;
+  double stall_speed_mps_;
+  OpenLoopSeries* series_;
+  double min_height_m_ = std::numeric_limits<double>::infinity();
+  double min_height_time_s_ = 0;
+  double max_abs_pitch_rate_radps_ = 0;
+  int stopping_event_ = -1;
+};
+
+void Reserve(OpenLoopSeries& series, std::size_t count) {
+  for (auto* column : {&series.time_s, &series.delta_speed_mps, &series.delta_normal_velocity_mps,
+                       &series.pitch_rate_radps, &series.delta_pitch_rad, &series.delta_height_m,
+                       &series.height_m, &series.speed_mps, &series.elevator_rad}) {
+    column->reserve(count);
+  }
+}
+
+template <class Source>
+OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoopConfig& config) {
+  OpenLoopResult result;
+  const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
+  IntegratorOptions options = config.integrator;
+  options.output_interval_s = config.series_interval_s;
+  OpenLoopSeries* series = nullptr;
+  if (config.series_interval_s > 0.0) {
+    // Every sample and the end point, so that push_back never reallocates during the run.
+    Reserve(result.series, static_cast<std::size_t>(config.duration_s / config.series_interval_s) + 3);
+    series = &result.series;
+  }
+  OpenLoopProblem<Source> problem(source, config.start_height_m, config.reference_speed_mps, schedule.elevator_rad,
+                                  TouchdownHeight(model, config), StallSpeed(model, config), series);
+  const InitialOffsets& o = config.initial_offsets;
+  const OdeState<5> x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
+                          o.delta_height_m};
+  const IntegrationResult<5> run = Integrate(problem, x0, 0.0, config.duration_s, schedule.breakpoints_s, options);
+
+  OpenLoopSummary& summary = result.summary;
+  summary.end_time_s = run.end_time_s;
+  for (int i = 0; i < 5; ++i) summary.final_state[i] = run.final_state[i];
+  summary.final_height_m = config.start_height_m + run.final_state[kDeltaH];
+  summary.final_speed_mps = config.reference_speed_mps + run.final_state[kDeltaU];
+  summary.min_height_m = problem.min_height_m();
+  summary.min_height_time_s = problem.min_height_time_s();
+  summary.max_abs_pitch_rate_radps = problem.max_abs_pitch_rate_radps();
+  summary.steps = run.accepted_steps;
+  summary.rejected_steps = run.rejected_steps;
+  summary.rhs_calls = run.rhs_calls;
+  switch (run.status) {
+    case IntegrationStatus::kReachedEnd:
+      summary.end_event = OpenLoopEndEvent::kTimeLimit;
+      break;
+    case IntegrationStatus::kStoppedByEvent:
+      summary.end_event =
+          run.stopping_event == kTouchdownEvent ? OpenLoopEndEvent::kTouchdown : OpenLoopEndEvent::kStall;
+      break;
+    case IntegrationStatus::kNonFinite:
+      summary.end_event = OpenLoopEndEvent::kDiverged;
+      summary.message = "the state became non-finite in the step after t = " + Text(run.end_time_s) + " s";
+      break;
+    case IntegrationStatus::kStepSizeUnderflow:
+      summary.end_event = OpenLoopEndEvent::kDiverged;
+      summary.message = "the adaptive step fell below its floor at t = " + Text(run.end_time_s) + " s";
+      break;
+  }
+  return result;
+}
+
+}  // namespace
+
+void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source) {
+  auto require = [&source](bool ok, const char* key, double value, const std::string& expected) {
+    if (!ok) throw InputError(source, key, Text(value), expected);
+  };
+  const double touchdown_m = TouchdownHeight(model, config);
+  const double stall_mps = StallSpeed(model, config);
+  require(std::isfinite(touchdown_m) && touchdown_m >= 0.0, "touchdown_height_m", touchdown_m,
+          "expected a finite height >= 0 m");
+  require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps, "expected a finite speed >= 0 m/s");
+  const double start_m = config.start_height_m + config.initial_offsets.delta_height_m;
+  require(std::isfinite(config.start_height_m), "start_height_m", config.start_height_m, "expected a finite height");
+  require(start_m > touchdown_m, "start_height_m", start_m,
+          "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
+              " m; a run cannot start on or below the ground");
+  require(std::isfinite(config.reference_speed_mps) && config.reference_speed_mps > 0.0, "reference_speed_mps",
+          config.reference_speed_mps, "expected a finite speed > 0 m/s");
+  const double start_speed = config.reference_speed_mps + config.initial_offsets.delta_speed_mps;
+  require(start_speed > stall_mps, "reference_speed_mps", start_speed,
+          "expected a start speed above the stall speed " + Text(stall_mps) + " m/s");
+  require(std::isfinite(config.duration_s) && config.duration_s > 0.0, "duration_s", config.duration_s,
+          "expected a finite duration > 0 s");
+  require(std::isfinite(config.series_interval_s) && config.series_interval_s >= 0.0, "series_interval_s",
+          config.series_interval_s, "expected a finite interval >= 0 s (0: summary only)");
+  require(config.series_interval_s == 0.0 || config.duration_s / config.series_interval_s <= 1e8, "series_interval_s",
+          config.series_interval_s, "expected at most 1e8 samples per run");
+  const ElevatorInput& input = config.elevator;
+  require(std::isfinite(input.amplitude_rad), "elevator.amplitude_rad", input.amplitude_rad, "expected a finite angle");
+  require(std::isfinite(input.start_s) && input.start_s >= 0.0, "elevator.start_s", input.start_s,
+          "expected a finite start time >= 0 s");
+  if (input.kind == ElevatorInputKind::kPulse || input.kind == ElevatorInputKind::kDoublet) {
+    require(std::isfinite(input.duration_s) && input.duration_s > 0.0, "elevator.duration_s", input.duration_s,
+            "expected a finite duration > 0 s");
+  }
+  const InitialOffsets& o = config.initial_offsets;
+  for (const auto& [key, value] : {std::pair{"initial_offsets.delta_speed_mps", o.delta_speed_mps},
+                                   {"initial_offsets.delta_normal_velocity_mps", o.delta_normal_velocity_mps},
+                                   {"initial_offsets.pitch_rate_radps", o.pitch_rate_radps},
+                                   {"initial_offsets.delta_pitch_rad", o.delta_pitch_rad},
+                                   {"initial_offsets.delta_height_m", o.delta_height_m}}) {
+    require(std::isfinite(value), key, value, "expected a finite number");
+  }
+  ValidateIntegratorOptions(config.integrator, source);
+}
+
+OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config) {
+  ValidateOpenLoopConfig(model, config, "open-loop config");
+  const double h0 = config.start_height_m;
+  const double u0 = config.reference_speed_mps;
+  if (config.freeze_derivatives) {
+    // A and B at the start condition H0 + ΔH(0), u0 + Δu(0), through the generic path.
+    const double height_m = h0 + config.initial_offsets.delta_height_m;
+    const double speed_mps = u0 + config.initial_offsets.delta_speed_mps;
+    return Run(FrozenSource{EntriesFromDerivatives(model.DerivativesAt(height_m, speed_mps), u0)}, model, config);
+  }
+  if (config.generic_derivative_path || model.options().interpolation != Interpolation::kLinear) {
+    return Run(ModelSource{&model}, model, config);
+  }
+  const LinearDerivativeTable table(model);
+  return Run(TableSource{&table, table.SegmentOf(h0)}, model, config);
+}
+
+}  // namespace gesweep

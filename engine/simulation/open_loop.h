@@ -1,0 +1,137 @@
+#pragma once
+/// The open-loop time response of docs/MODEL.md §7 (the paper's Section IV and Fig. 4): Eq. (1)
+/// integrated from a start height and speed after an elevator input, with the dimensional
+/// derivatives re-evaluated at every right-hand-side evaluation at the current height
+/// H = H0 + ΔH and speed u = u0 + Δu, with ρ(H); the kinematic u0 entries of Eq. (1) (row Δw
+/// column q, row ΔH column Δθ, and the Mẇ·u0 of row q) stay at the reference u0. The run ends at
+/// touchdown, stall, the time limit, or when the state stops being finite (diverged).
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/dynamics/longitudinal_model.h"
+#include "engine/simulation/integrator.h"
+
+namespace gesweep {
+
+/// The shape of the elevator input δe(t) (positive trailing edge down, MODEL.md §1).
+enum class ElevatorInputKind {
+  kNone,     ///< δe = 0
+  kPulse,    ///< amplitude on [start, start + duration), 0 elsewhere (the paper: +5° for 0.2 s)
+  kStep,     ///< amplitude from start on
+  kDoublet,  ///< +amplitude on [start, start + duration), −amplitude on [start + duration, start + 2·duration)
+};
+
+/// "none" / "pulse" / "step" / "doublet".
+std::string_view ToString(ElevatorInputKind kind);
+/// Parses the names above; nullopt otherwise.
+std::optional<ElevatorInputKind> ParseElevatorInputKind(std::string_view text);
+
+/// A piecewise-constant elevator input. Its jumps are the integrator's breakpoints.
+struct ElevatorInput {
+  ElevatorInputKind kind = ElevatorInputKind::kPulse;
+  double amplitude_rad = 5.0 * 3.14159265358979323846 / 180.0;  ///< the paper's +5°
+  double start_s = 0.0;     ///< time of the first jump, s, ≥ 0 (the run starts at t = 0)
+  double duration_s = 0.2;  ///< pulse length, or length of each half of a doublet, s, > 0
+};
+
+/// The input as breakpoints and one value per segment (Integrate's convention: segment k is
+/// [b_{k-1}, b_k)); values.size() == breakpoints.size() + 1.
+struct ElevatorSchedule {
+  std::vector<double> breakpoints_s;
+  std::vector<double> elevator_rad;
+};
+/// The schedule of an input (no validation; see ValidateOpenLoopConfig).
+ElevatorSchedule MakeElevatorSchedule(const ElevatorInput& input);
+
+/// Offsets added to the initial state (which is otherwise the reference, x = 0), SI units.
+struct InitialOffsets {
+  double delta_speed_mps = 0;            ///< Δu(0)
+  double delta_normal_velocity_mps = 0;  ///< Δw(0), positive down
+  double pitch_rate_radps = 0;           ///< q(0)
+  double delta_pitch_rad = 0;            ///< Δθ(0)
+  double delta_height_m = 0;             ///< ΔH(0): the derivatives see H0 + ΔH(0)
+};
+
+/// One open-loop run.
+struct OpenLoopConfig {
+  double start_height_m = 0;       ///< H0, m; must be above the touchdown height
+  double reference_speed_mps = 0;  ///< u0, m/s; must be above the stall speed
+  ElevatorInput elevator;
+  InitialOffsets initial_offsets;
+  double duration_s = 300.0;       ///< time limit, s, > 0
+  /// Method, step, tolerances, breakpoints (integrator.h). Its output_interval_s is ignored: use
+  /// series_interval_s.
+  IntegratorOptions integrator;
+  /// > 0: record the time series every series_interval_s seconds (and at the end); 0: summary only.
+  double series_interval_s = 0.0;
+  /// true: A and B frozen at (H0, u0) for the whole run (the classical linear response; the floor
+  /// of the performance target). false (MODEL.md §7): re-evaluated at every stage.
+  bool freeze_derivatives = false;
+  /// true: always evaluate the derivatives through LongitudinalModel::DerivativesAt (IsaDensity
+  /// and the coefficient table), as PCHIP interpolation does anyway; false: the per-segment fast
+  /// path (derivative_kernel.h) when the interpolation is linear.
+  bool generic_derivative_path = false;
+  std::optional<double> stall_speed_mps;     ///< default: the aircraft's stall speed, m/s
+  std::optional<double> touchdown_height_m;  ///< default: the aircraft's wheel-contact height, m
+};
+
+/// Throws InputError(source, <field>, value, expectation) when a field is out of range: non-finite
+/// numbers, H0 not above the touchdown height, u0 + Δu(0) not above the stall speed, duration or
+/// pulse length ≤ 0, input start < 0, integrator options (ValidateIntegratorOptions).
+void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source);
+
+/// How a run ended (MODEL.md §7).
+enum class OpenLoopEndEvent {
+  kTouchdown,  ///< H fell to the touchdown (wheel-contact) height
+  kStall,      ///< u fell to the stall speed
+  kTimeLimit,  ///< duration_s reached
+  kDiverged,   ///< the state became non-finite (or the adaptive step underflowed)
+};
+
+/// "touchdown" / "stall" / "time_limit" / "diverged".
+std::string_view ToString(OpenLoopEndEvent event);
+
+/// The summary of one run. The state is x = [Δu m/s, Δw m/s, q rad/s, Δθ rad, ΔH m] (MODEL.md §1).
+struct OpenLoopSummary {
+  OpenLoopEndEvent end_event = OpenLoopEndEvent::kTimeLimit;
+  double end_time_s = 0;              ///< time of the end event (touchdown and stall located inside the step)
+  double min_height_m = 0;            ///< lowest H: at step ends, and local minima located inside steps
+  double min_height_time_s = 0;       ///< when it occurred
+  double max_abs_pitch_rate_radps = 0;  ///< largest |q| at the initial point and step ends
+  Vector5d final_state = Vector5d::Zero();  ///< x at end_time_s (the last finite state if diverged)
+  double final_height_m = 0;          ///< H0 + ΔH at end_time_s
+  double final_speed_mps = 0;         ///< u0 + Δu at end_time_s
+  long steps = 0;                     ///< accepted steps
+  long rejected_steps = 0;            ///< rejected dopri5 trials
+  long rhs_calls = 0;                 ///< right-hand-side evaluations
+  std::string message;                ///< empty, or what went wrong numerically
+};
+
+/// The time series, one entry per sample (every series_interval_s and at the end), SI units.
+struct OpenLoopSeries {
+  std::vector<double> time_s;
+  std::vector<double> delta_speed_mps;
+  std::vector<double> delta_normal_velocity_mps;
+  std::vector<double> pitch_rate_radps;
+  std::vector<double> delta_pitch_rad;
+  std::vector<double> delta_height_m;
+  std::vector<double> height_m;
+  std::vector<double> speed_mps;
+  std::vector<double> elevator_rad;  ///< the input the step producing the sample used
+};
+
+/// A run's result: the summary, and the series when series_interval_s > 0 (else empty).
+struct OpenLoopResult {
+  OpenLoopSummary summary;
+  OpenLoopSeries series;
+};
+
+/// Runs MODEL.md §7 once. Validates the config (throws InputError, source "open-loop config");
+/// numerical outcomes (stall, divergence) are in the summary, never thrown. Allocates only the
+/// series (reserved before the run) and the per-run tables; nothing per step.
+OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config);
+
+}  // namespace gesweep

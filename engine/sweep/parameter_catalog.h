@@ -1,0 +1,87 @@
+#pragma once
+/// The catalogue of every parameter a study can fix or sweep (docs/sweep.md, schemas/study.schema.json):
+/// the flight condition, the model switches of docs/MODEL.md, scale factors on every coefficient,
+/// mass properties, the open-loop perturbation, the landing controller, and the inputs of the
+/// verification models. The unit is in each name; degrees only where the name says `_deg`.
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/aircraft/aircraft.h"
+
+namespace gesweep {
+
+/// What values a parameter takes. Every value is held as a double: a boolean as 0/1, a choice as
+/// the index of its level.
+enum class ParameterKind {
+  kReal,     ///< a finite number in the parameter's range
+  kBoolean,  ///< true/false, held as 1/0
+  kChoice,   ///< one of a few names, held as the level index
+};
+
+/// Which group of analyses reads a parameter.
+enum class ParameterGroup {
+  kFlight,        ///< height and speed: read by the analyses that name them
+  kModel,         ///< model options, scale factors, mass properties: read by every model analysis
+  kOpenLoop,      ///< the open-loop perturbation
+  kLanding,       ///< the landing controller
+  kVerification,  ///< inputs x1..x8 of the verification models (Ishigami, linear)
+};
+
+/// One catalogue entry.
+struct ParameterInfo {
+  std::string name;         ///< study key, archive dataset name (e.g. "scale.CLh")
+  std::string units;        ///< "m", "m/s", "deg", "s", "kg", "kg m^2", "1" for a ratio
+  std::string description;  ///< one line, for schemas/archive.md and the archive's attributes
+  ParameterKind kind = ParameterKind::kReal;
+  ParameterGroup group = ParameterGroup::kModel;
+  std::vector<std::string> levels;  ///< names of the values of a choice or boolean
+  /// Value when a study neither fixes nor sweeps it; nullopt: it must be given when used.
+  /// Mass and pitch inertia default to the aircraft's own (see DefaultValue).
+  std::optional<double> default_value;
+  double minimum = -1e300;  ///< allowed range of a real value, inclusive unless *_exclusive
+  double maximum = 1e300;
+  bool minimum_exclusive = false;
+  bool maximum_exclusive = false;
+};
+
+/// Index of a parameter in the catalogue.
+using ParameterId = int;
+
+/// Every parameter, in a fixed order (the order of the archive's fixed-parameter attributes).
+const std::vector<ParameterInfo>& ParameterCatalog();
+
+/// Number of catalogue entries.
+int ParameterCount();
+
+/// The id of a name, or nullopt.
+std::optional<ParameterId> FindParameter(std::string_view name);
+
+/// The id of a name the engine itself uses; GESWEEP_DEMAND that it exists.
+ParameterId RequireParameter(std::string_view name);
+
+/// All catalogue names (for near-name suggestions).
+std::vector<std::string> ParameterNames();
+
+/// The default of a parameter for this aircraft (mass and pitch inertia come from the aircraft;
+/// nullopt when the parameter has no default and must be given). `aircraft` may be null when no
+/// analysis builds a model.
+std::optional<double> DefaultValue(ParameterId id, const Aircraft* aircraft);
+
+/// Checks one value of a parameter. Returns an empty string when it is valid, else what was
+/// expected ("expected a number > 0", "expected a height >= the wheel-contact height 0.788 m ...").
+/// `aircraft` (may be null) adds the aircraft-dependent limits (height above wheel contact).
+std::string CheckParameterValue(ParameterId id, double value, const Aircraft* aircraft);
+
+/// Renders a value for messages and attributes: a number, or the level name of a choice/boolean.
+std::string FormatParameterValue(ParameterId id, double value);
+
+/// Parses a level name of a choice or boolean parameter ("polar", "true"); nullopt when unknown.
+std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text);
+
+/// A short description of the allowed values ("one of linear, pchip", "a number > 0 (kg)").
+std::string DescribeAllowedValues(ParameterId id);
+
+}  // namespace gesweep

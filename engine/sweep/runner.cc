@@ -1,0 +1,284 @@
+#include "engine/sweep/runner.h"
+
+#include <tbb/concurrent_queue.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+constexpr int kTokensPerThread = 2;  // batches in flight per worker: keeps every thread busy at a batch's tail
+
+struct ModelParameterIds {
+  ParameterId h_derivatives = RequireParameter("h_derivatives");
+  ParameterId cdh = RequireParameter("cdh");
+  ParameterId interpolation = RequireParameter("interpolation");
+  ParameterId CDo_scale = RequireParameter("scale.CDo");
+  ParameterId mass = RequireParameter("mass_kg");
+  ParameterId inertia = RequireParameter("pitch_inertia_kgm2");
+  ParameterId cg_shift = RequireParameter("cg_shift_over_chord");
+  std::array<ParameterId, kCoefficientCount> scale{};
+  ModelParameterIds() {
+    for (int i = 0; i < kCoefficientCount; ++i) {
+      scale[static_cast<std::size_t>(i)] =
+          RequireParameter("scale." + std::string(kCoefficientNames[static_cast<std::size_t>(i)]));
+    }
+  }
+};
+
+const ModelParameterIds& ModelIds() {
+  static const ModelParameterIds ids;
+  return ids;
+}
+
+ModelOptions OptionsFrom(const RunParameters& p) {
+  const ModelParameterIds& ids = ModelIds();
+  auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
+  ModelOptions options;
+  options.h_derivatives = at(ids.h_derivatives) != 0.0;
+  options.cdh = at(ids.cdh) == 0.0 ? CdhMode::kPolar : CdhMode::kZero;
+  options.interpolation = at(ids.interpolation) == 0.0 ? Interpolation::kLinear : Interpolation::kPchip;
+  for (int i = 0; i < kCoefficientCount; ++i) {
+    options.coefficient_scale[static_cast<std::size_t>(i)] = at(ids.scale[static_cast<std::size_t>(i)]);
+  }
+  options.CDo_scale = at(ids.CDo_scale);
+  options.mass_kg = at(ids.mass);
+  options.pitch_inertia_kgm2 = at(ids.inertia);
+  options.cg_shift_over_chord = at(ids.cg_shift);
+  return options;
+}
+
+void AppendMessage(std::string& message, std::string_view analysis, const std::string& text) {
+  if (text.empty()) return;
+  if (!message.empty()) message += "; ";
+  message.append(analysis).append(": ").append(text);
+}
+
+// Cuts a message to the stored length without splitting a UTF-8 sequence.
+void Truncate(std::string& message) {
+  if (static_cast<int>(message.size()) <= kMessageLength) return;
+  std::size_t cut = static_cast<std::size_t>(kMessageLength) - 3;
+  while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;
+  message.resize(cut);
+  message += "...";
+}
+
+}  // namespace
+
+void ResultBlock::Allocate(const SweepPlan& plan) {
+  const auto capacity = static_cast<std::size_t>(plan.chunk_runs());
+  design_index.assign(capacity, 0);
+  run_id.assign(capacity, 0);
+  status.assign(capacity, 0);
+  message.assign(capacity, std::string());
+  design.assign(static_cast<std::size_t>(plan.design().column_count()), std::vector<double>(capacity));
+  results.clear();
+  for (const auto& column : plan.schema().columns) {
+    results.emplace_back(capacity * static_cast<std::size_t>(column.doubles_per_run()));
+  }
+}
+
+void ResultBlock::Reset(const SweepPlan& plan, std::int64_t index) {
+  block_index = index;
+  first_row = index * plan.chunk_runs();
+  rows = static_cast<int>(std::min<std::int64_t>(plan.chunk_runs(), plan.run_count() - first_row));
+  GESWEEP_DEMAND(rows >= 1 && static_cast<std::size_t>(rows) <= design_index.size());
+  for (int r = 0; r < rows; ++r) {
+    design_index[static_cast<std::size_t>(r)] = plan.first_run() + first_row + r;
+    status[static_cast<std::size_t>(r)] = static_cast<std::int8_t>(RunStatus::kPending);
+    message[static_cast<std::size_t>(r)].clear();
+  }
+  for (auto& column : results) std::fill(column.begin(), column.end(), std::numeric_limits<double>::quiet_NaN());
+}
+
+RunWorkspace::RunWorkspace(const SweepPlan& plan)
+    : parameters(plan.base_parameters()), design_row(static_cast<std::size_t>(plan.design().column_count())) {}
+
+const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
+  const auto& ids = plan.model_parameters();
+  bool same = model_.has_value() && model_key_.size() == ids.size();
+  for (std::size_t i = 0; same && i < ids.size(); ++i) {
+    same = model_key_[i] == parameters[static_cast<std::size_t>(ids[i])];
+  }
+  if (!same) {
+    model_.reset();
+    model_key_.resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) model_key_[i] = parameters[static_cast<std::size_t>(ids[i])];
+    model_.emplace(*plan.study().aircraft, OptionsFrom(parameters));
+  }
+  return *model_;
+}
+
+void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
+                int row) {
+  const auto r = static_cast<std::size_t>(row);
+  const Design& design = plan.design();
+  design.Row(design_index, workspace.design_row.data());
+  workspace.parameters = plan.base_parameters();
+  for (int c = 0; c < design.column_count(); ++c) {
+    const double value = workspace.design_row[static_cast<std::size_t>(c)];
+    workspace.parameters[static_cast<std::size_t>(design.spec().parameters[static_cast<std::size_t>(c)].id)] = value;
+    block.design[static_cast<std::size_t>(c)][r] = value;
+  }
+  block.design_index[r] = design_index;
+  block.run_id[r] = plan.RunId(workspace.design_row.data());
+  std::string& message = block.message[r];
+  message.clear();
+  bool ok = true;
+
+  const LongitudinalModel* model = nullptr;
+  if (plan.study().needs_model()) {
+    try {
+      model = &workspace.Model(plan);
+    } catch (const std::exception& e) {
+      AppendMessage(message, "model", e.what());
+      Truncate(message);
+      block.status[r] = static_cast<std::int8_t>(RunStatus::kFailed);
+      return;
+    }
+  }
+  const RunContext context{workspace.parameters, model};
+  OutputRow output(&block.results, &plan.schema(), row);
+  for (const auto& analysis : plan.study().analyses) {
+    AnalysisOutcome outcome;
+    try {
+      outcome = analysis->Run(context, output);
+    } catch (const std::exception& e) {
+      outcome = AnalysisOutcome::Failed(std::string("exception: ") + e.what());
+    } catch (...) {
+      outcome = AnalysisOutcome::Failed("unknown exception");
+    }
+    ok = ok && outcome.ok;
+    AppendMessage(message, analysis->name(), outcome.message);
+  }
+  Truncate(message);
+  block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
+}
+
+SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks, ResultSink& sink,
+                      const RunnerOptions& options, SweepProgress* progress) {
+  SweepProgress local_progress;
+  SweepProgress& counters = progress ? *progress : local_progress;
+  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  const int tokens = kTokensPerThread * threads;
+  const int queue_capacity = std::max(1, options.queue_batches);
+
+  // The pool of batch buffers: every batch in flight, queued or being written holds one.
+  std::vector<ResultBlock> pool(static_cast<std::size_t>(tokens + queue_capacity + 1));
+  tbb::concurrent_bounded_queue<ResultBlock*> free_blocks;
+  for (auto& block : pool) {
+    block.Allocate(plan);
+    free_blocks.push(&block);
+  }
+  tbb::concurrent_bounded_queue<ResultBlock*> write_queue;
+  write_queue.set_capacity(queue_capacity);
+
+  std::atomic<bool> stop{false};
+  std::exception_ptr writer_error;
+  std::thread writer([&] {
+    for (;;) {
+      ResultBlock* block = nullptr;
+      write_queue.pop(block);
+      if (block == nullptr) break;
+      if (!writer_error) {
+        try {
+          sink.Write(*block);
+          counters.runs_written.fetch_add(block->rows, std::memory_order_relaxed);
+        } catch (...) {
+          writer_error = std::current_exception();
+          stop.store(true);
+        }
+      }
+      free_blocks.push(block);
+    }
+  });
+
+  tbb::enumerable_thread_specific<RunWorkspace> workspaces([&plan] { return RunWorkspace(plan); });
+  std::size_t next = 0;
+  std::size_t started = 0;
+  std::exception_ptr worker_error;
+  try {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_pipeline(
+          static_cast<std::size_t>(tokens),
+          tbb::make_filter<void, ResultBlock*>(
+              tbb::filter_mode::serial_in_order,
+              [&](tbb::flow_control& control) -> ResultBlock* {
+                const bool cancelled = options.cancel != nullptr && options.cancel->load();
+                if (next >= pending_blocks.size() || cancelled || stop.load()) {
+                  control.stop();
+                  return nullptr;
+                }
+                ResultBlock* block = nullptr;
+                free_blocks.pop(block);
+                block->Reset(plan, pending_blocks[next++]);
+                ++started;
+                return block;
+              }) &
+              tbb::make_filter<ResultBlock*, ResultBlock*>(
+                  tbb::filter_mode::parallel,
+                  [&](ResultBlock* block) {
+                    tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1), [&](const tbb::blocked_range<int>& range) {
+                      RunWorkspace& workspace = workspaces.local();
+                      for (int row = range.begin(); row != range.end(); ++row) {
+                        ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)], workspace, *block, row);
+                        if (block->status[static_cast<std::size_t>(row)] == static_cast<std::int8_t>(RunStatus::kFailed)) {
+                          counters.runs_failed.fetch_add(1, std::memory_order_relaxed);
+                        }
+                        counters.runs_done.fetch_add(1, std::memory_order_relaxed);
+                      }
+                    });
+                    return block;
+                  }) &
+              tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
+                                                   [&](ResultBlock* block) { write_queue.push(block); }));
+    });
+  } catch (...) {
+    worker_error = std::current_exception();
+  }
+  write_queue.push(nullptr);
+  writer.join();
+  if (writer_error) std::rethrow_exception(writer_error);
+  if (worker_error) std::rethrow_exception(worker_error);
+
+  SweepOutcome outcome;
+  outcome.runs_failed = counters.runs_failed.load();
+  outcome.runs_ok = counters.runs_done.load() - outcome.runs_failed;
+  outcome.runs_skipped = counters.runs_skipped;
+  outcome.cancelled = started < pending_blocks.size();
+  return outcome;
+}
+
+double MeasureRunCost(const SweepPlan& plan, int max_samples, double budget_s, int* samples_used) {
+  GESWEEP_DEMAND(max_samples >= 1);
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  const auto samples = static_cast<int>(std::min<std::int64_t>(max_samples, plan.run_count()));
+  const auto start = std::chrono::steady_clock::now();
+  double elapsed = 0;
+  int done = 0;
+  for (int k = 0; k < samples; ++k) {
+    const std::int64_t index = plan.first_run() + static_cast<std::int64_t>(k) * plan.run_count() / samples;
+    ExecuteRun(plan, index, workspace, block, 0);
+    ++done;
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (elapsed > budget_s) break;
+  }
+  if (samples_used) *samples_used = done;
+  return elapsed / done;
+}
+
+}  // namespace gesweep

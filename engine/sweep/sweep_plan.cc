@@ -1,0 +1,239 @@
+#include "engine/sweep/sweep_plan.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "engine/common/errors.h"
+#include "engine/sweep/hashing.h"
+
+namespace gesweep {
+namespace {
+
+// A write batch should take about this long on one core: long enough that flushing it costs
+// little, short enough that a crash loses little (docs/sweep.md, "Batches and chunks").
+constexpr double kTargetBatchCost_us = 5e5;
+constexpr int kMaximumChunkRuns = 4096;   // 32 KB float64 chunks: a good unit for deflate
+constexpr int kMinimumChunkRuns = 16;
+// Memory of one batch buffer; a few of them are in flight per thread.
+constexpr std::int64_t kMaximumBatchBytes = 16 << 20;
+constexpr int kMaximumShards = 100000;
+
+int FloorPowerOfTwo(double x) {
+  int p = 1;
+  while (p * 2 <= x && p < (1 << 30)) p *= 2;
+  return p;
+}
+
+}  // namespace
+
+ShardSpec ParseShard(const std::string& text, const std::string& flag) {
+  const auto slash = text.find('/');
+  ShardSpec shard;
+  bool ok = slash != std::string::npos;
+  if (ok) {
+    const char* begin = text.data();
+    auto [p1, e1] = std::from_chars(begin, begin + slash, shard.index);
+    auto [p2, e2] = std::from_chars(begin + slash + 1, begin + text.size(), shard.count);
+    ok = e1 == std::errc() && e2 == std::errc() && p1 == begin + slash && p2 == begin + text.size();
+  }
+  if (!ok || shard.count < 1 || shard.count > kMaximumShards || shard.index < 0 || shard.index >= shard.count) {
+    throw InputError("command line", flag, "'" + text + "'",
+                     "expected i/N with 0 <= i < N <= " + std::to_string(kMaximumShards) +
+                         " (shards are numbered from 0)");
+  }
+  return shard;
+}
+
+void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* first, std::int64_t* count) {
+  // floor(i·M/N) without overflow: M = qN + r gives floor(i·M/N) = i·q + floor(i·r/N).
+  const std::int64_t q = design_runs / shard.count, r = design_runs % shard.count;
+  const auto split = [&](std::int64_t i) { return i * q + i * r / shard.count; };
+  *first = split(shard.index);
+  *count = split(shard.index + 1) - *first;
+}
+
+std::int64_t BookkeepingBytesPerRun() {
+  return 8 /* index */ + 8 /* id */ + 1 /* status */ + kMessageLength;
+}
+
+std::string FormatBytes(double bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
+  int unit = 0;
+  while (bytes >= 1000.0 && unit < 6) {
+    bytes /= 1000.0;
+    ++unit;
+  }
+  std::ostringstream out;
+  out.precision(bytes < 10 && unit > 0 ? 2 : 3);
+  out << bytes << " " << units[unit];
+  return out.str();
+}
+
+SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), shard_(shard) {
+  design_ = MakeDesign(study_.design);
+  design_runs_ = design_->run_count();
+  ShardRange(design_runs_, shard_, &first_run_, &run_count_);
+  if (run_count_ < 1) {
+    throw InputError("command line", "--shard", std::to_string(shard_.index) + "/" + std::to_string(shard_.count),
+                     "shard has no runs: the design has only " + std::to_string(design_runs_) +
+                         " runs; use at most that many shards");
+  }
+
+  for (auto& analysis : study_.analyses) analysis->DeclareOutputs(schema_, study_.storage);
+
+  // Base parameters: defaults, then the study's fixed values.
+  const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
+  base_.assign(static_cast<std::size_t>(ParameterCount()), std::numeric_limits<double>::quiet_NaN());
+  for (ParameterId id = 0; id < ParameterCount(); ++id) {
+    if (auto value = DefaultValue(id, aircraft)) base_[static_cast<std::size_t>(id)] = *value;
+    if (ParameterCatalog()[static_cast<std::size_t>(id)].group == ParameterGroup::kModel) {
+      model_parameters_.push_back(id);
+    }
+  }
+  for (const auto& fixed : study_.fixed) base_[static_cast<std::size_t>(fixed.id)] = fixed.value;
+  std::vector<bool> read(static_cast<std::size_t>(ParameterCount()), false);
+  for (const auto& analysis : study_.analyses) {
+    for (ParameterId id : analysis->parameters_used()) read[static_cast<std::size_t>(id)] = true;
+    if (analysis->needs_model()) {
+      for (ParameterId id : model_parameters_) read[static_cast<std::size_t>(id)] = true;
+    }
+  }
+  for (ParameterId id = 0; id < ParameterCount(); ++id) {
+    if (read[static_cast<std::size_t>(id)]) parameters_read_.push_back(id);
+  }
+
+  CheckRuns();
+
+  // Storage before compression.
+  storage_.bytes_per_run = BookkeepingBytesPerRun() + 8 * static_cast<std::int64_t>(design_->column_count()) +
+                           schema_.StoredBytesPerRun();
+  for (const auto& column : schema_.columns) {
+    if (!column.time_axis.empty()) storage_.series_bytes_per_run += column.stored_bytes_per_run();
+  }
+  const long double total = static_cast<long double>(storage_.bytes_per_run) * design_runs_;
+  storage_.design_bytes = total > static_cast<long double>(std::numeric_limits<std::int64_t>::max())
+                              ? std::numeric_limits<std::int64_t>::max()
+                              : static_cast<std::int64_t>(total);
+  if (total > static_cast<long double>(study_.max_archive_gb) * 1e9L) {
+    std::ostringstream runs;
+    runs << design_runs_;
+    throw InputError(study_.path, "design", runs.str() + " runs",
+                     "refusing it: the archive would need about " + FormatBytes(static_cast<double>(total)) +
+                         " before compression (" + FormatBytes(static_cast<double>(storage_.bytes_per_run)) +
+                         " per run" + (storage_.series_bytes_per_run ? ", time series included" : "") +
+                         "), above output.max_archive_gb = " + FormatBytes(study_.max_archive_gb * 1e9) +
+                         "; shrink the design, turn time series off, or raise max_archive_gb",
+                     study_.design_line);
+  }
+
+  // Batch size: about kTargetBatchCost_us of work on one core, within memory and chunk bounds.
+  int chunk = study_.chunk_runs;
+  if (chunk == 0) {
+    const double per_run = std::max(nominal_run_cost_us(), 1e-3);
+    chunk = FloorPowerOfTwo(std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns},
+                                       double{kMaximumChunkRuns}));
+    std::int64_t memory_per_run = 8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
+    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
+    while (chunk > 1 && chunk * memory_per_run > kMaximumBatchBytes) chunk /= 2;
+  }
+  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(chunk, run_count_));
+}
+
+void SweepPlan::CheckRuns() const {
+  // The analyses' own checks (e.g. a start speed above stall) on the extreme values of the design:
+  // every corner of its box for up to kMaximumCheckedDimensions columns, every row of a list.
+  constexpr int kMaximumCheckedDimensions = 12;
+  constexpr std::int64_t kMaximumCheckedRows = 1'000'000;
+  const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
+  const DesignSpec& spec = design_->spec();
+  const int columns = design_->column_count();
+  RunParameters parameters = base_;
+  auto check = [&](const std::vector<double>& values) {
+    for (int c = 0; c < columns; ++c) {
+      parameters[static_cast<std::size_t>(spec.parameters[static_cast<std::size_t>(c)].id)] = values[static_cast<std::size_t>(c)];
+    }
+    for (const auto& analysis : study_.analyses) {
+      const std::string problem = analysis->CheckRun(parameters, aircraft);
+      if (problem.empty()) continue;
+      std::string where;
+      for (int c = 0; c < columns; ++c) {
+        const ParameterId id = spec.parameters[static_cast<std::size_t>(c)].id;
+        where += (where.empty() ? "" : ", ") + ParameterCatalog()[static_cast<std::size_t>(id)].name + " = " +
+                 FormatParameterValue(id, values[static_cast<std::size_t>(c)]);
+      }
+      throw InputError(study_.path, columns ? "design" : "parameters", where,
+                       "analysis '" + std::string(analysis->name()) + "' cannot run it: " + problem,
+                       study_.design_line);
+    }
+  };
+  std::vector<double> values(static_cast<std::size_t>(columns));
+  if (spec.kind == DesignKind::kList && spec.list_rows <= kMaximumCheckedRows) {
+    for (std::int64_t r = 0; r < spec.list_rows; ++r) {
+      design_->Row(r, values.data());
+      check(values);
+    }
+    return;
+  }
+  // The extreme values of each column.
+  std::vector<std::pair<double, double>> extremes;
+  for (int c = 0; c < columns; ++c) {
+    const DesignParameter& p = spec.parameters[static_cast<std::size_t>(c)];
+    if (spec.kind == DesignKind::kGrid) {
+      extremes.emplace_back(*std::min_element(p.values.begin(), p.values.end()),
+                            *std::max_element(p.values.begin(), p.values.end()));
+    } else if (spec.kind == DesignKind::kList) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (std::int64_t r = 0; r < spec.list_rows; ++r) {
+        const double v = spec.list_values[static_cast<std::size_t>(r * columns + c)];
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+      extremes.emplace_back(lo, hi);
+    } else {
+      extremes.emplace_back(p.lower, p.upper);
+    }
+  }
+  if (columns <= kMaximumCheckedDimensions) {
+    for (std::uint32_t corner = 0; corner < (1u << columns); ++corner) {
+      for (int c = 0; c < columns; ++c) {
+        values[static_cast<std::size_t>(c)] = (corner >> c) & 1u ? extremes[static_cast<std::size_t>(c)].second
+                                                                  : extremes[static_cast<std::size_t>(c)].first;
+      }
+      check(values);
+    }
+  } else {
+    for (int c = 0; c < columns; ++c) values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].first;
+    check(values);
+    for (int c = 0; c < columns; ++c) {
+      values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].second;
+      check(values);
+      values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].first;
+    }
+  }
+}
+
+void SweepPlan::set_chunk_runs(int chunk_runs) {
+  GESWEEP_DEMAND(chunk_runs >= 1);
+  chunk_runs_ = chunk_runs;
+}
+
+double SweepPlan::nominal_run_cost_us() const {
+  double cost = 0;
+  for (const auto& analysis : study_.analyses) cost += analysis->nominal_run_cost_us();
+  return cost;
+}
+
+std::uint64_t SweepPlan::RunId(const double* design_row) const {
+  std::uint64_t hash = kFnvOffset;
+  for (int c = 0; c < design_->column_count(); ++c) {
+    const ParameterId id = design_->spec().parameters[static_cast<std::size_t>(c)].id;
+    hash = Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].name, hash);
+    hash = Fnv1a64(design_row[c], hash);
+  }
+  return hash;
+}
+
+}  // namespace gesweep

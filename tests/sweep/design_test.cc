@@ -1,0 +1,259 @@
+// Designs: enumeration order, the Saltelli layout, the Sobol' points, Latin-hypercube strata and
+// Morris trajectories, each against an oracle that does not come from the code under test
+// (published points, nested loops, counting arguments).
+#include "engine/sweep/design.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+
+namespace gesweep {
+namespace {
+
+DesignParameter Axis(const char* name, std::vector<double> values) {
+  DesignParameter p;
+  p.id = RequireParameter(name);
+  p.values = std::move(values);
+  return p;
+}
+
+DesignParameter Bounds(const char* name, double lower, double upper) {
+  DesignParameter p;
+  p.id = RequireParameter(name);
+  p.lower = lower;
+  p.upper = upper;
+  return p;
+}
+
+TEST(GridDesign, EnumeratesTheCartesianProductLastAxisFastest) {
+  DesignSpec spec;
+  spec.kind = DesignKind::kGrid;
+  spec.parameters = {Axis("speed_mps", {30, 40}), Axis("height_m", {1, 2, 3}), Axis("x1", {7, 8})};
+  auto design = MakeDesign(spec);
+  ASSERT_EQ(design->run_count(), 12);
+  // Oracle: nested loops in declaration order.
+  std::int64_t index = 0;
+  double row[3];
+  for (double u : {30.0, 40.0}) {
+    for (double h : {1.0, 2.0, 3.0}) {
+      for (double x : {7.0, 8.0}) {
+        design->Row(index++, row);
+        EXPECT_EQ(row[0], u);
+        EXPECT_EQ(row[1], h);
+        EXPECT_EQ(row[2], x);
+      }
+    }
+  }
+}
+
+TEST(GridDesign, CountRunsRefusesOverflow) {
+  DesignSpec spec;
+  spec.kind = DesignKind::kGrid;
+  std::vector<double> million(1000000);
+  for (std::size_t i = 0; i < million.size(); ++i) million[i] = static_cast<double>(i);
+  for (const char* name : {"x1", "x2", "x3", "x4"}) spec.parameters.push_back(Axis(name, million));
+  EXPECT_EQ(CountRuns(spec), -1);  // 1e24 runs
+  spec.parameters.resize(3);
+  EXPECT_EQ(CountRuns(spec), 1000000LL * 1000000LL * 1000000LL);  // 1e18 < 2^62: countable, lazily
+  auto design = MakeDesign(spec);
+  double row[3];
+  design->Row(design->run_count() - 1, row);  // the last run, without enumerating the others
+  EXPECT_EQ(row[0], 999999);
+  EXPECT_EQ(row[1], 999999);
+  EXPECT_EQ(row[2], 999999);
+}
+
+// The first points of the 2-D Sobol' sequence (Sobol' 1967; Joe & Kuo direction numbers), as
+// published e.g. in scipy.stats.qmc.Sobol(d=2, scramble=False): after the origin,
+// (0.5, 0.5), (0.75, 0.25), (0.25, 0.75), (0.375, 0.375), (0.875, 0.875), (0.625, 0.125).
+TEST(SobolPoint, MatchesThePublishedSequenceWithoutTheOrigin) {
+  const double expected[6][2] = {{0.5, 0.5}, {0.75, 0.25}, {0.25, 0.75}, {0.375, 0.375}, {0.875, 0.875}, {0.625, 0.125}};
+  for (int j = 0; j < 6; ++j) {
+    double point[2];
+    SobolPoint(2, j, point);
+    EXPECT_EQ(point[0], expected[j][0]) << "point " << j;
+    EXPECT_EQ(point[1], expected[j][1]) << "point " << j;
+  }
+}
+
+TEST(SobolPoint, FirstTwoToTheMPointsAreStratified) {
+  // Every dyadic interval [k/2^m, (k+1)/2^m) of each coordinate holds exactly one of the points
+  // 0..2^m−1 of a (0,1)-sequence in one dimension; with the origin skipped, points 1..2^m hit each
+  // interval once too except [0, 2^-m) traded for the point 2^m. Check the 1-D projections.
+  constexpr int kM = 8;
+  constexpr int kPoints = 1 << kM;
+  for (int d = 0; d < 6; ++d) {
+    std::vector<int> hits(kPoints, 0);
+    for (int j = 0; j < kPoints - 1; ++j) {
+      double point[6];
+      SobolPoint(6, j, point);
+      ++hits[static_cast<std::size_t>(point[d] * kPoints)];
+    }
+    // Points 1..2^m−1 plus the skipped origin fill every interval exactly once.
+    ++hits[0];
+    for (int k = 0; k < kPoints; ++k) EXPECT_EQ(hits[static_cast<std::size_t>(k)], 1) << "dimension " << d << " cell " << k;
+  }
+}
+
+TEST(SaltelliDesign, RowsFollowSalibsBlockLayout) {
+  for (bool second_order : {false, true}) {
+    DesignSpec spec;
+    spec.kind = DesignKind::kSobol;
+    spec.base_samples = 5;
+    spec.second_order = second_order;
+    spec.parameters = {Bounds("x1", -3, 3), Bounds("x2", 0, 1), Bounds("x3", 10, 20)};
+    const int D = 3;
+    auto design = MakeDesign(spec);
+    const std::int64_t block = second_order ? 2 * D + 2 : D + 2;
+    ASSERT_EQ(design->run_count(), 5 * block);
+    for (std::int64_t j = 0; j < 5; ++j) {
+      // Oracle: A and B straight from the Sobol' point, mapped by hand.
+      double point[2 * D];
+      SobolPoint(2 * D, j, point);
+      const double lower[D] = {-3, 0, 10}, width[D] = {6, 1, 10};
+      double a[D], b[D];
+      for (int d = 0; d < D; ++d) {
+        a[d] = lower[d] + point[d] * width[d];
+        b[d] = lower[d] + point[D + d] * width[d];
+      }
+      double row[D];
+      design->Row(j * block, row);
+      for (int d = 0; d < D; ++d) EXPECT_EQ(row[d], a[d]);
+      for (int i = 0; i < D; ++i) {
+        design->Row(j * block + 1 + i, row);  // AB^(i): A with column i from B
+        for (int d = 0; d < D; ++d) EXPECT_EQ(row[d], d == i ? b[d] : a[d]);
+        if (second_order) {
+          design->Row(j * block + 1 + D + i, row);  // BA^(i): B with column i from A
+          for (int d = 0; d < D; ++d) EXPECT_EQ(row[d], d == i ? a[d] : b[d]);
+        }
+      }
+      design->Row(j * block + block - 1, row);
+      for (int d = 0; d < D; ++d) EXPECT_EQ(row[d], b[d]);
+    }
+  }
+}
+
+TEST(LatinHypercube, EveryStratumOfEveryDimensionHoldsExactlyOnePoint) {
+  for (std::int64_t n : {1, 2, 7, 64, 1000, 4099}) {
+    DesignSpec spec;
+    spec.kind = DesignKind::kLhs;
+    spec.samples = n;
+    spec.seed = 12345;
+    spec.parameters = {Bounds("x1", 0, 1), Bounds("x2", -2, 2), Bounds("x3", 5, 6)};
+    auto design = MakeDesign(spec);
+    std::vector<std::vector<int>> hits(3, std::vector<int>(static_cast<std::size_t>(n), 0));
+    for (std::int64_t i = 0; i < n; ++i) {
+      double row[3];
+      design->Row(i, row);
+      const double unit[3] = {row[0], (row[1] + 2) / 4, row[2] - 5};
+      for (int d = 0; d < 3; ++d) {
+        ASSERT_GE(unit[d], 0.0);
+        ASSERT_LT(unit[d], 1.0);
+        ++hits[static_cast<std::size_t>(d)][static_cast<std::size_t>(std::floor(unit[d] * static_cast<double>(n)))];
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      for (std::int64_t k = 0; k < n; ++k) {
+        ASSERT_EQ(hits[static_cast<std::size_t>(d)][static_cast<std::size_t>(k)], 1) << "n " << n << " dim " << d;
+      }
+    }
+  }
+}
+
+TEST(LatinHypercube, SeedChangesTheDesignAndTheSameSeedRepeatsIt) {
+  auto row_of = [](std::uint64_t seed, std::int64_t i) {
+    DesignSpec spec;
+    spec.kind = DesignKind::kLhs;
+    spec.samples = 100;
+    spec.seed = seed;
+    spec.parameters = {Bounds("x1", 0, 1), Bounds("x2", 0, 1)};
+    double row[2];
+    MakeDesign(spec)->Row(i, row);
+    return std::pair<double, double>(row[0], row[1]);
+  };
+  EXPECT_EQ(row_of(1, 17), row_of(1, 17));
+  int differ = 0;
+  for (int i = 0; i < 100; ++i) differ += row_of(1, i) != row_of(2, i);
+  EXPECT_GT(differ, 90);
+  // The two dimensions are permuted independently: not the same stratum order.
+  int same = 0;
+  for (int i = 0; i < 100; ++i) same += LatinStratum(1, 0, 100, i) == LatinStratum(1, 1, 100, i);
+  EXPECT_LT(same, 10);
+}
+
+TEST(MorrisDesign, TrajectoriesChangeOneFactorByDeltaPerStepOnTheLevelGrid) {
+  DesignSpec spec;
+  spec.kind = DesignKind::kMorris;
+  spec.trajectories = 50;
+  spec.levels = 4;
+  spec.seed = 7;
+  spec.parameters = {Bounds("x1", 0, 1), Bounds("x2", 10, 20), Bounds("x3", -1, 1), Bounds("x4", 0, 3)};
+  const int D = 4;
+  const double lower[D] = {0, 10, -1, 0}, width[D] = {1, 10, 2, 3};
+  const double delta = 4.0 / (2.0 * 3.0);  // p/(2(p−1)), Morris (1991)
+  auto design = MakeDesign(spec);
+  ASSERT_EQ(design->run_count(), 50 * (D + 1));
+  std::map<int, int> changes;
+  for (std::int64_t t = 0; t < 50; ++t) {
+    std::set<int> changed;
+    double previous[D];
+    for (int s = 0; s <= D; ++s) {
+      double row[D];
+      design->Row(t * (D + 1) + s, row);
+      for (int d = 0; d < D; ++d) {
+        const double unit = (row[d] - lower[d]) / width[d];
+        const double level = unit * 3.0;  // levels 0, 1/3, 2/3, 1
+        EXPECT_NEAR(level, std::round(level), 1e-12) << "off the level grid";
+      }
+      if (s > 0) {
+        int moved = 0;
+        for (int d = 0; d < D; ++d) {
+          if (row[d] != previous[d]) {
+            ++moved;
+            changed.insert(d);
+            EXPECT_NEAR(std::abs(row[d] - previous[d]) / width[d], delta, 1e-12);
+          }
+        }
+        EXPECT_EQ(moved, 1) << "trajectory " << t << " step " << s;
+      }
+      std::copy(row, row + D, previous);
+    }
+    EXPECT_EQ(changed.size(), static_cast<std::size_t>(D)) << "each factor moves once per trajectory";
+    for (int d : changed) ++changes[d];
+  }
+}
+
+TEST(MorrisDesign, IsReproducibleFromItsSeed) {
+  auto first_rows = [](std::uint64_t seed) {
+    DesignSpec spec;
+    spec.kind = DesignKind::kMorris;
+    spec.trajectories = 10;
+    spec.levels = 6;
+    spec.seed = seed;
+    spec.parameters = {Bounds("x1", 0, 1), Bounds("x2", 0, 1)};
+    auto design = MakeDesign(spec);
+    std::vector<double> values;
+    for (std::int64_t i = 0; i < design->run_count(); ++i) {
+      double row[2];
+      design->Row(i, row);
+      values.insert(values.end(), row, row + 2);
+    }
+    return values;
+  };
+  EXPECT_EQ(first_rows(3), first_rows(3));
+  EXPECT_NE(first_rows(3), first_rows(4));
+}
+
+TEST(MapUnit, LogUniformSpacesGeometrically) {
+  DesignParameter p = Bounds("x1", 1, 100);
+  p.distribution = Distribution::kLogUniform;
+  EXPECT_DOUBLE_EQ(MapUnit(p, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(MapUnit(p, 0.5), 10.0);
+  p.distribution = Distribution::kUniform;
+  EXPECT_DOUBLE_EQ(MapUnit(p, 0.5), 50.5);
+}
+
+}  // namespace
+}  // namespace gesweep

@@ -1,0 +1,227 @@
+// The runner: every run's results equal a direct call of the engine for its parameters; a failing
+// run is data and the sweep goes on; the results do not depend on the thread count; memory is a
+// fixed pool of batches.
+#include "engine/sweep/runner.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <mutex>
+
+#include "engine/modal/modal_analysis.h"
+#include "engine/sweep/analysis_adapters.h"
+
+namespace gesweep {
+namespace {
+
+const std::string kAircraft = std::string(GESWEEP_SOURCE_DIR) + "/studies/aircraft/ance.toml";
+
+// Keeps every batch, as the archive would, keyed by its number.
+class MemorySink : public ResultSink {
+ public:
+  void Write(const ResultBlock& block) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++writes_;
+    blocks_[block.block_index] = block;
+  }
+  std::map<std::int64_t, ResultBlock> blocks_;
+  int writes_ = 0;
+  std::mutex mutex_;
+};
+
+DesignParameter Axis(const char* name, std::vector<double> values) {
+  DesignParameter p;
+  p.id = RequireParameter(name);
+  p.values = std::move(values);
+  return p;
+}
+
+// A study of `analyses` over a grid, built in memory (no file).
+Study GridStudy(std::vector<std::unique_ptr<Analysis>> analyses, std::vector<DesignParameter> axes, int chunk_runs) {
+  Study study;
+  study.path = "<test>";
+  study.name = "test";
+  study.aircraft = LoadAircraftFile(kAircraft);
+  study.analyses = std::move(analyses);
+  study.chunk_runs = chunk_runs;
+  study.design.kind = DesignKind::kGrid;
+  study.design.parameters = std::move(axes);
+  return study;
+}
+
+std::unique_ptr<Analysis> Modes() {
+  toml::table empty;
+  static const Aircraft aircraft = LoadAircraftFile(kAircraft);
+  return MakeModesAnalysis(TomlSection(empty, "<test>", "analyses.modes"), &aircraft);
+}
+
+int ColumnIndex(const SweepPlan& plan, const std::string& path) {
+  for (std::size_t c = 0; c < plan.schema().columns.size(); ++c) {
+    if (plan.schema().columns[c].path == path) return static_cast<int>(c);
+  }
+  ADD_FAILURE() << "no column " << path;
+  return 0;
+}
+
+TEST(Runner, ModesResultsEqualDirectAnalysisOfEachRun) {
+  std::vector<std::unique_ptr<Analysis>> analyses;
+  analyses.push_back(Modes());
+  SweepPlan plan(GridStudy(std::move(analyses),
+                           {Axis("speed_mps", {25, 32.0208, 45}), Axis("height_m", {0.8, 1.5, 2.5935, 2.7, 6, 13})}, 4),
+                 ShardSpec{});
+  std::vector<std::int64_t> blocks;
+  for (std::int64_t b = 0; b < plan.block_count(); ++b) blocks.push_back(b);
+  MemorySink sink;
+  SweepProgress progress;
+  const SweepOutcome outcome = RunSweep(plan, blocks, sink, RunnerOptions{2, nullptr, 2}, &progress);
+  EXPECT_EQ(outcome.runs_ok, 18);
+  EXPECT_EQ(outcome.runs_failed, 0);
+  EXPECT_EQ(sink.writes_, 5);  // 18 runs in batches of 4
+  EXPECT_EQ(progress.runs_written.load(), 18);
+  const LongitudinalModel model(LoadAircraftFile(kAircraft), ModelOptions{});
+  const int margin = ColumnIndex(plan, "results/modes/stability_margin_per_s");
+  const int eigenvalues = ColumnIndex(plan, "results/modes/eigenvalues");
+  for (const auto& [index, block] : sink.blocks_) {
+    for (int r = 0; r < block.rows; ++r) {
+      const double u = block.design[0][static_cast<std::size_t>(r)];
+      const double h = block.design[1][static_cast<std::size_t>(r)];
+      EXPECT_EQ(block.design_index[static_cast<std::size_t>(r)], index * 4 + r);
+      const ModalAnalysis direct = AnalyzeModes(model.StateMatrix(h, u));
+      EXPECT_EQ(block.results[static_cast<std::size_t>(margin)][static_cast<std::size_t>(r)], direct.stability_margin_per_s);
+      for (int k = 0; k < 5; ++k) {
+        EXPECT_EQ(block.results[static_cast<std::size_t>(eigenvalues)][static_cast<std::size_t>(r * 10 + 2 * k)],
+                  direct.eigenvalues[static_cast<std::size_t>(k)].real());
+      }
+      EXPECT_EQ(block.status[static_cast<std::size_t>(r)], static_cast<std::int8_t>(RunStatus::kOk));
+    }
+  }
+}
+
+// Fails (by throwing, or by reporting) on chosen x1 values.
+class FlakyAnalysis final : public Analysis {
+ public:
+  std::string_view name() const override { return "flaky"; }
+  bool needs_model() const override { return false; }
+  std::vector<ParameterId> parameters_used() const override { return {x1_}; }
+  double nominal_run_cost_us() const override { return 1; }
+  void DeclareOutputs(OutputSchema& schema, const StorageOptions&) override {
+    column_ = schema.Add(OutputColumn::Real("results/flaky/y", "1", "x1 squared"));
+  }
+  AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
+    const double x = context.value(x1_);
+    if (x == 3) throw std::runtime_error("boom at 3");
+    if (x == 5) return AnalysisOutcome::Failed("diverged at 5");
+    row.Set(column_, x * x);
+    return AnalysisOutcome::Ok();
+  }
+
+ private:
+  ParameterId x1_ = RequireParameter("x1");
+  int column_ = 0;
+};
+
+TEST(Runner, FailedRunsAreDataAndTheSweepGoesOn) {
+  Study study;
+  study.path = "<test>";
+  study.analyses.push_back(std::make_unique<FlakyAnalysis>());
+  study.chunk_runs = 3;
+  study.design.kind = DesignKind::kGrid;
+  study.design.parameters = {Axis("x1", {1, 2, 3, 4, 5, 6, 7})};
+  SweepPlan plan(std::move(study), ShardSpec{});
+  MemorySink sink;
+  const SweepOutcome outcome = RunSweep(plan, {0, 1, 2}, sink, RunnerOptions{2, nullptr, 1}, nullptr);
+  EXPECT_EQ(outcome.runs_ok, 5);
+  EXPECT_EQ(outcome.runs_failed, 2);
+  const ResultBlock& middle = sink.blocks_.at(0);  // x1 = 1, 2, 3
+  EXPECT_EQ(middle.status[2], static_cast<std::int8_t>(RunStatus::kFailed));
+  EXPECT_EQ(middle.message[2], "flaky: exception: boom at 3");
+  EXPECT_TRUE(std::isnan(middle.results[0][2]));
+  EXPECT_EQ(middle.results[0][1], 4.0);
+  const ResultBlock& second = sink.blocks_.at(1);  // x1 = 4, 5, 6
+  EXPECT_EQ(second.status[1], static_cast<std::int8_t>(RunStatus::kFailed));
+  EXPECT_EQ(second.message[1], "flaky: diverged at 5");
+  EXPECT_EQ(second.results[0][2], 36.0);
+  EXPECT_EQ(sink.blocks_.at(2).rows, 1);
+}
+
+TEST(Runner, ResultsDoNotDependOnTheThreadCount) {
+  auto run = [](int threads) {
+    std::vector<std::unique_ptr<Analysis>> analyses;
+    analyses.push_back(Modes());
+    SweepPlan plan(GridStudy(std::move(analyses),
+                             {Axis("scale.CMalphadot", {0.8, 1.0, 1.2}), Axis("height_m", {0.9, 1.7, 2.6, 3.1, 8.0}),
+                              Axis("speed_mps", {28, 32, 40, 52})},
+                             8),
+                   ShardSpec{});
+    plan.set_chunk_runs(8);
+    MemorySink sink;
+    std::vector<std::int64_t> blocks;
+    for (std::int64_t b = 0; b < plan.block_count(); ++b) blocks.push_back(b);
+    RunSweep(plan, blocks, sink, RunnerOptions{threads, nullptr, 2}, nullptr);
+    std::vector<double> all;
+    for (const auto& [index, block] : sink.blocks_) {
+      for (const auto& column : block.results) all.insert(all.end(), column.begin(), column.begin() + block.rows * (static_cast<int>(column.size()) / 8));
+    }
+    return all;
+  };
+  const auto one = run(1);
+  const auto four = run(4);
+  ASSERT_EQ(one.size(), four.size());
+  EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(double)));  // bit for bit (NaN included)
+}
+
+TEST(Runner, CancelStopsTakingBatchesAndWritesThoseInFlight) {
+  Study study;
+  study.path = "<test>";
+  study.analyses.push_back(std::make_unique<FlakyAnalysis>());
+  study.chunk_runs = 1;
+  study.design.kind = DesignKind::kGrid;
+  std::vector<double> xs;
+  for (int i = 10; i < 1010; ++i) xs.push_back(i);
+  study.design.parameters = {Axis("x1", xs)};
+  SweepPlan plan(std::move(study), ShardSpec{});
+  std::vector<std::int64_t> blocks;
+  for (std::int64_t b = 0; b < plan.block_count(); ++b) blocks.push_back(b);
+  // Cancels from inside the sink after the fifth batch.
+  struct CancellingSink : MemorySink {
+    std::atomic<bool>* cancel = nullptr;
+    void Write(const ResultBlock& block) override {
+      MemorySink::Write(block);
+      if (writes_ == 5) cancel->store(true);
+    }
+  } sink;
+  std::atomic<bool> cancel{false};
+  sink.cancel = &cancel;
+  const SweepOutcome outcome = RunSweep(plan, blocks, sink, RunnerOptions{2, &cancel, 1}, nullptr);
+  EXPECT_TRUE(outcome.cancelled);
+  EXPECT_LT(sink.writes_, 100);
+  EXPECT_EQ(outcome.runs_ok, sink.writes_) << "every computed batch was written";
+}
+
+TEST(Runner, IshigamiRunsGiveTheFunctionValues) {
+  toml::table empty;
+  Study study;
+  study.path = "<test>";
+  study.analyses.push_back(MakeIshigamiAnalysis(TomlSection(empty, "<test>", "analyses.ishigami"), nullptr));
+  study.design.kind = DesignKind::kGrid;
+  study.design.parameters = {Axis("x1", {-1, 0.5}), Axis("x2", {2}), Axis("x3", {-3, 1})};
+  SweepPlan plan(std::move(study), ShardSpec{});
+  MemorySink sink;
+  RunSweep(plan, {0}, sink, RunnerOptions{1, nullptr, 1}, nullptr);
+  const ResultBlock& block = sink.blocks_.at(0);
+  // pow() and repeated products round differently in the last bits.
+  constexpr double kRounding = 1e-13;
+  // Oracle: the formula, Ishigami & Homma (1990) with a = 7, b = 0.1.
+  auto f = [](double x1, double x2, double x3) {
+    return std::sin(x1) + 7 * std::pow(std::sin(x2), 2) + 0.1 * std::pow(x3, 4) * std::sin(x1);
+  };
+  EXPECT_NEAR(block.results[0][0], f(-1, 2, -3), kRounding);
+  EXPECT_NEAR(block.results[0][1], f(-1, 2, 1), kRounding);
+  EXPECT_NEAR(block.results[0][2], f(0.5, 2, -3), kRounding);
+  EXPECT_NEAR(block.results[0][3], f(0.5, 2, 1), kRounding);
+}
+
+}  // namespace
+}  // namespace gesweep

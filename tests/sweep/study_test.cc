@@ -1,0 +1,316 @@
+// Study files: a valid study parses into the design and analyses it describes; a bad one is
+// refused before anything runs, with the file, key, value, expectation and line.
+#include "engine/sweep/study.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "engine/common/errors.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace gesweep {
+namespace {
+
+const std::string kAircraft = std::string(GESWEEP_SOURCE_DIR) + "/studies/aircraft/ance.toml";
+
+class StudyTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    directory_ = std::filesystem::temp_directory_path() /
+                 ("gesweep_study_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(directory_);
+  }
+  void TearDown() override { std::filesystem::remove_all(directory_); }
+
+  std::filesystem::path Write(const std::string& name, const std::string& text) {
+    const auto path = directory_ / name;
+    std::ofstream(path) << text;
+    return path;
+  }
+  std::string Header(const std::string& analyses = "[analyses.modes]\n") {
+    return "format_version = 1\nname = \"t\"\naircraft = \"" + kAircraft + "\"\n" + analyses;
+  }
+  // The InputError of loading `text`, or fails the test.
+  InputError ErrorOf(const std::string& text) {
+    const auto path = Write("study.toml", text);
+    try {
+      Study study = LoadStudy(path);
+      SweepPlan plan(std::move(study), ShardSpec{});
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "expected an InputError for:\n" << text;
+    return InputError("", "", "", "");
+  }
+
+  std::filesystem::path directory_;
+};
+
+TEST_F(StudyTest, ParsesAGridStudy) {
+  const auto path = Write("grid.toml", Header() + R"(
+[parameters]
+speed_mps = 32.0208
+scale.CLh = 1.1
+[output]
+compression_level = 6
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "height_m"
+linspace = [1.0, 3.0, 5]
+[[design.parameter]]
+name = "h_derivatives"
+values = [true, false]
+)");
+  Study study = LoadStudy(path);
+  EXPECT_EQ(study.name, "t");
+  ASSERT_EQ(study.analyses.size(), 1u);
+  EXPECT_EQ(study.analyses[0]->name(), "modes");
+  ASSERT_TRUE(study.aircraft.has_value());
+  EXPECT_EQ(study.compression_level, 6);
+  ASSERT_EQ(study.fixed.size(), 2u);
+  EXPECT_EQ(study.design.kind, DesignKind::kGrid);
+  ASSERT_EQ(study.design.parameters.size(), 2u);
+  EXPECT_EQ(study.design.parameters[0].values, (std::vector<double>{1.0, 1.5, 2.0, 2.5, 3.0}));
+  EXPECT_EQ(study.design.parameters[1].values, (std::vector<double>{1.0, 0.0}));
+  SweepPlan plan(std::move(study), ShardSpec{});
+  EXPECT_EQ(plan.design_runs(), 10);
+  EXPECT_EQ(plan.base_parameters()[static_cast<std::size_t>(RequireParameter("scale.CLh"))], 1.1);
+  EXPECT_EQ(plan.base_parameters()[static_cast<std::size_t>(RequireParameter("mass_kg"))], 182.055);
+}
+
+TEST_F(StudyTest, FingerprintIgnoresCommentsButNotValues) {
+  const std::string body = R"(
+[parameters]
+speed_mps = 32.0
+height_m = 2.0
+)";
+  const auto a = LoadStudy(Write("a.toml", Header() + body)).fingerprint;
+  const auto b = LoadStudy(Write("b.toml", "# a comment\n" + Header() + body + "\n# another\n")).fingerprint;
+  const auto c = LoadStudy(Write("c.toml", Header() + R"(
+[parameters]
+speed_mps = 32.5
+height_m = 2.0
+)")).fingerprint;
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+}
+
+TEST_F(StudyTest, ListDesignFromCsv) {
+  Write("runs.csv", "# heights and speeds\nheight_m, speed_mps, cdh\n1.0, 30, polar\n2.5, 40, zero\n");
+  Study study = LoadStudy(Write("list.toml", Header() + R"(
+[design]
+kind = "list"
+csv = "runs.csv"
+)"));
+  ASSERT_EQ(study.design.list_rows, 2);
+  EXPECT_EQ(study.design.list_values, (std::vector<double>{1.0, 30, 0, 2.5, 40, 1}));
+}
+
+TEST_F(StudyTest, CsvErrorsNameTheCsvLine) {
+  Write("runs.csv", "height_m,speed_mps\n1.0,30\n0.5,30\n");
+  const InputError e = ErrorOf(Header() + "[design]\nkind = \"list\"\ncsv = \"runs.csv\"\n");
+  EXPECT_NE(e.source().find("runs.csv"), std::string::npos);
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(e.expected().find("wheel-contact"), std::string::npos);
+}
+
+TEST_F(StudyTest, UnknownKeySuggestsTheNearOne) {
+  const InputError e = ErrorOf(Header() + "[output]\ntime_serie = true\n");
+  EXPECT_EQ(e.key(), "output.time_serie");
+  EXPECT_NE(e.expected().find("did you mean 'time_series'"), std::string::npos);
+  EXPECT_EQ(e.line(), 6);
+}
+
+TEST_F(StudyTest, UnknownParameterSuggestsTheNearOne) {
+  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheigth_m = 2\n");
+  EXPECT_NE(e.expected().find("did you mean 'height_m'"), std::string::npos);
+  EXPECT_EQ(e.line(), 7);
+}
+
+TEST_F(StudyTest, UnknownAnalysisSuggestsTheNearOne) {
+  const InputError e = ErrorOf(Header("[analyses.mode]\n") + "[parameters]\nspeed_mps = 30\nheight_m = 2\n");
+  EXPECT_NE(e.expected().find("did you mean 'modes'"), std::string::npos);
+}
+
+TEST_F(StudyTest, WrongTypeNamesKeyValueAndLine) {
+  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = \"fast\"\nheight_m = 2\n");
+  EXPECT_EQ(e.key(), "parameters.speed_mps");
+  EXPECT_EQ(e.value(), "\"fast\"");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(std::string(e.what()).find("study.toml:6"), std::string::npos);
+}
+
+TEST_F(StudyTest, StartHeightUnderWheelContactIsRefused) {
+  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 0.5\n");
+  EXPECT_NE(e.expected().find("wheel-contact height 0.788"), std::string::npos);
+}
+
+TEST_F(StudyTest, NegativeAndZeroValuesAreRefused) {
+  EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 0\nheight_m = 2\n").expected().find("in (0, 300]"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\nmass_kg = -1\n").expected().find("> 0"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = nan\nheight_m = 2\n").expected().find("expected"),
+            std::string::npos);
+}
+
+TEST_F(StudyTest, DuplicateAxisIsRefused) {
+  const InputError e = ErrorOf(Header() + R"([parameters]
+speed_mps = 30
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "height_m"
+values = [1, 2]
+[[design.parameter]]
+name = "height_m"
+values = [3, 4]
+)");
+  EXPECT_NE(e.expected().find("duplicate"), std::string::npos);
+  EXPECT_EQ(e.line(), 13);
+}
+
+TEST_F(StudyTest, FixedAndSweptAtOnceIsRefused) {
+  const InputError e = ErrorOf(Header() + R"([parameters]
+speed_mps = 30
+height_m = 2
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "height_m"
+values = [1, 2]
+)");
+  EXPECT_NE(e.expected().find("both fixed"), std::string::npos);
+}
+
+TEST_F(StudyTest, ParameterNoAnalysisReadsIsRefused) {
+  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\npulse_amplitude_deg = 5\n");
+  EXPECT_NE(e.expected().find("no analysis of this study"), std::string::npos);
+}
+
+TEST_F(StudyTest, MissingRequiredParameterIsNamed) {
+  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = 30\n");
+  EXPECT_NE(e.expected().find("needs height_m"), std::string::npos);
+}
+
+TEST_F(StudyTest, ChoiceParametersCannotBeSampled) {
+  const InputError e = ErrorOf(Header() + R"([parameters]
+speed_mps = 30
+height_m = 2
+[design]
+kind = "lhs"
+samples = 10
+seed = 1
+[[design.parameter]]
+name = "cdh"
+uniform = [0, 1]
+)");
+  EXPECT_NE(e.expected().find("real-valued"), std::string::npos);
+}
+
+TEST_F(StudyTest, AbsurdGridIsRefusedQuotingTheStorageEstimate) {
+  // 10^4 × 10^4 × 10^4 = 10^12 runs of modes: hundreds of terabytes.
+  const InputError e = ErrorOf(Header() + R"([parameters]
+speed_mps = 30
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "height_m"
+linspace = [1, 10, 10000]
+[[design.parameter]]
+name = "scale.CLh"
+linspace = [0.5, 1.5, 10000]
+[[design.parameter]]
+name = "scale.CMh"
+linspace = [0.5, 1.5, 10000]
+)");
+  EXPECT_NE(e.expected().find("refusing it: the archive would need about"), std::string::npos);
+  EXPECT_NE(e.expected().find(" TB before compression"), std::string::npos) << e.what();
+  EXPECT_EQ(e.line(), 7);
+}
+
+TEST_F(StudyTest, EmptyGridAxisIsRefused) {
+  const InputError e = ErrorOf(Header() + R"([parameters]
+speed_mps = 30
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "height_m"
+values = []
+)");
+  EXPECT_NE(e.expected().find("non-empty"), std::string::npos);
+}
+
+TEST_F(StudyTest, StudyNamingItselfAsAircraftIsRefused) {
+  const auto path = Write("self.toml", "format_version = 1\naircraft = \"self.toml\"\n[analyses.modes]\n");
+  try {
+    LoadStudy(path);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.expected().find("not this study file itself"), std::string::npos);
+  }
+}
+
+TEST_F(StudyTest, MissingAircraftFileIsNamed) {
+  const auto path = Write("s.toml", "format_version = 1\naircraft = \"nowhere.toml\"\n[analyses.modes]\n");
+  try {
+    LoadStudy(path);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "aircraft");
+    EXPECT_NE(std::string(e.what()).find("nowhere.toml"), std::string::npos);
+  }
+}
+
+TEST_F(StudyTest, VerificationStudyNeedsNoAircraft) {
+  Study study = LoadStudy(Write("ishigami.toml", R"(format_version = 1
+[analyses.ishigami]
+[design]
+kind = "sobol"
+base_samples = 8
+second_order = true
+[[design.parameter]]
+name = "x1"
+uniform = [-3.141592653589793, 3.141592653589793]
+[[design.parameter]]
+name = "x2"
+uniform = [-3.141592653589793, 3.141592653589793]
+[[design.parameter]]
+name = "x3"
+uniform = [-3.141592653589793, 3.141592653589793]
+)"));
+  EXPECT_FALSE(study.aircraft.has_value());
+  SweepPlan plan(std::move(study), ShardSpec{});
+  EXPECT_EQ(plan.design_runs(), 8 * (2 * 3 + 2));
+}
+
+TEST(ShardSpec, ParsesAndSplitsContiguously) {
+  EXPECT_THROW(ParseShard("3/3", "--shard"), InputError);
+  EXPECT_THROW(ParseShard("1", "--shard"), InputError);
+  EXPECT_THROW(ParseShard("-1/3", "--shard"), InputError);
+  const ShardSpec shard = ParseShard("1/3", "--shard");
+  EXPECT_EQ(shard.index, 1);
+  EXPECT_EQ(shard.count, 3);
+  // Every run in exactly one shard, in order, sizes differing by at most one.
+  for (std::int64_t runs : {1, 2, 10, 1000, 1001}) {
+    for (int count : {1, 2, 3, 7}) {
+      std::int64_t next = 0;
+      for (int i = 0; i < count; ++i) {
+        std::int64_t first = 0, n = 0;
+        ShardRange(runs, ShardSpec{i, count}, &first, &n);
+        EXPECT_EQ(first, next);
+        EXPECT_LE(n, runs / count + 1);
+        EXPECT_GE(n, runs / count);
+        next = first + n;
+      }
+      EXPECT_EQ(next, runs);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gesweep
