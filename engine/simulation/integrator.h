@@ -137,8 +137,8 @@ enum class IntegrationStatus {
 std::string_view ToString(IntegrationStatus status);
 
 /// What Integrate returns. Counts include everything: `rhs_calls` counts every Derivative call
-/// (RK4: 4 per step plus 1 per breakpoint or restart; dopri5: 6 per trial step plus 1 per start,
-/// breakpoint or restart).
+/// (RK4: 1 at the start, 4 per step, 1 per breakpoint or restart; dopri5: 1 at the start, 6 per
+/// trial step, 1 per breakpoint or restart).
 template <int N>
 struct IntegrationResult {
   IntegrationStatus status = IntegrationStatus::kReachedEnd;

@@ -251,7 +251,7 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
 }  // namespace
 
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source) {
-  auto require = [&source](bool ok, const char* key, double value, const std::string& expected) {
+  auto require = [&source](bool ok, const char* key, double value, const char* expected) {
     if (!ok) throw InputError(source, key, Text(value), expected);
   };
   const double touchdown_m = TouchdownHeight(model, config);
@@ -261,14 +261,18 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
   require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps, "expected a finite speed >= 0 m/s");
   const double start_m = config.start_height_m + config.initial_offsets.delta_height_m;
   require(std::isfinite(config.start_height_m), "start_height_m", config.start_height_m, "expected a finite height");
-  require(start_m > touchdown_m, "start_height_m", start_m,
-          "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
-              " m; a run cannot start on or below the ground");
+  if (!(start_m > touchdown_m)) {  // the message is built only on failure: this runs once per sweep run
+    throw InputError(source, "start_height_m", Text(start_m),
+                     "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
+                         " m; a run cannot start on or below the ground");
+  }
   require(std::isfinite(config.reference_speed_mps) && config.reference_speed_mps > 0.0, "reference_speed_mps",
           config.reference_speed_mps, "expected a finite speed > 0 m/s");
   const double start_speed = config.reference_speed_mps + config.initial_offsets.delta_speed_mps;
-  require(start_speed > stall_mps, "reference_speed_mps", start_speed,
-          "expected a start speed above the stall speed " + Text(stall_mps) + " m/s");
+  if (!(start_speed > stall_mps)) {
+    throw InputError(source, "reference_speed_mps", Text(start_speed),
+                     "expected a start speed above the stall speed " + Text(stall_mps) + " m/s");
+  }
   require(std::isfinite(config.duration_s) && config.duration_s > 0.0, "duration_s", config.duration_s,
           "expected a finite duration > 0 s");
   require(std::isfinite(config.series_interval_s) && config.series_interval_s >= 0.0, "series_interval_s",
