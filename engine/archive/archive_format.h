@@ -21,6 +21,8 @@ inline constexpr const char* kSeriesGroup = "series";       ///< series/<analysi
 inline constexpr const char* kAnalysisGroup = "analysis";   ///< derived products (boundary, sensitivity, ...)
 
 /// Path of the dataset of a design parameter.
-inline std::string DesignPath(const std::string& parameter) { return std::string(kDesignGroup) + "/" + parameter; }
+inline std::string DesignPath(const std::string& parameter) {
+  return std::string(kDesignGroup) + "/" + parameter;
+}
 
 }  // namespace gesweep::archive

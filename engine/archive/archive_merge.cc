@@ -44,8 +44,8 @@ void CopyGroupAttributes(hid_t from_file, hid_t to_file, const std::string& grou
 
 }  // namespace
 
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
-                          bool force, const std::string& command_line) {
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line) {
   hdf5::Quiet();
   const std::string shown = output.string();
   if (inputs.empty()) throw InputError("command line", "ARCHIVES", "", "expected one or more shard archives");
@@ -54,6 +54,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   std::error_code ec;
   if (!std::filesystem::is_directory(directory, ec)) {
     throw InputError("command line", "-o", shown, "the directory " + directory.string() + " does not exist");
+  }
+  if (std::filesystem::is_directory(output, ec)) {
+    throw InputError("command line", "-o", shown,
+                     "is a directory; expected an archive file name such as all.h5");
   }
   if (std::filesystem::exists(output, ec) && !force) {
     throw InputError("command line", "-o", shown, "already exists; pass --force to replace it");
@@ -75,7 +79,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
       throw InputError(input.string(), "", "",
                        "shard " + reader.StringAttribute("shard") +
                            " is incomplete: its sweep is still writing it or was killed; finish it with "
-                           "`gesweep run ... --shard " + reader.StringAttribute("shard") + " --resume` first");
+                           "`gesweep run ... --shard " +
+                           reader.StringAttribute("shard") + " --resume` first");
     }
     shard.first = reader.IntegerAttribute("first_run");
     shard.count = reader.run_count();
@@ -87,7 +92,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
     for (const auto& shard : shards) {
       if (shard.reader->StringAttribute(key) != reference.StringAttribute(key)) {
         throw InputError(shard.path.string(), key, shard.reader->StringAttribute(key),
-                         "expected " + reference.StringAttribute(key) + " as in " + shards.front().path.string() +
+                         "expected " + reference.StringAttribute(key) + " as in " +
+                             shards.front().path.string() +
                              ": shards must come from the same study and engine");
       }
     }
@@ -95,7 +101,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   const std::int64_t design_runs = reference.IntegerAttribute("design_runs");
   for (const auto& shard : shards) {
     if (shard.reader->IntegerAttribute("design_runs") != design_runs) {
-      throw InputError(shard.path.string(), "design_runs", std::to_string(shard.reader->IntegerAttribute("design_runs")),
+      throw InputError(shard.path.string(), "design_runs",
+                       std::to_string(shard.reader->IntegerAttribute("design_runs")),
                        "expected " + std::to_string(design_runs) + " as in " + shards.front().path.string());
     }
   }
@@ -108,8 +115,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
     std::string names;
     for (std::int64_t i = 0; i < shard_count; ++i) {
       const std::int64_t a = i * (design_runs / shard_count) + i * (design_runs % shard_count) / shard_count;
-      const std::int64_t b = (i + 1) * (design_runs / shard_count) + (i + 1) * (design_runs % shard_count) / shard_count;
-      if (a < to && b > from) names += (names.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shard_count);
+      const std::int64_t b =
+          (i + 1) * (design_runs / shard_count) + (i + 1) * (design_runs % shard_count) / shard_count;
+      if (a < to && b > from)
+        names += (names.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shard_count);
     }
     throw InputError("command line", "ARCHIVES", "",
                      "runs " + Range(from, to - from) + " of the design are missing (shard " +
@@ -119,10 +128,11 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   for (std::size_t i = 0; i < shards.size(); ++i) {
     if (shards[i].first > covered) missing(covered, shards[i].first);
     if (shards[i].first < covered) {
-      throw InputError(shards[i].path.string(), "shard", shards[i].shard,
-                       "overlaps " + shards[i - 1].path.string() + " (runs " +
-                           Range(shards[i].first, std::min(covered, shards[i].first + shards[i].count) - shards[i].first) +
-                           " in both): each run must come from exactly one shard");
+      throw InputError(
+          shards[i].path.string(), "shard", shards[i].shard,
+          "overlaps " + shards[i - 1].path.string() + " (runs " +
+              Range(shards[i].first, std::min(covered, shards[i].first + shards[i].count) - shards[i].first) +
+              " in both): each run must come from exactly one shard");
     }
     covered = shards[i].first + shards[i].count;
   }
@@ -143,9 +153,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
       }
     }
     if (pending > 0) {
-      throw InputError(shard.path.string(), "shard", shard.shard,
-                       "is incomplete: " + std::to_string(pending) + " of its " + std::to_string(shard.count) +
-                           " runs are pending; finish it with `gesweep run ... --shard " + shard.shard + " --resume`");
+      throw InputError(
+          shard.path.string(), "shard", shard.shard,
+          "is incomplete: " + std::to_string(pending) + " of its " + std::to_string(shard.count) +
+              " runs are pending; finish it with `gesweep run ... --shard " + shard.shard + " --resume`");
     }
   }
 
@@ -153,16 +164,27 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   const std::filesystem::path temporary = output.string() + ".partial";
   std::filesystem::remove(temporary, ec);
   Handle fapl = hdf5::FileAccess();
+  // Nothing half-written survives a failure: the temporary file goes.
+  struct RemoveOnFailure {
+    const std::filesystem::path& path;
+    bool armed = true;
+    ~RemoveOnFailure() {
+      std::error_code ignored;
+      if (armed) std::filesystem::remove(path, ignored);
+    }
+  } cleanup{temporary};
   {
-    Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), "create " + temporary.string());
+    Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
+                "create " + temporary.string());
     hdf5::CopyAttributes(reference.file(), file.get());
     std::vector<std::string> merged_from, shard_notes;
     std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");
     for (const auto& shard : shards) {
       merged_from.push_back(shard.path.string());
-      shard_notes.push_back(shard.shard + ": " + shard.path.string() + ", host " + shard.reader->StringAttribute("host") +
-                            ", threads " + std::to_string(shard.reader->IntegerAttribute("threads")) + ", " +
-                            shard.reader->StringAttribute("start_time") + " to " + shard.reader->StringAttribute("end_time"));
+      shard_notes.push_back(
+          shard.shard + ": " + shard.path.string() + ", host " + shard.reader->StringAttribute("host") +
+          ", threads " + std::to_string(shard.reader->IntegerAttribute("threads")) + ", " +
+          shard.reader->StringAttribute("start_time") + " to " + shard.reader->StringAttribute("end_time"));
       start = std::min(start, shard.reader->StringAttribute("start_time"));
       end = std::max(end, shard.reader->StringAttribute("end_time"));
     }
@@ -188,12 +210,14 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
 
     std::vector<unsigned char> buffer, piece;
     for (const std::string& path : reference.Datasets()) {
-      if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/")) continue;  // derived: recompute after merge
+      if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
+        continue;  // derived: recompute after merge
       Handle source(H5Dopen2(reference.file(), path.c_str(), H5P_DEFAULT), "open " + path);
       const auto dims = hdf5::Dimensions(source.get());
       hdf5::CreateGroups(file.get(), path.substr(0, path.rfind('/')));
       if (!PerRun(path, dims)) {
-        Check(H5Ocopy(reference.file(), path.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT), "copy " + path);
+        Check(H5Ocopy(reference.file(), path.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+              "copy " + path);
         continue;
       }
       Handle type(H5Dget_type(source.get()), "type of " + path);
@@ -203,9 +227,11 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
       Check(rank, "chunk of " + path);
       std::vector<hsize_t> out_dims{static_cast<hsize_t>(design_runs)};
       if (dims.size() == 2) out_dims.push_back(static_cast<hsize_t>(dims[1]));
-      Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), nullptr), "dataspace");
-      Handle target(H5Dcreate2(file.get(), path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-                    "create " + path);
+      Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), nullptr),
+                   "dataspace");
+      Handle target(
+          H5Dcreate2(file.get(), path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+          "create " + path);
       hdf5::CopyAttributes(source.get(), target.get());
       const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
       const std::size_t row_bytes = static_cast<std::size_t>(width) * H5Tget_size(type.get());
@@ -220,7 +246,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
           if (a >= b) continue;
           piece.resize(static_cast<std::size_t>(b - a) * row_bytes);
           shard.reader->ReadRows(path, a - shard.first, b - a, type.get(), piece.data());
-          std::copy(piece.begin(), piece.end(), buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
+          std::copy(piece.begin(), piece.end(),
+                    buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
         }
         Handle memory;
         Handle file_space = hdf5::SelectRows(target.get(), first, count, &memory);
@@ -233,6 +260,7 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   for (auto& shard : shards) shard.reader->Close();
   std::filesystem::rename(temporary, output, ec);
   if (ec) throw ArchiveError("rename " + temporary.string() + " to " + shown + ": " + ec.message());
+  cleanup.armed = false;
   return report;
 }
 

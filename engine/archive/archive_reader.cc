@@ -1,6 +1,7 @@
 #include "engine/archive/archive_reader.h"
 
 #include <algorithm>
+#include <cstring>
 #include <sstream>
 
 #include "engine/archive/archive_format.h"
@@ -38,9 +39,13 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
   hdf5::Quiet();
   const std::string shown = path.string();
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(shown, "", "", "no such archive");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(shown, "", "", "is a directory, not an archive");
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
+  const bool exists = std::filesystem::exists(path, ec);
+  if (ec) throw InputError(shown, "", "", "cannot read the archive: " + ec.message());
+  if (!exists) throw InputError(shown, "", "", "no such archive");
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(shown, "", "", "is a directory, not an archive");
+  if (H5Fis_hdf5(path.c_str()) <= 0)
+    throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
   Handle fapl = hdf5::FileAccess();
   bool snapshot = false;
   hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
@@ -61,7 +66,8 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
   ArchiveReader reader(path, Handle(id), snapshot);
   const auto format = hdf5::ReadStringAttribute(id, "format");
   if (!format || *format != archive::kFormatName) {
-    throw InputError(shown, "format", format.value_or(""), "not a gesweep archive (no format = \"gesweep-archive\")");
+    throw InputError(shown, "format", format.value_or(""),
+                     "not a gesweep archive (no format = \"gesweep-archive\")");
   }
   const auto version = hdf5::ReadIntegerAttribute(id, "format_version");
   if (!version || *version > archive::kFormatVersion) {
@@ -96,8 +102,8 @@ std::vector<std::string> ArchiveReader::Datasets() const {
   return names;
 }
 
-void ArchiveReader::ReadRows(const std::string& path, std::int64_t first, std::int64_t count, hid_t memory_type,
-                             void* out) const {
+void ArchiveReader::ReadRows(const std::string& path, std::int64_t first, std::int64_t count,
+                             hid_t memory_type, void* out) const {
   Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
   Handle memory;
   Handle space = hdf5::SelectRows(dataset.get(), first, count, &memory);
@@ -105,7 +111,8 @@ void ArchiveReader::ReadRows(const std::string& path, std::int64_t first, std::i
         "read " + path + " of " + path_.string());
 }
 
-std::vector<double> ArchiveReader::ReadDoubles(const std::string& path, std::int64_t first, std::int64_t count) const {
+std::vector<double> ArchiveReader::ReadDoubles(const std::string& path, std::int64_t first,
+                                               std::int64_t count) const {
   Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
   const auto dims = hdf5::Dimensions(dataset.get());
   const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
@@ -120,12 +127,27 @@ std::vector<std::int8_t> ArchiveReader::ReadStatus(std::int64_t first, std::int6
   return status;
 }
 
+std::vector<std::string> ArchiveReader::ReadMessages(std::int64_t first, std::int64_t count) const {
+  Handle dataset(H5Dopen2(file_.get(), archive::kRunMessage, H5P_DEFAULT), "open runs/message");
+  Handle type(H5Dget_type(dataset.get()), "type of runs/message");
+  const std::size_t length = H5Tget_size(type.get());
+  std::vector<char> buffer(static_cast<std::size_t>(count) * length);
+  ReadRows(archive::kRunMessage, first, count, type.get(), buffer.data());
+  std::vector<std::string> messages;
+  for (std::int64_t r = 0; r < count; ++r) {
+    const char* text = buffer.data() + static_cast<std::size_t>(r) * length;
+    messages.emplace_back(text, strnlen(text, length));
+  }
+  return messages;
+}
+
 std::vector<std::int64_t> ArchiveReader::CompleteBlocks(int chunk_runs) const {
   std::vector<std::int64_t> blocks;
   for (std::int64_t first = 0, block = 0; first < run_count_; first += chunk_runs, ++block) {
     const std::int64_t count = std::min<std::int64_t>(chunk_runs, run_count_ - first);
     const auto status = ReadStatus(first, count);
-    if (std::all_of(status.begin(), status.end(), [](std::int8_t s) { return s != 0; })) blocks.push_back(block);
+    if (std::all_of(status.begin(), status.end(), [](std::int8_t s) { return s != 0; }))
+      blocks.push_back(block);
   }
   return blocks;
 }
@@ -137,18 +159,22 @@ void ArchiveReader::CheckSameSweep(const SweepPlan& plan, const std::string& sho
                          "; use --force to replace it, or another -o");
   };
   if (StringAttribute("study_fingerprint") != Hex(plan.study().fingerprint)) {
-    refuse("study fingerprint", StringAttribute("study_fingerprint") + " (study " + StringAttribute("study_path") + ")",
-           Hex(plan.study().fingerprint) + " (study " + plan.study().path + "; a changed study or aircraft file)");
+    refuse("study fingerprint",
+           StringAttribute("study_fingerprint") + " (study " + StringAttribute("study_path") + ")",
+           Hex(plan.study().fingerprint) + " (study " + plan.study().path +
+               "; a changed study or aircraft file)");
   }
-  if (StringAttribute("engine_version") != EngineVersion() || StringAttribute("git_commit") != EngineGitCommit()) {
+  if (StringAttribute("engine_version") != EngineVersion() ||
+      StringAttribute("git_commit") != EngineGitCommit()) {
     refuse("engine", StringAttribute("engine_version") + " " + StringAttribute("git_commit"),
            EngineVersion() + " " + EngineGitCommit());
   }
   const std::string shard = std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count);
   if (StringAttribute("shard") != shard) refuse("shard", StringAttribute("shard"), shard);
-  if (IntegerAttribute("design_runs") != plan.design_runs() || IntegerAttribute("first_run") != plan.first_run() ||
-      run_count_ != plan.run_count()) {
-    refuse("design size", std::to_string(IntegerAttribute("design_runs")), std::to_string(plan.design_runs()));
+  if (IntegerAttribute("design_runs") != plan.design_runs() ||
+      IntegerAttribute("first_run") != plan.first_run() || run_count_ != plan.run_count()) {
+    refuse("design size", std::to_string(IntegerAttribute("design_runs")),
+           std::to_string(plan.design_runs()));
   }
 }
 
@@ -163,34 +189,57 @@ void ArchiveReader::VerifyRunIds(const SweepPlan& plan, const std::vector<std::i
     ReadRows(archive::kRunId, local, 1, H5T_NATIVE_UINT64, &id);
     plan.design().Row(plan.first_run() + local, row.data());
     if (index != plan.first_run() + local || id != plan.RunId(row.data())) {
-      throw InputError("command line", "-o", shown,
-                       "cannot resume: run " + std::to_string(plan.first_run() + local) +
-                           " of the archive has other parameters than this study gives it; use --force to replace it");
+      throw InputError(
+          "command line", "-o", shown,
+          "cannot resume: run " + std::to_string(plan.first_run() + local) +
+              " of the archive has other parameters than this study gives it; use --force to replace it");
     }
   }
 }
 
-void ArchiveReader::CopyBlock(ArchiveWriter& writer, std::int64_t block, int chunk_runs) const {
-  const std::int64_t first = block * chunk_runs;
-  const std::int64_t count = std::min<std::int64_t>(chunk_runs, run_count_ - first);
+void ArchiveReader::CopyBlocks(ArchiveWriter& writer, const std::vector<std::int64_t>& blocks,
+                               int chunk_runs) const {
+  // Consecutive blocks are copied together, a bounded number of chunks per piece; every piece
+  // covers whole chunks of the target, so each chunk is still written exactly once.
+  constexpr std::int64_t kChunksPerPiece = 64;
+  std::vector<std::pair<std::int64_t, std::int64_t>> ranges;  // [first block, last block]
+  for (std::int64_t block : blocks) {
+    if (!ranges.empty() && ranges.back().second + 1 == block &&
+        block - ranges.back().first < kChunksPerPiece) {
+      ranges.back().second = block;
+    } else {
+      ranges.emplace_back(block, block);
+    }
+  }
   std::vector<unsigned char> buffer;
   auto copy = [&](const std::string& path, hid_t target) {
     Handle source(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
     Handle type(H5Dget_type(source.get()), "type of " + path);
     const auto dims = hdf5::Dimensions(source.get());
-    const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
-    buffer.resize(static_cast<std::size_t>(count * width) * H5Tget_size(type.get()));
-    ReadRows(path, first, count, type.get(), buffer.data());
-    Handle memory;
-    Handle space = hdf5::SelectRows(target, first, count, &memory);
-    Check(H5Dwrite(target, type.get(), memory.get(), space.get(), H5P_DEFAULT, buffer.data()), "copy " + path);
+    const std::size_t row_bytes =
+        static_cast<std::size_t>(dims.size() == 2 ? dims[1] : 1) * H5Tget_size(type.get());
+    for (const auto& [first_block, last_block] : ranges) {
+      const std::int64_t first = first_block * chunk_runs;
+      const std::int64_t count = std::min<std::int64_t>((last_block + 1) * chunk_runs, run_count_) - first;
+      buffer.resize(static_cast<std::size_t>(count) * row_bytes);
+      Handle memory;
+      Handle space = hdf5::SelectRows(source.get(), first, count, &memory);
+      Check(H5Dread(source.get(), type.get(), memory.get(), space.get(), H5P_DEFAULT, buffer.data()),
+            "read " + path + " of " + path_.string());
+      Handle target_memory;
+      Handle target_space = hdf5::SelectRows(target, first, count, &target_memory);
+      Check(H5Dwrite(target, type.get(), target_memory.get(), target_space.get(), H5P_DEFAULT, buffer.data()),
+            "copy " + path);
+    }
   };
   const SweepPlan& plan = writer.plan_;
   for (std::size_t c = 0; c < writer.design_.size(); ++c) {
-    copy(archive::DesignPath(ParameterCatalog()[static_cast<std::size_t>(plan.design().spec().parameters[c].id)].name),
+    copy(archive::DesignPath(
+             ParameterCatalog()[static_cast<std::size_t>(plan.design().spec().parameters[c].id)].name),
          writer.design_[c].get());
   }
-  for (std::size_t c = 0; c < writer.results_.size(); ++c) copy(plan.schema().columns[c].path, writer.results_[c].get());
+  for (std::size_t c = 0; c < writer.results_.size(); ++c)
+    copy(plan.schema().columns[c].path, writer.results_[c].get());
   copy(archive::kRunIndex, writer.index_.get());
   copy(archive::kRunId, writer.id_.get());
   copy(archive::kRunMessage, writer.message_.get());

@@ -46,11 +46,15 @@ class ArchiveReader {
 
   /// Reads rows [first, first + count) of a per-run dataset (all columns of a 2-D one) converted
   /// to `memory_type` into `out`.
-  void ReadRows(const std::string& path, std::int64_t first, std::int64_t count, hid_t memory_type, void* out) const;
+  void ReadRows(const std::string& path, std::int64_t first, std::int64_t count, hid_t memory_type,
+                void* out) const;
   /// Rows of a numeric per-run dataset as doubles (integers converted).
   std::vector<double> ReadDoubles(const std::string& path, std::int64_t first, std::int64_t count) const;
   /// Statuses of runs [first, first + count) (0 pending, 1 ok, 2 failed).
   std::vector<std::int8_t> ReadStatus(std::int64_t first, std::int64_t count) const;
+
+  /// Messages of runs [first, first + count) (empty for most ok runs).
+  std::vector<std::string> ReadMessages(std::int64_t first, std::int64_t count) const;
 
   /// Batches (of `chunk_runs` runs) whose every run has a nonzero status, ascending.
   std::vector<std::int64_t> CompleteBlocks(int chunk_runs) const;
@@ -59,10 +63,12 @@ class ArchiveReader {
   /// version and commit, for the same shard of the same design as `plan`.
   void CheckSameSweep(const SweepPlan& plan, const std::string& shown) const;
   /// Throws InputError unless the first run of each of `blocks` has the index and id `plan` gives.
-  void VerifyRunIds(const SweepPlan& plan, const std::vector<std::int64_t>& blocks, const std::string& shown) const;
+  void VerifyRunIds(const SweepPlan& plan, const std::vector<std::int64_t>& blocks,
+                    const std::string& shown) const;
 
-  /// Copies batch `block` (of `chunk_runs` runs) of every dataset of `writer`'s plan into it.
-  void CopyBlock(ArchiveWriter& writer, std::int64_t block, int chunk_runs) const;
+  /// Copies batches `blocks` (ascending; of `chunk_runs` runs) of every dataset of `writer`'s plan
+  /// into it, each target chunk written once.
+  void CopyBlocks(ArchiveWriter& writer, const std::vector<std::int64_t>& blocks, int chunk_runs) const;
 
   void Close();
 

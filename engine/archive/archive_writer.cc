@@ -36,7 +36,8 @@ std::string Hex(std::uint64_t value) {
 
 // A dataset creation property list: chunked, shuffle + deflate (+ Fletcher-32 so a damaged chunk
 // is detected on read rather than returned), with a fill value that means "not written".
-Handle ChunkedCreation(const std::vector<hsize_t>& chunk, int compression_level, hid_t fill_type, const void* fill) {
+Handle ChunkedCreation(const std::vector<hsize_t>& chunk, int compression_level, hid_t fill_type,
+                       const void* fill) {
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "dataset creation property list");
   Check(H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()), "set chunk");
   Check(H5Pset_fletcher32(dcpl.get()), "set fletcher32");
@@ -63,10 +64,14 @@ void Describe(hid_t object, const std::string& units, const std::string& descrip
 
 hid_t StoredType(ColumnType type, hid_t complex_type) {
   switch (type) {
-    case ColumnType::kFloat64: return H5T_IEEE_F64LE;
-    case ColumnType::kInt32: return H5T_STD_I32LE;
-    case ColumnType::kInt8: return H5T_STD_I8LE;
-    case ColumnType::kComplex: return complex_type;
+    case ColumnType::kFloat64:
+      return H5T_IEEE_F64LE;
+    case ColumnType::kInt32:
+      return H5T_STD_I32LE;
+    case ColumnType::kInt8:
+      return H5T_STD_I8LE;
+    case ColumnType::kComplex:
+      return complex_type;
   }
   return H5T_IEEE_F64LE;
 }
@@ -84,9 +89,10 @@ void WriteRows(hid_t dataset, std::int64_t first, std::int64_t count, hid_t memo
 
 void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
   const DesignSpec& spec = plan.design().spec();
-  hdf5::WriteAttribute(group, "description",
-                       "The swept parameters: one float64 dataset per parameter, one value per run (a choice or "
-                       "boolean as the index of its level)");
+  hdf5::WriteAttribute(
+      group, "description",
+      "The swept parameters: one float64 dataset per parameter, one value per run (a choice or "
+      "boolean as the index of its level)");
   hdf5::WriteAttribute(group, "kind", std::string(ToString(spec.kind)));
   std::vector<std::string> names;
   for (const auto& p : spec.parameters) names.push_back(ParameterNameOf(p));
@@ -155,7 +161,8 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
 int SeriesChunkRows(int chunk_runs, int samples) {
   int best = 1;
   for (int d = 1; d <= chunk_runs; ++d) {
-    if (chunk_runs % d == 0 && static_cast<std::int64_t>(d) * samples * 8 <= kMaximumSeriesChunkBytes) best = d;
+    if (chunk_runs % d == 0 && static_cast<std::int64_t>(d) * samples * 8 <= kMaximumSeriesChunkBytes)
+      best = d;
   }
   return best;
 }
@@ -211,7 +218,8 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   hdf5::WriteAttribute(file, "host", HostName());
   hdf5::WriteAttribute(file, "threads", static_cast<std::int64_t>(provenance.threads));
   hdf5::WriteAttribute(file, "command_line", provenance.command_line);
-  hdf5::WriteAttribute(file, "shard", std::to_string(plan_.shard().index) + "/" + std::to_string(plan_.shard().count));
+  hdf5::WriteAttribute(file, "shard",
+                       std::to_string(plan_.shard().index) + "/" + std::to_string(plan_.shard().count));
   hdf5::WriteAttribute(file, "shard_index", static_cast<std::int64_t>(plan_.shard().index));
   hdf5::WriteAttribute(file, "shard_count", static_cast<std::int64_t>(plan_.shard().count));
   hdf5::WriteAttribute(file, "design_runs", plan_.design_runs());
@@ -220,15 +228,15 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   hdf5::WriteAttribute(file, "chunk_runs", static_cast<std::int64_t>(plan_.chunk_runs()));
   hdf5::WriteAttribute(file, "start_time", UtcTimestamp());
   hdf5::WriteAttribute(file, "end_time", std::string());
-  hdf5::WriteAttribute(file, "resumed_at", std::vector<std::string>{});
+  hdf5::WriteAttribute(file, "resumed_at", std::string());
   hdf5::WriteAttribute(file, "complete", std::int64_t{0});
   hdf5::WriteAttribute(file, "runs_ok", std::int64_t{0});
   hdf5::WriteAttribute(file, "runs_failed", std::int64_t{0});
   hdf5::WriteAttribute(file, "runs_pending", n);
   hdf5::WriteAttribute(file, "merged_from", std::vector<std::string>{});
 
-  for (const char* group : {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup,
-                            archive::kAnalysisGroup}) {
+  for (const char* group :
+       {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup, archive::kAnalysisGroup}) {
     hdf5::CreateGroups(file, group);
   }
   {
@@ -248,22 +256,25 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     const std::uint64_t fill = 0;
     Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_UINT64, &fill);
     Handle d = CreateDataset(file, archive::kRunId, H5T_STD_U64LE, {rows}, dcpl.get());
-    Describe(d.get(), "1", "Stable id of the run: FNV-1a hash of its design parameters' names and values "
-                           "(with runs/index, identifies the run across shards and resumes)");
+    Describe(d.get(), "1",
+             "Stable id of the run: FNV-1a hash of its design parameters' names and values "
+             "(with runs/index, identifies the run across shards and resumes)");
   }
   {
     const std::int8_t fill = 0;
     Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_INT8, &fill);
     Handle d = CreateDataset(file, archive::kRunStatus, H5T_STD_I8LE, {rows}, dcpl.get());
-    Describe(d.get(), "1", "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
-                           "results, so a nonzero status marks a complete run");
+    Describe(d.get(), "1",
+             "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
+             "results, so a nonzero status marks a complete run");
     hdf5::WriteAttribute(d.get(), "levels", std::vector<std::string>{"pending", "ok", "failed"});
   }
   {
     Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_INT8, nullptr);
     Handle d = CreateDataset(file, archive::kRunMessage, message_type_.get(), {rows}, dcpl.get());
-    Describe(d.get(), "1", "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, at most " +
-                               std::to_string(kMessageLength) + " bytes");
+    Describe(d.get(), "1",
+             "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, at most " +
+                 std::to_string(kMessageLength) + " bytes");
   }
   for (const auto& parameter : plan_.design().spec().parameters) {
     const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
@@ -283,9 +294,11 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     hdf5::CreateGroups(file, axis.path.substr(0, axis.path.rfind('/')));
     hsize_t dims[1] = {axis.times_s.size()};
     Handle space(H5Screate_simple(1, dims, nullptr), "time axis space");
-    Handle d(H5Dcreate2(file, axis.path.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+    Handle d(H5Dcreate2(file, axis.path.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                        H5P_DEFAULT),
              "create " + axis.path);
-    Check(H5Dwrite(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, axis.times_s.data()), "write " + axis.path);
+    Check(H5Dwrite(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, axis.times_s.data()),
+          "write " + axis.path);
     Describe(d.get(), "s", axis.description);
   }
   Handle complex_type = hdf5::ComplexType();
@@ -294,8 +307,8 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     std::vector<hsize_t> dims{rows}, chunks{chunk};
     if (column.width > 1) {
       dims.push_back(static_cast<hsize_t>(column.width));
-      const int chunk_rows = column.time_axis.empty() ? plan_.chunk_runs()
-                                                      : SeriesChunkRows(plan_.chunk_runs(), column.width);
+      const int chunk_rows =
+          column.time_axis.empty() ? plan_.chunk_runs() : SeriesChunkRows(plan_.chunk_runs(), column.width);
       chunks = {static_cast<hsize_t>(chunk_rows), static_cast<hsize_t>(column.width)};
     }
     Handle dcpl;
@@ -311,14 +324,16 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
       const double fill[2] = {nan, nan};
       dcpl = ChunkedCreation(chunks, level, complex_memory_type_.get(), fill);
     }
-    Handle d = CreateDataset(file, column.path, StoredType(column.type, complex_type.get()), dims, dcpl.get());
+    Handle d =
+        CreateDataset(file, column.path, StoredType(column.type, complex_type.get()), dims, dcpl.get());
     Describe(d.get(), column.units, column.description);
     if (!column.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", column.levels);
     if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
       hdf5::WriteAttribute(d.get(), "fill", static_cast<std::int64_t>(column.integer_fill));
     }
     if (!column.time_axis.empty()) hdf5::WriteAttribute(d.get(), "time_axis", column.time_axis);
-    if (!column.component_names.empty()) hdf5::WriteAttribute(d.get(), "component_names", column.component_names);
+    if (!column.component_names.empty())
+      hdf5::WriteAttribute(d.get(), "component_names", column.component_names);
   }
   Handle design(H5Gopen2(file, archive::kDesignGroup, H5P_DEFAULT), "open design group");
   WriteDesignAttributes(design.get(), plan_);
@@ -340,18 +355,18 @@ void ArchiveWriter::OpenDatasets() {
   for (const auto& column : plan_.schema().columns) {
     Handle dataset = open(column.path);
     const auto dims = hdf5::Dimensions(dataset.get());
-    const bool shape_ok = !dims.empty() && dims[0] == plan_.run_count() &&
-                          (column.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == column.width);
+    const bool shape_ok =
+        !dims.empty() && dims[0] == plan_.run_count() &&
+        (column.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == column.width);
     if (!shape_ok) throw ArchiveError(path_.string() + ": dataset " + column.path + " has the wrong shape");
     results_.push_back(std::move(dataset));
   }
 }
 
-void ArchiveWriter::StartSwmr() {
-  Check(H5Fstart_swmr_write(file_.get()), "start SWMR write mode on " + path_.string());
-}
-
 void ArchiveWriter::Write(const ResultBlock& block) {
+  // HDF5's error printing is per thread: keep the writer thread's errors for the exception.
+  thread_local const bool quiet = (hdf5::Quiet(), true);
+  (void)quiet;
   const std::int64_t first = block.first_row;
   const std::int64_t rows = block.rows;
   const auto n = static_cast<std::size_t>(rows);
@@ -390,12 +405,18 @@ void ArchiveWriter::Write(const ResultBlock& block) {
   }
   WriteRows(index_.get(), first, rows, H5T_NATIVE_INT64, block.design_index.data(), archive::kRunIndex);
   WriteRows(id_.get(), first, rows, H5T_NATIVE_UINT64, block.run_id.data(), archive::kRunId);
-  message_buffer_.assign(n * kMessageLength, '\0');
-  for (std::size_t r = 0; r < n; ++r) {
-    std::memcpy(message_buffer_.data() + r * kMessageLength, block.message[r].data(),
-                std::min<std::size_t>(block.message[r].size(), kMessageLength));
+  // Most batches have no message at all: their chunk stays unwritten and reads as the fill value
+  // (empty strings), which saves compressing kMessageLength zero bytes per run.
+  const bool any_message = std::any_of(block.message.begin(), block.message.begin() + rows,
+                                       [](const std::string& m) { return !m.empty(); });
+  if (any_message) {
+    message_buffer_.assign(n * kMessageLength, '\0');
+    for (std::size_t r = 0; r < n; ++r) {
+      std::memcpy(message_buffer_.data() + r * kMessageLength, block.message[r].data(),
+                  std::min<std::size_t>(block.message[r].size(), kMessageLength));
+    }
+    WriteRows(message_.get(), first, rows, message_type_.get(), message_buffer_.data(), archive::kRunMessage);
   }
-  WriteRows(message_.get(), first, rows, message_type_.get(), message_buffer_.data(), archive::kRunMessage);
   // Results reach the disk before the statuses that declare them complete.
   Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
   WriteRows(status_.get(), first, rows, H5T_NATIVE_INT8, block.status.data(), archive::kRunStatus);
@@ -425,6 +446,15 @@ void ArchiveWriter::CountStatuses() {
 void ArchiveWriter::Finish() {
   hdf5::Quiet();
   CountStatuses();
+  // Still in SWMR mode: existing attributes are rewritten in place (SWMR forbids creating objects,
+  // not changing values), so there is no moment at which the file is open for writing outside
+  // SWMR mode and a kill would leave it unreadable.
+  hdf5::UpdateAttribute(file_.get(), "end_time", UtcTimestamp());
+  hdf5::UpdateAttribute(file_.get(), "complete", static_cast<std::int64_t>(runs_pending_ == 0 ? 1 : 0));
+  hdf5::UpdateAttribute(file_.get(), "runs_ok", runs_ok_);
+  hdf5::UpdateAttribute(file_.get(), "runs_failed", runs_failed_);
+  hdf5::UpdateAttribute(file_.get(), "runs_pending", runs_pending_);
+  Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
   index_.Reset();
   id_.Reset();
   status_.Reset();
@@ -432,15 +462,6 @@ void ArchiveWriter::Finish() {
   design_.clear();
   results_.clear();
   file_.Close("close " + path_.string());
-  // Attributes cannot change in SWMR mode: reopen normally to record the end.
-  Handle fapl = hdf5::FileAccess();
-  Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, fapl.get()), "reopen " + path_.string());
-  hdf5::WriteAttribute(file.get(), "end_time", UtcTimestamp());
-  hdf5::WriteAttribute(file.get(), "complete", static_cast<std::int64_t>(runs_pending_ == 0 ? 1 : 0));
-  hdf5::WriteAttribute(file.get(), "runs_ok", runs_ok_);
-  hdf5::WriteAttribute(file.get(), "runs_failed", runs_failed_);
-  hdf5::WriteAttribute(file.get(), "runs_pending", runs_pending_);
-  file.Close("close " + path_.string());
   finished_ = true;
 }
 
@@ -458,7 +479,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   const auto status = std::filesystem::symlink_status(path, ec);
   const bool exists = !ec && std::filesystem::exists(status);
   if (exists && std::filesystem::is_directory(std::filesystem::status(path, ec))) {
-    throw InputError("command line", "-o", shown, "is a directory; expected an archive file name such as out.h5");
+    throw InputError("command line", "-o", shown,
+                     "is a directory; expected an archive file name such as out.h5");
   }
   if (exists && mode == ArchiveOpenMode::kCreate) {
     throw InputError("command line", "-o", shown,
@@ -475,8 +497,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   writer->lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (writer->lock_fd_ < 0) throw ArchiveError("cannot create the lock file " + lock_path);
   if (flock(writer->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    throw InputError("command line", "-o", shown, "archive in use: another gesweep process is writing it (" +
-                                                       lock_path + " is locked)");
+    throw InputError("command line", "-o", shown,
+                     "archive in use: another gesweep process is writing it (" + lock_path + " is locked)");
   }
   writer->lock_held_ = true;
   const std::filesystem::path temporary = path.string() + ".partial";
@@ -488,7 +510,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   std::vector<std::int64_t> complete_blocks;
   std::optional<ArchiveReader> crashed;
   std::string original_start;
-  std::vector<std::string> resumed_at;
+  std::string resumed_at;
   if (exists && mode == ArchiveOpenMode::kResume) {
     ArchiveReader existing = ArchiveReader::Open(path);
     existing.CheckSameSweep(plan, shown);
@@ -496,23 +518,36 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     complete_blocks = existing.CompleteBlocks(plan.chunk_runs());
     existing.VerifyRunIds(plan, complete_blocks, shown);
     original_start = existing.StringAttribute("start_time");
-    resumed_at = existing.StringListAttribute("resumed_at");
-    resumed_at.push_back(UtcTimestamp());
+    resumed_at = existing.StringAttribute("resumed_at");
+    resumed_at += (resumed_at.empty() ? "" : ", ") + UtcTimestamp();
     if (!existing.snapshot()) {
-      // Closed cleanly: continue in place.
+      // Closed cleanly: continue in place, opened straight into SWMR mode. When that is impossible
+      // (a reader holds the file's lock, e.g. h5py or gesweep query), resume as after a crash:
+      // copy the complete batches into a fresh file and rename it over (the reader keeps its view).
       existing.Close();
-      writer->file_ = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), "open " + shown + " for writing");
-      hdf5::WriteAttribute(writer->file_.get(), "resumed_at", resumed_at);
-      hdf5::WriteAttribute(writer->file_.get(), "end_time", std::string());
-      hdf5::WriteAttribute(writer->file_.get(), "complete", std::int64_t{0});
-      hdf5::WriteAttribute(writer->file_.get(), "threads", static_cast<std::int64_t>(provenance.threads));
-      hdf5::WriteAttribute(writer->file_.get(), "host", HostName());
-      writer->OpenDatasets();
-      writer->StartSwmr();
-      out.kind = ArchiveOpenReport::Kind::kResumedClean;
+      const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDWR | H5F_ACC_SWMR_WRITE, fapl.get());
+      H5Eclear2(H5E_DEFAULT);
+      if (id < 0) {
+        crashed.emplace(ArchiveReader::Open(path));
+        out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
+        out.note = "another process holds it open";
+      }
+      if (id >= 0) {
+        writer->file_ = Handle(id);
+        hdf5::UpdateAttribute(writer->file_.get(), "resumed_at", resumed_at);
+        hdf5::UpdateAttribute(writer->file_.get(), "end_time", std::string());
+        hdf5::UpdateAttribute(writer->file_.get(), "complete", std::int64_t{0});
+        hdf5::UpdateAttribute(writer->file_.get(), "threads", static_cast<std::int64_t>(provenance.threads));
+        hdf5::UpdateAttribute(writer->file_.get(), "host", HostName());
+        hdf5::UpdateAttribute(writer->file_.get(), "command_line", provenance.command_line);
+        Check(H5Fflush(writer->file_.get(), H5F_SCOPE_LOCAL), "flush " + shown);
+        writer->OpenDatasets();
+        out.kind = ArchiveOpenReport::Kind::kResumedClean;
+      }
     } else {
       crashed.emplace(std::move(existing));
       out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
+      out.note = "it was not closed cleanly";
     }
   }
 
@@ -521,7 +556,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     // mistake or a crash before this point leaves no half-made archive under the requested name.
     std::filesystem::remove(temporary, ec);
     {
-      Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), "create " + temporary.string());
+      Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
+                  "create " + temporary.string());
       writer->CreateSkeleton(file.get(), provenance);
       if (crashed) {
         hdf5::WriteAttribute(file.get(), "start_time", original_start);
@@ -529,7 +565,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
         // Copy the complete batches of the crashed file, each chunk once.
         writer->file_ = std::move(file);
         writer->OpenDatasets();
-        for (std::int64_t block : complete_blocks) crashed->CopyBlock(*writer, block, plan.chunk_runs());
+        crashed->CopyBlocks(*writer, complete_blocks, plan.chunk_runs());
         Check(H5Fflush(writer->file_.get(), H5F_SCOPE_LOCAL), "flush " + temporary.string());
         writer->index_.Reset();
         writer->id_.Reset();
@@ -542,11 +578,23 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
       file.Close("close " + temporary.string());
     }
     if (crashed) crashed->Close();
-    std::filesystem::rename(temporary, path, ec);
-    if (ec) throw ArchiveError("rename " + temporary.string() + " to " + shown + ": " + ec.message());
-    writer->file_ = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), "open " + shown + " for writing");
+    // Reopened straight into SWMR mode, then renamed into place while open: under the requested name
+    // the file is only ever absent, or consistent on disk (a kill at any moment leaves it readable).
+    writer->file_ = Handle(H5Fopen(temporary.c_str(), H5F_ACC_RDWR | H5F_ACC_SWMR_WRITE, fapl.get()),
+                           "open " + temporary.string() + " for writing");
     writer->OpenDatasets();
-    writer->StartSwmr();
+    std::filesystem::rename(temporary, path, ec);
+    if (ec) {
+      writer->index_.Reset();
+      writer->id_.Reset();
+      writer->status_.Reset();
+      writer->message_.Reset();
+      writer->design_.clear();
+      writer->results_.clear();
+      writer->file_.Reset();
+      std::filesystem::remove(temporary);
+      throw ArchiveError("rename " + temporary.string() + " to " + shown + ": " + ec.message());
+    }
   }
 
   std::size_t next_complete = 0;

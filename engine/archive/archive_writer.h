@@ -39,8 +39,9 @@ struct RunProvenance {
 /// What opening for a sweep found.
 struct ArchiveOpenReport {
   enum class Kind { kCreated, kResumedClean, kResumedAfterCrash } kind = Kind::kCreated;
-  std::int64_t runs_complete = 0;  ///< runs already complete in the archive
+  std::int64_t runs_complete = 0;            ///< runs already complete in the archive
   std::vector<std::int64_t> pending_blocks;  ///< batches to run, ascending
+  std::string note;                          ///< why a resume copied the complete batches into a fresh file
 };
 
 /// Writes one sweep's archive. Not thread-safe: one writer thread calls Write.
@@ -74,7 +75,6 @@ class ArchiveWriter final : public ResultSink {
   ArchiveWriter(std::filesystem::path path, const SweepPlan& plan);
   void CreateSkeleton(hid_t file, const RunProvenance& provenance);
   void OpenDatasets();
-  void StartSwmr();
   void CountStatuses();
 
   std::filesystem::path path_;

@@ -34,14 +34,29 @@ std::int64_t Check(std::int64_t status, const std::string& what) {
 void Handle::Reset() {
   if (id_ < 0) return;
   switch (H5Iget_type(id_)) {
-    case H5I_FILE: H5Fclose(id_); break;
-    case H5I_GROUP: H5Gclose(id_); break;
-    case H5I_DATASET: H5Dclose(id_); break;
-    case H5I_DATASPACE: H5Sclose(id_); break;
-    case H5I_DATATYPE: H5Tclose(id_); break;
-    case H5I_ATTR: H5Aclose(id_); break;
-    case H5I_GENPROP_LST: H5Pclose(id_); break;
-    default: break;
+    case H5I_FILE:
+      H5Fclose(id_);
+      break;
+    case H5I_GROUP:
+      H5Gclose(id_);
+      break;
+    case H5I_DATASET:
+      H5Dclose(id_);
+      break;
+    case H5I_DATASPACE:
+      H5Sclose(id_);
+      break;
+    case H5I_DATATYPE:
+      H5Tclose(id_);
+      break;
+    case H5I_ATTR:
+      H5Aclose(id_);
+      break;
+    case H5I_GENPROP_LST:
+      H5Pclose(id_);
+      break;
+    default:
+      break;
   }
   id_ = H5I_INVALID_HID;
 }
@@ -50,9 +65,15 @@ void Handle::Close(const std::string& what) {
   if (id_ < 0) return;
   herr_t status = 0;
   switch (H5Iget_type(id_)) {
-    case H5I_FILE: status = H5Fclose(id_); break;
-    case H5I_DATASET: status = H5Dclose(id_); break;
-    default: Reset(); return;
+    case H5I_FILE:
+      status = H5Fclose(id_);
+      break;
+    case H5I_DATASET:
+      status = H5Dclose(id_);
+      break;
+    default:
+      Reset();
+      return;
   }
   id_ = H5I_INVALID_HID;
   Check(status, what);
@@ -88,7 +109,8 @@ void CreateGroups(hid_t location, const std::string& path) {
     if (part.empty()) continue;
     partial += (partial.empty() ? "" : "/") + part;
     if (H5Lexists(location, partial.c_str(), H5P_DEFAULT) > 0) continue;
-    Handle group(H5Gcreate2(location, partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + partial);
+    Handle group(H5Gcreate2(location, partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                 "create group " + partial);
   }
 }
 
@@ -162,13 +184,27 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
   Check(H5Awrite(attribute.get(), type.get(), pointers.data()), "write attribute " + name);
 }
 
+void UpdateAttribute(hid_t object, const std::string& name, const std::string& value) {
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle type = VariableString();
+  const char* pointer = value.c_str();
+  Check(H5Awrite(attribute.get(), type.get(), &pointer), "write attribute " + name);
+}
+
+void UpdateAttribute(hid_t object, const std::string& name, std::int64_t value) {
+  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Check(H5Awrite(attribute.get(), H5T_NATIVE_INT64, &value), "write attribute " + name);
+}
+
 std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name) {
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
   Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
   Handle file_type(H5Aget_type(attribute.get()), "attribute type");
-  if (H5Tget_class(file_type.get()) != H5T_STRING) throw ArchiveError("attribute " + name + " is not a string");
+  if (H5Tget_class(file_type.get()) != H5T_STRING)
+    throw ArchiveError("attribute " + name + " is not a string");
   Handle space(H5Aget_space(attribute.get()), "attribute space");
-  if (H5Sget_simple_extent_npoints(space.get()) != 1) throw ArchiveError("attribute " + name + " is not one string");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1)
+    throw ArchiveError("attribute " + name + " is not one string");
   if (H5Tis_variable_str(file_type.get()) > 0) {
     Handle type = VariableString();
     char* pointer = nullptr;
@@ -187,7 +223,8 @@ std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
   Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
   Handle file_type(H5Aget_type(attribute.get()), "attribute type");
-  if (H5Tget_class(file_type.get()) != H5T_INTEGER) throw ArchiveError("attribute " + name + " is not an integer");
+  if (H5Tget_class(file_type.get()) != H5T_INTEGER)
+    throw ArchiveError("attribute " + name + " is not an integer");
   std::int64_t value = 0;
   Check(H5Aread(attribute.get(), H5T_NATIVE_INT64, &value), "read attribute " + name);
   return value;
@@ -256,7 +293,8 @@ void CopyAttributes(hid_t from, hid_t to) {
   CopyContext context{to, ""};
   hsize_t index = 0;
   const herr_t status = H5Aiterate2(from, H5_INDEX_NAME, H5_ITER_INC, &index, CopyOne, &context);
-  if (status < 0) throw ArchiveError(context.error.empty() ? "copy attributes: " + LastError() : context.error);
+  if (status < 0)
+    throw ArchiveError(context.error.empty() ? "copy attributes: " + LastError() : context.error);
 }
 
 Handle ComplexType() {

@@ -78,6 +78,11 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
 void WriteAttribute(hid_t object, const std::string& name, const std::vector<double>& values);
 void WriteAttribute(hid_t object, const std::string& name, const std::vector<std::int64_t>& values);
 
+/// Rewrites the value of an existing scalar attribute in place (allowed in SWMR write mode, where
+/// creating or deleting one is not). Throws ArchiveError when it is absent.
+void UpdateAttribute(hid_t object, const std::string& name, const std::string& value);
+void UpdateAttribute(hid_t object, const std::string& name, std::int64_t value);
+
 /// Attribute readers; nullopt when absent, ArchiveError when of another kind.
 std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name);
 std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name);

@@ -1,17 +1,27 @@
 // gesweep boundary: H*(u0), the largest height at which the stability margin changes sign
 // (docs/MODEL.md §6), by bracketing root finding on the continuous model. With --sensitivities, also
 // the local sensitivities ∂H*/∂p of each boundary (docs/sensitivity.md), ranked.
+// With --archive, the boundary of a sweep's results instead: the sign change of the archived stability
+// margin along height for each value of the other axes, refined on each run's model and written to
+// /analysis/boundary (docs/report.md, "gesweep boundary --archive").
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "engine/analysis/local_sensitivity.h"
+#include "engine/archive/archive_reader.h"
+#include "engine/archive/hdf5_util.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
 #include "engine/modal/boundary.h"
+#include "engine/query/archive_boundary.h"
+#include "engine/query/archive_lock.h"
+#include "engine/query/run_columns.h"
+#include "engine/query/run_model.h"
 
 namespace gesweep::cli {
 namespace {
@@ -22,6 +32,9 @@ struct BoundaryFlags {
   std::string speeds;
   std::string format = "table";
   bool sensitivities = false;
+  std::string archive;          // --archive: the boundary of a sweep's results
+  std::vector<std::string> by;  // --by: order of the curve's axes
+  bool no_write = false;        // --no-write: print only
 };
 
 std::string Scientific(double value, int digits = 4) {
@@ -67,15 +80,19 @@ void PrintSensitivitiesTable(const BoundarySensitivities& s) {
     return;
   }
   std::cout << ", H* = " << FormatNumber(s.height_m, 7) << " m: sigma set by the " << s.mode
-            << " (dsigma/dH = " << Scientific(s.margin_height_derivative_per_s_per_m) << " 1/(s m)); ranked by |p dH*/dp|\n";
+            << " (dsigma/dH = " << Scientific(s.margin_height_derivative_per_s_per_m)
+            << " 1/(s m)); ranked by |p dH*/dp|\n";
   std::cout << "  " << std::left << std::setw(22) << "parameter" << std::right << std::setw(12) << "value"
-            << std::setw(14) << "dH*/dp" << "  " << std::left << std::setw(12) << "unit" << std::right
-            << std::setw(14) << "p_dH*/dp_m" << std::setw(17) << "dsigma/dp_per_s" << "\n";
+            << std::setw(14) << "dH*/dp"
+            << "  " << std::left << std::setw(12) << "unit" << std::right << std::setw(14) << "p_dH*/dp_m"
+            << std::setw(17) << "dsigma/dp_per_s"
+            << "\n";
   for (const auto& p : RankByRelativeEffect(s)) {
     std::cout << "  " << std::left << std::setw(22) << p.parameter.Name() << std::right << std::setw(12)
-              << FormatNumber(p.value, 6) << std::setw(14) << Scientific(p.height_derivative) << "  " << std::left
-              << std::setw(12) << HeightDerivativeUnit(p.parameter) << std::right << std::setw(14)
-              << Scientific(p.relative_height_derivative_m) << std::setw(17) << Scientific(p.margin_derivative)
+              << FormatNumber(p.value, 6) << std::setw(14) << Scientific(p.height_derivative) << "  "
+              << std::left << std::setw(12) << HeightDerivativeUnit(p.parameter) << std::right
+              << std::setw(14) << Scientific(p.relative_height_derivative_m) << std::setw(17)
+              << Scientific(p.margin_derivative)
               << (p.method == DerivativeMethod::kExact ? "" : "  (central difference)") << "\n";
   }
   std::string no_effect;
@@ -85,13 +102,175 @@ void PrintSensitivitiesTable(const BoundarySensitivities& s) {
   if (!no_effect.empty()) std::cout << "#   not in Eq. (1), no effect:" << no_effect << "\n";
 }
 
-int RunBoundary(const BoundaryFlags& flags) {
+std::string KeyText(const ArchiveBoundary& boundary, std::size_t k, double value) {
+  const auto& levels = boundary.key_levels[k];
+  if (!levels.empty() && value >= 0 && value < static_cast<double>(levels.size()) &&
+      value == std::floor(value)) {
+    return levels[static_cast<std::size_t>(value)];
+  }
+  return FormatNumber(value, 8);
+}
+
+std::string CommandLine(const BoundaryFlags& flags) {
+  std::string line = "gesweep boundary --archive " + flags.archive;
+  if (!flags.by.empty()) {
+    line += " --by ";
+    for (std::size_t i = 0; i < flags.by.size(); ++i) line += (i ? "," : "") + flags.by[i];
+  }
+  if (flags.sensitivities) line += " --sensitivities";
+  if (flags.format != "table") line += " --format " + flags.format;
+  return line;
+}
+
+void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& flags,
+                          const std::vector<std::optional<BoundarySensitivities>>& sensitivities,
+                          bool written) {
+  const auto nan_or = [](const std::optional<double>& v) { return v ? *v : std::nan(""); };
+  if (flags.format == "json") {
+    nlohmann::json points = nlohmann::json::array();
+    for (std::size_t i = 0; i < boundary.points.size(); ++i) {
+      const ArchiveBoundaryPoint& p = boundary.points[i];
+      nlohmann::json row;
+      for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
+        row[boundary.key_names[k]] = boundary.key_levels[k].empty()
+                                         ? JsonNumber(p.key_values[k])
+                                         : nlohmann::json(KeyText(boundary, k, p.key_values[k]));
+      }
+      row["height_m"] = JsonNumber(nan_or(p.height_m));
+      row["height_over_span"] = JsonNumber(nan_or(p.height_over_span));
+      row["grid_bracket_m"] = {JsonNumber(p.grid_lower_height_m), JsonNumber(p.grid_upper_height_m)};
+      row["bracket_width_m"] = JsonNumber(p.bracket_width_m);
+      row["grid_crossings"] = p.grid_crossings;
+      row["heights"] = p.heights;
+      if (!p.reason.empty()) row["reason"] = p.reason;
+      if (sensitivities[i]) AddSensitivitiesJson(*sensitivities[i], row);
+      points.push_back(row);
+    }
+    nlohmann::json out = {{"archive", boundary.archive},
+                          {"study", boundary.study_name},
+                          {"aircraft", boundary.aircraft_name},
+                          {"wingspan_m", boundary.wingspan_m},
+                          {"keys", boundary.key_names},
+                          {"tolerance_m", boundary.tolerance_m},
+                          {"runs_used", boundary.runs_used},
+                          {"runs_skipped", boundary.runs_skipped},
+                          {"snapshot", boundary.snapshot},
+                          {"written", written},
+                          {"boundaries", points}};
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  if (flags.format == "csv") {
+    for (const auto& name : boundary.key_names) std::cout << name << ",";
+    std::cout
+        << "height_m,height_over_span,grid_lower_height_m,grid_upper_height_m,bracket_width_m,grid_crossings,"
+           "heights,reason\n";
+    for (const auto& p : boundary.points) {
+      for (std::size_t k = 0; k < boundary.key_names.size(); ++k)
+        std::cout << KeyText(boundary, k, p.key_values[k]) << ",";
+      auto number = [](double v) { return std::isnan(v) ? std::string() : FormatNumber(v); };
+      std::cout << number(nan_or(p.height_m)) << "," << number(nan_or(p.height_over_span)) << ","
+                << number(p.grid_lower_height_m) << "," << number(p.grid_upper_height_m) << ","
+                << number(p.bracket_width_m) << "," << p.grid_crossings << "," << p.heights << ",\""
+                << p.reason << "\"\n";
+    }
+    return;
+  }
+  std::cout << "# " << boundary.aircraft_name
+            << ": stability boundary H* (unstable below, stable above) from "
+            << "results/modes/stability_margin_per_s of " << boundary.archive << " (study "
+            << boundary.study_name
+            << "): the grid's sign change along height_m, refined on each run's model to "
+            << FormatNumber(boundary.tolerance_m * 1000.0, 3) << " mm\n";
+  std::vector<int> widths;
+  for (const auto& name : boundary.key_names) {
+    widths.push_back(std::max(12, static_cast<int>(name.size()) + 2));
+    std::cout << std::setw(widths.back()) << name;
+  }
+  std::cout << std::setw(12) << "H*_m" << std::setw(10) << "H*/b" << std::setw(24) << "grid bracket (m)"
+            << "  note\n";
+  for (const auto& p : boundary.points) {
+    for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
+      std::cout << std::setw(widths[k]) << KeyText(boundary, k, p.key_values[k]);
+    }
+    const std::string bracket =
+        std::isnan(p.grid_lower_height_m)
+            ? std::string()
+            : FormatNumber(p.grid_lower_height_m, 6) + " - " + FormatNumber(p.grid_upper_height_m, 6);
+    std::cout << std::setw(12) << (p.height_m ? FormatNumber(*p.height_m, 7) : "none") << std::setw(10)
+              << (p.height_over_span ? FormatNumber(*p.height_over_span, 5) : "none") << std::setw(24)
+              << bracket << "  " << p.reason;
+    if (p.height_m && p.grid_crossings > 1)
+      std::cout << "(" << p.grid_crossings << " sign changes on the grid)";
+    std::cout << "\n";
+  }
+  std::cout << "# " << boundary.runs_used << " runs used, " << boundary.runs_skipped
+            << " skipped (failed, pending or without a finite sigma)"
+            << (boundary.snapshot ? "; snapshot of an archive a sweep is writing" : "")
+            << (written ? "; written to " + boundary.archive + ":/" + kBoundaryGroup : "") << "\n";
+  for (const auto& s : sensitivities) {
+    if (s) PrintSensitivitiesTable(*s);
+  }
+}
+
+int RunArchiveBoundary(const BoundaryFlags& flags) {
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
   }
   if (flags.sensitivities && flags.format == "csv") {
-    throw InputError("command line", "--format", "csv",
-                     "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
+    throw InputError(
+        "command line", "--format", "csv",
+        "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
+  }
+  try {
+    // Claim the archive before reading it, so no sweep starts writing it meanwhile; refused while
+    // one writes it.
+    std::optional<ArchiveLock> lock;
+    if (!flags.no_write) {
+      lock.emplace(ArchiveLock::Acquire(flags.archive,
+                                        "run gesweep boundary --archive once the sweep has finished, or pass "
+                                        "--no-write to print the boundary of the runs complete so far"));
+    }
+    ArchiveReader archive = ArchiveReader::Open(flags.archive);
+    if (!flags.no_write && archive.snapshot()) {
+      throw InputError(
+          flags.archive, "", "",
+          "the sweep that wrote this archive stopped without closing it (killed?); finish it with "
+          "gesweep run STUDY -o " +
+              flags.archive + " --resume, or pass --no-write");
+    }
+    const ColumnCatalog catalog = ColumnCatalog::Of(archive);
+    ArchiveRunModels models = ArchiveRunModels::Of(archive);
+    BoundaryExtractionOptions options;
+    options.by = flags.by;
+    const ArchiveBoundary boundary = ExtractBoundary(archive, catalog, models, options);
+    archive.Close();
+    std::vector<std::optional<BoundarySensitivities>> sensitivities(boundary.points.size());
+    if (flags.sensitivities) {
+      for (std::size_t i = 0; i < boundary.points.size(); ++i) {
+        const ArchiveBoundaryPoint& p = boundary.points[i];
+        if (p.height_m)
+          sensitivities[i] = ComputeBoundarySensitivities(models.Model(p.parameters), p.refined);
+      }
+    }
+    if (!flags.no_write) WriteBoundaryGroup(flags.archive, boundary, CommandLine(flags));
+    PrintArchiveBoundary(boundary, flags, sensitivities, !flags.no_write);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+int RunBoundary(const BoundaryFlags& flags) {
+  if (!flags.archive.empty()) return RunArchiveBoundary(flags);
+  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
+    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
+  }
+  if (flags.sensitivities && flags.format == "csv") {
+    throw InputError(
+        "command line", "--format", "csv",
+        "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
   }
   std::vector<double> speeds;
   if (!flags.speeds.empty()) {
@@ -106,9 +285,10 @@ int RunBoundary(const BoundaryFlags& flags) {
 
   nlohmann::json boundaries = nlohmann::json::array();
   if (flags.format == "table") {
-    std::cout << "# " << model.aircraft().name << ": stability boundary H* (unstable below, stable above), h-derivatives "
-              << (model.options().h_derivatives ? "on" : "off") << ", cdh " << ToString(model.options().cdh) << ", "
-              << ToString(model.options().interpolation) << " interpolation\n";
+    std::cout << "# " << model.aircraft().name
+              << ": stability boundary H* (unstable below, stable above), h-derivatives "
+              << (model.options().h_derivatives ? "on" : "off") << ", cdh " << ToString(model.options().cdh)
+              << ", " << ToString(model.options().interpolation) << " interpolation\n";
     std::cout << std::setw(12) << "speed_mps" << std::setw(12) << "H*_m" << std::setw(10) << "H*/b"
               << "  other crossings (m) / reason\n";
   } else if (flags.format == "csv") {
@@ -123,12 +303,13 @@ int RunBoundary(const BoundaryFlags& flags) {
       if (!result.height_m || crossing.height_m != *result.height_m) others.push_back(crossing.height_m);
     }
     if (flags.format == "json") {
-      nlohmann::json row = {{"speed_mps", speed},
-                            {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
-                            {"height_over_span",
-                             result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
-                            {"other_crossings_m", others},
-                            {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
+      nlohmann::json row = {
+          {"speed_mps", speed},
+          {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
+          {"height_over_span",
+           result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
+          {"other_crossings_m", others},
+          {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
       if (!result.height_m) row["reason"] = result.reason;
       if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
       boundaries.push_back(row);
@@ -138,12 +319,13 @@ int RunBoundary(const BoundaryFlags& flags) {
       const std::string h_text = result.height_m ? FormatNumber(*result.height_m, 7) : "none";
       const std::string ratio_text = result.height_m ? FormatNumber(*result.height_m / span, 5) : "none";
       if (flags.format == "csv") {
-        std::cout << FormatNumber(speed) << "," << (result.height_m ? FormatNumber(*result.height_m) : "") << ","
-                  << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\"" << other_text
-                  << "\",\"" << result.reason << "\"\n";
+        std::cout << FormatNumber(speed) << "," << (result.height_m ? FormatNumber(*result.height_m) : "")
+                  << "," << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\""
+                  << other_text << "\",\"" << result.reason << "\"\n";
       } else {
         std::cout << std::setw(12) << FormatNumber(speed, 6) << std::setw(12) << h_text << std::setw(10)
-                  << ratio_text << "  " << other_text << (other_text.empty() ? "" : " ") << result.reason << "\n";
+                  << ratio_text << "  " << other_text << (other_text.empty() ? "" : " ") << result.reason
+                  << "\n";
       }
     }
   }
@@ -158,15 +340,42 @@ const CommandRegistrar kRegistrar{Command{
     "boundary", "Stability boundary H*(u0): where the largest real part of the eigenvalues changes sign",
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<BoundaryFlags>();
-      flags->model.AddTo(app);
+      flags->model.AddTo(app, /*aircraft_required=*/false);
       auto* speed = app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s");
       auto* speeds = app.add_option("--speeds-mps", flags->speeds, "Speeds a:b:n (n evenly spaced) or a,b,c");
       speed->excludes(speeds);
+      auto* archive =
+          app.add_option("--archive", flags->archive,
+                         "Instead of --aircraft: the boundary of a sweep's archive (results/modes over a "
+                         "height_m axis), refined on each run's model, written to /analysis/boundary");
+      archive->excludes(app.get_option("--aircraft"))->excludes(speed)->excludes(speeds);
+      auto* by = app.add_option("--by", flags->by,
+                                "With --archive: the swept parameters to order the curve by, e.g. speed_mps "
+                                "(default: the design's order)")
+                     ->delimiter(',');
+      auto* no_write =
+          app.add_flag("--no-write", flags->no_write, "With --archive: print only, write nothing");
       app.add_option("--format", flags->format, "table (default), csv or json");
       app.add_flag("--sensitivities", flags->sensitivities,
                    "Also print dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by "
                    "|p dH*/dp| (docs/sensitivity.md)");
-      app.callback([speed, speeds] {
+      app.callback([&app, speed, speeds, archive, by, no_write] {
+        if (archive->count() > 0) {
+          for (const char* model_flag : {"--cdh", "--no-h-derivatives", "--interpolation"}) {
+            if (app.get_option(model_flag)->count() > 0) {
+              throw CLI::ValidationError(model_flag,
+                                         "the model of --archive comes from the archive's runs; "
+                                         "sweep the model options in the study instead");
+            }
+          }
+          return;
+        }
+        if (by->count() > 0 || no_write->count() > 0) {
+          throw CLI::ValidationError(by->count() > 0 ? "--by" : "--no-write", "only with --archive");
+        }
+        if (app.get_option("--aircraft")->count() == 0) {
+          throw CLI::ValidationError("--aircraft or --archive", "one of them is required");
+        }
         if (speed->count() == 0 && speeds->count() == 0) {
           throw CLI::ValidationError("--speed-mps or --speeds-mps", "one of them is required");
         }

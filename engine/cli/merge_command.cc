@@ -26,8 +26,8 @@ int Merge(const MergeFlags& flags) {
     const MergeReport report = MergeArchives(inputs, flags.output, flags.force, command_line);
     if (!flags.quiet) {
       std::cerr << "gesweep: merged " << report.shards << " shard" << (report.shards > 1 ? "s" : "") << ": "
-                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed << " failed) -> "
-                << flags.output << "\n";
+                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed
+                << " failed) -> " << flags.output << "\n";
     }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
@@ -37,7 +37,8 @@ int Merge(const MergeFlags& flags) {
 }
 
 const CommandRegistrar kRegistrar{Command{
-    "merge", "Merge shard archives of one study into one archive, checking they cover the design exactly once",
+    "merge",
+    "Merge shard archives of one study into one archive, checking they cover the design exactly once",
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<MergeFlags>();
       app.add_option("archives", flags->inputs, "Shard archives (from gesweep run --shard i/N)")->required();

@@ -2,15 +2,14 @@
 //   gesweep run STUDY -o ARCHIVE [--threads N] [--shard i/N] [--resume] [--force] [--dry-run]
 // Exit codes: 0 every run ok, 3 some runs failed, 2 bad input, 1 an I/O error, 128+signal when
 // stopped by SIGINT/SIGTERM (the archive is then closed cleanly and resumable).
-#include <unistd.h>
-
 #include <tbb/info.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <csignal>
-#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <mutex>
@@ -23,6 +22,9 @@
 #include "engine/common/errors.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
+#ifdef GESWEEP_HAVE_MPI
+#include "engine/mpi/mpi_runner.h"
+#endif
 
 namespace gesweep::cli {
 namespace {
@@ -51,6 +53,7 @@ struct RunFlags {
   bool force = false;
   bool dry_run = false;
   bool quiet = false;
+  bool mpi = false;
   std::string format = "text";
 };
 
@@ -131,8 +134,8 @@ class ProgressPrinter {
     } else {
       line << "gesweep: ";
     }
-    line << done << "/" << total << " runs (" << std::fixed << std::setprecision(1) << 100.0 * fraction << "%), "
-         << std::setprecision(rate < 100 ? 1 : 0) << rate << " runs/s, ETA " << FormatDuration(eta);
+    line << done << "/" << total << " runs (" << std::fixed << std::setprecision(1) << 100.0 * fraction
+         << "%), " << std::setprecision(rate < 100 ? 1 : 0) << rate << " runs/s, ETA " << FormatDuration(eta);
     if (failed) line << ", " << failed << " failed";
     std::cerr << line.str() << (terminal_ ? "   " : "\n") << std::flush;
   }
@@ -154,22 +157,23 @@ int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
   const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
   if (format == "json") {
-    nlohmann::json out = {{"study", study.path},
-                          {"name", study.name},
-                          {"design_kind", std::string(ToString(study.design.kind))},
-                          {"design_runs", plan.design_runs()},
-                          {"shard", std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count)},
-                          {"first_run", plan.first_run()},
-                          {"run_count", plan.run_count()},
-                          {"chunk_runs", plan.chunk_runs()},
-                          {"bytes_per_run", storage.bytes_per_run},
-                          {"series_bytes_per_run", storage.series_bytes_per_run},
-                          {"storage_bytes", shard_bytes},
-                          {"design_storage_bytes", storage.design_bytes},
-                          {"seconds_per_run", per_run_s},
-                          {"calibration_runs", samples},
-                          {"threads", threads},
-                          {"estimated_seconds", estimate_s}};
+    nlohmann::json out = {
+        {"study", study.path},
+        {"name", study.name},
+        {"design_kind", std::string(ToString(study.design.kind))},
+        {"design_runs", plan.design_runs()},
+        {"shard", std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count)},
+        {"first_run", plan.first_run()},
+        {"run_count", plan.run_count()},
+        {"chunk_runs", plan.chunk_runs()},
+        {"bytes_per_run", storage.bytes_per_run},
+        {"series_bytes_per_run", storage.series_bytes_per_run},
+        {"storage_bytes", shard_bytes},
+        {"design_storage_bytes", storage.design_bytes},
+        {"seconds_per_run", per_run_s},
+        {"calibration_runs", samples},
+        {"threads", threads},
+        {"estimated_seconds", estimate_s}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -179,16 +183,16 @@ int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
   std::cout << "\n";
   std::cout << "design       " << ToString(study.design.kind) << ", " << plan.design_runs() << " runs";
   if (plan.shard().count > 1) {
-    std::cout << "; shard " << plan.shard().index << "/" << plan.shard().count << " runs " << plan.first_run() << ".."
-              << plan.first_run() + plan.run_count() - 1 << " (" << plan.run_count() << " runs)";
+    std::cout << "; shard " << plan.shard().index << "/" << plan.shard().count << " runs " << plan.first_run()
+              << ".." << plan.first_run() + plan.run_count() - 1 << " (" << plan.run_count() << " runs)";
   }
   std::cout << "\n";
-  std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes)) << " before compression ("
-            << FormatBytes(static_cast<double>(storage.bytes_per_run)) << " per run"
-            << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
+  std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes))
+            << " before compression (" << FormatBytes(static_cast<double>(storage.bytes_per_run))
+            << " per run" << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
   std::cout << "time         about " << FormatDuration(estimate_s) << " on " << threads << " thread"
-            << (threads > 1 ? "s" : "") << " (" << std::setprecision(3) << per_run_s * 1e6 << " us per run, from "
-            << samples << " sample run" << (samples > 1 ? "s" : "") << ")\n";
+            << (threads > 1 ? "s" : "") << " (" << std::setprecision(3) << per_run_s * 1e6
+            << " us per run, from " << samples << " sample run" << (samples > 1 ? "s" : "") << ")\n";
   std::cout << "batches      " << plan.block_count() << " of " << plan.chunk_runs() << " runs\n";
   return 0;
 }
@@ -201,7 +205,8 @@ int Run(const RunFlags& flags) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }
   if (flags.threads < 0 || flags.threads > 4096) {
-    throw InputError("command line", "--threads", std::to_string(flags.threads), "expected 1 to 4096 (0: all cores)");
+    throw InputError("command line", "--threads", std::to_string(flags.threads),
+                     "expected 1 to 4096 (0: all cores)");
   }
   ShardSpec shard;
   if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
@@ -209,15 +214,41 @@ int Run(const RunFlags& flags) {
   SweepPlan plan(std::move(study), shard);
   const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
   if (flags.dry_run) return DryRun(plan, threads, flags.format);
-  if (flags.output.empty()) throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
+  if (flags.output.empty())
+    throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
+  if (flags.mpi) {
+#ifdef GESWEEP_HAVE_MPI
+    // mpirun -n R gesweep run ... --mpi (docs/cluster.md, "MPI"): RunStudyMpi initialises and
+    // finalises MPI itself; rank 0 alone writes the archive and prints.
+    g_cancel.store(false);
+    auto previous_int = std::signal(SIGINT, OnSignal);
+    auto previous_term = std::signal(SIGTERM, OnSignal);
+    MpiRunOptions options;
+    options.output = flags.output;
+    options.mode = flags.resume ? ArchiveOpenMode::kResume
+                                : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate);
+    options.threads = flags.threads;
+    options.command_line = CommandLine(flags) + " --mpi";
+    options.cancel = &g_cancel;
+    options.signal = &g_signal;
+    options.quiet = flags.quiet;
+    const int code = RunStudyMpi(plan, options);
+    std::signal(SIGINT, previous_int);
+    std::signal(SIGTERM, previous_term);
+    return code;
+#else
+    throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
+#endif
+  }
 
   ArchiveOpenReport opened;
   std::unique_ptr<ArchiveWriter> writer;
   try {
-    writer = ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
-                                 flags.resume ? ArchiveOpenMode::kResume
-                                              : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
-                                 &opened);
+    writer =
+        ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
+                            flags.resume ? ArchiveOpenMode::kResume
+                                         : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
+                            &opened);
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
     return 1;
@@ -229,15 +260,17 @@ int Run(const RunFlags& flags) {
   if (!flags.quiet) {
     std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
     if (plan.shard().count > 1) {
-      std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count << " = runs " << plan.first_run()
-                << ".." << plan.first_run() + plan.run_count() - 1;
+      std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count << " = runs "
+                << plan.first_run() << ".." << plan.first_run() + plan.run_count() - 1;
     }
     std::cerr << ", " << threads << " thread" << (threads > 1 ? "s" : "") << " -> " << flags.output << "\n";
     if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
-      std::cerr << "gesweep: resuming" << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
-                                               ? " after an unclean stop (complete batches copied to a fresh file)"
-                                               : "")
-                << ": " << opened.runs_complete << " runs already complete, " << progress.runs_to_do << " to run\n";
+      std::cerr << "gesweep: resuming"
+                << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
+                        ? " after an unclean stop (complete batches copied to a fresh file)"
+                        : "")
+                << ": " << opened.runs_complete << " runs already complete, " << progress.runs_to_do
+                << " to run\n";
     }
   }
 
@@ -258,7 +291,8 @@ int Run(const RunFlags& flags) {
       printer.Stop();
       std::signal(SIGINT, previous_int);
       std::signal(SIGTERM, previous_term);
-      std::cerr << "\ngesweep: error: " << e.what() << " (the runs written so far are kept; fix the cause and "
+      std::cerr << "\ngesweep: error: " << e.what()
+                << " (the runs written so far are kept; fix the cause and "
                 << "rerun with --resume)\n";
       return 1;
     }
@@ -275,9 +309,9 @@ int Run(const RunFlags& flags) {
   const std::int64_t ran = progress.runs_done.load();
   if (!flags.quiet || writer->runs_failed() > 0 || outcome.cancelled) {
     std::cerr << "gesweep: " << ran << " runs in " << FormatDuration(elapsed) << " (" << std::fixed
-              << std::setprecision(1) << (elapsed > 0 ? ran / elapsed : 0.0) << " runs/s); archive: "
-              << writer->runs_ok() << " ok, " << writer->runs_failed() << " failed, " << writer->runs_pending()
-              << " pending -> " << flags.output << "\n";
+              << std::setprecision(1) << (elapsed > 0 ? ran / elapsed : 0.0)
+              << " runs/s); archive: " << writer->runs_ok() << " ok, " << writer->runs_failed() << " failed, "
+              << writer->runs_pending() << " pending -> " << flags.output << "\n";
   }
   if (outcome.cancelled) {
     std::cerr << "gesweep: stopped by signal " << g_signal.load() << "; continue with --resume\n";
@@ -298,12 +332,16 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("study", flags->study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
       app.add_option("-o,--output", flags->output, "Archive to write (HDF5), e.g. results/stability_map.h5");
       app.add_option("--threads", flags->threads, "Worker threads (default: all cores)");
-      app.add_option("--shard", flags->shard, "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
-      app.add_flag("--resume", flags->resume, "Continue an existing archive: skip complete runs, run the rest");
+      app.add_option("--shard", flags->shard,
+                     "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
+      app.add_flag("--resume", flags->resume,
+                   "Continue an existing archive: skip complete runs, run the rest");
       app.add_flag("--force", flags->force, "Replace an existing archive");
-      app.add_flag("--dry-run", flags->dry_run, "Print the run count, storage and time estimates; run nothing");
+      app.add_flag("--dry-run", flags->dry_run,
+                   "Print the run count, storage and time estimates; run nothing");
       app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
       app.add_flag("-q,--quiet", flags->quiet, "No progress output");
+      app.add_flag("--mpi", flags->mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
       return [flags] { return Run(*flags); };
     }}};
 

@@ -14,6 +14,10 @@ std::string Compose(const std::string& source, const std::string& key, const std
   if (!key.empty()) message.append(": ").append(key);
   if (!value.empty()) message.append(" = ").append(value);
   message.append(": ").append(expected);
+  // One line, always: a quoted value or a parser's description may carry line breaks.
+  for (char& ch : message) {
+    if (ch == '\n' || ch == '\r') ch = ' ';
+  }
   return message;
 }
 

@@ -58,6 +58,11 @@ std::string ReadTextFile(const std::filesystem::path& path, std::string_view wha
     throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
                                                 " file, found a directory");
   }
+  if (!std::filesystem::is_regular_file(status)) {
+    // A FIFO or a device could block or never end: refuse it at once.
+    throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
+                                                " file, found something that is not a regular file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw InputError(path.string(), "", "",

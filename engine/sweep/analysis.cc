@@ -8,17 +8,22 @@ namespace gesweep {
 
 int OutputColumn::stored_bytes_per_run() const {
   switch (type) {
-    case ColumnType::kFloat64: return 8 * width;
-    case ColumnType::kInt32: return 4 * width;
-    case ColumnType::kInt8: return width;
-    case ColumnType::kComplex: return 16 * width;
+    case ColumnType::kFloat64:
+      return 8 * width;
+    case ColumnType::kInt32:
+      return 4 * width;
+    case ColumnType::kInt8:
+      return width;
+    case ColumnType::kComplex:
+      return 16 * width;
   }
   return 0;
 }
 
 int OutputSchema::Add(OutputColumn column) {
   GESWEEP_DEMAND(column.width >= 1);
-  GESWEEP_DEMAND(std::none_of(columns.begin(), columns.end(), [&](const auto& c) { return c.path == column.path; }));
+  GESWEEP_DEMAND(
+      std::none_of(columns.begin(), columns.end(), [&](const auto& c) { return c.path == column.path; }));
   columns.push_back(std::move(column));
   return static_cast<int>(columns.size()) - 1;
 }

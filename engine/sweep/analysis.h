@@ -36,10 +36,10 @@ struct OutputColumn {
   std::string description;  ///< one line
   ColumnType type = ColumnType::kFloat64;
   int width = 1;
-  std::string time_axis;            ///< path of the shared time axis when this is a time series
-  std::vector<std::string> levels;  ///< names of the codes of an integer column (0, 1, ...)
+  std::string time_axis;                     ///< path of the shared time axis when this is a time series
+  std::vector<std::string> levels;           ///< names of the codes of an integer column (0, 1, ...)
   std::vector<std::string> component_names;  ///< names of the `width` components of a non-series column
-  int integer_fill = -1;            ///< stored for NaN in an integer column
+  int integer_fill = -1;                     ///< stored for NaN in an integer column
 
   /// A float64 scalar column.
   static OutputColumn Real(std::string path, std::string units, std::string description) {
@@ -65,8 +65,8 @@ struct OutputColumn {
     return c;
   }
   /// A float64 time series of `samples` values per run on the shared axis `time_axis`.
-  static OutputColumn Series(std::string path, std::string units, std::string description, std::string time_axis,
-                             int samples) {
+  static OutputColumn Series(std::string path, std::string units, std::string description,
+                             std::string time_axis, int samples) {
     OutputColumn c = Real(std::move(path), std::move(units), std::move(description));
     c.width = samples;
     c.time_axis = std::move(time_axis);
@@ -108,7 +108,8 @@ class OutputRow {
   /// The doubles_per_run() slots of column `column` for this run.
   double* Slot(int column) {
     return (*columns_)[static_cast<std::size_t>(column)].data() +
-           static_cast<std::size_t>(row_) * static_cast<std::size_t>(schema_->columns[column].doubles_per_run());
+           static_cast<std::size_t>(row_) *
+               static_cast<std::size_t>(schema_->columns[column].doubles_per_run());
   }
   /// Sets a scalar column.
   void Set(int column, double value) { *Slot(column) = value; }
@@ -141,8 +142,8 @@ struct AnalysisOutcome {
 
 /// What a study says about storage that analyses need when declaring their columns.
 struct StorageOptions {
-  bool time_series = false;  ///< store time series (open_loop, landing)
-  double output_dt_s = 0.05; ///< sample interval of stored series
+  bool time_series = false;   ///< store time series (open_loop, landing)
+  double output_dt_s = 0.05;  ///< sample interval of stored series
 };
 
 /// One per-run analysis.

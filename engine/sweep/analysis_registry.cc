@@ -5,8 +5,10 @@ namespace gesweep {
 
 const std::vector<AnalysisEntry>& AnalysisRegistry() {
   static const std::vector<AnalysisEntry> registry = {
-      {"modes", "eigenvalues, modes and stability margin at the run's height and speed", true, &MakeModesAnalysis, ""},
-      {"boundary", "the stability boundary H* of the run's model at its speed", true, &MakeBoundaryAnalysis, ""},
+      {"modes", "eigenvalues, modes and stability margin at the run's height and speed", true,
+       &MakeModesAnalysis, ""},
+      {"boundary", "the stability boundary H* of the run's model at its speed", true, &MakeBoundaryAnalysis,
+       ""},
 #ifdef GESWEEP_HAVE_SIMULATION
       {"open_loop", "the time response to an elevator pulse", true, &MakeOpenLoopAnalysis, ""},
 #else

@@ -1,7 +1,6 @@
 #include "engine/sweep/design.h"
 
 #include <boost/random/sobol.hpp>
-
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -58,7 +57,8 @@ class ListDesign final : public Design {
   void Row(std::int64_t index, double* values) const override {
     GESWEEP_DEMAND(index >= 0 && index < spec_.list_rows);
     const std::size_t begin = static_cast<std::size_t>(index) * static_cast<std::size_t>(column_count());
-    for (int d = 0; d < column_count(); ++d) values[d] = spec_.list_values[begin + static_cast<std::size_t>(d)];
+    for (int d = 0; d < column_count(); ++d)
+      values[d] = spec_.list_values[begin + static_cast<std::size_t>(d)];
   }
 };
 
@@ -71,8 +71,8 @@ class LatinHypercubeDesign final : public Design {
     const std::int64_t n = spec_.samples;
     for (int d = 0; d < column_count(); ++d) {
       const std::int64_t stratum = LatinStratum(spec_.seed, d, n, index);
-      const double jitter = UnitInterval(HashWords(spec_.seed ^ kLatinJitterTag, static_cast<std::uint64_t>(d),
-                                                   static_cast<std::uint64_t>(index)));
+      const double jitter = UnitInterval(HashWords(
+          spec_.seed ^ kLatinJitterTag, static_cast<std::uint64_t>(d), static_cast<std::uint64_t>(index)));
       const double u = Clamp01((static_cast<double>(stratum) + jitter) / static_cast<double>(n));
       values[d] = MapUnit(spec_.parameters[static_cast<std::size_t>(d)], u);
     }
@@ -96,13 +96,13 @@ class SaltelliDesign final : public Design {
     for (int d = 0; d < D; ++d) {
       double u;
       if (k == 0) {
-        u = a[d];                                     // A_j
+        u = a[d];  // A_j
       } else if (k <= D) {
-        u = (d == k - 1) ? b[d] : a[d];               // AB_j^(k)
+        u = (d == k - 1) ? b[d] : a[d];  // AB_j^(k)
       } else if (spec_.second_order && k <= 2 * D) {
-        u = (d == k - D - 1) ? a[d] : b[d];           // BA_j^(k−D)
+        u = (d == k - D - 1) ? a[d] : b[d];  // BA_j^(k−D)
       } else {
-        u = b[d];                                     // B_j
+        u = b[d];  // B_j
       }
       values[d] = MapUnit(spec_.parameters[static_cast<std::size_t>(d)], u);
     }
@@ -167,12 +167,18 @@ std::uint64_t Feistel(std::uint64_t x, int bits, std::uint64_t key) {
 
 std::string_view ToString(DesignKind kind) {
   switch (kind) {
-    case DesignKind::kSingle: return "single";
-    case DesignKind::kGrid: return "grid";
-    case DesignKind::kList: return "list";
-    case DesignKind::kLhs: return "lhs";
-    case DesignKind::kSobol: return "sobol";
-    case DesignKind::kMorris: return "morris";
+    case DesignKind::kSingle:
+      return "single";
+    case DesignKind::kGrid:
+      return "grid";
+    case DesignKind::kList:
+      return "list";
+    case DesignKind::kLhs:
+      return "lhs";
+    case DesignKind::kSobol:
+      return "sobol";
+    case DesignKind::kMorris:
+      return "morris";
   }
   return "?";
 }
@@ -182,7 +188,8 @@ std::string_view ToString(Distribution distribution) {
 }
 
 std::int64_t SaltelliBlockRows(int dimension, bool second_order) {
-  return second_order ? 2 * static_cast<std::int64_t>(dimension) + 2 : static_cast<std::int64_t>(dimension) + 2;
+  return second_order ? 2 * static_cast<std::int64_t>(dimension) + 2
+                      : static_cast<std::int64_t>(dimension) + 2;
 }
 
 std::int64_t CountRuns(const DesignSpec& spec) {
@@ -192,16 +199,21 @@ std::int64_t CountRuns(const DesignSpec& spec) {
     return a * b;
   };
   switch (spec.kind) {
-    case DesignKind::kSingle: return 1;
+    case DesignKind::kSingle:
+      return 1;
     case DesignKind::kGrid: {
       std::int64_t count = 1;
-      for (const auto& p : spec.parameters) count = multiply(count, static_cast<std::int64_t>(p.values.size()));
+      for (const auto& p : spec.parameters)
+        count = multiply(count, static_cast<std::int64_t>(p.values.size()));
       return count;
     }
-    case DesignKind::kList: return spec.list_rows;
-    case DesignKind::kLhs: return spec.samples;
+    case DesignKind::kList:
+      return spec.list_rows;
+    case DesignKind::kLhs:
+      return spec.samples;
     case DesignKind::kSobol:
-      return multiply(spec.base_samples, SaltelliBlockRows(static_cast<int>(spec.parameters.size()), spec.second_order));
+      return multiply(spec.base_samples,
+                      SaltelliBlockRows(static_cast<int>(spec.parameters.size()), spec.second_order));
     case DesignKind::kMorris:
       return multiply(spec.trajectories, static_cast<std::int64_t>(spec.parameters.size()) + 1);
   }
@@ -245,12 +257,18 @@ std::int64_t LatinStratum(std::uint64_t seed, int dimension, std::int64_t n, std
 std::unique_ptr<Design> MakeDesign(DesignSpec spec) {
   GESWEEP_DEMAND(CountRuns(spec) >= 1);
   switch (spec.kind) {
-    case DesignKind::kSingle: return std::make_unique<SingleDesign>(std::move(spec));
-    case DesignKind::kGrid: return std::make_unique<GridDesign>(std::move(spec));
-    case DesignKind::kList: return std::make_unique<ListDesign>(std::move(spec));
-    case DesignKind::kLhs: return std::make_unique<LatinHypercubeDesign>(std::move(spec));
-    case DesignKind::kSobol: return std::make_unique<SaltelliDesign>(std::move(spec));
-    case DesignKind::kMorris: return std::make_unique<MorrisDesign>(std::move(spec));
+    case DesignKind::kSingle:
+      return std::make_unique<SingleDesign>(std::move(spec));
+    case DesignKind::kGrid:
+      return std::make_unique<GridDesign>(std::move(spec));
+    case DesignKind::kList:
+      return std::make_unique<ListDesign>(std::move(spec));
+    case DesignKind::kLhs:
+      return std::make_unique<LatinHypercubeDesign>(std::move(spec));
+    case DesignKind::kSobol:
+      return std::make_unique<SaltelliDesign>(std::move(spec));
+    case DesignKind::kMorris:
+      return std::make_unique<MorrisDesign>(std::move(spec));
   }
   GESWEEP_DEMAND(false);
   return nullptr;

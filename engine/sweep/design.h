@@ -37,7 +37,7 @@ std::string_view ToString(Distribution distribution);
 /// One column of a design.
 struct DesignParameter {
   ParameterId id = 0;
-  std::vector<double> values;  ///< grid: the axis values (a choice as level indices)
+  std::vector<double> values;                          ///< grid: the axis values (a choice as level indices)
   Distribution distribution = Distribution::kUniform;  ///< lhs, sobol, morris
   double lower = 0, upper = 0;                         ///< lhs, sobol, morris
 };
@@ -48,13 +48,13 @@ struct DesignSpec {
   std::vector<DesignParameter> parameters;  ///< the swept parameters, in column order
   std::vector<double> list_values;          ///< list: row-major, parameters.size() per row
   std::int64_t list_rows = 0;
-  std::string list_csv;                     ///< list: the CSV path when the rows came from one
-  std::int64_t samples = 0;                 ///< lhs: N
-  std::uint64_t seed = 0;                   ///< lhs, morris
-  std::int64_t base_samples = 0;            ///< sobol: N
-  bool second_order = false;                ///< sobol
-  std::int64_t trajectories = 0;            ///< morris: r
-  int levels = 0;                           ///< morris: p (even)
+  std::string list_csv;           ///< list: the CSV path when the rows came from one
+  std::int64_t samples = 0;       ///< lhs: N
+  std::uint64_t seed = 0;         ///< lhs, morris
+  std::int64_t base_samples = 0;  ///< sobol: N
+  bool second_order = false;      ///< sobol
+  std::int64_t trajectories = 0;  ///< morris: r
+  int levels = 0;                 ///< morris: p (even)
 };
 
 /// A design: `run_count()` rows of `columns()` values.

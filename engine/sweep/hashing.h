@@ -35,7 +35,8 @@ inline constexpr std::uint64_t Mix64(std::uint64_t x) {
 }
 
 /// A hash of several 64-bit words (order matters).
-inline constexpr std::uint64_t HashWords(std::uint64_t a, std::uint64_t b, std::uint64_t c = 0, std::uint64_t d = 0) {
+inline constexpr std::uint64_t HashWords(std::uint64_t a, std::uint64_t b, std::uint64_t c = 0,
+                                         std::uint64_t d = 0) {
   return Mix64(Mix64(Mix64(Mix64(a) ^ b) ^ c) ^ d);
 }
 

@@ -12,8 +12,8 @@
 namespace gesweep {
 namespace {
 
-// A dopri5 landing from 500 m: a few thousand right-hand sides plus one Riccati solution.
-constexpr double kLandingCost_us = 30000.0;
+// Measured (docs/sweep.md): a dopri5 landing from 500 m and one Riccati solution, about 15 ms.
+constexpr double kLandingCost_us = 15000.0;
 // Stored series cover this long unless the study says otherwise (the paper's landing from 500 m at
 // 52.21 m/s down a 2.5° slope lasts about 230 s).
 constexpr double kDefaultSeriesDuration_s = 400.0;
@@ -69,11 +69,15 @@ class LandingAnalysis final : public Analysis {
     real("flare_time_constant_s", "s", "Flare time constant tau used");
     real("time_limit_s", "s", "Time limit used");
     real("design_height_m", "m", "Height of the linear model the gain was designed on");
-    real("closed_loop_max_real_per_s", "1/s", "Largest real part of the design model's closed-loop eigenvalues");
-    steps_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
-    rhs_calls_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
-    OutputColumn gain = OutputColumn::Real(base + "gain", "rad per unit state",
-                                           "LQR gain K on the 9 states of Eq. (14), eta_e = -K z (component_names attribute)");
+    real("closed_loop_max_real_per_s", "1/s",
+         "Largest real part of the design model's closed-loop eigenvalues");
+    steps_ =
+        schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
+    rhs_calls_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    OutputColumn gain = OutputColumn::Real(
+        base + "gain", "rad per unit state",
+        "LQR gain K on the 9 states of Eq. (14), eta_e = -K z (component_names attribute)");
     gain.width = kLandingStateCount;
     for (std::string_view state : LandingStateNames()) gain.component_names.emplace_back(state);
     gain_ = schema.Add(gain);
@@ -90,8 +94,8 @@ class LandingAnalysis final : public Analysis {
     for (int k = 0; k < samples_; ++k) axis.times_s.push_back(k * dt_s_);
     schema.AddAxis(axis);
     auto series = [&](const char* name, const char* units, const char* description) {
-      series_.push_back(schema.Add(
-          OutputColumn::Series(std::string("series/landing/") + name, units, description, axis.path, samples_)));
+      series_.push_back(schema.Add(OutputColumn::Series(std::string("series/landing/") + name, units,
+                                                        description, axis.path, samples_)));
     };
     series("height_m", "m", "Height H of the mean chord above ground");
     series("reference_height_m", "m", "Height of the glide path, or H_ref in the flare");
@@ -140,8 +144,9 @@ class LandingAnalysis final : public Analysis {
                              r.flare_time_constant_s,
                              r.time_limit_s,
                              r.design.design_height_m,
-                             r.design.closed_loop_eigenvalues.size() ? r.design.closed_loop_eigenvalues[0].real()
-                                                                     : std::numeric_limits<double>::quiet_NaN()};
+                             r.design.closed_loop_eigenvalues.size()
+                                 ? r.design.closed_loop_eigenvalues[0].real()
+                                 : std::numeric_limits<double>::quiet_NaN()};
     for (std::size_t i = 0; i < scalars_.size(); ++i) row.Set(scalars_[i], values[i]);
     row.Set(steps_, static_cast<double>(r.accepted_steps));
     row.Set(rhs_calls_, static_cast<double>(r.rhs_calls));
@@ -151,8 +156,8 @@ class LandingAnalysis final : public Analysis {
     }
     bool truncated = false;
     if (samples_ > 0) truncated = StoreSeries(r, config, row);
-    const std::string note = truncated ? r.message + " (series cut at " + std::to_string(series_duration_s_) + " s)"
-                                       : r.message;
+    const std::string note =
+        truncated ? r.message + " (series cut at " + std::to_string(series_duration_s_) + " s)" : r.message;
     if (r.outcome == LandingOutcome::kDiverged || r.outcome == LandingOutcome::kDesignFailed) {
       return AnalysisOutcome::Failed(std::string(ToString(r.outcome)) + ": " + note);
     }
@@ -178,8 +183,8 @@ class LandingAnalysis final : public Analysis {
   // Samples on the grid t = k·dt; returns whether some fell past the stored duration.
   bool StoreSeries(const LandingResult& r, const LandingConfig& config, OutputRow& row) const {
     const double u0 = config.start_speed_mps;
-    const double transmitter_time_s =
-        (config.start_height_m - config.start_glide_path_offset_m) / (u0 * config.glide_slope_deg * kRadPerDeg);
+    const double transmitter_time_s = (config.start_height_m - config.start_glide_path_offset_m) /
+                                      (u0 * config.glide_slope_deg * kRadPerDeg);
     bool truncated = false;
     for (const LandingSample& s : r.series) {
       const double position = s.time_s / dt_s_;
@@ -189,10 +194,18 @@ class LandingAnalysis final : public Analysis {
         truncated = true;
         continue;
       }
-      const double values[] = {s.height_m,        s.reference_height_m, s.tracking_error_m,
-                               u0 * (s.time_s - transmitter_time_s), s.speed_mps, s.delta_w_mps,
-                               s.pitch_rate_radps, s.pitch_rad,          s.sink_rate_mps,
-                               s.elevator_rad,     s.elevator_command_rad, static_cast<double>(static_cast<int>(s.phase))};
+      const double values[] = {s.height_m,
+                               s.reference_height_m,
+                               s.tracking_error_m,
+                               u0 * (s.time_s - transmitter_time_s),
+                               s.speed_mps,
+                               s.delta_w_mps,
+                               s.pitch_rate_radps,
+                               s.pitch_rad,
+                               s.sink_rate_mps,
+                               s.elevator_rad,
+                               s.elevator_command_rad,
+                               static_cast<double>(static_cast<int>(s.phase))};
       for (std::size_t c = 0; c < series_.size(); ++c) row.Slot(series_[c])[static_cast<int>(k)] = values[c];
     }
     return truncated;
@@ -216,11 +229,11 @@ class LandingAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys({"start_pitch_deg", "start_glide_path_offset_m", "design_height_m", "design_speed_mps",
-                              "design_h_derivatives", "actuator_pole_per_s", "compensator_pole_per_s",
-                              "elevator_min_deg", "elevator_max_deg", "plant_height_reference",
-                              "plant_fixed_reference_height_m", "relative_tolerance", "absolute_tolerance",
-                              "max_step_s", "time_limit_s", "divergence_pitch_deg", "series_duration_s"});
+  settings.RejectUnknownKeys(
+      {"start_pitch_deg", "start_glide_path_offset_m", "design_height_m", "design_speed_mps",
+       "design_h_derivatives", "actuator_pole_per_s", "compensator_pole_per_s", "elevator_min_deg",
+       "elevator_max_deg", "plant_height_reference", "plant_fixed_reference_height_m", "relative_tolerance",
+       "absolute_tolerance", "max_step_s", "time_limit_s", "divergence_pitch_deg", "series_duration_s"});
   LandingConfig config;
   auto number = [&](const char* key, double& field) {
     if (const auto value = settings.OptionalNumber(key)) field = *value;

@@ -10,8 +10,8 @@
 namespace gesweep {
 namespace {
 
-// Measured on the reference machine (docs/sweep.md): one 5×5 eigen-analysis and its bookkeeping.
-constexpr double kModesCost_us = 20.0;
+// Measured (docs/sweep.md): one 5×5 eigen-analysis and its bookkeeping, about 8 µs on one core.
+constexpr double kModesCost_us = 8.0;
 
 class ModesAnalysis final : public Analysis {
  public:
@@ -22,35 +22,53 @@ class ModesAnalysis final : public Analysis {
   double nominal_run_cost_us() const override { return kModesCost_us; }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions&) override {
-    OutputColumn eigenvalues = OutputColumn::Complex("results/modes/eigenvalues", "1/s", "Eigenvalues of A (Eq. 1): short period (2), phugoid (2), height (1); a pair with "
-                               "Im > 0 first (MODEL.md §6)", 5);
+    OutputColumn eigenvalues = OutputColumn::Complex(
+        "results/modes/eigenvalues", "1/s",
+        "Eigenvalues of A (Eq. 1): short period (2), phugoid (2), height (1); a pair with "
+        "Im > 0 first (MODEL.md §6)",
+        5);
     eigenvalues.component_names = {"short_period", "short_period", "phugoid", "phugoid", "height"};
     eigenvalues_ = schema.Add(eigenvalues);
-    margin_ = schema.Add(OutputColumn::Real("results/modes/stability_margin_per_s", "1/s", "Stability margin sigma = the largest Re(lambda), the neutral height root left out "
-                          "(MODEL.md §6); stable when < 0"));
-    stable_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/modes/stable", "1", "1 when sigma < 0, else 0", {"false", "true"}));
+    margin_ = schema.Add(OutputColumn::Real(
+        "results/modes/stability_margin_per_s", "1/s",
+        "Stability margin sigma = the largest Re(lambda), the neutral height root left out "
+        "(MODEL.md §6); stable when < 0"));
+    stable_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/modes/stable", "1",
+                                               "1 when sigma < 0, else 0", {"false", "true"}));
     std::vector<std::string> classes;
     for (auto c : {ModeClassification::kStandard, ModeClassification::kPhugoidSplit,
                    ModeClassification::kShortPeriodSplit, ModeClassification::kAllReal}) {
       classes.emplace_back(ToString(c));
     }
-    classification_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/modes/classification", "1", "How the eigenvalues were assigned to modes (levels attribute)", classes));
-    height_over_span_ = schema.Add(OutputColumn::Real("results/modes/height_over_span", "1", "H/b of the run's height_m"));
+    classification_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt8, "results/modes/classification", "1",
+                              "How the eigenvalues were assigned to modes (levels attribute)", classes));
+    height_over_span_ =
+        schema.Add(OutputColumn::Real("results/modes/height_over_span", "1", "H/b of the run's height_m"));
     const std::array<const char*, 3> modes = {"short_period", "phugoid", "height"};
     const std::array<const char*, 3> titles = {"short-period", "phugoid", "height (subsidence)"};
     for (std::size_t m = 0; m < modes.size(); ++m) {
       const std::string base = std::string("results/modes/") + modes[m] + "/";
       const std::string title = titles[m];
       ModeColumns& c = mode_columns_[m];
-      c.re = schema.Add(OutputColumn::Real(base + "eigenvalue_re_per_s", "1/s", "Re(lambda) of the " + title + " mode"));
-      c.im = schema.Add(OutputColumn::Real(base + "eigenvalue_im_per_s", "1/s", "Im(lambda) >= 0 of the " + title + " mode"));
-      c.frequency = schema.Add(OutputColumn::Real(base + "natural_frequency_radps", "rad/s", "Natural frequency |lambda| of the " + title + " mode"));
-      c.damping = schema.Add(OutputColumn::Real(base + "damping_ratio", "1", "Damping ratio -Re(lambda)/|lambda| of the " + title +
-                                                             " mode (NaN when neutral)"));
-      c.period = schema.Add(OutputColumn::Real(base + "period_s", "s", "Period 2 pi/|Im lambda| of the " + title + " mode (inf when real)"));
-      c.half_double = schema.Add(OutputColumn::Real(base + "time_to_half_or_double_s", "s", "ln 2/|Re lambda| of the " + title + " mode: to half amplitude when stable, to double "
-                                  "when unstable"));
-      c.oscillatory = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "oscillatory", "1", "1 when the " + title + " mode is a complex pair", {"false", "true"}));
+      c.re = schema.Add(
+          OutputColumn::Real(base + "eigenvalue_re_per_s", "1/s", "Re(lambda) of the " + title + " mode"));
+      c.im = schema.Add(OutputColumn::Real(base + "eigenvalue_im_per_s", "1/s",
+                                           "Im(lambda) >= 0 of the " + title + " mode"));
+      c.frequency = schema.Add(OutputColumn::Real(base + "natural_frequency_radps", "rad/s",
+                                                  "Natural frequency |lambda| of the " + title + " mode"));
+      c.damping = schema.Add(OutputColumn::Real(
+          base + "damping_ratio", "1",
+          "Damping ratio -Re(lambda)/|lambda| of the " + title + " mode (NaN when neutral)"));
+      c.period = schema.Add(OutputColumn::Real(
+          base + "period_s", "s", "Period 2 pi/|Im lambda| of the " + title + " mode (inf when real)"));
+      c.half_double = schema.Add(OutputColumn::Real(base + "time_to_half_or_double_s", "s",
+                                                    "ln 2/|Re lambda| of the " + title +
+                                                        " mode: to half amplitude when stable, to double "
+                                                        "when unstable"));
+      c.oscillatory = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "oscillatory", "1",
+                                                       "1 when the " + title + " mode is a complex pair",
+                                                       {"false", "true"}));
     }
   }
 

@@ -11,8 +11,8 @@
 namespace gesweep {
 namespace {
 
-// RK4 at 0.015 s for 30 s with the derivatives re-evaluated per stage (docs/sweep.md measures it).
-constexpr double kOpenLoopCost_us = 2000.0;
+// Measured (docs/sweep.md): RK4 at 0.015 s for 30 s, derivatives re-evaluated per stage, about 300 µs.
+constexpr double kOpenLoopCost_us = 300.0;
 constexpr double kDefaultDuration_s = 30.0;
 constexpr double kMaximumDuration_s = 1e5;
 // A sample lands on the series grid when within this of a grid time (the integrator's output times
@@ -24,8 +24,12 @@ class OpenLoopAnalysis final : public Analysis {
   explicit OpenLoopAnalysis(OpenLoopConfig config) : config_(std::move(config)) {}
 
   std::string_view name() const override { return "open_loop"; }
-  std::vector<ParameterId> parameters_used() const override { return {height_, speed_, amplitude_, duration_}; }
-  double nominal_run_cost_us() const override { return kOpenLoopCost_us * config_.duration_s / kDefaultDuration_s; }
+  std::vector<ParameterId> parameters_used() const override {
+    return {height_, speed_, amplitude_, duration_};
+  }
+  double nominal_run_cost_us() const override {
+    return kOpenLoopCost_us * config_.duration_s / kDefaultDuration_s;
+  }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
     const std::string base = "results/open_loop/";
@@ -34,20 +38,27 @@ class OpenLoopAnalysis final : public Analysis {
                    OpenLoopEndEvent::kDiverged}) {
       events.emplace_back(ToString(e));
     }
-    end_event_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "end_event", "1",
-                                                  "How the run ended (levels attribute, MODEL.md §7)", events));
+    end_event_ =
+        schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "end_event", "1",
+                                         "How the run ended (levels attribute, MODEL.md §7)", events));
     end_time_ = schema.Add(OutputColumn::Real(base + "end_time_s", "s", "Time of the end event"));
     min_height_ = schema.Add(OutputColumn::Real(base + "min_height_m", "m", "Lowest height H reached"));
-    min_height_time_ = schema.Add(OutputColumn::Real(base + "min_height_time_s", "s", "When the lowest height was reached"));
-    max_pitch_rate_ = schema.Add(OutputColumn::Real(base + "max_abs_pitch_rate_radps", "rad/s", "Largest |q|"));
+    min_height_time_ =
+        schema.Add(OutputColumn::Real(base + "min_height_time_s", "s", "When the lowest height was reached"));
+    max_pitch_rate_ =
+        schema.Add(OutputColumn::Real(base + "max_abs_pitch_rate_radps", "rad/s", "Largest |q|"));
     final_height_ = schema.Add(OutputColumn::Real(base + "final_height_m", "m", "H at the end of the run"));
     final_speed_ = schema.Add(OutputColumn::Real(base + "final_speed_mps", "m/s", "u at the end of the run"));
-    final_state_ = schema.Add(OutputColumn::Real(base + "final_delta_w_mps", "m/s", "Delta w at the end of the run"));
-    final_pitch_ = schema.Add(OutputColumn::Real(base + "final_delta_theta_rad", "rad", "Delta theta at the end of the run"));
-    final_q_ = schema.Add(OutputColumn::Real(base + "final_pitch_rate_radps", "rad/s", "q at the end of the run"));
-    steps_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "steps", "1", "Accepted integration steps"));
-    rhs_calls_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1",
-                                                  "Right-hand-side evaluations"));
+    final_state_ =
+        schema.Add(OutputColumn::Real(base + "final_delta_w_mps", "m/s", "Delta w at the end of the run"));
+    final_pitch_ = schema.Add(
+        OutputColumn::Real(base + "final_delta_theta_rad", "rad", "Delta theta at the end of the run"));
+    final_q_ =
+        schema.Add(OutputColumn::Real(base + "final_pitch_rate_radps", "rad/s", "q at the end of the run"));
+    steps_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "steps", "1", "Accepted integration steps"));
+    rhs_calls_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
     if (!storage.time_series) return;
     dt_s_ = storage.output_dt_s;
     config_.series_interval_s = dt_s_;
@@ -58,14 +69,19 @@ class OpenLoopAnalysis final : public Analysis {
     for (int k = 0; k < samples; ++k) axis.times_s.push_back(k * dt_s_);
     schema.AddAxis(axis);
     const std::string series = "series/open_loop/";
-    series_height_ = schema.Add(OutputColumn::Series(series + "height_m", "m", "Height H", axis.path, samples));
-    series_speed_ = schema.Add(OutputColumn::Series(series + "speed_mps", "m/s", "Speed u", axis.path, samples));
-    series_w_ = schema.Add(OutputColumn::Series(series + "delta_w_mps", "m/s", "Delta w (positive down)", axis.path, samples));
-    series_q_ = schema.Add(OutputColumn::Series(series + "pitch_rate_radps", "rad/s", "Pitch rate q", axis.path, samples));
-    series_theta_ = schema.Add(OutputColumn::Series(series + "delta_theta_rad", "rad", "Delta theta", axis.path, samples));
+    series_height_ =
+        schema.Add(OutputColumn::Series(series + "height_m", "m", "Height H", axis.path, samples));
+    series_speed_ =
+        schema.Add(OutputColumn::Series(series + "speed_mps", "m/s", "Speed u", axis.path, samples));
+    series_w_ = schema.Add(
+        OutputColumn::Series(series + "delta_w_mps", "m/s", "Delta w (positive down)", axis.path, samples));
+    series_q_ = schema.Add(
+        OutputColumn::Series(series + "pitch_rate_radps", "rad/s", "Pitch rate q", axis.path, samples));
+    series_theta_ = schema.Add(
+        OutputColumn::Series(series + "delta_theta_rad", "rad", "Delta theta", axis.path, samples));
     series_elevator_ = schema.Add(OutputColumn::Series(series + "elevator_rad", "rad",
-                                                       "Elevator deflection (positive trailing edge down)", axis.path,
-                                                       samples));
+                                                       "Elevator deflection (positive trailing edge down)",
+                                                       axis.path, samples));
     samples_ = samples;
   }
 
@@ -77,7 +93,8 @@ class OpenLoopAnalysis final : public Analysis {
       out << "expected height_m > the touchdown height " << touchdown << " m";
     } else if (!(p[static_cast<std::size_t>(speed_)] > stall)) {
       out << "expected speed_mps > the stall speed " << stall << " m/s";
-    } else if (!(p[static_cast<std::size_t>(duration_)] > 0) && config_.elevator.kind != ElevatorInputKind::kNone &&
+    } else if (!(p[static_cast<std::size_t>(duration_)] > 0) &&
+               config_.elevator.kind != ElevatorInputKind::kNone &&
                config_.elevator.kind != ElevatorInputKind::kStep) {
       out << "expected pulse_duration_s > 0 for a " << ToString(config_.elevator.kind);
     }
@@ -115,9 +132,12 @@ class OpenLoopAnalysis final : public Analysis {
   // The simulation samples every dt and once more at the end; keep the samples on the grid.
   void StoreSeries(const OpenLoopSeries& series, OutputRow& row) const {
     const std::pair<int, const std::vector<double>*> columns[] = {
-        {series_height_, &series.height_m},          {series_speed_, &series.speed_mps},
-        {series_w_, &series.delta_normal_velocity_mps}, {series_q_, &series.pitch_rate_radps},
-        {series_theta_, &series.delta_pitch_rad},     {series_elevator_, &series.elevator_rad}};
+        {series_height_, &series.height_m},
+        {series_speed_, &series.speed_mps},
+        {series_w_, &series.delta_normal_velocity_mps},
+        {series_q_, &series.pitch_rate_radps},
+        {series_theta_, &series.delta_pitch_rad},
+        {series_elevator_, &series.elevator_rad}};
     for (std::size_t i = 0; i < series.time_s.size(); ++i) {
       const double position = series.time_s[i] / dt_s_;
       const double k = std::round(position);
@@ -132,8 +152,10 @@ class OpenLoopAnalysis final : public Analysis {
   ParameterId amplitude_ = RequireParameter("pulse_amplitude_deg");
   ParameterId duration_ = RequireParameter("pulse_duration_s");
   int end_event_ = 0, end_time_ = 0, min_height_ = 0, min_height_time_ = 0, max_pitch_rate_ = 0;
-  int final_height_ = 0, final_speed_ = 0, final_state_ = 0, final_pitch_ = 0, final_q_ = 0, steps_ = 0, rhs_calls_ = 0;
-  int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0, series_elevator_ = 0;
+  int final_height_ = 0, final_speed_ = 0, final_state_ = 0, final_pitch_ = 0, final_q_ = 0, steps_ = 0,
+      rhs_calls_ = 0;
+  int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0,
+      series_elevator_ = 0;
   int samples_ = 0;
   double dt_s_ = 0;
 };
@@ -141,8 +163,9 @@ class OpenLoopAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys({"input", "input_start_s", "duration_s", "integrator", "step_s", "relative_tolerance",
-                              "absolute_tolerance", "max_step_s", "honour_breakpoints", "freeze_derivatives"});
+  settings.RejectUnknownKeys({"input", "input_start_s", "duration_s", "integrator", "step_s",
+                              "relative_tolerance", "absolute_tolerance", "max_step_s", "honour_breakpoints",
+                              "freeze_derivatives"});
   OpenLoopConfig config;
   config.duration_s = kDefaultDuration_s;
   if (const auto input = settings.OptionalString("input")) {
@@ -166,10 +189,13 @@ std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, cons
     config.integrator.kind = *kind;
   }
   if (settings.Has("step_s")) config.integrator.step_s = settings.PositiveNumber("step_s");
-  if (settings.Has("relative_tolerance")) config.integrator.relative_tolerance = settings.PositiveNumber("relative_tolerance");
-  if (settings.Has("absolute_tolerance")) config.integrator.absolute_tolerance = settings.PositiveNumber("absolute_tolerance");
+  if (settings.Has("relative_tolerance"))
+    config.integrator.relative_tolerance = settings.PositiveNumber("relative_tolerance");
+  if (settings.Has("absolute_tolerance"))
+    config.integrator.absolute_tolerance = settings.PositiveNumber("absolute_tolerance");
   if (const auto max_step = settings.OptionalNumber("max_step_s")) {
-    if (*max_step < 0) settings.Fail("max_step_s", std::to_string(*max_step), "expected >= 0 s (0: no limit)");
+    if (*max_step < 0)
+      settings.Fail("max_step_s", std::to_string(*max_step), "expected >= 0 s (0: no limit)");
     config.integrator.max_step_s = *max_step;
   }
   config.integrator.honour_breakpoints = settings.OptionalBool("honour_breakpoints").value_or(true);

@@ -45,31 +45,35 @@ std::vector<ParameterInfo> BuildCatalog() {
 
   // The flight condition.
   {
-    ParameterInfo height = Real("height_m", "m",
-                                "Height H of the mean aerodynamic chord above ground: the evaluation height (modes), "
-                                "the start height (open_loop, landing)",
-                                G::kFlight, std::nullopt);
+    ParameterInfo height =
+        Real("height_m", "m",
+             "Height H of the mean aerodynamic chord above ground: the evaluation height (modes), "
+             "the start height (open_loop, landing)",
+             G::kFlight, std::nullopt);
     height.minimum = 0.0;
     height.minimum_exclusive = true;
     height.maximum = kMaximumHeight_m;
     c.push_back(height);
-    ParameterInfo speed = Positive(Real("speed_mps", "m/s", "Reference forward speed u0", G::kFlight, std::nullopt));
+    ParameterInfo speed =
+        Positive(Real("speed_mps", "m/s", "Reference forward speed u0", G::kFlight, std::nullopt));
     speed.maximum = kMaximumSpeed_mps;
     c.push_back(speed);
   }
 
   // Model switches (docs/MODEL.md §2-§4).
   {
-    ParameterInfo h = Real("h_derivatives", "1", "Whether Xh, Zh and Mh are in the model (MODEL.md §4)", G::kModel, 1.0);
+    ParameterInfo h =
+        Real("h_derivatives", "1", "Whether Xh, Zh and Mh are in the model (MODEL.md §4)", G::kModel, 1.0);
     h.kind = ParameterKind::kBoolean;
     h.levels = {"false", "true"};
     c.push_back(h);
-    ParameterInfo cdh = Real("cdh", "1", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (MODEL.md §3)", G::kModel, 0.0);
+    ParameterInfo cdh =
+        Real("cdh", "1", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (MODEL.md §3)", G::kModel, 0.0);
     cdh.kind = ParameterKind::kChoice;
     cdh.levels = {"polar", "zero"};
     c.push_back(cdh);
-    ParameterInfo interpolation =
-        Real("interpolation", "1", "Table interpolation in height: linear or pchip (MODEL.md §2)", G::kModel, 0.0);
+    ParameterInfo interpolation = Real(
+        "interpolation", "1", "Table interpolation in height: linear or pchip (MODEL.md §2)", G::kModel, 0.0);
     interpolation.kind = ParameterKind::kChoice;
     interpolation.levels = {"linear", "pchip"};
     c.push_back(interpolation);
@@ -81,39 +85,45 @@ std::vector<ParameterInfo> BuildCatalog() {
                      "Multiplicative factor on the coefficient " + std::string(name) + " at every height",
                      G::kModel, 1.0));
   }
-  c.push_back(Real("scale.CDo", "1", "Multiplicative factor on the parasite drag coefficient CDo", G::kModel, 1.0));
+  c.push_back(
+      Real("scale.CDo", "1", "Multiplicative factor on the parasite drag coefficient CDo", G::kModel, 1.0));
 
   // Mass properties; the defaults are the aircraft's (DefaultValue).
-  c.push_back(Positive(Real("mass_kg", "kg", "Airplane mass m (default: the aircraft file's)", G::kModel, std::nullopt)));
-  c.push_back(Positive(Real("pitch_inertia_kgm2", "kg m^2", "Pitching moment of inertia Iy (default: the aircraft file's)",
-                            G::kModel, std::nullopt)));
-  c.push_back(Range(Real("cg_shift_over_chord", "1",
-                         "CG moved aft by this fraction of the mean chord (negative: forward)", G::kModel, 0.0),
-                    -1.0, 1.0));
+  c.push_back(Positive(
+      Real("mass_kg", "kg", "Airplane mass m (default: the aircraft file's)", G::kModel, std::nullopt)));
+  c.push_back(Positive(Real("pitch_inertia_kgm2", "kg m^2",
+                            "Pitching moment of inertia Iy (default: the aircraft file's)", G::kModel,
+                            std::nullopt)));
+  c.push_back(
+      Range(Real("cg_shift_over_chord", "1",
+                 "CG moved aft by this fraction of the mean chord (negative: forward)", G::kModel, 0.0),
+            -1.0, 1.0));
 
   // Open-loop perturbation (MODEL.md §7).
-  c.push_back(Range(Real("pulse_amplitude_deg", "deg",
-                         "Elevator pulse amplitude, positive trailing edge down (paper: 5 deg)", G::kOpenLoop, 5.0),
-                    -30.0, 30.0));
-  c.push_back(Range(Real("pulse_duration_s", "s", "Elevator pulse duration (paper: 0.2 s)", G::kOpenLoop, 0.2), 0.0,
-                    1e4));
+  c.push_back(
+      Range(Real("pulse_amplitude_deg", "deg",
+                 "Elevator pulse amplitude, positive trailing edge down (paper: 5 deg)", G::kOpenLoop, 5.0),
+            -30.0, 30.0));
+  c.push_back(Range(
+      Real("pulse_duration_s", "s", "Elevator pulse duration (paper: 0.2 s)", G::kOpenLoop, 0.2), 0.0, 1e4));
 
   // Landing controller (MODEL.md §8; engine/control/landing_config.h, docs/landing.md). A NaN
   // default means "automatic": the controller's own rule.
   {
-    ParameterInfo gamma = Real("glide_slope_deg", "deg",
-                               "Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)",
-                               G::kLanding, 2.5);
+    ParameterInfo gamma =
+        Real("glide_slope_deg", "deg",
+             "Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)", G::kLanding, 2.5);
     gamma.minimum = 0.0;
     gamma.minimum_exclusive = true;
     gamma.maximum = 10.0;
     c.push_back(gamma);
-    c.push_back(Positive(Real("flare_height_m", "m", "Height Ho at which the flare starts", G::kLanding, 10.0)));
+    c.push_back(
+        Positive(Real("flare_height_m", "m", "Height Ho at which the flare starts", G::kLanding, 10.0)));
     c.push_back(Positive(Real("flare_tau_s", "s",
                               "Time constant tau of the exponential flare command (default NaN: automatic, "
                               "Ho/(u0 sin gamma), so the commanded sink rate is continuous at Ho)",
                               G::kLanding, std::numeric_limits<double>::quiet_NaN())));
-    const char* states[] = {"delta_u", "delta_w", "pitch_rate", "delta_theta", "delta_h",
+    const char* states[] = {"delta_u",  "delta_w",   "pitch_rate",  "delta_theta",   "delta_h",
                             "elevator", "deviation", "compensator", "error_integral"};
     for (const char* state : states) {
       ParameterInfo q = Real(std::string("lqr.q_") + state, "1",
@@ -123,7 +133,8 @@ std::vector<ParameterInfo> BuildCatalog() {
       q.minimum = 0.0;
       c.push_back(q);
     }
-    c.push_back(Positive(Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0)));
+    c.push_back(Positive(
+        Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0)));
   }
 
   // Inputs of the verification models (Ishigami, linear): dimensionless, no default meaning.
@@ -208,7 +219,8 @@ std::string CheckParameterValue(ParameterId id, double value, const Aircraft* ai
   const ParameterInfo& info = ParameterCatalog().at(id);
   if (!std::isfinite(value)) return "expected " + DescribeAllowedValues(id);
   if (info.kind != ParameterKind::kReal) {
-    const bool is_level = value >= 0 && value < static_cast<double>(info.levels.size()) && value == std::floor(value);
+    const bool is_level =
+        value >= 0 && value < static_cast<double>(info.levels.size()) && value == std::floor(value);
     return is_level ? "" : "expected " + DescribeAllowedValues(id);
   }
   const bool below = info.minimum_exclusive ? !(value > info.minimum) : !(value >= info.minimum);
@@ -216,8 +228,8 @@ std::string CheckParameterValue(ParameterId id, double value, const Aircraft* ai
   if (below || above) return "expected " + DescribeAllowedValues(id);
   if (aircraft != nullptr && info.name == "height_m") {
     if (value < aircraft->wheel_contact_height_m) {
-      return "expected a height >= the wheel-contact height " + FormatNumber(aircraft->wheel_contact_height_m) +
-             " m of " + aircraft->source_path;
+      return "expected a height >= the wheel-contact height " +
+             FormatNumber(aircraft->wheel_contact_height_m) + " m of " + aircraft->source_path;
     }
     if (aircraft->field_elevation_m + value > kMaximumHeight_m) {
       return "expected field elevation + height <= " + FormatNumber(kMaximumHeight_m) +

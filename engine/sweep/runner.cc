@@ -17,7 +17,8 @@
 namespace gesweep {
 namespace {
 
-constexpr int kTokensPerThread = 2;  // batches in flight per worker: keeps every thread busy at a batch's tail
+constexpr int kTokensPerThread =
+    2;  // batches in flight per worker: keeps every thread busy at a batch's tail
 
 struct ModelParameterIds {
   ParameterId h_derivatives = RequireParameter("h_derivatives");
@@ -98,11 +99,13 @@ void ResultBlock::Reset(const SweepPlan& plan, std::int64_t index) {
     status[static_cast<std::size_t>(r)] = static_cast<std::int8_t>(RunStatus::kPending);
     message[static_cast<std::size_t>(r)].clear();
   }
-  for (auto& column : results) std::fill(column.begin(), column.end(), std::numeric_limits<double>::quiet_NaN());
+  for (auto& column : results)
+    std::fill(column.begin(), column.end(), std::numeric_limits<double>::quiet_NaN());
 }
 
 RunWorkspace::RunWorkspace(const SweepPlan& plan)
-    : parameters(plan.base_parameters()), design_row(static_cast<std::size_t>(plan.design().column_count())) {}
+    : parameters(plan.base_parameters()),
+      design_row(static_cast<std::size_t>(plan.design().column_count())) {}
 
 const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
   const auto& ids = plan.model_parameters();
@@ -127,7 +130,8 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
   workspace.parameters = plan.base_parameters();
   for (int c = 0; c < design.column_count(); ++c) {
     const double value = workspace.design_row[static_cast<std::size_t>(c)];
-    workspace.parameters[static_cast<std::size_t>(design.spec().parameters[static_cast<std::size_t>(c)].id)] = value;
+    workspace.parameters[static_cast<std::size_t>(design.spec().parameters[static_cast<std::size_t>(c)].id)] =
+        value;
     block.design[static_cast<std::size_t>(c)][r] = value;
   }
   block.design_index[r] = design_index;
@@ -165,8 +169,8 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
   block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
 }
 
-SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks, ResultSink& sink,
-                      const RunnerOptions& options, SweepProgress* progress) {
+SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
+                      ResultSink& sink, const RunnerOptions& options, SweepProgress* progress) {
   SweepProgress local_progress;
   SweepProgress& counters = progress ? *progress : local_progress;
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
@@ -229,16 +233,19 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
               tbb::make_filter<ResultBlock*, ResultBlock*>(
                   tbb::filter_mode::parallel,
                   [&](ResultBlock* block) {
-                    tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1), [&](const tbb::blocked_range<int>& range) {
-                      RunWorkspace& workspace = workspaces.local();
-                      for (int row = range.begin(); row != range.end(); ++row) {
-                        ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)], workspace, *block, row);
-                        if (block->status[static_cast<std::size_t>(row)] == static_cast<std::int8_t>(RunStatus::kFailed)) {
-                          counters.runs_failed.fetch_add(1, std::memory_order_relaxed);
-                        }
-                        counters.runs_done.fetch_add(1, std::memory_order_relaxed);
-                      }
-                    });
+                    tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1),
+                                      [&](const tbb::blocked_range<int>& range) {
+                                        RunWorkspace& workspace = workspaces.local();
+                                        for (int row = range.begin(); row != range.end(); ++row) {
+                                          ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)],
+                                                     workspace, *block, row);
+                                          if (block->status[static_cast<std::size_t>(row)] ==
+                                              static_cast<std::int8_t>(RunStatus::kFailed)) {
+                                            counters.runs_failed.fetch_add(1, std::memory_order_relaxed);
+                                          }
+                                          counters.runs_done.fetch_add(1, std::memory_order_relaxed);
+                                        }
+                                      });
                     return block;
                   }) &
               tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,

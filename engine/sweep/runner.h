@@ -21,7 +21,7 @@ namespace gesweep {
 enum class RunStatus : std::int8_t {
   kPending = 0,  ///< not (completely) written yet: a resumed sweep runs it
   kOk = 1,
-  kFailed = 2,   ///< a numerical failure or an exception; the message says why
+  kFailed = 2,  ///< a numerical failure or an exception; the message says why
 };
 
 /// One batch of consecutive runs of a shard, column by column.
@@ -99,8 +99,8 @@ struct SweepOutcome {
 
 /// Runs the batches `pending_blocks` (ascending batch numbers of the plan's shard) and writes them
 /// through `sink`. Rethrows the first exception of the sink after stopping cleanly.
-SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks, ResultSink& sink,
-                      const RunnerOptions& options, SweepProgress* progress);
+SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
+                      ResultSink& sink, const RunnerOptions& options, SweepProgress* progress);
 
 /// Mean wall time of one run on one thread, seconds, from up to `max_samples` runs spread over the
 /// shard, stopping early after `budget_s` (dry-run time estimates). Nothing is written.

@@ -42,10 +42,12 @@ class StudyParser {
 
   Study Parse() {
     TomlSection root(root_, source_, "");
-    root.RejectUnknownKeys({"format_version", "name", "description", "aircraft", "analyses", "output",
-                            "parameters", "design"});
+    root.RejectUnknownKeys(
+        {"format_version", "name", "description", "aircraft", "analyses", "output", "parameters", "design"});
     const auto version = root.OptionalInteger("format_version");
-    if (!version) root.Fail("format_version", "", "missing key, expected format_version = " + std::to_string(kStudyFormatVersion));
+    if (!version)
+      root.Fail("format_version", "",
+                "missing key, expected format_version = " + std::to_string(kStudyFormatVersion));
     if (*version != kStudyFormatVersion) {
       root.Fail("format_version", std::to_string(*version),
                 "expected " + std::to_string(kStudyFormatVersion) + " (the study format this engine reads)");
@@ -81,14 +83,16 @@ class StudyParser {
                           std::string(entry.name) + " = {}");
       }
       if (entry.factory == nullptr) {
-        analyses.Fail(entry.name, "", "analysis '" + std::string(entry.name) + "' is not available in this build: " +
-                                          std::string(entry.unavailable_reason));
+        analyses.Fail(entry.name, "",
+                      "analysis '" + std::string(entry.name) +
+                          "' is not available in this build: " + std::string(entry.unavailable_reason));
       }
       requested_.push_back(&entry);
     }
     if (requested_.empty()) {
       std::string names;
-      for (const auto& entry : AnalysisRegistry()) names += (names.empty() ? "" : ", ") + std::string(entry.name);
+      for (const auto& entry : AnalysisRegistry())
+        names += (names.empty() ? "" : ", ") + std::string(entry.name);
       throw InputError(source_, "analyses", "{}", "expected at least one analysis (" + names + ")",
                        analyses.LineOf(""));
     }
@@ -122,10 +126,12 @@ class StudyParser {
     for (const AnalysisEntry* entry : requested_) {
       const TomlSection settings = analyses.Section(entry->name);
       if (entry->needs_model && !study_.aircraft) {
-        root.Fail("aircraft", "", "missing key: analysis '" + std::string(entry->name) +
-                                      "' needs an aircraft file, e.g. aircraft = \"aircraft/ance.toml\"");
+        root.Fail("aircraft", "",
+                  "missing key: analysis '" + std::string(entry->name) +
+                      "' needs an aircraft file, e.g. aircraft = \"aircraft/ance.toml\"");
       }
-      std::unique_ptr<Analysis> analysis = entry->factory(settings, study_.aircraft ? &*study_.aircraft : nullptr);
+      std::unique_ptr<Analysis> analysis =
+          entry->factory(settings, study_.aircraft ? &*study_.aircraft : nullptr);
       GESWEEP_DEMAND(analysis != nullptr && analysis->needs_model() == entry->needs_model);
       study_.analyses.push_back(std::move(analysis));
     }
@@ -134,7 +140,8 @@ class StudyParser {
   void ParseOutput(const TomlSection& root) {
     const auto output = root.OptionalSection("output");
     if (!output) return;
-    output->RejectUnknownKeys({"time_series", "output_dt_s", "chunk_runs", "compression_level", "max_archive_gb"});
+    output->RejectUnknownKeys(
+        {"time_series", "output_dt_s", "chunk_runs", "compression_level", "max_archive_gb"});
     study_.storage.time_series = output->OptionalBool("time_series").value_or(false);
     if (output->Has("output_dt_s")) study_.storage.output_dt_s = output->PositiveNumber("output_dt_s");
     if (const auto chunk = output->OptionalInteger("chunk_runs")) {
@@ -145,7 +152,8 @@ class StudyParser {
       study_.chunk_runs = static_cast<int>(*chunk);
     }
     if (const auto level = output->OptionalInteger("compression_level")) {
-      if (*level < 0 || *level > 9) output->Fail("compression_level", std::to_string(*level), "expected 0 to 9");
+      if (*level < 0 || *level > 9)
+        output->Fail("compression_level", std::to_string(*level), "expected 0 to 9");
       study_.compression_level = static_cast<int>(*level);
     }
     if (output->Has("max_archive_gb")) study_.max_archive_gb = output->PositiveNumber("max_archive_gb");
@@ -162,7 +170,8 @@ class StudyParser {
       } else if (auto i = node.as_integer()) {
         value = static_cast<double>(i->get());
       } else {
-        throw InputError(source_, key, DescribeNode(node), "expected " + DescribeAllowedValues(id), NodeLine(node));
+        throw InputError(source_, key, DescribeNode(node), "expected " + DescribeAllowedValues(id),
+                         NodeLine(node));
       }
     } else if (info.kind == ParameterKind::kBoolean) {
       auto b = node.as_boolean();
@@ -171,7 +180,9 @@ class StudyParser {
     } else {
       auto s = node.as_string();
       const auto level = s ? ParseParameterLevel(id, s->get()) : std::nullopt;
-      if (!level) throw InputError(source_, key, DescribeNode(node), "expected " + DescribeAllowedValues(id), NodeLine(node));
+      if (!level)
+        throw InputError(source_, key, DescribeNode(node), "expected " + DescribeAllowedValues(id),
+                         NodeLine(node));
       value = *level;
     }
     const std::string problem = CheckParameterValue(id, value, study_.aircraft ? &*study_.aircraft : nullptr);
@@ -198,7 +209,8 @@ class StudyParser {
     std::vector<std::pair<std::string, const toml::node*>> flat;
     auto flatten = [&](auto&& self, const toml::table& table, const std::string& prefix) -> void {
       for (const auto& [key, node] : table) {
-        const std::string name = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+        const std::string name =
+            prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
         if (node.is_table() && !FindParameter(name)) {
           self(self, *node.as_table(), name);
         } else {
@@ -213,21 +225,25 @@ class StudyParser {
       study_.fixed.push_back({id, ParameterValue(id, *node, key)});
       fixed_lines_[id] = NodeLine(*node);
     }
-    std::sort(study_.fixed.begin(), study_.fixed.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+    std::sort(study_.fixed.begin(), study_.fixed.end(),
+              [](const auto& a, const auto& b) { return a.id < b.id; });
   }
 
   std::int64_t PositiveCount(const TomlSection& design, const char* key, std::int64_t maximum) const {
     const auto value = design.OptionalInteger(key);
     if (!value) design.Fail(key, "", std::string("missing key, expected a whole number >= 1"));
     if (*value < 1 || *value > maximum) {
-      design.Fail(key, std::to_string(*value), "expected a whole number from 1 to " + std::to_string(maximum));
+      design.Fail(key, std::to_string(*value),
+                  "expected a whole number from 1 to " + std::to_string(maximum));
     }
     return *value;
   }
 
   std::uint64_t Seed(const TomlSection& design) const {
     const auto seed = design.OptionalInteger("seed");
-    if (!seed) design.Fail("seed", "", "missing key, expected a seed (a whole number >= 0) so the design is reproducible");
+    if (!seed)
+      design.Fail("seed", "",
+                  "missing key, expected a seed (a whole number >= 0) so the design is reproducible");
     if (*seed < 0) design.Fail("seed", std::to_string(*seed), "expected a whole number >= 0");
     return static_cast<std::uint64_t>(*seed);
   }
@@ -248,7 +264,8 @@ class StudyParser {
       const std::string prefix = "design.parameter[" + std::to_string(i) + "]";
       const toml::table* table = array->get(i)->as_table();
       if (table == nullptr) {
-        throw InputError(source_, prefix, DescribeNode(*array->get(i)), "expected a table", NodeLine(*array->get(i)));
+        throw InputError(source_, prefix, DescribeNode(*array->get(i)), "expected a table",
+                         NodeLine(*array->get(i)));
       }
       const TomlSection entry(*table, source_, prefix);
       if (grid) {
@@ -260,7 +277,8 @@ class StudyParser {
       DesignParameter parameter;
       parameter.id = ParameterIdOf(name, entry.KeyOf("name"), entry.LineOf("name"));
       if (!seen.insert(parameter.id).second) {
-        entry.Fail("name", Quote(name), "expected each parameter once in the design (it is a duplicate axis)");
+        entry.Fail("name", Quote(name),
+                   "expected each parameter once in the design (it is a duplicate axis)");
       }
       swept_lines_[parameter.id] = entry.LineOf("name");
       const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
@@ -268,8 +286,9 @@ class StudyParser {
         ParseGridAxis(entry, parameter);
       } else {
         if (info.kind != ParameterKind::kReal) {
-          entry.Fail("name", Quote(name), "expected a real-valued parameter: a " + std::string(ToString(study_.design.kind)) +
-                                              " design samples numbers; sweep " + name + " in a grid or list design");
+          entry.Fail("name", Quote(name),
+                     "expected a real-valued parameter: a " + std::string(ToString(study_.design.kind)) +
+                         " design samples numbers; sweep " + name + " in a grid or list design");
         }
         ParseBounds(entry, parameter);
       }
@@ -280,30 +299,37 @@ class StudyParser {
   void ParseGridAxis(const TomlSection& entry, DesignParameter& parameter) {
     const int given = entry.Has("values") + entry.Has("linspace") + entry.Has("logspace");
     if (given != 1) {
-      entry.Fail("name", "", "expected exactly one of values = [...], linspace = [start, stop, n] or "
-                             "logspace = [start, stop, n]");
+      entry.Fail("name", "",
+                 "expected exactly one of values = [...], linspace = [start, stop, n] or "
+                 "logspace = [start, stop, n]");
     }
     const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
     if (entry.Has("values")) {
       const toml::array* array = entry.table().get("values")->as_array();
       if (array == nullptr || array->empty()) {
-        entry.Fail("values", DescribeNode(*entry.table().get("values")), "expected a non-empty array of values");
+        entry.Fail("values", DescribeNode(*entry.table().get("values")),
+                   "expected a non-empty array of values");
       }
       for (std::size_t k = 0; k < array->size(); ++k) {
-        parameter.values.push_back(
-            ParameterValue(parameter.id, *array->get(k), entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
+        parameter.values.push_back(ParameterValue(parameter.id, *array->get(k),
+                                                  entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
       }
     } else {
       const char* key = entry.Has("linspace") ? "linspace" : "logspace";
       if (info.kind != ParameterKind::kReal) {
-        entry.Fail(key, "", "expected values = [...] for " + info.name + " (" + DescribeAllowedValues(parameter.id) + ")");
+        entry.Fail(
+            key, "",
+            "expected values = [...] for " + info.name + " (" + DescribeAllowedValues(parameter.id) + ")");
       }
       const std::vector<double> spec = entry.NumberArray(key);
       if (spec.size() != 3 || spec[2] < 1 || spec[2] != std::floor(spec[2]) ||
           spec[2] > static_cast<double>(kMaximumAxisPoints)) {
-        entry.Fail(key, "[...]", "expected [start, stop, n] with a whole n from 1 to " + std::to_string(kMaximumAxisPoints));
+        entry.Fail(
+            key, "[...]",
+            "expected [start, stop, n] with a whole n from 1 to " + std::to_string(kMaximumAxisPoints));
       }
       const auto n = static_cast<std::int64_t>(spec[2]);
+      parameter.values.reserve(static_cast<std::size_t>(n));
       const bool log = std::string(key) == "logspace";
       if (log && !(spec[0] > 0 && spec[1] > 0)) {
         entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", ...]",
@@ -317,12 +343,24 @@ class StudyParser {
         parameter.values.push_back(value);
       }
       for (double value : {spec[0], spec[1]}) {
-        const std::string problem = CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
+        const std::string problem =
+            CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
         if (!problem.empty()) entry.Fail(key, FormatNumber(value), problem);
       }
     }
-    std::set<double> distinct(parameter.values.begin(), parameter.values.end());
-    if (distinct.size() != parameter.values.size()) {
+    // Distinct values: a spaced axis is monotone, so neighbours suffice (no memory per value);
+    // explicit values are few, and sorted in a copy.
+    bool distinct = true;
+    if (entry.Has("values")) {
+      std::vector<double> sorted = parameter.values;
+      std::sort(sorted.begin(), sorted.end());
+      distinct = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+    } else {
+      for (std::size_t k = 1; k < parameter.values.size() && distinct; ++k) {
+        distinct = parameter.values[k] != parameter.values[k - 1];
+      }
+    }
+    if (!distinct) {
       entry.Fail(entry.Has("values") ? "values" : (entry.Has("linspace") ? "linspace" : "logspace"), "[...]",
                  "expected distinct values (a repeated value repeats runs)");
     }
@@ -330,7 +368,9 @@ class StudyParser {
 
   void ParseBounds(const TomlSection& entry, DesignParameter& parameter) {
     const int given = entry.Has("uniform") + entry.Has("loguniform");
-    if (given != 1) entry.Fail("name", "", "expected exactly one of uniform = [lower, upper] or loguniform = [lower, upper]");
+    if (given != 1)
+      entry.Fail("name", "",
+                 "expected exactly one of uniform = [lower, upper] or loguniform = [lower, upper]");
     const char* key = entry.Has("uniform") ? "uniform" : "loguniform";
     parameter.distribution = entry.Has("uniform") ? Distribution::kUniform : Distribution::kLogUniform;
     const std::vector<double> bounds = entry.NumberArray(key);
@@ -341,7 +381,8 @@ class StudyParser {
       entry.Fail(key, FormatNumber(bounds[0]), "expected lower > 0 for a loguniform distribution");
     }
     for (double value : bounds) {
-      const std::string problem = CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
+      const std::string problem =
+          CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
       if (!problem.empty()) entry.Fail(key, FormatNumber(value), problem);
     }
     parameter.lower = bounds[0];
@@ -351,7 +392,8 @@ class StudyParser {
   void ParseList(const TomlSection& design) {
     design.RejectUnknownKeys({"kind", "columns", "rows", "csv"});
     if (design.Has("rows") == design.Has("csv")) {
-      design.Fail("rows", "", "expected exactly one of rows = [[...], ...] (with columns = [...]) or csv = \"file.csv\"");
+      design.Fail("rows", "",
+                  "expected exactly one of rows = [[...], ...] (with columns = [...]) or csv = \"file.csv\"");
     }
     DesignSpec& spec = study_.design;
     if (design.Has("rows")) {
@@ -364,16 +406,19 @@ class StudyParser {
       for (std::size_t i = 0; i < columns.size(); ++i) {
         auto s = columns.get(i)->as_string();
         if (!s) {
-          throw InputError(source_, "design.columns[" + std::to_string(i) + "]", DescribeNode(*columns.get(i)),
-                           "expected a parameter name", NodeLine(*columns.get(i)));
+          throw InputError(source_, "design.columns[" + std::to_string(i) + "]",
+                           DescribeNode(*columns.get(i)), "expected a parameter name",
+                           NodeLine(*columns.get(i)));
         }
         names.push_back(s->get());
       }
-      AddListColumns(names, [&](std::size_t i) { return "design.columns[" + std::to_string(i) + "]"; },
-                     design.LineOf("columns"));
+      AddListColumns(
+          names, [&](std::size_t i) { return "design.columns[" + std::to_string(i) + "]"; },
+          design.LineOf("columns"));
       const toml::array* rows = design.table().get("rows")->as_array();
       if (rows == nullptr || rows->empty()) design.Fail("rows", "", "expected a non-empty array of rows");
-      if (static_cast<std::int64_t>(rows->size()) > kMaximumListRows) design.Fail("rows", "", "too many rows");
+      if (static_cast<std::int64_t>(rows->size()) > kMaximumListRows)
+        design.Fail("rows", "", "too many rows");
       for (std::size_t r = 0; r < rows->size(); ++r) {
         const toml::array* row = rows->get(r)->as_array();
         const std::string key = "design.rows[" + std::to_string(r) + "]";
@@ -389,7 +434,8 @@ class StudyParser {
       }
       spec.list_rows = static_cast<std::int64_t>(rows->size());
     } else {
-      if (design.Has("columns")) design.Fail("columns", "", "not used with csv: the CSV header names the columns");
+      if (design.Has("columns"))
+        design.Fail("columns", "", "not used with csv: the CSV header names the columns");
       ReadCsv(design);
     }
   }
@@ -401,7 +447,8 @@ class StudyParser {
       DesignParameter parameter;
       parameter.id = ParameterIdOf(names[i], key_of(i), line);
       if (!seen.insert(parameter.id).second) {
-        throw InputError(source_, key_of(i), Quote(names[i]), "expected each parameter once (duplicate column)", line);
+        throw InputError(source_, key_of(i), Quote(names[i]),
+                         "expected each parameter once (duplicate column)", line);
       }
       swept_lines_[parameter.id] = line;
       study_.design.parameters.push_back(parameter);
@@ -445,7 +492,9 @@ class StudyParser {
       if (header.empty()) {
         header = cells;
         for (std::size_t i = 0; i < header.size(); ++i) {
-          if (header[i].empty()) throw InputError(csv_source, "header", "", "expected a parameter name in every column", line_number);
+          if (header[i].empty())
+            throw InputError(csv_source, "header", "", "expected a parameter name in every column",
+                             line_number);
         }
         std::vector<std::string> names = header;
         const std::string source = csv_source;
@@ -454,11 +503,13 @@ class StudyParser {
           const auto id = FindParameter(names[i]);
           if (!id) {
             const std::string near = NearestName(names[i], ParameterNames());
-            throw InputError(source, "header", Quote(names[i]),
-                             near.empty() ? "unknown parameter" : "unknown parameter (did you mean '" + near + "'?)",
-                             line_number);
+            throw InputError(
+                source, "header", Quote(names[i]),
+                near.empty() ? "unknown parameter" : "unknown parameter (did you mean '" + near + "'?)",
+                line_number);
           }
-          if (!seen.insert(*id).second) throw InputError(source, "header", Quote(names[i]), "duplicate column", line_number);
+          if (!seen.insert(*id).second)
+            throw InputError(source, "header", Quote(names[i]), "duplicate column", line_number);
           DesignParameter parameter;
           parameter.id = *id;
           swept_lines_[*id] = design.LineOf("csv");
@@ -467,9 +518,10 @@ class StudyParser {
         continue;
       }
       if (cells.size() != header.size()) {
-        throw InputError(csv_source, "row", trimmed,
-                         "expected " + std::to_string(header.size()) + " comma-separated values (one per header column)",
-                         line_number);
+        throw InputError(
+            csv_source, "row", trimmed,
+            "expected " + std::to_string(header.size()) + " comma-separated values (one per header column)",
+            line_number);
       }
       for (std::size_t c = 0; c < cells.size(); ++c) {
         const ParameterId id = spec.parameters[c].id;
@@ -485,16 +537,20 @@ class StudyParser {
           parsed = level.has_value();
           if (parsed) value = *level;
         }
-        std::string problem = parsed ? CheckParameterValue(id, value, study_.aircraft ? &*study_.aircraft : nullptr)
-                                     : "expected " + DescribeAllowedValues(id);
+        std::string problem =
+            parsed ? CheckParameterValue(id, value, study_.aircraft ? &*study_.aircraft : nullptr)
+                   : "expected " + DescribeAllowedValues(id);
         if (!problem.empty()) throw InputError(csv_source, header[c], Quote(cells[c]), problem, line_number);
         spec.list_values.push_back(value);
       }
       ++spec.list_rows;
-      if (spec.list_rows > kMaximumListRows) throw InputError(csv_source, "", "", "too many rows", line_number);
+      if (spec.list_rows > kMaximumListRows)
+        throw InputError(csv_source, "", "", "too many rows", line_number);
     }
-    if (header.empty()) throw InputError(csv_source, "", "", "expected a header line naming the parameters", 0);
-    if (spec.list_rows == 0) throw InputError(csv_source, "", "", "expected at least one row after the header", line_number);
+    if (header.empty())
+      throw InputError(csv_source, "", "", "expected a header line naming the parameters", 0);
+    if (spec.list_rows == 0)
+      throw InputError(csv_source, "", "", "expected at least one row after the header", line_number);
   }
 
   void ParseDesign(const TomlSection& root) {
@@ -535,7 +591,8 @@ class StudyParser {
       design->RejectUnknownKeys({"kind", "trajectories", "levels", "seed", "parameter"});
       spec.trajectories = PositiveCount(*design, "trajectories", kMaximumListRows);
       const auto levels = design->OptionalInteger("levels");
-      if (!levels) design->Fail("levels", "", "missing key, expected an even number of levels p >= 2 (e.g. 4)");
+      if (!levels)
+        design->Fail("levels", "", "missing key, expected an even number of levels p >= 2 (e.g. 4)");
       if (*levels < 2 || *levels % 2 != 0 || *levels > kMaximumMorrisLevels) {
         design->Fail("levels", std::to_string(*levels),
                      "expected an even number of levels from 2 to " + std::to_string(kMaximumMorrisLevels));
@@ -546,7 +603,8 @@ class StudyParser {
     } else {
       const std::string near = NearestName(kind, kinds);
       design->Fail("kind", Quote(kind),
-                   "expected grid, list, lhs, sobol or morris" + (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+                   "expected grid, list, lhs, sobol or morris" +
+                       (near.empty() ? "" : " (did you mean '" + near + "'?)"));
     }
     if (CountRuns(spec) < 0) {
       design->Fail("kind", Quote(kind), "the design has more than 2^62 runs; refusing it");
@@ -569,11 +627,16 @@ class StudyParser {
     auto analyses_using = [&](ParameterId id) {
       const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
       switch (info.group) {
-        case ParameterGroup::kFlight: return std::string("the analyses that fly a condition (modes, open_loop, landing)");
-        case ParameterGroup::kModel: return std::string("every analysis with a model");
-        case ParameterGroup::kOpenLoop: return std::string("open_loop");
-        case ParameterGroup::kLanding: return std::string("landing");
-        case ParameterGroup::kVerification: return std::string("the verification models (ishigami, linear)");
+        case ParameterGroup::kFlight:
+          return std::string("the analyses that fly a condition (modes, open_loop, landing)");
+        case ParameterGroup::kModel:
+          return std::string("every analysis with a model");
+        case ParameterGroup::kOpenLoop:
+          return std::string("open_loop");
+        case ParameterGroup::kLanding:
+          return std::string("landing");
+        case ParameterGroup::kVerification:
+          return std::string("the verification models (ishigami, linear)");
       }
       return std::string("?");
     };
@@ -600,7 +663,8 @@ class StudyParser {
       }
       if (fixed_lines_.count(parameter.id)) {
         throw InputError(source_, "parameters." + name, "",
-                         "is both fixed in [parameters] and swept in [design]; keep one", fixed_lines_[parameter.id]);
+                         "is both fixed in [parameters] and swept in [design]; keep one",
+                         fixed_lines_[parameter.id]);
       }
     }
     // Every parameter an analysis reads needs a value: a default, a fixed value or a design column.
@@ -612,7 +676,8 @@ class StudyParser {
           const std::string& name = ParameterCatalog()[static_cast<std::size_t>(id)].name;
           throw InputError(source_, "parameters." + name, "",
                            "missing: analysis '" + std::string(analysis->name()) + "' needs " + name +
-                               "; fix it in [parameters] or sweep it in [design] (" + DescribeAllowedValues(id) + ")",
+                               "; fix it in [parameters] or sweep it in [design] (" +
+                               DescribeAllowedValues(id) + ")",
                            root.LineOf("parameters"));
         }
       }

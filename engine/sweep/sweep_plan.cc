@@ -14,8 +14,8 @@ namespace {
 
 // A write batch should take about this long on one core: long enough that flushing it costs
 // little, short enough that a crash loses little (docs/sweep.md, "Batches and chunks").
-constexpr double kTargetBatchCost_us = 5e5;
-constexpr int kMaximumChunkRuns = 4096;   // 32 KB float64 chunks: a good unit for deflate
+constexpr double kTargetBatchCost_us = 1e6;
+constexpr int kMaximumChunkRuns = 4096;  // 32 KB float64 chunks: a good unit for deflate
 constexpr int kMinimumChunkRuns = 16;
 // Memory of one batch buffer; a few of them are in flight per thread.
 constexpr std::int64_t kMaximumBatchBytes = 16 << 20;
@@ -39,7 +39,8 @@ ShardSpec ParseShard(const std::string& text, const std::string& flag) {
     auto [p2, e2] = std::from_chars(begin + slash + 1, begin + text.size(), shard.count);
     ok = e1 == std::errc() && e2 == std::errc() && p1 == begin + slash && p2 == begin + text.size();
   }
-  if (!ok || shard.count < 1 || shard.count > kMaximumShards || shard.index < 0 || shard.index >= shard.count) {
+  if (!ok || shard.count < 1 || shard.count > kMaximumShards || shard.index < 0 ||
+      shard.index >= shard.count) {
     throw InputError("command line", flag, "'" + text + "'",
                      "expected i/N with 0 <= i < N <= " + std::to_string(kMaximumShards) +
                          " (shards are numbered from 0)");
@@ -55,9 +56,7 @@ void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* 
   *count = split(shard.index + 1) - *first;
 }
 
-std::int64_t BookkeepingBytesPerRun() {
-  return 8 /* index */ + 8 /* id */ + 1 /* status */ + kMessageLength;
-}
+std::int64_t BookkeepingBytesPerRun() { return 8 /* index */ + 8 /* id */ + 1 /* status */ + kMessageLength; }
 
 std::string FormatBytes(double bytes) {
   const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
@@ -73,16 +72,23 @@ std::string FormatBytes(double bytes) {
 }
 
 SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), shard_(shard) {
-  design_ = MakeDesign(study_.design);
-  design_runs_ = design_->run_count();
+  for (auto& analysis : study_.analyses) analysis->DeclareOutputs(schema_, study_.storage);
+  design_runs_ = CountRuns(study_.design);
+  GESWEEP_DEMAND(design_runs_ >= 1);
+  CheckStorage();
+  // The design takes over the spec (a list's rows or a huge axis are not held twice); the study
+  // keeps the kind for those who print it.
+  const DesignKind kind = study_.design.kind;
+  design_ = MakeDesign(std::move(study_.design));
+  study_.design = DesignSpec{};
+  study_.design.kind = kind;
   ShardRange(design_runs_, shard_, &first_run_, &run_count_);
   if (run_count_ < 1) {
-    throw InputError("command line", "--shard", std::to_string(shard_.index) + "/" + std::to_string(shard_.count),
+    throw InputError("command line", "--shard",
+                     std::to_string(shard_.index) + "/" + std::to_string(shard_.count),
                      "shard has no runs: the design has only " + std::to_string(design_runs_) +
                          " runs; use at most that many shards");
   }
-
-  for (auto& analysis : study_.analyses) analysis->DeclareOutputs(schema_, study_.storage);
 
   // Base parameters: defaults, then the study's fixed values.
   const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
@@ -107,8 +113,24 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
 
   CheckRuns();
 
+  // Batch size: about kTargetBatchCost_us of work on one core, within memory and chunk bounds.
+  int chunk = study_.chunk_runs;
+  if (chunk == 0) {
+    const double per_run = std::max(nominal_run_cost_us(), 1e-3);
+    chunk = FloorPowerOfTwo(
+        std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns}, double{kMaximumChunkRuns}));
+    std::int64_t memory_per_run =
+        8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
+    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
+    while (chunk > 1 && chunk * memory_per_run > kMaximumBatchBytes) chunk /= 2;
+  }
+  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(chunk, run_count_));
+}
+
+void SweepPlan::CheckStorage() {
   // Storage before compression.
-  storage_.bytes_per_run = BookkeepingBytesPerRun() + 8 * static_cast<std::int64_t>(design_->column_count()) +
+  storage_.bytes_per_run = BookkeepingBytesPerRun() +
+                           8 * static_cast<std::int64_t>(study_.design.parameters.size()) +
                            schema_.StoredBytesPerRun();
   for (const auto& column : schema_.columns) {
     if (!column.time_axis.empty()) storage_.series_bytes_per_run += column.stored_bytes_per_run();
@@ -128,18 +150,6 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
                          "; shrink the design, turn time series off, or raise max_archive_gb",
                      study_.design_line);
   }
-
-  // Batch size: about kTargetBatchCost_us of work on one core, within memory and chunk bounds.
-  int chunk = study_.chunk_runs;
-  if (chunk == 0) {
-    const double per_run = std::max(nominal_run_cost_us(), 1e-3);
-    chunk = FloorPowerOfTwo(std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns},
-                                       double{kMaximumChunkRuns}));
-    std::int64_t memory_per_run = 8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
-    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
-    while (chunk > 1 && chunk * memory_per_run > kMaximumBatchBytes) chunk /= 2;
-  }
-  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(chunk, run_count_));
 }
 
 void SweepPlan::CheckRuns() const {
@@ -153,7 +163,8 @@ void SweepPlan::CheckRuns() const {
   RunParameters parameters = base_;
   auto check = [&](const std::vector<double>& values) {
     for (int c = 0; c < columns; ++c) {
-      parameters[static_cast<std::size_t>(spec.parameters[static_cast<std::size_t>(c)].id)] = values[static_cast<std::size_t>(c)];
+      parameters[static_cast<std::size_t>(spec.parameters[static_cast<std::size_t>(c)].id)] =
+          values[static_cast<std::size_t>(c)];
     }
     for (const auto& analysis : study_.analyses) {
       const std::string problem = analysis->CheckRun(parameters, aircraft);
@@ -199,13 +210,15 @@ void SweepPlan::CheckRuns() const {
   if (columns <= kMaximumCheckedDimensions) {
     for (std::uint32_t corner = 0; corner < (1u << columns); ++corner) {
       for (int c = 0; c < columns; ++c) {
-        values[static_cast<std::size_t>(c)] = (corner >> c) & 1u ? extremes[static_cast<std::size_t>(c)].second
-                                                                  : extremes[static_cast<std::size_t>(c)].first;
+        values[static_cast<std::size_t>(c)] = (corner >> c) & 1u
+                                                  ? extremes[static_cast<std::size_t>(c)].second
+                                                  : extremes[static_cast<std::size_t>(c)].first;
       }
       check(values);
     }
   } else {
-    for (int c = 0; c < columns; ++c) values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].first;
+    for (int c = 0; c < columns; ++c)
+      values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].first;
     check(values);
     for (int c = 0; c < columns; ++c) {
       values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].second;

@@ -27,9 +27,9 @@ void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* 
 
 /// Storage of one run of a plan, in bytes before compression.
 struct StorageEstimate {
-  std::int64_t bytes_per_run = 0;       ///< every column, the bookkeeping columns included
+  std::int64_t bytes_per_run = 0;         ///< every column, the bookkeeping columns included
   std::int64_t series_bytes_per_run = 0;  ///< the time series among them
-  std::int64_t design_bytes = 0;         ///< bytes_per_run × the design's run count
+  std::int64_t design_bytes = 0;          ///< bytes_per_run × the design's run count
 };
 
 /// A sweep plan. Built once per process; shared read-only by every worker thread.
@@ -78,6 +78,8 @@ class SweepPlan {
   double nominal_run_cost_us() const;
 
  private:
+  /// Computes the storage estimate; throws InputError when it exceeds the study's max_archive_gb.
+  void CheckStorage();
   /// Throws InputError when an analysis refuses the design's extreme runs (Analysis::CheckRun).
   void CheckRuns() const;
   Study study_;

@@ -22,7 +22,9 @@ class IshigamiAnalysis final : public Analysis {
   std::vector<ParameterId> parameters_used() const override { return {x_[0], x_[1], x_[2]}; }
   double nominal_run_cost_us() const override { return kVerificationCost_us; }
   void DeclareOutputs(OutputSchema& schema, const StorageOptions&) override {
-    output_ = schema.Add(OutputColumn::Real("results/ishigami/ishigami", "1", "Ishigami function sin x1 + a sin^2 x2 + b x3^4 sin x1 (verification model)"));
+    output_ = schema.Add(
+        OutputColumn::Real("results/ishigami/ishigami", "1",
+                           "Ishigami function sin x1 + a sin^2 x2 + b x3^4 sin x1 (verification model)"));
   }
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
     const double x1 = context.value(x_[0]), x2 = context.value(x_[1]), x3 = context.value(x_[2]);
@@ -52,7 +54,8 @@ class LinearAnalysis final : public Analysis {
   std::vector<ParameterId> parameters_used() const override { return x_; }
   double nominal_run_cost_us() const override { return kVerificationCost_us; }
   void DeclareOutputs(OutputSchema& schema, const StorageOptions&) override {
-    output_ = schema.Add(OutputColumn::Real("results/linear/linear", "1", "Linear function intercept + sum c_i x_i (verification model)"));
+    output_ = schema.Add(OutputColumn::Real("results/linear/linear", "1",
+                                            "Linear function intercept + sum c_i x_i (verification model)"));
   }
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
     double sum = intercept_;
@@ -82,7 +85,8 @@ std::unique_ptr<Analysis> MakeLinearAnalysis(const TomlSection& settings, const 
   if (coefficients.empty() || coefficients.size() > 8) {
     settings.Fail("coefficients", "[...]", "expected 1 to 8 coefficients (for x1..x8)");
   }
-  return std::make_unique<LinearAnalysis>(std::move(coefficients), settings.OptionalNumber("intercept").value_or(0.0));
+  return std::make_unique<LinearAnalysis>(std::move(coefficients),
+                                          settings.OptionalNumber("intercept").value_or(0.0));
 }
 
 }  // namespace gesweep

@@ -34,21 +34,23 @@ class ArchiveTest : public ::testing::Test {
   // A modes study over speed × height (and a scale factor when `scale` differs from 1).
   std::filesystem::path StudyFile(const std::string& name, int chunk_runs, double speed_top = 40.0) {
     const auto path = directory_ / name;
-    std::ofstream(path) << "format_version = 1\nname = \"" << name << "\"\naircraft = \"" << kAircraft
-                        << "\"\n[analyses.modes]\n[output]\nchunk_runs = " << chunk_runs
-                        << "\n[design]\nkind = \"grid\"\n[[design.parameter]]\nname = \"speed_mps\"\nlinspace = [28.0, "
-                        << speed_top << ", 5]\n[[design.parameter]]\nname = \"height_m\"\nlinspace = [0.8, 6.0, 21]\n";
+    std::ofstream(path)
+        << "format_version = 1\nname = \"" << name << "\"\naircraft = \"" << kAircraft
+        << "\"\n[analyses.modes]\n[output]\nchunk_runs = " << chunk_runs
+        << "\n[design]\nkind = \"grid\"\n[[design.parameter]]\nname = \"speed_mps\"\nlinspace = [28.0, "
+        << speed_top << ", 5]\n[[design.parameter]]\nname = \"height_m\"\nlinspace = [0.8, 6.0, 21]\n";
     return path;
   }
 
   // Runs `blocks` (all when empty) of a plan into `archive`; returns the writer's counts.
-  void Run(SweepPlan& plan, const std::filesystem::path& archive, ArchiveOpenMode mode, std::int64_t max_blocks = -1,
-           ArchiveOpenReport* report = nullptr) {
+  void Run(SweepPlan& plan, const std::filesystem::path& archive, ArchiveOpenMode mode,
+           std::int64_t max_blocks = -1, ArchiveOpenReport* report = nullptr) {
     ArchiveOpenReport local;
     ArchiveOpenReport& opened = report ? *report : local;
     auto writer = ArchiveWriter::Open(archive, plan, RunProvenance{"test", 2}, mode, &opened);
     std::vector<std::int64_t> blocks = opened.pending_blocks;
-    if (max_blocks >= 0 && static_cast<std::int64_t>(blocks.size()) > max_blocks) blocks.resize(static_cast<std::size_t>(max_blocks));
+    if (max_blocks >= 0 && static_cast<std::int64_t>(blocks.size()) > max_blocks)
+      blocks.resize(static_cast<std::size_t>(max_blocks));
     RunSweep(plan, blocks, *writer, RunnerOptions{2, nullptr, 2}, nullptr);
     writer->Finish();
   }
@@ -119,7 +121,8 @@ TEST_F(ArchiveTest, StoresEveryRunWithUnitsDescriptionsAndProvenance) {
   for (int i = 0; i < 105; ++i) {
     EXPECT_EQ(index[static_cast<std::size_t>(i)], i);
     EXPECT_EQ(speeds[static_cast<std::size_t>(i)], 28.0 + 3.0 * (i / 21));
-    const ModalAnalysis direct = AnalyzeModes(model.StateMatrix(heights[static_cast<std::size_t>(i)], speeds[static_cast<std::size_t>(i)]));
+    const ModalAnalysis direct = AnalyzeModes(
+        model.StateMatrix(heights[static_cast<std::size_t>(i)], speeds[static_cast<std::size_t>(i)]));
     EXPECT_EQ(margins[static_cast<std::size_t>(i)], direct.stability_margin_per_s);
     EXPECT_EQ(eigenvalues[static_cast<std::size_t>(i * 10 + 3)], direct.eigenvalues[1].imag());
   }
@@ -131,13 +134,14 @@ TEST_F(ArchiveTest, NeverOverwritesWithoutResumeOrForceAndNeedsAnExistingDirecto
   const auto archive = directory_ / "a.h5";
   std::ofstream(archive) << "precious";
   SweepPlan plan(LoadStudy(study), ShardSpec{});
-  EXPECT_THROW(ArchiveWriter::Open(archive, plan, RunProvenance{}, ArchiveOpenMode::kCreate, nullptr), InputError);
+  EXPECT_THROW(ArchiveWriter::Open(archive, plan, RunProvenance{}, ArchiveOpenMode::kCreate, nullptr),
+               InputError);
   std::ifstream in(archive);
   std::string text;
   in >> text;
   EXPECT_EQ(text, "precious");
-  EXPECT_THROW(ArchiveWriter::Open(directory_ / "missing" / "a.h5", plan, RunProvenance{}, ArchiveOpenMode::kCreate,
-                                   nullptr),
+  EXPECT_THROW(ArchiveWriter::Open(directory_ / "missing" / "a.h5", plan, RunProvenance{},
+                                   ArchiveOpenMode::kCreate, nullptr),
                InputError);
   EXPECT_FALSE(std::filesystem::exists(directory_ / "missing"));
   // --force replaces it.
@@ -168,7 +172,8 @@ TEST_F(ArchiveTest, ResumeAfterACleanStopRunsOnlyThePendingBatchesAndEqualsAnUni
   EXPECT_EQ(Contents(archive), Contents(directory_ / "reference.h5"));
   ArchiveReader done = ArchiveReader::Open(archive);
   EXPECT_EQ(done.IntegerAttribute("complete"), 1);
-  EXPECT_EQ(done.StringListAttribute("resumed_at").size(), 1u);
+  EXPECT_FALSE(done.StringAttribute("resumed_at").empty());
+  EXPECT_EQ(done.StringAttribute("resumed_at").find(","), std::string::npos) << "resumed once";
 }
 
 TEST_F(ArchiveTest, ResumeRefusesAnArchiveOfAnotherStudy) {
@@ -183,7 +188,8 @@ TEST_F(ArchiveTest, ResumeRefusesAnArchiveOfAnotherStudy) {
     EXPECT_NE(e.expected().find("study fingerprint"), std::string::npos);
   }
   SweepPlan shard(LoadStudy(StudyFile("s.toml", 8)), ShardSpec{1, 2});
-  EXPECT_THROW(ArchiveWriter::Open(archive, shard, RunProvenance{}, ArchiveOpenMode::kResume, nullptr), InputError);
+  EXPECT_THROW(ArchiveWriter::Open(archive, shard, RunProvenance{}, ArchiveOpenMode::kResume, nullptr),
+               InputError);
 }
 
 TEST_F(ArchiveTest, MergedShardsEqualOneProcessBitForBit) {
@@ -246,7 +252,7 @@ TEST_F(ArchiveTest, ReaderRefusesWhatIsNotAnArchive) {
 }
 
 TEST(SeriesChunkRows, DividesTheBatchAndStaysUnderAMebibyte) {
-  EXPECT_EQ(SeriesChunkRows(256, 2001), 64);   // 64 × 2001 × 8 B = 1 024 512 B ≤ 1 MiB; 128 rows would not be
+  EXPECT_EQ(SeriesChunkRows(256, 2001), 64);  // 64 × 2001 × 8 B = 1 024 512 B ≤ 1 MiB; 128 rows would not be
   EXPECT_EQ(SeriesChunkRows(256, 100000), 1);  // one run's series is bigger than a chunk: one per chunk
   EXPECT_EQ(SeriesChunkRows(10, 100), 10);
   EXPECT_EQ(SeriesChunkRows(7, 100000), 1);

@@ -69,7 +69,8 @@ TEST(GridDesign, CountRunsRefusesOverflow) {
 // published e.g. in scipy.stats.qmc.Sobol(d=2, scramble=False): after the origin,
 // (0.5, 0.5), (0.75, 0.25), (0.25, 0.75), (0.375, 0.375), (0.875, 0.875), (0.625, 0.125).
 TEST(SobolPoint, MatchesThePublishedSequenceWithoutTheOrigin) {
-  const double expected[6][2] = {{0.5, 0.5}, {0.75, 0.25}, {0.25, 0.75}, {0.375, 0.375}, {0.875, 0.875}, {0.625, 0.125}};
+  const double expected[6][2] = {{0.5, 0.5},     {0.75, 0.25},   {0.25, 0.75},
+                                 {0.375, 0.375}, {0.875, 0.875}, {0.625, 0.125}};
   for (int j = 0; j < 6; ++j) {
     double point[2];
     SobolPoint(2, j, point);
@@ -93,7 +94,8 @@ TEST(SobolPoint, FirstTwoToTheMPointsAreStratified) {
     }
     // Points 1..2^m−1 plus the skipped origin fill every interval exactly once.
     ++hits[0];
-    for (int k = 0; k < kPoints; ++k) EXPECT_EQ(hits[static_cast<std::size_t>(k)], 1) << "dimension " << d << " cell " << k;
+    for (int k = 0; k < kPoints; ++k)
+      EXPECT_EQ(hits[static_cast<std::size_t>(k)], 1) << "dimension " << d << " cell " << k;
   }
 }
 
@@ -151,12 +153,14 @@ TEST(LatinHypercube, EveryStratumOfEveryDimensionHoldsExactlyOnePoint) {
       for (int d = 0; d < 3; ++d) {
         ASSERT_GE(unit[d], 0.0);
         ASSERT_LT(unit[d], 1.0);
-        ++hits[static_cast<std::size_t>(d)][static_cast<std::size_t>(std::floor(unit[d] * static_cast<double>(n)))];
+        ++hits[static_cast<std::size_t>(d)]
+              [static_cast<std::size_t>(std::floor(unit[d] * static_cast<double>(n)))];
       }
     }
     for (int d = 0; d < 3; ++d) {
       for (std::int64_t k = 0; k < n; ++k) {
-        ASSERT_EQ(hits[static_cast<std::size_t>(d)][static_cast<std::size_t>(k)], 1) << "n " << n << " dim " << d;
+        ASSERT_EQ(hits[static_cast<std::size_t>(d)][static_cast<std::size_t>(k)], 1)
+            << "n " << n << " dim " << d;
       }
     }
   }

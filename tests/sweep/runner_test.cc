@@ -12,6 +12,12 @@
 
 #include "engine/modal/modal_analysis.h"
 #include "engine/sweep/analysis_adapters.h"
+#ifdef GESWEEP_HAVE_SIMULATION
+#include "engine/simulation/open_loop.h"
+#endif
+#ifdef GESWEEP_HAVE_CONTROL
+#include "engine/control/landing_simulation.h"
+#endif
 
 namespace gesweep {
 namespace {
@@ -39,7 +45,8 @@ DesignParameter Axis(const char* name, std::vector<double> values) {
 }
 
 // A study of `analyses` over a grid, built in memory (no file).
-Study GridStudy(std::vector<std::unique_ptr<Analysis>> analyses, std::vector<DesignParameter> axes, int chunk_runs) {
+Study GridStudy(std::vector<std::unique_ptr<Analysis>> analyses, std::vector<DesignParameter> axes,
+                int chunk_runs) {
   Study study;
   study.path = "<test>";
   study.name = "test";
@@ -68,9 +75,10 @@ int ColumnIndex(const SweepPlan& plan, const std::string& path) {
 TEST(Runner, ModesResultsEqualDirectAnalysisOfEachRun) {
   std::vector<std::unique_ptr<Analysis>> analyses;
   analyses.push_back(Modes());
-  SweepPlan plan(GridStudy(std::move(analyses),
-                           {Axis("speed_mps", {25, 32.0208, 45}), Axis("height_m", {0.8, 1.5, 2.5935, 2.7, 6, 13})}, 4),
-                 ShardSpec{});
+  SweepPlan plan(
+      GridStudy(std::move(analyses),
+                {Axis("speed_mps", {25, 32.0208, 45}), Axis("height_m", {0.8, 1.5, 2.5935, 2.7, 6, 13})}, 4),
+      ShardSpec{});
   std::vector<std::int64_t> blocks;
   for (std::int64_t b = 0; b < plan.block_count(); ++b) blocks.push_back(b);
   MemorySink sink;
@@ -89,10 +97,12 @@ TEST(Runner, ModesResultsEqualDirectAnalysisOfEachRun) {
       const double h = block.design[1][static_cast<std::size_t>(r)];
       EXPECT_EQ(block.design_index[static_cast<std::size_t>(r)], index * 4 + r);
       const ModalAnalysis direct = AnalyzeModes(model.StateMatrix(h, u));
-      EXPECT_EQ(block.results[static_cast<std::size_t>(margin)][static_cast<std::size_t>(r)], direct.stability_margin_per_s);
+      EXPECT_EQ(block.results[static_cast<std::size_t>(margin)][static_cast<std::size_t>(r)],
+                direct.stability_margin_per_s);
       for (int k = 0; k < 5; ++k) {
-        EXPECT_EQ(block.results[static_cast<std::size_t>(eigenvalues)][static_cast<std::size_t>(r * 10 + 2 * k)],
-                  direct.eigenvalues[static_cast<std::size_t>(k)].real());
+        EXPECT_EQ(
+            block.results[static_cast<std::size_t>(eigenvalues)][static_cast<std::size_t>(r * 10 + 2 * k)],
+            direct.eigenvalues[static_cast<std::size_t>(k)].real());
       }
       EXPECT_EQ(block.status[static_cast<std::size_t>(r)], static_cast<std::int8_t>(RunStatus::kOk));
     }
@@ -150,11 +160,12 @@ TEST(Runner, ResultsDoNotDependOnTheThreadCount) {
   auto run = [](int threads) {
     std::vector<std::unique_ptr<Analysis>> analyses;
     analyses.push_back(Modes());
-    SweepPlan plan(GridStudy(std::move(analyses),
-                             {Axis("scale.CMalphadot", {0.8, 1.0, 1.2}), Axis("height_m", {0.9, 1.7, 2.6, 3.1, 8.0}),
-                              Axis("speed_mps", {28, 32, 40, 52})},
-                             8),
-                   ShardSpec{});
+    SweepPlan plan(
+        GridStudy(std::move(analyses),
+                  {Axis("scale.CMalphadot", {0.8, 1.0, 1.2}), Axis("height_m", {0.9, 1.7, 2.6, 3.1, 8.0}),
+                   Axis("speed_mps", {28, 32, 40, 52})},
+                  8),
+        ShardSpec{});
     plan.set_chunk_runs(8);
     MemorySink sink;
     std::vector<std::int64_t> blocks;
@@ -162,14 +173,17 @@ TEST(Runner, ResultsDoNotDependOnTheThreadCount) {
     RunSweep(plan, blocks, sink, RunnerOptions{threads, nullptr, 2}, nullptr);
     std::vector<double> all;
     for (const auto& [index, block] : sink.blocks_) {
-      for (const auto& column : block.results) all.insert(all.end(), column.begin(), column.begin() + block.rows * (static_cast<int>(column.size()) / 8));
+      for (const auto& column : block.results)
+        all.insert(all.end(), column.begin(),
+                   column.begin() + block.rows * (static_cast<int>(column.size()) / 8));
     }
     return all;
   };
   const auto one = run(1);
   const auto four = run(4);
   ASSERT_EQ(one.size(), four.size());
-  EXPECT_EQ(0, std::memcmp(one.data(), four.data(), one.size() * sizeof(double)));  // bit for bit (NaN included)
+  EXPECT_EQ(0,
+            std::memcmp(one.data(), four.data(), one.size() * sizeof(double)));  // bit for bit (NaN included)
 }
 
 TEST(Runner, CancelStopsTakingBatchesAndWritesThoseInFlight) {
@@ -225,3 +239,90 @@ TEST(Runner, IshigamiRunsGiveTheFunctionValues) {
 
 }  // namespace
 }  // namespace gesweep
+
+#ifdef GESWEEP_HAVE_SIMULATION
+namespace gesweep {
+namespace {
+
+TEST(Runner, OpenLoopRunsEqualDirectSimulationSummaryAndSeries) {
+  static const Aircraft aircraft = LoadAircraftFile(kAircraft);
+  toml::table settings;
+  settings.insert("duration_s", 20.0);
+  std::vector<std::unique_ptr<Analysis>> analyses;
+  analyses.push_back(MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+  Study study = GridStudy(std::move(analyses), {Axis("height_m", {1.5561, 5.5922})}, 2);
+  study.storage.time_series = true;
+  study.storage.output_dt_s = 0.03;
+  study.fixed = {{RequireParameter("speed_mps"), 32.0208}};
+  SweepPlan plan(std::move(study), ShardSpec{});
+  MemorySink sink;
+  RunSweep(plan, {0}, sink, RunnerOptions{2, nullptr, 1}, nullptr);
+  const ResultBlock& block = sink.blocks_.at(0);
+  const LongitudinalModel model(aircraft, ModelOptions{});
+  const int min_height = ColumnIndex(plan, "results/open_loop/min_height_m");
+  const int series_height = ColumnIndex(plan, "series/open_loop/height_m");
+  const int samples = plan.schema().columns[static_cast<std::size_t>(series_height)].width;
+  EXPECT_EQ(samples, 667);  // 0, 0.03, ..., 19.98 s
+  for (int r = 0; r < 2; ++r) {
+    // Oracle: the engine's own open-loop run with the same settings (the paper's pulse).
+    OpenLoopConfig config;
+    config.start_height_m = block.design[0][static_cast<std::size_t>(r)];
+    config.reference_speed_mps = 32.0208;
+    config.duration_s = 20.0;
+    config.series_interval_s = 0.03;
+    const OpenLoopResult direct = SimulateOpenLoop(model, config);
+    EXPECT_EQ(block.results[static_cast<std::size_t>(min_height)][static_cast<std::size_t>(r)],
+              direct.summary.min_height_m);
+    const double* series = block.results[static_cast<std::size_t>(series_height)].data() + r * samples;
+    for (std::size_t i = 0; i + 1 < direct.series.time_s.size(); ++i) {
+      const auto k = static_cast<int>(std::lround(direct.series.time_s[i] / 0.03));
+      ASSERT_LT(k, samples);
+      EXPECT_EQ(series[k], direct.series.height_m[i]) << "row " << r << " t " << direct.series.time_s[i];
+    }
+    if (direct.summary.end_event == OpenLoopEndEvent::kTouchdown) {
+      EXPECT_TRUE(std::isnan(series[samples - 1])) << "samples after touchdown are NaN";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gesweep
+#endif
+
+#ifdef GESWEEP_HAVE_CONTROL
+namespace gesweep {
+namespace {
+
+TEST(Runner, LandingRunsEqualDirectSimulationWithAndWithoutHDerivatives) {
+  static const Aircraft aircraft = LoadAircraftFile(kAircraft);
+  toml::table settings;
+  std::vector<std::unique_ptr<Analysis>> analyses;
+  analyses.push_back(MakeLandingAnalysis(TomlSection(settings, "<test>", "analyses.landing"), &aircraft));
+  Study study = GridStudy(std::move(analyses), {Axis("h_derivatives", {1.0, 0.0})}, 2);
+  study.fixed = {{RequireParameter("height_m"), 500.0}, {RequireParameter("speed_mps"), 52.21}};
+  SweepPlan plan(std::move(study), ShardSpec{});
+  MemorySink sink;
+  RunSweep(plan, {0}, sink, RunnerOptions{2, nullptr, 1}, nullptr);
+  const ResultBlock& block = sink.blocks_.at(0);
+  const int touchdown = ColumnIndex(plan, "results/landing/touchdown_time_s");
+  const int outcome = ColumnIndex(plan, "results/landing/outcome");
+  const int gain = ColumnIndex(plan, "results/landing/gain");
+  for (int r = 0; r < 2; ++r) {
+    ModelOptions options;
+    options.h_derivatives = r == 0;
+    LandingConfig config;  // the paper's case: 500 m, 52.21 m/s (landing_config.h defaults)
+    config.output_interval_s = 0.0;
+    const LandingResult direct = SimulateLanding(LongitudinalModel(aircraft, options), config);
+    EXPECT_EQ(block.results[static_cast<std::size_t>(outcome)][static_cast<std::size_t>(r)],
+              static_cast<double>(static_cast<int>(direct.outcome)));
+    const double expected = direct.touchdown_time_s;
+    const double got = block.results[static_cast<std::size_t>(touchdown)][static_cast<std::size_t>(r)];
+    EXPECT_TRUE(got == expected || (std::isnan(got) && std::isnan(expected))) << got << " vs " << expected;
+    EXPECT_EQ(block.results[static_cast<std::size_t>(gain)][static_cast<std::size_t>(r * 9 + 3)],
+              direct.design.gain[3]);
+  }
+}
+
+}  // namespace
+}  // namespace gesweep
+#endif

@@ -1,9 +1,9 @@
 // schemas/study.schema.json documents the same parameters and analyses the engine knows: a
 // parameter or analysis added to one and not the other fails here.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "engine/sweep/analysis.h"
@@ -27,12 +27,17 @@ TEST(StudySchema, ListsEveryCatalogueParameterAndNoOther) {
     const auto dot = info.name.find('.');
     if (dot != std::string::npos) {
       // Written in TOML as a dotted key, it arrives as a nested table.
-      EXPECT_TRUE(fixed[info.name.substr(0, dot)]["properties"].contains(info.name.substr(dot + 1))) << info.name;
+      EXPECT_TRUE(fixed[info.name.substr(0, dot)]["properties"].contains(info.name.substr(dot + 1)))
+          << info.name;
     }
     const auto& entry = fixed[info.name];
-    if (info.kind == ParameterKind::kReal) EXPECT_EQ(entry["type"], "number") << info.name;
-    if (info.kind == ParameterKind::kBoolean) EXPECT_EQ(entry["type"], "boolean") << info.name;
-    if (info.kind == ParameterKind::kChoice) EXPECT_EQ(entry["enum"], nlohmann::json(info.levels)) << info.name;
+    if (info.kind == ParameterKind::kReal) {
+      EXPECT_EQ(entry["type"], "number") << info.name;
+    } else if (info.kind == ParameterKind::kBoolean) {
+      EXPECT_EQ(entry["type"], "boolean") << info.name;
+    } else {
+      EXPECT_EQ(entry["enum"], nlohmann::json(info.levels)) << info.name;
+    }
   }
   for (const auto& [name, entry] : fixed.items()) {
     if (entry.value("type", "") == "object") continue;  // the nested forms
@@ -45,7 +50,8 @@ TEST(StudySchema, ListsEveryAnalysis) {
   const nlohmann::json schema = Schema();
   std::set<std::string> registry, documented;
   for (const auto& entry : AnalysisRegistry()) registry.emplace(entry.name);
-  for (const auto& [name, entry] : schema["properties"]["analyses"]["properties"].items()) documented.insert(name);
+  for (const auto& [name, entry] : schema["properties"]["analyses"]["properties"].items())
+    documented.insert(name);
   EXPECT_EQ(documented, registry);
 }
 

@@ -19,8 +19,8 @@ class StudyTest : public ::testing::Test {
  protected:
   void SetUp() override {
     directory_ = std::filesystem::temp_directory_path() /
-                 ("gesweep_study_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+                 ("gesweep_study_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                  "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(directory_);
   }
   void TearDown() override { std::filesystem::remove_all(directory_); }
@@ -94,7 +94,8 @@ height_m = 2.0
 [parameters]
 speed_mps = 32.5
 height_m = 2.0
-)")).fingerprint;
+)"))
+                     .fingerprint;
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
 }
@@ -152,8 +153,9 @@ TEST_F(StudyTest, StartHeightUnderWheelContactIsRefused) {
 TEST_F(StudyTest, NegativeAndZeroValuesAreRefused) {
   EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 0\nheight_m = 2\n").expected().find("in (0, 300]"),
             std::string::npos);
-  EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\nmass_kg = -1\n").expected().find("> 0"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\nmass_kg = -1\n").expected().find("> 0"),
+      std::string::npos);
   EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = nan\nheight_m = 2\n").expected().find("expected"),
             std::string::npos);
 }
@@ -188,7 +190,8 @@ values = [1, 2]
 }
 
 TEST_F(StudyTest, ParameterNoAnalysisReadsIsRefused) {
-  const InputError e = ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\npulse_amplitude_deg = 5\n");
+  const InputError e =
+      ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\npulse_amplitude_deg = 5\n");
   EXPECT_NE(e.expected().find("no analysis of this study"), std::string::npos);
 }
 
@@ -287,6 +290,24 @@ uniform = [-3.141592653589793, 3.141592653589793]
   SweepPlan plan(std::move(study), ShardSpec{});
   EXPECT_EQ(plan.design_runs(), 8 * (2 * 3 + 2));
 }
+
+#ifdef GESWEEP_HAVE_SIMULATION
+TEST_F(StudyTest, OpenLoopRefusesADesignThatStartsAtStall) {
+  const InputError e = ErrorOf(Header("[analyses.open_loop]\n") + R"([parameters]
+height_m = 3.0
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "speed_mps"
+linspace = [24.6314, 40.0, 5]
+)");
+  EXPECT_NE(
+      e.expected().find("analysis 'open_loop' cannot run it: expected speed_mps > the stall speed 24.6314"),
+      std::string::npos)
+      << e.what();
+  EXPECT_NE(e.value().find("speed_mps = 24.6314"), std::string::npos) << e.what();
+}
+#endif
 
 TEST(ShardSpec, ParsesAndSplitsContiguously) {
   EXPECT_THROW(ParseShard("3/3", "--shard"), InputError);

@@ -1,0 +1,186 @@
+// gesweep query: rows of an archive that satisfy a condition, or --describe: what it holds
+// (docs/report.md, "gesweep query").
+//   gesweep query ARCHIVE [--where EXPR] [--columns a,b,c] [--sort col [--descending]] [--limit n]
+//                 [--format table|csv|json]
+//   gesweep query ARCHIVE --describe [--format table|json]
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "engine/archive/archive_reader.h"
+#include "engine/archive/hdf5_util.h"
+#include "engine/cli/command.h"
+#include "engine/common/errors.h"
+#include "engine/query/query.h"
+#include "engine/query/query_output.h"
+#include "engine/query/run_columns.h"
+
+namespace gesweep::cli {
+namespace {
+
+struct QueryFlags {
+  std::string archive;
+  std::string where;
+  std::vector<std::string> columns;
+  std::string sort;
+  bool descending = false;
+  long long limit = -1;
+  std::string format = "table";
+  bool describe = false;
+};
+
+// Root attributes too long for a listing: shown by their size.
+bool LongText(const std::string& name) { return name == "study_text" || name == "aircraft_text"; }
+
+std::string TypeText(const RunColumn& column) {
+  if (column.kind == ColumnKind::kText) return "text";
+  if (column.kind == ColumnKind::kUnsigned) return "uint64";
+  if (!column.levels.empty()) return "level";
+  return column.integer ? "integer" : "float64";
+}
+
+std::string Shape(const std::vector<std::int64_t>& shape) {
+  std::string text;
+  for (auto d : shape) text += (text.empty() ? "" : " x ") + std::to_string(d);
+  return text.empty() ? "scalar" : text;
+}
+
+int Describe(const ArchiveReader& archive, const ColumnCatalog& catalog, QueryFormat format) {
+  const StatusCounts counts = CountStatuses(archive);
+  const std::vector<AttributeText> provenance = ReadAttributes(archive, "/");
+  if (format == QueryFormat::kCsv) {
+    throw InputError("command line", "--format", "csv", "expected table or json with --describe");
+  }
+  if (format == QueryFormat::kJson) {
+    nlohmann::json columns = nlohmann::json::array(), others = nlohmann::json::array(), attributes;
+    for (const auto& c : catalog.columns()) {
+      nlohmann::json entry = {{"name", c.name},
+                              {"path", c.path},
+                              {"units", c.units},
+                              {"type", TypeText(c)},
+                              {"description", c.description}};
+      if (!c.levels.empty()) entry["levels"] = c.levels;
+      columns.push_back(entry);
+    }
+    for (const auto& o : catalog.others()) {
+      others.push_back({{"path", o.path},
+                        {"shape", o.shape},
+                        {"units", o.units},
+                        {"description", o.description},
+                        {"not_a_column", o.why}});
+    }
+    for (const auto& a : provenance) attributes[a.name] = a.value;
+    nlohmann::json out = {
+        {"archive", archive.path().string()},
+        {"runs", archive.run_count()},
+        {"status", {{"ok", counts.ok}, {"failed", counts.failed}, {"pending", counts.pending}}},
+        {"snapshot", archive.snapshot()},
+        {"columns", columns},
+        {"other_datasets", others},
+        {"provenance", attributes}};
+    std::cout << out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+    return 0;
+  }
+  std::cout << "# " << archive.path().string() << ": study " << archive.StringAttribute("study_name") << ", "
+            << archive.run_count() << " runs: " << counts.ok << " ok, " << counts.failed << " failed, "
+            << counts.pending << " pending\n";
+  if (archive.snapshot()) {
+    std::cout << "# snapshot: a sweep is writing this archive, or its writer stopped without closing it; "
+                 "the counts are of the runs complete so far\n";
+  }
+  std::size_t name_width = 4, units_width = 5;
+  for (const auto& c : catalog.columns()) {
+    name_width = std::max(name_width, c.name.size());
+    units_width = std::max(units_width, c.units.size());
+  }
+  std::cout << "\n# columns (query them by name; the full dataset path works too)\n";
+  std::cout << std::left << std::setw(static_cast<int>(name_width)) << "name"
+            << "  " << std::setw(static_cast<int>(units_width)) << "units"
+            << "  " << std::setw(8) << "type"
+            << "  description\n";
+  for (const auto& c : catalog.columns()) {
+    std::string description = c.description;
+    if (!c.levels.empty()) {
+      std::string levels;
+      for (const auto& l : c.levels) levels += (levels.empty() ? "" : ", ") + l;
+      description += " [levels: " + levels + "]";
+    }
+    if (c.name != c.path) description += " (" + c.path + ")";
+    std::cout << std::setw(static_cast<int>(name_width)) << c.name << "  "
+              << std::setw(static_cast<int>(units_width)) << (c.units.empty() ? "-" : c.units) << "  "
+              << std::setw(8) << TypeText(c) << "  " << description << "\n";
+  }
+  if (!catalog.others().empty()) {
+    std::cout << "\n# other datasets (not query columns)\n";
+    for (const auto& o : catalog.others()) {
+      std::cout << o.path << "  [" << Shape(o.shape) << "]  " << (o.units.empty() ? "-" : o.units) << "  "
+                << o.why << (o.description.empty() ? "" : ": " + o.description) << "\n";
+    }
+  }
+  std::cout << "\n# provenance (root attributes)\n";
+  for (const auto& a : provenance) {
+    if (LongText(a.name)) {
+      std::cout << a.name << " = (" << a.value.size() << " characters of TOML)\n";
+    } else {
+      std::cout << a.name << " = " << a.value << "\n";
+    }
+  }
+  std::cout << std::right;
+  return 0;
+}
+
+int RunQueryCommand(const QueryFlags& flags) {
+  const QueryFormat format = ParseQueryFormat(flags.format, "--format");
+  if (flags.limit < -1) {
+    throw InputError("command line", "--limit", std::to_string(flags.limit), "expected a count >= 0");
+  }
+  try {
+    const ArchiveReader archive = ArchiveReader::Open(flags.archive);
+    const ColumnCatalog catalog = ColumnCatalog::Of(archive);
+    if (flags.describe) {
+      if (!flags.where.empty() || !flags.columns.empty() || !flags.sort.empty() || flags.limit >= 0) {
+        throw InputError("command line", "--describe", "",
+                         "lists what the archive holds; it takes no --where, --columns, --sort or --limit");
+      }
+      return Describe(archive, catalog, format);
+    }
+    QueryRequest request;
+    request.where = flags.where;
+    request.columns = flags.columns;
+    request.sort = flags.sort;
+    request.descending = flags.descending;
+    request.limit = flags.limit;
+    if (flags.descending && flags.sort.empty()) {
+      throw InputError("command line", "--descending", "", "sorts by --sort; give --sort COLUMN");
+    }
+    const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
+    RunQuery(archive, catalog, request, *writer);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "query", "Select runs of an archive by a condition, with chosen columns, sorted; or --describe it",
+    [](CLI::App& app) -> std::function<int()> {
+      auto flags = std::make_shared<QueryFlags>();
+      app.add_option("archive", flags->archive, "Archive (HDF5) written by gesweep run")->required();
+      app.add_option("--where", flags->where,
+                     "Condition, e.g. 'height_m < 3 and stability_margin_per_s > 0', 'status == \"failed\"' "
+                     "(docs/report.md)");
+      app.add_option("--columns", flags->columns,
+                     "Columns to show, comma-separated (default: index, design, status)")
+          ->delimiter(',');
+      app.add_option("--sort", flags->sort, "Column to sort by (missing values last)");
+      app.add_flag("--descending", flags->descending, "Sort largest first");
+      app.add_option("--limit", flags->limit, "Show at most this many rows (with --sort: the best n)");
+      app.add_option("--format", flags->format, "table (default), csv or json");
+      app.add_flag("--describe", flags->describe,
+                   "List the columns with units, run counts by status, provenance");
+      return [flags] { return RunQueryCommand(*flags); };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli

@@ -1,0 +1,50 @@
+#include "engine/query/archive_lock.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+
+ArchiveLock ArchiveLock::Acquire(const std::filesystem::path& archive, const std::string& retry_hint) {
+  ArchiveLock lock;
+  lock.lock_path_ = archive.string() + ".lock";
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(lock.lock_path_, ec);
+  lock.fd_ = ::open(lock.lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock.fd_ < 0) {
+    throw InputError(archive.string(), "", "",
+                     "cannot write into the archive: cannot create its lock file " +
+                         lock.lock_path_.string() + " (" + std::strerror(errno) + "); " + retry_hint);
+  }
+  lock.created_ = !existed;
+  if (flock(lock.fd_, LOCK_EX | LOCK_NB) != 0) {
+    throw InputError(archive.string(), "", "",
+                     "archive in use: a gesweep process is writing it (" + lock.lock_path_.string() +
+                         " is locked); " + retry_hint);
+  }
+  return lock;
+}
+
+ArchiveLock::ArchiveLock(ArchiveLock&& other) noexcept
+    : lock_path_(std::move(other.lock_path_)), fd_(other.fd_), created_(other.created_) {
+  other.fd_ = -1;
+  other.created_ = false;
+}
+
+ArchiveLock::~ArchiveLock() {
+  if (fd_ < 0) return;
+  // Removed while still locked, as ArchiveWriter does, so nobody locks a file about to disappear.
+  if (created_) {
+    std::error_code ec;
+    std::filesystem::remove(lock_path_, ec);
+  }
+  close(fd_);
+}
+
+}  // namespace gesweep

@@ -1,0 +1,33 @@
+#pragma once
+/// An exclusive claim on an archive for adding a derived product to it (/analysis/boundary): a flock
+/// on ARCHIVE.lock, the lock `gesweep run` holds while it writes the archive
+/// (engine/archive/archive_writer.h). While held, no sweep can start writing the archive; it is not
+/// granted while one writes.
+
+#include <filesystem>
+#include <string>
+
+namespace gesweep {
+
+/// The claim; released (and its lock file removed when this claim created it) on destruction.
+class ArchiveLock {
+ public:
+  /// Takes the lock without waiting. Throws InputError (source the archive) when a gesweep process
+  /// holds it ("archive in use: ..."; `retry_hint` says what to do, e.g. "run gesweep boundary again
+  /// once it has finished, or pass --no-write"), or when the lock file cannot be created.
+  static ArchiveLock Acquire(const std::filesystem::path& archive, const std::string& retry_hint);
+
+  ArchiveLock(ArchiveLock&& other) noexcept;
+  ArchiveLock& operator=(ArchiveLock&&) = delete;
+  ArchiveLock(const ArchiveLock&) = delete;
+  ArchiveLock& operator=(const ArchiveLock&) = delete;
+  ~ArchiveLock();
+
+ private:
+  ArchiveLock() = default;
+  std::filesystem::path lock_path_;
+  int fd_ = -1;
+  bool created_ = false;
+};
+
+}  // namespace gesweep

@@ -1,0 +1,549 @@
+#include "engine/query/expression.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+
+struct RowFilter::Node {
+  enum class Kind {
+    kColumn,
+    kNumber,
+    kString,
+    kNot,
+    kAnd,
+    kOr,
+    kCompare,
+    kArithmetic,
+    kNegate,
+    kFunction,
+    kTruth
+  };
+  /// kBool: 0/1 values; kText: a text column; kString: a string literal.
+  enum class Type { kNumber, kBool, kText, kString };
+  Kind kind = Kind::kNumber;
+  Type type = Type::kNumber;
+  int position = 1;   // 1-based column in the expression
+  int column = -1;    // kColumn
+  double number = 0;  // kNumber
+  std::string text;   // kString: the literal; kCompare/kArithmetic: the operator; kFunction: its name
+  std::unique_ptr<Node> left, right;
+};
+
+namespace {
+
+using Node = RowFilter::Node;
+using Kind = Node::Kind;
+using Type = Node::Type;
+
+enum class TokenKind { kNumber, kString, kName, kOperator, kEnd };
+
+struct Token {
+  TokenKind kind = TokenKind::kEnd;
+  std::string text;
+  double number = 0;
+  int position = 1;
+};
+
+bool NameStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool NameChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
+
+bool IsKeyword(const std::string& name) {
+  static const char* const kKeywords[] = {"and", "or",  "not", "true",  "false",
+                                          "inf", "nan", "abs", "isnan", "isfinite"};
+  return std::any_of(std::begin(kKeywords), std::end(kKeywords), [&](const char* k) { return name == k; });
+}
+
+class Parser {
+ public:
+  Parser(const std::string& text, const ColumnCatalog& catalog, const std::string& flag)
+      : text_(text), catalog_(catalog), flag_(flag) {
+    Lex();
+  }
+
+  std::unique_ptr<Node> ParseCondition() {
+    if (tokens_.size() == 1) Fail(1, "empty expression; expected a condition such as height_m < 3");
+    auto node = ParseOr();
+    if (Peek().kind != TokenKind::kEnd) {
+      if (Peek().kind == TokenKind::kOperator && Peek().text == ")") Fail(Peek().position, "unmatched ')'");
+      Fail(Peek().position, "expected and, or, or the end of the expression, found '" + Peek().text + "'");
+    }
+    return AsCondition(std::move(node));
+  }
+
+  std::vector<int> columns() const {
+    std::vector<int> sorted = columns_;
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    return sorted;
+  }
+
+ private:
+  [[noreturn]] void Fail(int position, const std::string& what) const {
+    throw InputError("command line", flag_, "'" + text_ + "'",
+                     "at column " + std::to_string(position) + ": " + what);
+  }
+
+  void Lex() {
+    std::size_t i = 0;
+    const std::size_t n = text_.size();
+    // A "/" where an operand is expected starts a full dataset path ("/design/height_m"); after an
+    // operand it divides.
+    bool operand_expected = true;
+    while (i < n) {
+      const char c = text_[i];
+      const int position = static_cast<int>(i) + 1;
+      if (std::isspace(static_cast<unsigned char>(c))) {
+        ++i;
+        continue;
+      }
+      Token token;
+      token.position = position;
+      if (std::isdigit(static_cast<unsigned char>(c)) ||
+          (c == '.' && i + 1 < n && std::isdigit(static_cast<unsigned char>(text_[i + 1])))) {
+        const char* begin = text_.c_str() + i;
+        char* end = nullptr;
+        token.number = std::strtod(begin, &end);
+        const std::size_t length = static_cast<std::size_t>(end - begin);
+        if (length == 0) Fail(position, "malformed number");
+        i += length;
+        if (i < n && NameStart(text_[i]))
+          Fail(position, "malformed number '" + text_.substr(position - 1, i - position + 2) + "'");
+        token.kind = TokenKind::kNumber;
+        token.text = text_.substr(static_cast<std::size_t>(position - 1), length);
+      } else if (c == '"' || c == '\'') {
+        const std::size_t close = text_.find(c, i + 1);
+        if (close == std::string::npos)
+          Fail(position, "unterminated string (no closing " + std::string(1, c) + ")");
+        token.kind = TokenKind::kString;
+        token.text = text_.substr(i + 1, close - i - 1);
+        i = close + 1;
+      } else if (NameStart(c) || (c == '/' && operand_expected && i + 1 < n && NameStart(text_[i + 1]))) {
+        // A name: letters, digits, '_', '.', and '/' followed by a name character (dataset paths).
+        std::size_t j = i;
+        while (j < n && (NameChar(text_[j]) || (text_[j] == '/' && j + 1 < n && NameStart(text_[j + 1]))))
+          ++j;
+        std::string name = text_.substr(i, j - i);
+        // "a/b" is one column when it names one; else the longest prefix that does, then "/".
+        if (!IsKeyword(name) && !catalog_.Find(name)) {
+          for (std::size_t cut = name.rfind('/'); cut != std::string::npos && cut > 0;
+               cut = name.rfind('/', cut - 1)) {
+            if (catalog_.Find(name.substr(0, cut))) {
+              name = name.substr(0, cut);
+              break;
+            }
+          }
+        }
+        token.kind = TokenKind::kName;
+        token.text = name;
+        i += name.size();
+      } else {
+        static const char* const kOperators[] = {"==", "!=", "<=", ">=", "<", ">",
+                                                 "+",  "-",  "*",  "/",  "(", ")"};
+        token.kind = TokenKind::kOperator;
+        for (const char* op : kOperators) {
+          const std::size_t length = std::char_traits<char>::length(op);
+          if (text_.compare(i, length, op) == 0) {
+            token.text = op;
+            break;
+          }
+        }
+        if (token.text.empty()) {
+          if (c == '=') Fail(position, "'=' is not an operator; write '==' to compare");
+          if (c == '&' || c == '|')
+            Fail(position, "write 'and' / 'or' instead of '" + std::string(1, c) + "'");
+          if (c == '!') Fail(position, "write 'not' instead of '!'");
+          Fail(position, "unexpected character '" + std::string(1, c) + "'");
+        }
+        i += token.text.size();
+      }
+      operand_expected = token.kind == TokenKind::kOperator
+                             ? token.text != ")"
+                             : token.kind == TokenKind::kName && IsKeyword(token.text) &&
+                                   token.text != "true" && token.text != "false" && token.text != "inf" &&
+                                   token.text != "nan";
+      tokens_.push_back(std::move(token));
+    }
+    Token end;
+    end.position = static_cast<int>(n) + 1;
+    end.text = "end of expression";
+    tokens_.push_back(end);
+  }
+
+  const Token& Peek() const { return tokens_[next_]; }
+  const Token& Take() { return tokens_[next_++]; }
+  bool TakeName(const char* keyword) {
+    if (Peek().kind == TokenKind::kName && Peek().text == keyword) {
+      ++next_;
+      return true;
+    }
+    return false;
+  }
+  bool TakeOperator(const char* op) {
+    if (Peek().kind == TokenKind::kOperator && Peek().text == op) {
+      ++next_;
+      return true;
+    }
+    return false;
+  }
+
+  static std::unique_ptr<Node> Make(Kind kind, Type type, int position) {
+    auto node = std::make_unique<Node>();
+    node->kind = kind;
+    node->type = type;
+    node->position = position;
+    return node;
+  }
+
+  std::string Describe(const Node& node) const {
+    if (node.kind == Kind::kColumn) return catalog_.column(node.column).name;
+    if (node.kind == Kind::kString) return "\"" + node.text + "\"";
+    return "the expression at column " + std::to_string(node.position);
+  }
+
+  // A boolean-valued node, or a false/true column standing alone.
+  std::unique_ptr<Node> AsCondition(std::unique_ptr<Node> node) {
+    if (node->type == Type::kBool) return node;
+    if (node->kind == Kind::kColumn && catalog_.column(node->column).boolean()) {
+      auto truth = Make(Kind::kTruth, Type::kBool, node->position);
+      truth->left = std::move(node);
+      return truth;
+    }
+    Fail(node->position, "expected a condition (a comparison such as x < 1, or a false/true column), found " +
+                             Describe(*node));
+  }
+
+  std::unique_ptr<Node> ParseOr() {
+    auto left = ParseAnd();
+    while (Peek().kind == TokenKind::kName && Peek().text == "or") {
+      const int position = Take().position;
+      auto node = Make(Kind::kOr, Type::kBool, position);
+      node->left = AsCondition(std::move(left));
+      node->right = AsCondition(ParseAnd());
+      left = std::move(node);
+    }
+    return left;
+  }
+
+  std::unique_ptr<Node> ParseAnd() {
+    auto left = ParseNot();
+    while (Peek().kind == TokenKind::kName && Peek().text == "and") {
+      const int position = Take().position;
+      auto node = Make(Kind::kAnd, Type::kBool, position);
+      node->left = AsCondition(std::move(left));
+      node->right = AsCondition(ParseNot());
+      left = std::move(node);
+    }
+    return left;
+  }
+
+  std::unique_ptr<Node> ParseNot() {
+    if (Peek().kind == TokenKind::kName && Peek().text == "not") {
+      const int position = Take().position;
+      auto node = Make(Kind::kNot, Type::kBool, position);
+      node->left = AsCondition(ParseNot());
+      return node;
+    }
+    return ParseComparison();
+  }
+
+  static bool IsComparison(const Token& token) {
+    if (token.kind != TokenKind::kOperator) return false;
+    return token.text == "==" || token.text == "!=" || token.text == "<" || token.text == "<=" ||
+           token.text == ">" || token.text == ">=";
+  }
+
+  // A string literal compared with a column that has levels becomes the level's index.
+  void CoerceLevel(std::unique_ptr<Node>& literal, const Node& column_node) {
+    const RunColumn& column = catalog_.column(column_node.column);
+    const auto it = std::find(column.levels.begin(), column.levels.end(), literal->text);
+    if (it == column.levels.end()) {
+      std::string levels;
+      for (const auto& level : column.levels) levels += (levels.empty() ? "" : ", ") + level;
+      Fail(literal->position, "\"" + literal->text + "\" is not a level of " + column.name +
+                                  " (expected one of " + levels + ")");
+    }
+    auto number = Make(Kind::kNumber, Type::kNumber, literal->position);
+    number->number = static_cast<double>(it - column.levels.begin());
+    literal = std::move(number);
+  }
+
+  std::unique_ptr<Node> ParseComparison() {
+    auto left = ParseSum();
+    if (!IsComparison(Peek())) return left;
+    const Token op = Take();
+    auto right = ParseSum();
+    if (IsComparison(Peek())) {
+      Fail(Peek().position, "comparisons do not chain; write a < b and b < c");
+    }
+    auto is_level_column = [&](const Node& n) {
+      return n.kind == Kind::kColumn && !catalog_.column(n.column).levels.empty();
+    };
+    if (left->type == Type::kBool || right->type == Type::kBool) {
+      const Node& bad = left->type == Type::kBool ? *left : *right;
+      Fail(bad.position, "a condition cannot be compared; use and, or, not");
+    }
+    if (left->type == Type::kString && right->type == Type::kString) {
+      Fail(op.position, "both sides are strings; compare a column with a string");
+    }
+    if (left->type == Type::kString || right->type == Type::kString) {
+      std::unique_ptr<Node>& literal = left->type == Type::kString ? left : right;
+      const Node& other = left->type == Type::kString ? *right : *left;
+      if (other.type == Type::kText) {
+        // text == "..." compares strings.
+      } else if (is_level_column(other)) {
+        CoerceLevel(literal, other);
+      } else {
+        Fail(literal->position, "\"" + literal->text + "\" is a string but " + Describe(other) +
+                                    " is a number (strings compare with message or a column with levels, "
+                                    "e.g. status == \"failed\")");
+      }
+    } else if ((left->type == Type::kText) != (right->type == Type::kText)) {
+      const Node& text = left->type == Type::kText ? *left : *right;
+      Fail(text.position, catalog_.column(text.column).name + " is text; compare it with a string");
+    }
+    auto node = Make(Kind::kCompare, Type::kBool, op.position);
+    node->text = op.text;
+    node->left = std::move(left);
+    node->right = std::move(right);
+    return node;
+  }
+
+  void RequireNumber(const Node& node) const {
+    if (node.type == Type::kNumber) return;
+    if (node.type == Type::kBool) Fail(node.position, "a condition is not a number");
+    Fail(node.position, Describe(node) + " is text, not a number");
+  }
+
+  std::unique_ptr<Node> ParseSum() {
+    auto left = ParseProduct();
+    while (Peek().kind == TokenKind::kOperator && (Peek().text == "+" || Peek().text == "-")) {
+      const Token op = Take();
+      auto node = Make(Kind::kArithmetic, Type::kNumber, op.position);
+      node->text = op.text;
+      RequireNumber(*left);
+      node->left = std::move(left);
+      node->right = ParseProduct();
+      RequireNumber(*node->right);
+      left = std::move(node);
+    }
+    return left;
+  }
+
+  std::unique_ptr<Node> ParseProduct() {
+    auto left = ParseUnary();
+    while (Peek().kind == TokenKind::kOperator && (Peek().text == "*" || Peek().text == "/")) {
+      const Token op = Take();
+      auto node = Make(Kind::kArithmetic, Type::kNumber, op.position);
+      node->text = op.text;
+      RequireNumber(*left);
+      node->left = std::move(left);
+      node->right = ParseUnary();
+      RequireNumber(*node->right);
+      left = std::move(node);
+    }
+    return left;
+  }
+
+  std::unique_ptr<Node> ParseUnary() {
+    if (Peek().kind == TokenKind::kOperator && Peek().text == "-") {
+      const int position = Take().position;
+      auto node = Make(Kind::kNegate, Type::kNumber, position);
+      node->left = ParseUnary();
+      RequireNumber(*node->left);
+      return node;
+    }
+    return ParsePrimary();
+  }
+
+  std::unique_ptr<Node> ParsePrimary() {
+    const Token token = Take();
+    switch (token.kind) {
+      case TokenKind::kNumber: {
+        auto node = Make(Kind::kNumber, Type::kNumber, token.position);
+        node->number = token.number;
+        return node;
+      }
+      case TokenKind::kString: {
+        auto node = Make(Kind::kString, Type::kString, token.position);
+        node->text = token.text;
+        return node;
+      }
+      case TokenKind::kOperator:
+        if (token.text == "(") {
+          auto inner = ParseOr();
+          if (!TakeOperator(")"))
+            Fail(Peek().position,
+                 "expected ')' to close the '(' at column " + std::to_string(token.position));
+          return inner;
+        }
+        Fail(token.position, "expected a column, a number or '(', found '" + token.text + "'");
+      case TokenKind::kEnd:
+        Fail(token.position, "the expression ends too early; expected a column, a number or '('");
+      case TokenKind::kName:
+        break;
+    }
+    const std::string& name = token.text;
+    if (name == "true" || name == "false" || name == "inf" || name == "nan") {
+      auto node = Make(Kind::kNumber, Type::kNumber, token.position);
+      node->number = name == "true"    ? 1.0
+                     : name == "false" ? 0.0
+                     : name == "inf"   ? std::numeric_limits<double>::infinity()
+                                       : std::nan("");
+      return node;
+    }
+    if (name == "abs" || name == "isnan" || name == "isfinite") {
+      if (!TakeOperator("(")) Fail(Peek().position, "expected '(' after " + name);
+      auto node = Make(Kind::kFunction, name == "abs" ? Type::kNumber : Type::kBool, token.position);
+      node->text = name;
+      node->left = ParseSum();
+      RequireNumber(*node->left);
+      if (!TakeOperator(")")) Fail(Peek().position, "expected ')' to close " + name + "(");
+      return node;
+    }
+    if (name == "and" || name == "or" || name == "not") {
+      Fail(token.position, "'" + name + "' needs a condition before/after it");
+    }
+    std::string problem;
+    const auto column = catalog_.Resolve(name, &problem);
+    if (!column) Fail(token.position, problem);
+    auto node =
+        Make(Kind::kColumn, catalog_.column(*column).kind == ColumnKind::kText ? Type::kText : Type::kNumber,
+             token.position);
+    node->column = *column;
+    columns_.push_back(*column);
+    return node;
+  }
+
+  const std::string& text_;
+  const ColumnCatalog& catalog_;
+  const std::string& flag_;
+  std::vector<Token> tokens_;
+  std::size_t next_ = 0;
+  std::vector<int> columns_;
+};
+
+bool Compare(const std::string& op, double a, double b) {
+  if (op == "==") return a == b;
+  if (op == "!=") return a != b;
+  if (op == "<") return a < b;
+  if (op == "<=") return a <= b;
+  if (op == ">") return a > b;
+  return a >= b;
+}
+
+bool CompareText(const std::string& op, const std::string& a, const std::string& b) {
+  const int c = a.compare(b);
+  if (op == "==") return c == 0;
+  if (op == "!=") return c != 0;
+  if (op == "<") return c < 0;
+  if (op == "<=") return c <= 0;
+  if (op == ">") return c > 0;
+  return c >= 0;
+}
+
+std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& values, std::size_t n) {
+  switch (node.kind) {
+    case Kind::kColumn:
+      return values[static_cast<std::size_t>(node.column)].numbers;
+    case Kind::kNumber:
+      return std::vector<double>(n, node.number);
+    case Kind::kString:
+      GESWEEP_DEMAND(false);  // strings are consumed by their comparison
+      return {};
+    case Kind::kNot: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      for (double& v : a) v = v != 0.0 ? 0.0 : 1.0;
+      return a;
+    }
+    case Kind::kAnd:
+    case Kind::kOr: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      const std::vector<double> b = Evaluate(*node.right, values, n);
+      for (std::size_t i = 0; i < n; ++i) {
+        a[i] = node.kind == Kind::kAnd ? (a[i] != 0.0 && b[i] != 0.0) : (a[i] != 0.0 || b[i] != 0.0);
+      }
+      return a;
+    }
+    case Kind::kTruth: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      for (double& v : a) v = v == 1.0 ? 1.0 : 0.0;
+      return a;
+    }
+    case Kind::kCompare: {
+      std::vector<double> out(n);
+      if (node.left->type == Type::kText || node.right->type == Type::kText) {
+        const bool left_text = node.left->type == Type::kText;
+        const Node& column = left_text ? *node.left : *node.right;
+        const Node& other = left_text ? *node.right : *node.left;
+        const std::vector<std::string>& texts = values[static_cast<std::size_t>(column.column)].texts;
+        const std::vector<std::string>* other_texts =
+            other.kind == Kind::kColumn ? &values[static_cast<std::size_t>(other.column)].texts : nullptr;
+        for (std::size_t i = 0; i < n; ++i) {
+          const std::string& b = other_texts ? (*other_texts)[i] : other.text;
+          out[i] = left_text ? CompareText(node.text, texts[i], b) : CompareText(node.text, b, texts[i]);
+        }
+        return out;
+      }
+      const std::vector<double> a = Evaluate(*node.left, values, n);
+      const std::vector<double> b = Evaluate(*node.right, values, n);
+      for (std::size_t i = 0; i < n; ++i) out[i] = Compare(node.text, a[i], b[i]) ? 1.0 : 0.0;
+      return out;
+    }
+    case Kind::kArithmetic: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      const std::vector<double> b = Evaluate(*node.right, values, n);
+      const char op = node.text[0];
+      for (std::size_t i = 0; i < n; ++i) {
+        a[i] = op == '+' ? a[i] + b[i] : op == '-' ? a[i] - b[i] : op == '*' ? a[i] * b[i] : a[i] / b[i];
+      }
+      return a;
+    }
+    case Kind::kNegate: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      for (double& v : a) v = -v;
+      return a;
+    }
+    case Kind::kFunction: {
+      std::vector<double> a = Evaluate(*node.left, values, n);
+      for (double& v : a) {
+        v = node.text == "abs"     ? std::abs(v)
+            : node.text == "isnan" ? (std::isnan(v) ? 1.0 : 0.0)
+                                   : (std::isfinite(v) ? 1.0 : 0.0);
+      }
+      return a;
+    }
+  }
+  GESWEEP_DEMAND(false);
+  return {};
+}
+
+}  // namespace
+
+RowFilter::RowFilter() = default;
+RowFilter::RowFilter(RowFilter&&) noexcept = default;
+RowFilter& RowFilter::operator=(RowFilter&&) noexcept = default;
+RowFilter::~RowFilter() = default;
+
+RowFilter RowFilter::Parse(const std::string& text, const ColumnCatalog& catalog, const std::string& flag) {
+  Parser parser(text, catalog, flag);
+  RowFilter filter;
+  filter.root_ = parser.ParseCondition();
+  filter.columns_ = parser.columns();
+  return filter;
+}
+
+void RowFilter::Evaluate(const std::vector<ColumnValues>& values, std::int64_t count,
+                         std::vector<char>& keep) const {
+  const auto n = static_cast<std::size_t>(count);
+  const std::vector<double> result = gesweep::Evaluate(*root_, values, n);
+  keep.resize(n);
+  for (std::size_t i = 0; i < n; ++i) keep[i] = result[i] != 0.0 ? 1 : 0;
+}
+
+}  // namespace gesweep

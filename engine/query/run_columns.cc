@@ -1,0 +1,262 @@
+#include "engine/query/run_columns.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "engine/archive/archive_format.h"
+#include "engine/archive/archive_reader.h"
+#include "engine/archive/hdf5_util.h"
+#include "engine/common/errors.h"
+#include "engine/common/toml_reader.h"
+
+namespace gesweep {
+namespace {
+
+using hdf5::Check;
+using hdf5::Handle;
+
+bool StartsWith(const std::string& text, const std::string& prefix) {
+  return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
+}
+
+bool EndsWithTail(const std::string& path, const std::string& tail) {
+  if (tail.empty()) return false;
+  if (path == tail) return true;
+  return path.size() > tail.size() && path.compare(path.size() - tail.size(), tail.size(), tail) == 0 &&
+         path[path.size() - tail.size() - 1] == '/';
+}
+
+// The tails of a path after each "/", shortest first: "a/b/c" gives "c", "b/c", "a/b/c".
+std::vector<std::string> Tails(const std::string& path) {
+  std::vector<std::string> tails;
+  for (std::size_t i = path.size(); i-- > 0;) {
+    if (path[i] == '/') tails.push_back(path.substr(i + 1));
+  }
+  tails.push_back(path);
+  return tails;
+}
+
+std::string Join(const std::vector<std::string>& items, const std::string& separator) {
+  std::string text;
+  for (const auto& item : items) text += (text.empty() ? "" : separator) + item;
+  return text;
+}
+
+}  // namespace
+
+ColumnCatalog ColumnCatalog::Of(const ArchiveReader& archive) {
+  ColumnCatalog catalog;
+  const std::int64_t runs = archive.run_count();
+  const std::vector<std::string> design_order = [&] {
+    Handle design(H5Gopen2(archive.file(), archive::kDesignGroup, H5P_DEFAULT), "open design group");
+    return hdf5::ReadStringListAttribute(design.get(), "parameters");
+  }();
+  for (const std::string& path : archive.Datasets()) {
+    const bool per_run_group = StartsWith(path, std::string(archive::kRunsGroup) + "/") ||
+                               StartsWith(path, std::string(archive::kDesignGroup) + "/") ||
+                               StartsWith(path, std::string(archive::kResultsGroup) + "/");
+    Handle dataset(H5Dopen2(archive.file(), path.c_str(), H5P_DEFAULT), "open " + path);
+    const std::vector<std::int64_t> shape = hdf5::Dimensions(dataset.get());
+    Handle type(H5Dget_type(dataset.get()), "type of " + path);
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    const std::string units = hdf5::ReadStringAttribute(dataset.get(), "units").value_or("");
+    const std::string description = hdf5::ReadStringAttribute(dataset.get(), "description").value_or("");
+    std::string why;
+    if (!per_run_group) {
+      why = "not a per-run dataset (outside runs/, design/, results/)";
+    } else if (shape.empty() || shape[0] != runs) {
+      why = "not one value per run";
+    } else if (shape.size() > 1) {
+      const std::string time_axis = hdf5::ReadStringAttribute(dataset.get(), "time_axis").value_or("");
+      why = time_axis.empty() ? std::to_string(shape[1]) + (type_class == H5T_COMPOUND ? " complex" : "") +
+                                    " values per run"
+                              : "a time series of " + std::to_string(shape[1]) + " samples per run";
+    } else if (type_class == H5T_COMPOUND) {
+      why = "a compound value per run";
+    } else if (type_class != H5T_INTEGER && type_class != H5T_FLOAT && type_class != H5T_STRING) {
+      why = "of an unsupported type";
+    }
+    if (!why.empty()) {
+      catalog.others_.push_back(OtherDataset{path, shape, units, description, why});
+      continue;
+    }
+    RunColumn column;
+    column.path = path;
+    column.units = units;
+    column.description = description;
+    column.primary = !StartsWith(path, std::string(archive::kResultsGroup) + "/");
+    if (type_class == H5T_STRING) {
+      column.kind = ColumnKind::kText;
+    } else if (type_class == H5T_INTEGER) {
+      column.integer = true;
+      if (H5Tget_sign(type.get()) == H5T_SGN_NONE && H5Tget_size(type.get()) == 8)
+        column.kind = ColumnKind::kUnsigned;
+    }
+    column.levels = hdf5::ReadStringListAttribute(dataset.get(), "levels");
+    if (column.integer) column.fill = hdf5::ReadIntegerAttribute(dataset.get(), "fill");
+    catalog.columns_.push_back(std::move(column));
+  }
+
+  // Display names: the shortest tail that resolves back to the column.
+  for (auto& column : catalog.columns_) column.name = column.path;
+  for (std::size_t i = 0; i < catalog.columns_.size(); ++i) {
+    for (const std::string& tail : Tails(catalog.columns_[i].path)) {
+      const auto found = catalog.Find(tail);
+      if (found && static_cast<std::size_t>(*found) == i) {
+        catalog.columns_[i].name = tail;
+        break;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < catalog.columns_.size(); ++i) {
+    const std::string& path = catalog.columns_[i].path;
+    if (path == archive::kRunStatus) catalog.status_ = static_cast<int>(i);
+    if (path == archive::kRunIndex) catalog.index_ = static_cast<int>(i);
+  }
+  for (const std::string& name : design_order) {
+    if (const auto index = catalog.FindPath(archive::DesignPath(name)))
+      catalog.design_columns_.push_back(*index);
+  }
+  if (catalog.status_ < 0 || catalog.index_ < 0) {
+    throw ArchiveError(archive.path().string() +
+                       ": no runs/status or runs/index dataset (not a complete archive)");
+  }
+  return catalog;
+}
+
+std::vector<std::string> ColumnCatalog::Candidates(const std::string& raw) const {
+  const std::string name = !raw.empty() && raw[0] == '/' ? raw.substr(1) : raw;
+  std::vector<std::string> matches;
+  for (const auto& column : columns_) {
+    if (EndsWithTail(column.path, name)) matches.push_back(column.path);
+  }
+  return matches;
+}
+
+std::optional<int> ColumnCatalog::FindPath(const std::string& path) const {
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    if (columns_[i].path == path) return static_cast<int>(i);
+  }
+  return std::nullopt;
+}
+
+std::optional<int> ColumnCatalog::Find(const std::string& raw) const {
+  const std::string name = !raw.empty() && raw[0] == '/' ? raw.substr(1) : raw;
+  if (name.empty()) return std::nullopt;
+  std::vector<int> matches, primary_bare;
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    const RunColumn& column = columns_[i];
+    if (column.path == name) return static_cast<int>(i);  // a full path is never ambiguous
+    if (!EndsWithTail(column.path, name)) continue;
+    matches.push_back(static_cast<int>(i));
+    // A bare name (no "/") of a design/runs column: the name after its group.
+    if (column.primary && name.find('/') == std::string::npos) primary_bare.push_back(static_cast<int>(i));
+  }
+  if (matches.size() == 1) return matches[0];
+  if (primary_bare.size() == 1) return primary_bare[0];
+  return std::nullopt;
+}
+
+std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* problem) const {
+  if (const auto index = Find(name)) return index;
+  const std::vector<std::string> candidates = Candidates(name);
+  if (candidates.size() > 1) {
+    std::vector<std::string> shown;
+    for (const auto& path : candidates)
+      shown.push_back(columns_[static_cast<std::size_t>(*FindPath(path))].name);
+    *problem = "ambiguous column '" + name + "': it matches " + Join(shown, ", ") + "; write one of them";
+    return std::nullopt;
+  }
+  const std::string stripped = !name.empty() && name[0] == '/' ? name.substr(1) : name;
+  for (const auto& other : others_) {
+    if (EndsWithTail(other.path, stripped)) {
+      *problem = "'" + name + "' (" + other.path + ") is not a per-run scalar column: " + other.why;
+      return std::nullopt;
+    }
+  }
+  std::vector<std::string> names;
+  for (const auto& column : columns_) names.push_back(column.name);
+  const std::string nearest = NearestName(name, names);
+  *problem = "unknown column '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
+             "; gesweep query ARCHIVE --describe lists the columns";
+  return std::nullopt;
+}
+
+int ColumnCatalog::Require(const std::string& name, const std::string& source, const std::string& key) const {
+  std::string problem;
+  const auto index = Resolve(name, &problem);
+  if (!index) throw InputError(source, key, name, problem);
+  return *index;
+}
+
+void ReadColumn(const ArchiveReader& archive, const RunColumn& column, std::int64_t first, std::int64_t count,
+                ColumnValues& out) {
+  const auto n = static_cast<std::size_t>(count);
+  switch (column.kind) {
+    case ColumnKind::kText:
+      out.texts = archive.ReadMessages(first, count);
+      return;
+    case ColumnKind::kUnsigned:
+      out.unsigned_values.resize(n);
+      archive.ReadRows(column.path, first, count, H5T_NATIVE_UINT64, out.unsigned_values.data());
+      out.numbers.resize(n);
+      for (std::size_t i = 0; i < n; ++i) out.numbers[i] = static_cast<double>(out.unsigned_values[i]);
+      return;
+    case ColumnKind::kNumber:
+      out.numbers.resize(n);
+      archive.ReadRows(column.path, first, count, H5T_NATIVE_DOUBLE, out.numbers.data());
+      if (column.fill) {
+        const auto fill = static_cast<double>(*column.fill);
+        for (double& v : out.numbers) {
+          if (v == fill) v = std::nan("");
+        }
+      }
+      return;
+  }
+}
+
+std::string FormatValue(double value, int significant) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  // The shortest text that reads back to the same double (fixed or scientific, whichever is shorter),
+  // when it needs at most `significant` digits; else rounded to `significant` digits.
+  char buffer[64];
+  const auto shortest = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  std::string text(buffer, shortest.ptr);
+  int digits = 0;
+  bool leading = true;
+  for (char c : text) {
+    if (c == 'e') break;
+    if (c < '0' || c > '9') continue;
+    if (leading && c == '0') continue;
+    leading = false;
+    ++digits;
+  }
+  // Trailing zeros of an integer written in fixed form are not significant digits.
+  if (text.find_first_of(".e") == std::string::npos) {
+    for (std::size_t i = text.size(); i-- > 0 && text[i] == '0';) --digits;
+  }
+  if (digits <= significant) return text;
+  const auto rounded =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, significant);
+  return std::string(buffer, rounded.ptr);
+}
+
+std::string FormatCell(const RunColumn& column, double number) {
+  if (std::isnan(number)) return "nan";
+  if (!column.levels.empty() && number >= 0 && number < static_cast<double>(column.levels.size()) &&
+      number == std::floor(number)) {
+    return column.levels[static_cast<std::size_t>(number)];
+  }
+  if (column.integer && std::abs(number) < 9.0e15) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%.0f", number);
+    return buffer;
+  }
+  return FormatValue(number);
+}
+
+}  // namespace gesweep

@@ -1,0 +1,234 @@
+#!/usr/bin/python3
+"""gesweep report: an HTML page of figures and tables from one or more archives (docs/report.md).
+
+    /usr/bin/python3 scripts/report/report.py -o DIR [--title T] [--quiet] -- ARCHIVE...
+
+Normally run by `gesweep report ARCHIVE... -o DIR`, which checks the archives first. Writes
+DIR/index.html and the figures (PNG) beside it; the page has no script and no external resource, so it
+opens from disk. Exit codes: 0 ok, 2 bad input (one line on stderr), 1 anything else.
+"""
+
+import argparse
+import html
+import os
+import sys
+import time
+
+import numpy as np
+
+import report_claims
+import report_figures
+from report_data import open_archives
+
+CSS = """
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1180px;
+       color: #1d1d1d; line-height: 1.45; padding: 0 1em; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 2em; border-bottom: 1px solid #ccc; }
+.sub { color: #555; margin-top: 0; }
+figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { color: #444; font-size: 0.92em; margin-top: 0.4em; }
+table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.9em; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: left; vertical-align: top; }
+th { background: #f0f0f0; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+.agrees { background: #e3f4e1; } .differs { background: #fbe3e0; } .nodata { background: #f3f3f3; color: #666; }
+pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
+details { margin: 0.5em 0; } summary { cursor: pointer; }
+nav a { margin-right: 1em; }
+"""
+
+
+def esc(value):
+    return html.escape(str(value))
+
+
+def table(headers, rows, numeric=()):
+    out = ["<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in headers) + "</tr>"]
+    for row in rows:
+        cells = []
+        for i, cell in enumerate(row):
+            cls = ' class="num"' if i in numeric else ""
+            cells.append(f"<td{cls}>{esc(cell)}</td>")
+        out.append("<tr>" + "".join(cells) + "</tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def fmt(value, digits=5):
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return "—"
+    return f"{value:.{digits}g}"
+
+
+def boundary_section(archives):
+    parts = []
+    for archive in archives:
+        boundary = archive.boundary()
+        if boundary is None:
+            continue
+        keys = boundary["keys"]
+        headers = keys + ["H* (m)", "H*/b", "grid bracket (m)", "note"]
+        rows = []
+        for i in range(len(boundary["height_m"])):
+            row = []
+            for k in keys:
+                levels = boundary["levels"].get(k) or []
+                v = float(boundary[k][i])
+                row.append(levels[int(v)] if levels and v.is_integer() and 0 <= int(v) < len(levels) else fmt(v, 7))
+            lower, upper = boundary["grid_lower_height_m"][i], boundary["grid_upper_height_m"][i]
+            row += [fmt(float(boundary["height_m"][i]), 7), fmt(float(boundary["height_over_span"][i]), 4),
+                    f"{lower:.5g} – {upper:.5g}" if np.isfinite(lower) else "", boundary["reason"][i]]
+            rows.append(row)
+        found = np.isfinite(boundary["height_m"])
+        summary = f"{int(found.sum())} of {len(found)} points have a boundary"
+        if found.any():
+            ratio = boundary["height_over_span"][found]
+            summary += f"; H*/b from {np.min(ratio):.4f} to {np.max(ratio):.4f}"
+            if "speed_mps" in keys:
+                speeds = boundary["speed_mps"][found]
+                summary += (f" (lowest at {speeds[np.argmin(ratio)]:.4g} m/s, highest at "
+                            f"{speeds[np.argmax(ratio)]:.4g} m/s)")
+        attrs = boundary["attrs"]
+        parts.append(f"<h3>{esc(archive.study_name)} <small>({esc(os.path.basename(archive.path))})</small></h3>"
+                     f"<p>{esc(summary)}. Refined to {fmt(float(attrs.get('tolerance_m', float('nan'))) * 1000, 3)} mm "
+                     f"on each run's continuous model; b = {fmt(float(attrs.get('wingspan_m', float('nan'))), 5)} m. "
+                     f"Written by <code>{esc(attrs.get('command_line', ''))}</code> on {esc(attrs.get('created', ''))}."
+                     f"</p>")
+        rendered = table(headers, rows, numeric=set(range(len(keys) + 2)))
+        if len(rows) > 20:
+            parts.append(f"<details><summary>the {len(rows)} points</summary>{rendered}</details>")
+        else:
+            parts.append(rendered)
+    return "\n".join(parts)
+
+
+def claims_section(archives):
+    rows = report_claims.paper_claims(archives)
+    if not rows:
+        return ""
+    out = ["<table><tr><th>claim</th><th>paper</th><th>engine (from the archives)</th><th>verdict</th></tr>"]
+    for claim, paper, engine, verdict in rows:
+        cls = "agrees" if verdict == "agrees" else ("nodata" if verdict == "no data" else "differs")
+        out.append(f"<tr><td>{esc(claim)}</td><td>{esc(paper)}</td><td>{esc(engine)}</td>"
+                   f'<td class="{cls}">{esc(verdict)}</td></tr>')
+    out.append("</table>")
+    return "\n".join(out)
+
+
+def status_section(archives):
+    rows = []
+    for archive in archives:
+        ok, failed, pending = archive.counts()
+        rows.append([os.path.basename(archive.path), archive.study_name, archive.run_count, ok, failed, pending,
+                     "yes (being written, or its writer died)" if archive.snapshot else "no"])
+    return table(["archive", "study", "runs", "ok", "failed", "pending", "snapshot"], rows, numeric={2, 3, 4, 5})
+
+
+PROVENANCE_KEYS = ["study_name", "study_description", "study_path", "study_fingerprint", "aircraft_name",
+                   "aircraft_path", "analyses", "engine_version", "git_commit", "compiler", "hdf5_version", "host",
+                   "threads", "command_line", "shard", "start_time", "end_time", "resumed_at", "complete",
+                   "merged_from"]
+
+
+def provenance_section(archives):
+    parts = []
+    for archive in archives:
+        rows = []
+        for key in PROVENANCE_KEYS:
+            if key in archive.attrs:
+                value = archive.attrs[key]
+                if isinstance(value, list):
+                    value = ", ".join(str(v) for v in value) or "—"
+                rows.append([key, value])
+        study_text = archive.attrs.get("study_text", "")
+        parts.append(f"<details><summary>{esc(os.path.basename(archive.path))}: study {esc(archive.study_name)}, "
+                     f"engine {esc(archive.attrs.get('engine_version', '?'))} "
+                     f"({esc(archive.attrs.get('git_commit', '?'))})</summary>"
+                     f"<p>File: <code>{esc(os.path.abspath(archive.path))}</code></p>"
+                     f"{table(['attribute', 'value'], rows)}"
+                     f"<details><summary>study file as run</summary><pre>{esc(study_text)}</pre></details>"
+                     f"</details>")
+    return "\n".join(parts)
+
+
+def figure_html(figure):
+    return (f'<figure><img src="{esc(figure.file)}" alt="{esc(figure.title)}">'
+            f"<figcaption><b>{esc(figure.title)}.</b> {esc(figure.caption)}</figcaption></figure>")
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("-o", "--output", required=True)
+    parser.add_argument("--title", default="")
+    parser.add_argument("--quiet", action="store_true")
+    parser.add_argument("archives", nargs="+")
+    args = parser.parse_args(argv)
+    started = time.time()
+
+    def progress(text):
+        if not args.quiet:
+            print(f"gesweep report: {text} ({time.time() - started:.1f} s)", file=sys.stderr)
+
+    try:
+        archives = open_archives(args.archives)
+    except (OSError, ValueError) as error:
+        print(f"gesweep: error: {error}", file=sys.stderr)
+        return 2
+    os.makedirs(args.output, exist_ok=True)
+    # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
+    for name in os.listdir(args.output):
+        if name.endswith(".png") and name.split("_")[0] in ("stability", "root", "open", "landing", "sensitivity"):
+            os.remove(os.path.join(args.output, name))
+
+    sections = []
+    drawn = []
+    for title, anchor, draw in (("Stability map", "map", report_figures.stability_maps),
+                                ("Root locus against height", "locus", report_figures.root_locus),
+                                ("Open-loop responses", "open_loop", report_figures.open_loop),
+                                ("Landing", "landing", report_figures.landing),
+                                ("Sensitivity", "sensitivity", report_figures.sensitivity)):
+        figures = draw(archives, args.output)
+        progress(f"{title.lower()}: {len(figures)} figure(s)")
+        if figures:
+            drawn += figures
+            sections.append((title, anchor, "\n".join(figure_html(f) for f in figures)))
+    boundary = boundary_section(archives)
+    if boundary:
+        sections.insert(1 if sections and sections[0][1] == "map" else 0,
+                        ("Stability boundary per speed", "boundary", boundary))
+    claims = claims_section(archives)
+    if claims:
+        sections.append(("The paper's claims beside the engine's findings", "claims",
+                         "<p>The paper: González, Boschetti, Cárdenas and Rodriguez-Celi, <i>Dynamic Ground Effect on "
+                         "the Longitudinal Stability of Airplanes during the Landing</i>, Section IV and Fig. 4–9. "
+                         "The engine's side is read from the archives of this report.</p>" + claims))
+    sections.append(("Runs by status", "status", status_section(archives)))
+    sections.append(("Provenance", "provenance", provenance_section(archives)))
+
+    studies = ", ".join(a.study_name for a in archives)
+    aircraft = sorted({a.aircraft.name for a in archives if a.aircraft.name})
+    title = args.title or f"gesweep report: {', '.join(aircraft) or 'archives'}"
+    nav = " ".join(f'<a href="#{anchor}">{esc(name)}</a>' for name, anchor, _ in sections)
+    body = "\n".join(f'<h2 id="{anchor}">{esc(name)}</h2>\n{content}' for name, anchor, content in sections)
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{esc(title)}</title>
+<style>{CSS}</style></head>
+<body>
+<h1>{esc(title)}</h1>
+<p class="sub">{len(archives)} archive(s) (studies {esc(studies)});
+written {esc(time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime()))} by <code>gesweep report</code>.</p>
+<nav>{nav}</nav>
+{body}
+</body></html>
+"""
+    path = os.path.join(args.output, "index.html")
+    with open(path + ".partial", "w", encoding="utf-8") as out:
+        out.write(page)
+    os.replace(path + ".partial", path)
+    for archive in archives:
+        archive.close()
+    progress(f"wrote {path} with {len(drawn)} figure(s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

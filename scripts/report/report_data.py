@@ -1,0 +1,181 @@
+"""Reading gesweep archives for the report (layout: schemas/archive.md, docs/report.md).
+
+An archive is opened read-only; one that a sweep is writing (or whose writer was killed) is opened
+in SWMR-read mode, and only complete runs (status ok or failed) are used: a nonzero status is written
+after the run's values (docs/sweep.md, "Crash safety"), and statuses are read before values.
+"""
+
+import math
+import tomllib
+
+import h5py
+import numpy as np
+
+STATUS_PENDING, STATUS_OK, STATUS_FAILED = 0, 1, 2
+
+
+def _text(value):
+    """An HDF5 attribute as Python text or list of text."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.dtype.kind in "OSU":
+        return [_text(v) for v in value.tolist()]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+class Aircraft:
+    """What the report needs of the aircraft file stored in the archive (attribute aircraft_text)."""
+
+    def __init__(self, text):
+        data = tomllib.loads(text) if text else {}
+        self.name = data.get("name", "")
+        self.wingspan_m = data.get("geometry", {}).get("wingspan_m", math.nan)
+        limits = data.get("limits", {})
+        self.wheel_contact_height_m = limits.get("wheel_contact_height_m", math.nan)
+        self.stall_speed_mps = limits.get("stall_speed_mps", math.nan)
+        self.table_heights_m = list(data.get("table", {}).get("height_m", []))
+
+
+class Archive:
+    """One archive: attributes, parameters per run, result columns, series."""
+
+    def __init__(self, path):
+        self.path = path
+        self.snapshot = False
+        try:
+            self.file = h5py.File(path, "r")
+        except OSError:
+            # Being written by a sweep, or left open by a writer that died.
+            self.file = h5py.File(path, "r", swmr=True)
+            self.snapshot = True
+        self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
+        if self.attrs.get("format") != "gesweep-archive":
+            raise ValueError(f"{path}: not a gesweep archive")
+        self.run_count = int(self.attrs.get("run_count", 0))
+        self.status = self.file["runs/status"][...]  # before any value (snapshot safety)
+        self.complete = self.status != STATUS_PENDING
+        self.ok = self.status == STATUS_OK
+        design = self.file["design"]
+        self.design_attrs = {k: _text(v) for k, v in design.attrs.items()}
+        self.design_names = list(self.design_attrs.get("parameters", []))
+        names = self.design_attrs.get("unswept_parameter_names", [])
+        values = self.design_attrs.get("unswept_parameter_values", [])
+        self.unswept = dict(zip(names, values))
+        self.aircraft = Aircraft(self.attrs.get("aircraft_text", ""))
+        self.study_name = self.attrs.get("study_name", path)
+        self._cache = {}  # per-run datasets already read (each is read once)
+
+    def close(self):
+        self.file.close()
+
+    def has(self, path):
+        return path in self.file
+
+    def counts(self):
+        """Runs by status: (ok, failed, pending)."""
+        return (int(np.count_nonzero(self.status == STATUS_OK)), int(np.count_nonzero(self.status == STATUS_FAILED)),
+                int(np.count_nonzero(self.status == STATUS_PENDING)))
+
+    def param(self, name):
+        """Value of a parameter for every run (swept or fixed), or None when the archive has neither."""
+        if name in self.design_names:
+            return self._read("design/" + name)
+        if name in self.unswept:
+            return np.full(self.run_count, float(self.unswept[name]))
+        return None
+
+    def levels(self, path):
+        if path not in self.file:
+            return []
+        return _text(self.file[path].attrs.get("levels", []))
+
+    def level_name(self, name, value):
+        """The level name of a choice/boolean parameter value, else the number as text."""
+        levels = self.levels("design/" + name)
+        if not levels and name in ("h_derivatives",):
+            levels = ["false", "true"]
+        if levels and float(value).is_integer() and 0 <= int(value) < len(levels):
+            return levels[int(value)]
+        return f"{value:g}"
+
+    def column(self, path):
+        """A per-run scalar dataset as float64 (an integer column's fill value as NaN), all rows."""
+        if path not in self._cache:
+            dataset = self.file[path]
+            values = dataset[...].astype(float)
+            fill = dataset.attrs.get("fill")
+            if fill is not None:
+                values[values == float(fill)] = math.nan
+            self._cache[path] = values
+        return self._cache[path]
+
+    def _read(self, path):
+        if path not in self._cache:
+            self._cache[path] = self.file[path][...]
+        return self._cache[path]
+
+    def series(self, path, rows):
+        """Rows `rows` of a time series dataset."""
+        dataset = self.file[path]
+        return np.stack([dataset[int(r)] for r in rows]) if len(rows) else np.empty((0, dataset.shape[1]))
+
+    def other_axes(self, exclude):
+        """Design parameters besides `exclude`."""
+        return [n for n in self.design_names if n not in exclude]
+
+    def groups(self, exclude):
+        """Complete runs grouped by the values of the design parameters other than `exclude`:
+        a list of (key dict, run indices), in key order. (A pending run's design values may be
+        fill values, NaN.)"""
+        axes = self.other_axes(exclude)
+        complete = np.nonzero(self.complete)[0]
+        if not axes:
+            return [({}, complete)]
+        columns = np.stack([self._read("design/" + a)[complete] for a in axes], axis=1)
+        keys, inverse = np.unique(columns, axis=0, return_inverse=True)
+        inverse = np.asarray(inverse).reshape(-1)
+        order = np.argsort(inverse, kind="stable")
+        members = np.split(complete[order], np.cumsum(np.bincount(inverse, minlength=len(keys)))[:-1])
+        return [({a: float(k[i]) for i, a in enumerate(axes)}, m) for k, m in zip(keys, members)]
+
+    def key_text(self, key):
+        return ", ".join(f"{n} = {self.level_name(n, v)}" for n, v in key.items())
+
+    def analysis_groups(self, prefix):
+        """Groups under `prefix` (e.g. analysis/sensitivity) that carry a `method` attribute."""
+        found = []
+        if prefix not in self.file:
+            return found
+
+        def visit(name, obj):
+            if isinstance(obj, h5py.Group) and "method" in obj.attrs and not name.split("/")[-1].startswith("."):
+                found.append(prefix + "/" + name)
+
+        self.file[prefix].visititems(visit)
+        return sorted(found)
+
+    def boundary(self):
+        """/analysis/boundary as a dict of arrays (with 'keys', 'levels', 'attrs'), or None."""
+        if "analysis/boundary" not in self.file:
+            return None
+        group = self.file["analysis/boundary"]
+        out = {"attrs": {k: _text(v) for k, v in group.attrs.items()}}
+        for name, dataset in group.items():
+            if dataset.dtype.kind == "O":
+                out[name] = [v.decode("utf-8", "replace") if isinstance(v, bytes) else str(v) for v in dataset[...]]
+            else:
+                out[name] = dataset[...]
+            out.setdefault("levels", {})[name] = _text(dataset.attrs.get("levels", []))
+        out["keys"] = list(out["attrs"].get("keys", []))
+        return out
+
+
+def open_archives(paths):
+    archives = []
+    for path in paths:
+        archives.append(Archive(path))
+    return archives

@@ -1,0 +1,61 @@
+// mpi_runner_driver: runs a study through RunStudyMpi (engine/mpi) without the CLI, so the MPI
+// runner is tested end to end (tests/mpi/mpi_test.py) whether or not `gesweep run --mpi` is wired.
+//   mpirun -n R mpi_runner_driver STUDY -o ARCHIVE [--threads N] [--shard i/N] [--force|--resume]
+//                                 [--prefetch N] [--quiet]
+// Exit codes as `gesweep run`: 0 all ok, 3 some runs failed, 2 bad input, 1 an I/O error.
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <csignal>
+#include <iostream>
+#include <string>
+
+#include "engine/common/errors.h"
+#include "engine/mpi/mpi_runner.h"
+#include "engine/sweep/study.h"
+
+namespace {
+std::atomic<bool> g_cancel{false};
+std::atomic<int> g_signal{0};
+extern "C" void OnSignal(int signal) {
+  g_signal.store(signal);
+  g_cancel.store(true);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Runs a study through the MPI runner (test driver of engine/mpi)"};
+  std::string study_path, output, shard;
+  int threads = 0, prefetch = 0;
+  bool force = false, resume = false, quiet = false;
+  app.add_option("study", study_path, "Study file")->required();
+  app.add_option("-o,--output", output, "Archive")->required();
+  app.add_option("--threads", threads, "Compute threads per rank (0: all cores)");
+  app.add_option("--shard", shard, "Shard i/N");
+  app.add_option("--prefetch", prefetch, "Batches a rank holds beyond its pipeline (0: one per thread)");
+  app.add_flag("--force", force, "Replace an existing archive");
+  app.add_flag("--resume", resume, "Continue an existing archive");
+  app.add_flag("-q,--quiet", quiet, "No progress output");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    gesweep::ShardSpec spec;
+    if (!shard.empty()) spec = gesweep::ParseShard(shard, "--shard");
+    gesweep::SweepPlan plan(gesweep::LoadStudy(study_path), spec);
+    gesweep::MpiRunOptions options;
+    options.output = output;
+    options.mode = resume ? gesweep::ArchiveOpenMode::kResume
+                          : (force ? gesweep::ArchiveOpenMode::kForce : gesweep::ArchiveOpenMode::kCreate);
+    options.threads = threads;
+    options.prefetch_batches = prefetch;
+    options.quiet = quiet;
+    options.command_line = "mpi_runner_driver " + study_path + " -o " + output;
+    options.cancel = &g_cancel;
+    options.signal = &g_signal;
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    return gesweep::RunStudyMpi(plan, options);
+  } catch (const gesweep::InputError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 2;
+  }
+}
