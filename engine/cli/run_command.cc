@@ -267,8 +267,8 @@ int Run(const RunFlags& flags) {
     if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
       std::cerr << "gesweep: resuming"
                 << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
-                        ? " after an unclean stop (complete batches copied to a fresh file)"
-                        : "")
+                        ? " from a fresh copy of its complete batches (" + opened.note + ")"
+                        : std::string())
                 << ": " << opened.runs_complete << " runs already complete, " << progress.runs_to_do
                 << " to run\n";
     }

@@ -272,14 +272,20 @@ linspace = [27.0, 55.0, 24]
       }
     }
     std::this_thread::sleep_for(
-        std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 300)(random)));
+        std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 100)(random)));
     kill(pid, SIGKILL);
     if (Wait(pid) != 128 + SIGKILL) break;  // it finished first: nothing to test this time
-    ++kills;
-    // The archive opens after the kill (a snapshot of the complete batches), and what it holds is right.
+    // The archive opens after the kill, and what it holds is right. Normally it is a snapshot of the
+    // complete batches; if the kill landed after the writer had closed the file (the process was
+    // already exiting), the archive is closed cleanly and must then be whole.
     ArchiveReader after = ArchiveReader::Open(archive);
-    EXPECT_TRUE(after.snapshot());
+    const bool closed_before_the_kill = !after.snapshot();
     after.Close();
+    if (closed_before_the_kill) {
+      EXPECT_EQ(Contents(archive), expected) << "clean archive after a late kill " << attempt;
+      break;
+    }
+    ++kills;
     auto partial = Contents(archive, /*complete_only=*/true);
     ArchiveReader again = ArchiveReader::Open(archive);
     const auto status = again.ReadStatus(0, again.run_count());
