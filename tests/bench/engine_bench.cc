@@ -95,8 +95,9 @@ BENCHMARK(BM_StateMatrix);
 // dynamic-size blocks). A has entries from 1e-3 (Mh) to 32 (u0) and the QR needs many sweeps to
 // converge; balancing it first (a diagonal similarity by powers of two, exact in floating point:
 // Parlett & Reinsch 1969, EISPACK's balanc, LAPACK's dgebal without permutations, and what
-// numpy.linalg.eigvals does through dgeev) cuts the sweeps. These benchmarks measure that change
-// without touching engine/modal: the same eigenvalues, by the same solver, on the balanced matrix.
+// numpy.linalg.eigvals does through dgeev) cuts the sweeps. These benchmarks measured that change
+// (bare Eigen, then Eigen after a hand-written Parlett-Reinsch balance) before AnalyzeModes adopted
+// it, balancing with LAPACK's dgebal; BM_Modes measures AnalyzeModes as it is.
 
 // Balances A in place by the Parlett-Reinsch iteration with radix 2 (row and column 1-norms of the
 // off-diagonal part brought within a factor 2 of each other). Same eigenvalues, exactly.
