@@ -242,7 +242,8 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   {
     Handle analysis(H5Gopen2(file, archive::kAnalysisGroup, H5P_DEFAULT), "open analysis group");
     hdf5::WriteAttribute(analysis.get(), "description",
-                         "Derived products written after the sweep: boundary, maps, sensitivity indices");
+                         "Derived products written after the sweep: the stability boundary (gesweep boundary "
+                         "--archive) and sensitivity indices (gesweep sensitivity)");
   }
 
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -57,7 +57,7 @@ class BoundaryAnalysis final : public Analysis {
       return AnalysisOutcome::Ok();
     }
     // No boundary is a finding, not a failure: H* is NaN and the message says why.
-    return AnalysisOutcome::Ok("boundary: none (" + result.reason + ")");
+    return AnalysisOutcome::Ok("none (" + result.reason + ")");  // stored as "boundary: none (...)"
   }
 
  private:

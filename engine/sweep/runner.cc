@@ -278,7 +278,12 @@ double MeasureRunCost(const SweepPlan& plan, int max_samples, double budget_s, i
   double elapsed = 0;
   int done = 0;
   for (int k = 0; k < samples; ++k) {
-    const std::int64_t index = plan.first_run() + static_cast<std::int64_t>(k) * plan.run_count() / samples;
+    // Spread by the golden-ratio (Weyl) sequence, not an even stride: a stride that divides a grid
+    // axis's length samples one value of that axis only (e.g. every sample at the lowest height).
+    const double where = std::fmod((k + 0.5) * 0.6180339887498949, 1.0);
+    const std::int64_t index =
+        plan.first_run() + std::min<std::int64_t>(plan.run_count() - 1,
+                                                  static_cast<std::int64_t>(where * plan.run_count()));
     ExecuteRun(plan, index, workspace, block, 0);
     ++done;
     elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

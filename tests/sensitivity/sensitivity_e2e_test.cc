@@ -385,6 +385,8 @@ TEST_F(SensitivityEndToEnd, RunsWithoutABoundaryDropTheirBlocks) {
       << table.out;
   EXPECT_NE(table.out.find("boundary: none"), std::string::npos) << "the first missing run's message\n"
                                                                  << table.out;
+  EXPECT_EQ(table.out.find("boundary: boundary:"), std::string::npos) << "the analysis named twice\n"
+                                                                      << table.out;
   hdf5::Handle file = OpenFile(archive);
   hdf5::Handle group(H5Gopen2(file.get(), "analysis/sensitivity/boundary/height_m", H5P_DEFAULT), "group");
   EXPECT_EQ(hdf5::ReadIntegerAttribute(group.get(), "blocks_dropped").value_or(-1),
