@@ -15,6 +15,12 @@ root, binary = pathlib.Path(sys.argv[1]).resolve(), sys.argv[2]
 text = (root / "schemas" / "archive.md").read_text()
 snippet = re.search(r"```python\n(.*?)```", text, re.S).group(1)
 assert len(snippet.strip().splitlines()) == 5, "the archive.md snippet must stay five lines"
+readme = (root / "README.md").read_text()
+assert snippet in readme, "README's h5py snippet must be archive.md's (tested here)"
+# README's study example is studies/map_h_terms.toml (run by validate_studies.py with every study).
+example = re.search(r"```toml\n(.*?)```", readme, re.S).group(1)
+assert example in (root / "studies" / "map_h_terms.toml").read_text(), \
+    "README's study example must be the body of studies/map_h_terms.toml"
 
 with tempfile.TemporaryDirectory() as directory:
     study = pathlib.Path(directory) / "s.toml"
