@@ -19,7 +19,7 @@
 #include "engine/common/errors.h"
 #include "engine/modal/boundary.h"
 #include "engine/query/archive_boundary.h"
-#include "engine/query/archive_lock.h"
+#include "engine/archive/archive_lock.h"
 #include "engine/query/run_columns.h"
 #include "engine/query/run_model.h"
 

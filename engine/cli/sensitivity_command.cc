@@ -18,6 +18,7 @@
 #include <optional>
 #include <sstream>
 
+#include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/hdf5_util.h"
 #include "engine/cli/command.h"
@@ -257,9 +258,10 @@ int Sensitivity(const SensitivityFlags& flags) {
     std::error_code ec;
     // The lock comes first, so that no sweep starts writing between the read and the write; a
     // missing archive is reported as such, not as an unwritable lock file.
-    std::optional<ArchiveUpdateLock> lock;
+    std::optional<ArchiveLock> lock;
     if (!flags.no_write && std::filesystem::is_regular_file(path, ec))
-      lock.emplace(ArchiveUpdateLock::Acquire(path));
+      lock.emplace(ArchiveLock::Acquire(
+          path, "run gesweep sensitivity once it has finished, or pass --no-write to only print it"));
     ArchiveReader reader = ArchiveReader::Open(path);
     if (reader.snapshot() && !flags.no_write) {
       throw InputError(

@@ -1,10 +1,5 @@
 #include "engine/sensitivity/sensitivity_group.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstring>
 #include <limits>
 
@@ -182,44 +177,6 @@ void WriteGroup(hid_t file, const std::string& path, const ArchiveSensitivity& r
 
 std::string SensitivityGroupPath(const ArchiveOutput& output) {
   return std::string(kSensitivityGroup) + "/" + output.name;
-}
-
-ArchiveUpdateLock ArchiveUpdateLock::Acquire(const std::filesystem::path& archive) {
-  ArchiveUpdateLock lock;
-  lock.lock_path_ = archive.string() + ".lock";
-  std::error_code ec;
-  const bool existed = std::filesystem::exists(lock.lock_path_, ec);
-  lock.fd_ = ::open(lock.lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (lock.fd_ < 0) {
-    throw InputError(archive.string(), "", "",
-                     "cannot write the result into the archive: cannot create its lock file " +
-                         lock.lock_path_.string() + " (" + std::strerror(errno) +
-                         "); pass --no-write to only print it");
-  }
-  lock.created_ = !existed;
-  if (flock(lock.fd_, LOCK_EX | LOCK_NB) != 0) {
-    throw InputError(archive.string(), "", "",
-                     "archive in use: a gesweep sweep is writing it (" + lock.lock_path_.string() +
-                         " is locked); run gesweep sensitivity once it has finished");
-  }
-  return lock;
-}
-
-ArchiveUpdateLock::ArchiveUpdateLock(ArchiveUpdateLock&& other) noexcept
-    : lock_path_(std::move(other.lock_path_)), fd_(other.fd_), created_(other.created_) {
-  other.fd_ = -1;
-  other.created_ = false;
-}
-
-ArchiveUpdateLock::~ArchiveUpdateLock() {
-  if (fd_ < 0) return;
-  // Removed while still locked, as ArchiveWriter does, so no other process takes a lock on a file
-  // that is about to disappear.
-  if (created_) {
-    std::error_code ec;
-    std::filesystem::remove(lock_path_, ec);
-  }
-  close(fd_);
 }
 
 void WriteSensitivityGroup(const std::filesystem::path& archive, const ArchiveSensitivity& result,

@@ -22,7 +22,7 @@
 #include "engine/modal/boundary.h"
 #include "engine/modal/modal_analysis.h"
 #include "engine/query/archive_boundary.h"
-#include "engine/query/archive_lock.h"
+#include "engine/archive/archive_lock.h"
 #include "engine/query/expression.h"
 #include "engine/query/run_columns.h"
 #include "engine/query/run_model.h"

@@ -1,4 +1,4 @@
-#include "engine/query/archive_lock.h"
+#include "engine/archive/archive_lock.h"
 
 #include <fcntl.h>
 #include <sys/file.h>

@@ -1,6 +1,7 @@
 #pragma once
-/// An exclusive claim on an archive for adding a derived product to it (/analysis/boundary): a flock
-/// on ARCHIVE.lock, the lock `gesweep run` holds while it writes the archive
+/// An exclusive claim on an archive for adding a derived product to it (/analysis/boundary by
+/// `gesweep boundary --archive`, /analysis/sensitivity by `gesweep sensitivity`): a flock on
+/// ARCHIVE.lock, the lock `gesweep run` holds while it writes the archive
 /// (engine/archive/archive_writer.h). While held, no sweep can start writing the archive; it is not
 /// granted while one writes.
 
