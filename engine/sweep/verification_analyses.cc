@@ -7,6 +7,7 @@
 //  - linear: f = intercept + Σ cᵢ xᵢ; Morris' μ* of xᵢ over [0, 1] is |cᵢ|.
 #include <cmath>
 
+#include "engine/analysis/ishigami.h"
 #include "engine/sweep/analysis_adapters.h"
 
 namespace gesweep {
@@ -27,9 +28,7 @@ class IshigamiAnalysis final : public Analysis {
                            "Ishigami function sin x1 + a sin^2 x2 + b x3^4 sin x1 (verification model)"));
   }
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
-    const double x1 = context.value(x_[0]), x2 = context.value(x_[1]), x3 = context.value(x_[2]);
-    const double s2 = std::sin(x2);
-    row.Set(output_, std::sin(x1) + a_ * s2 * s2 + b_ * x3 * x3 * x3 * x3 * std::sin(x1));
+    row.Set(output_, Ishigami({context.value(x_[0]), context.value(x_[1]), context.value(x_[2])}, a_, b_));
     return AnalysisOutcome::Ok();
   }
 
@@ -75,8 +74,8 @@ class LinearAnalysis final : public Analysis {
 
 std::unique_ptr<Analysis> MakeIshigamiAnalysis(const TomlSection& settings, const Aircraft*) {
   settings.RejectUnknownKeys({"a", "b"});
-  return std::make_unique<IshigamiAnalysis>(settings.OptionalNumber("a").value_or(7.0),
-                                            settings.OptionalNumber("b").value_or(0.1));
+  return std::make_unique<IshigamiAnalysis>(settings.OptionalNumber("a").value_or(kIshigamiA),
+                                            settings.OptionalNumber("b").value_or(kIshigamiB));
 }
 
 std::unique_ptr<Analysis> MakeLinearAnalysis(const TomlSection& settings, const Aircraft*) {
