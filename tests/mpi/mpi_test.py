@@ -33,7 +33,7 @@ COMPARE = os.path.join(ROOT, "tests", "slurm", "compare_archives.py")
 # boundary + open loop with series in 24 batches (about a second of work per rank).
 STUDIES = [(os.path.join(ROOT, "tests", "slurm", "tiny_study.toml"), False),
            (os.path.join(ROOT, "tests", "mpi", "mpi_study.toml"), True)]
-# Long enough (2400 boundary runs, seconds) to be stopped mid-run: mpirun forwards SIGTERM to every
+# Long enough (6000 boundary runs, seconds) to be stopped mid-run: mpirun forwards SIGTERM to every
 # rank, with a delay of its own.
 INTERRUPT_STUDY = os.path.join(ROOT, "tests", "slurm", "requeue_study.toml")
 RANKS = 3
@@ -172,8 +172,8 @@ def main():
     if args.runner == "cli":
         help_text = run([args.gesweep, "run", "--help"]).stdout
         if "--mpi" not in help_text:
-            print("skipped: `gesweep run` has no --mpi flag yet (apply tests/mpi/run_command.patch)")
-            return 77
+            print("FAIL: `gesweep run --help` lists no --mpi flag, though gesweep was built with MPI")
+            return 1
     try:
         with tempfile.TemporaryDirectory(prefix="gesweep-mpi-") as work:
             for study, spread_required in STUDIES:
