@@ -33,6 +33,8 @@ import slurm_sweep as ss  # noqa: E402
 STUDY = os.path.join(REPO, "tests", "slurm", "tiny_study.toml")
 # The tiny study's grid: 20 heights x 10 speeds x 2 h-derivative settings, counted by hand.
 STUDY_RUNS = 20 * 10 * 2
+# tests/slurm/requeue_study.toml: 40 speeds x 150 CLh scales.
+SLOW_RUNS = 40 * 150
 COMPARE = os.path.join(REPO, "tests", "slurm", "compare_archives.py")
 GESWEEP = None
 
@@ -203,7 +205,7 @@ class MergeJobTest(unittest.TestCase):
         # must pass it on, and gesweep must stop cleanly (exit 143) with its archive closed.
         slow = os.path.join(REPO, "tests", "slurm", "requeue_study.toml")
         manifest = ss.read_manifest(self.out_dir)
-        manifest.update(study=slow, study_sha256=ss.sha256_of(slow), shards=1, runs=2400)
+        manifest.update(study=slow, study_sha256=ss.sha256_of(slow), shards=1, runs=SLOW_RUNS)
         ss.write_manifest(self.out_dir, manifest)
         env = dict(os.environ, SLURM_ARRAY_TASK_ID="0")
         task = subprocess.Popen([os.path.join(SLURM, "shard_task"), GESWEEP, slow, ss.sha256_of(slow),
@@ -220,7 +222,7 @@ class MergeJobTest(unittest.TestCase):
         self.assertIn("stopped by signal 15", stderr)
         status = run([os.path.join(SLURM, "status"), self.out_dir])
         # Closed cleanly (not a snapshot) with some, not all, runs done.
-        self.assertRegex(status.stdout, r"shard 0: incomplete \([1-9][0-9]* of 2400 runs\)\n", status.stdout)
+        self.assertRegex(status.stdout, rf"shard 0: incomplete \([1-9][0-9]* of {SLOW_RUNS} runs\)\n", status.stdout)
 
     def test_task_refuses_a_changed_study(self):
         env = dict(os.environ, SLURM_ARRAY_TASK_ID="0")
