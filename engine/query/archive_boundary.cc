@@ -369,6 +369,9 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
     {
       Handle dataset(H5Dopen2(g, "found", H5P_DEFAULT), "open found");
       hdf5::WriteAttribute(dataset.get(), "levels", std::vector<std::string>{"false", "true"});
+      // The archive's convention for integer codes (schemas/archive.md): never stored here, every
+      // point is 0 or 1.
+      hdf5::WriteAttribute(dataset.get(), "fill", std::int64_t{-1});
     }
     WriteDoubles(g, "grid_lower_height_m", lower, "m",
                  "Grid height just below the sign change (sigma >= 0); NaN when none");

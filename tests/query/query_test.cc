@@ -382,6 +382,9 @@ TEST_F(QueryTest, BoundaryGroupIsWrittenWithUnitsAndReplacedWhole) {
     EXPECT_TRUE(hdf5::ReadStringAttribute(dataset.get(), "description").has_value()) << name;
     EXPECT_EQ(hdf5::Dimensions(dataset.get())[0], static_cast<std::int64_t>(boundary.points.size())) << name;
   }
+  // An integer code carries `levels` and `fill`, as every integer code of the archive does.
+  hdf5::Handle found(H5Dopen2(group.get(), "found", H5P_DEFAULT), "found");
+  EXPECT_EQ(hdf5::ReadIntegerAttribute(found.get(), "fill").value_or(0), -1);
   hdf5::Handle dataset(H5Dopen2(group.get(), "height_m", H5P_DEFAULT), "height_m");
   std::vector<double> heights(boundary.points.size());
   H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, heights.data());
