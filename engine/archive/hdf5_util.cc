@@ -114,6 +114,29 @@ void CreateGroups(hid_t location, const std::string& path) {
   }
 }
 
+void ReplaceGroup(hid_t file, const std::string& path, const std::function<void(const std::string&)>& write) {
+  const std::size_t slash = path.rfind('/');
+  const std::string parent = slash == std::string::npos ? "" : path.substr(0, slash);
+  const std::string leaf = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string temporary = (parent.empty() ? "" : parent + "/") + "." + leaf + ".partial";
+  if (!parent.empty()) CreateGroups(file, parent);
+  if (H5Lexists(file, temporary.c_str(), H5P_DEFAULT) > 0) {
+    Check(H5Ldelete(file, temporary.c_str(), H5P_DEFAULT), "delete " + temporary);
+  }
+  try {
+    write(temporary);
+  } catch (...) {
+    H5Ldelete(file, temporary.c_str(), H5P_DEFAULT);
+    H5Eclear2(H5E_DEFAULT);
+    throw;
+  }
+  if (H5Lexists(file, path.c_str(), H5P_DEFAULT) > 0) {
+    Check(H5Ldelete(file, path.c_str(), H5P_DEFAULT), "delete the previous " + path);
+  }
+  Check(H5Lmove(file, temporary.c_str(), file, path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+        "move " + temporary + " to " + path);
+}
+
 namespace {
 
 void Replace(hid_t object, const std::string& name) {

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -68,6 +69,13 @@ bool Exists(hid_t location, const std::string& path);
 
 /// Creates the groups of `path` that do not exist yet.
 void CreateGroups(hid_t location, const std::string& path);
+
+/// Replaces the group at `path` (e.g. "analysis/boundary") whole: `write(temporary)` creates and fills
+/// a group under the hidden sibling name "<parent>/.<leaf>.partial" (a stale one is deleted first);
+/// only when it returns is the old group deleted and the new one moved into place. If `write`
+/// throws, the temporary group is deleted, the old group is left untouched, and the exception
+/// propagates. Creates the parent groups when missing.
+void ReplaceGroup(hid_t file, const std::string& path, const std::function<void(const std::string&)>& write);
 
 /// Attribute writers (an existing attribute of the same name is replaced).
 void WriteAttribute(hid_t object, const std::string& name, const std::string& value);

@@ -294,13 +294,7 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
             "); is another program reading or writing it? pass --no-write to only print the boundary");
   }
   Handle file(id);
-  const std::string path = kBoundaryGroup;
-  const std::string temporary = std::string(archive::kAnalysisGroup) + "/.boundary.partial";
-  hdf5::CreateGroups(file.get(), archive::kAnalysisGroup);
-  if (H5Lexists(file.get(), temporary.c_str(), H5P_DEFAULT) > 0) {
-    Check(H5Ldelete(file.get(), temporary.c_str(), H5P_DEFAULT), "delete " + temporary);
-  }
-  try {
+  hdf5::ReplaceGroup(file.get(), kBoundaryGroup, [&](const std::string& temporary) {
     Handle group(H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                  "create group " + temporary);
     const hid_t g = group.get();
@@ -384,16 +378,7 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
     WriteNumbers(g, "heights", H5T_STD_I32LE, H5T_NATIVE_INT32, heights.data(), n, "1",
                  "Grid heights with a finite sigma (complete ok runs) of this point");
     WriteStrings(g, "reason", reasons, "Why there is no boundary (empty when there is one)");
-  } catch (...) {
-    H5Ldelete(file.get(), temporary.c_str(), H5P_DEFAULT);
-    H5Eclear2(H5E_DEFAULT);
-    throw;
-  }
-  if (H5Lexists(file.get(), path.c_str(), H5P_DEFAULT) > 0) {
-    Check(H5Ldelete(file.get(), path.c_str(), H5P_DEFAULT), "delete the previous " + path);
-  }
-  Check(H5Lmove(file.get(), temporary.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-        "move " + temporary + " to " + path);
+  });
   file.Close("close " + shown);
 }
 

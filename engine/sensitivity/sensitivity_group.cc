@@ -195,25 +195,9 @@ void WriteSensitivityGroup(const std::filesystem::path& archive, const ArchiveSe
             "); is another program reading or writing it? pass --no-write to only print the result");
   }
   Handle file(id);
-  const std::string path = SensitivityGroupPath(result.output);
-  const std::string parent = path.substr(0, path.rfind('/'));
-  const std::string temporary = parent + "/." + path.substr(path.rfind('/') + 1) + ".partial";
-  hdf5::CreateGroups(file.get(), parent);
-  if (H5Lexists(file.get(), temporary.c_str(), H5P_DEFAULT) > 0) {
-    Check(H5Ldelete(file.get(), temporary.c_str(), H5P_DEFAULT), "delete " + temporary);
-  }
-  try {
+  hdf5::ReplaceGroup(file.get(), SensitivityGroupPath(result.output), [&](const std::string& temporary) {
     WriteGroup(file.get(), temporary, result, command_line);
-  } catch (...) {
-    H5Ldelete(file.get(), temporary.c_str(), H5P_DEFAULT);
-    H5Eclear2(H5E_DEFAULT);
-    throw;
-  }
-  if (H5Lexists(file.get(), path.c_str(), H5P_DEFAULT) > 0) {
-    Check(H5Ldelete(file.get(), path.c_str(), H5P_DEFAULT), "delete the previous " + path);
-  }
-  Check(H5Lmove(file.get(), temporary.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-        "move " + temporary + " to " + path);
+  });
   file.Close("close " + shown);
 }
 
