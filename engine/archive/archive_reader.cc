@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <sstream>
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_writer.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
@@ -30,6 +32,114 @@ herr_t CollectDataset(hid_t, const char* name, const H5O_info_t* info, void* dat
   return 0;
 }
 
+bool StartsWith(const std::string& text, const std::string& prefix) {
+  return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
+}
+
+// The layout every reader relies on (schemas/archive.md), checked from metadata alone when an archive
+// is opened, so that a damaged or foreign file is refused with one line (exit 2) instead of failing
+// later in a reader: the root attributes the readers use, runs/ and design/ present, and every
+// per-run dataset one row per run, of a type its readers can convert.
+void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_count) {
+  auto refuse = [&shown](const std::string& key, const std::string& value, const std::string& why) {
+    throw InputError(shown, key, value, why + " (a damaged archive, or one not written by gesweep)");
+  };
+  auto integer = [&](const char* name) {
+    std::optional<std::int64_t> value;
+    try {
+      value = hdf5::ReadIntegerAttribute(file, name);
+    } catch (const ArchiveError&) {
+      refuse(name, "", "expected an integer root attribute");
+    }
+    if (!value) refuse(name, "", "missing root attribute");
+    return *value;
+  };
+  const std::int64_t runs = integer("run_count");
+  const std::int64_t design_runs = integer("design_runs");
+  const std::int64_t first_run = integer("first_run");
+  const std::int64_t chunk_runs = integer("chunk_runs");
+  if (runs < 0) refuse("run_count", std::to_string(runs), "expected a run count >= 0");
+  if (chunk_runs < 1) refuse("chunk_runs", std::to_string(chunk_runs), "expected a batch size >= 1");
+  if (first_run < 0 || design_runs < 0 || first_run > design_runs || runs > design_runs - first_run) {
+    refuse("first_run", std::to_string(first_run),
+           "expected first_run + run_count <= design_runs = " + std::to_string(design_runs));
+  }
+  for (const char* group : {archive::kRunsGroup, archive::kDesignGroup}) {
+    H5O_info_t info{};
+    if (!hdf5::Exists(file, group) || H5Oget_info_by_name2(file, group, &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0 ||
+        info.type != H5O_TYPE_GROUP) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(group, "", "missing group /" + std::string(group));
+    }
+  }
+  std::vector<std::string> datasets;
+  if (H5Ovisit2(file, H5_INDEX_NAME, H5_ITER_INC, CollectDataset, &datasets, H5O_INFO_BASIC) < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    refuse("", "", "cannot list its datasets");
+  }
+  bool seen[4] = {false, false, false, false};
+  const char* required[4] = {archive::kRunIndex, archive::kRunId, archive::kRunStatus, archive::kRunMessage};
+  for (const std::string& path : datasets) {
+    const bool runs_group = StartsWith(path, std::string(archive::kRunsGroup) + "/");
+    const bool design_group = StartsWith(path, std::string(archive::kDesignGroup) + "/");
+    const bool results_group = StartsWith(path, std::string(archive::kResultsGroup) + "/");
+    const bool series_group = StartsWith(path, std::string(archive::kSeriesGroup) + "/");
+    if (!runs_group && !design_group && !results_group && !series_group) continue;
+    const hid_t raw = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+    if (raw < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "cannot open the dataset");
+    }
+    Handle dataset(raw);
+    // A series group holds the shared time axes too (one value per sample, not per run).
+    if (series_group && H5Aexists(dataset.get(), "time_axis") <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      continue;
+    }
+    const hid_t space_id = H5Dget_space(dataset.get());
+    const hid_t type_id = H5Dget_type(dataset.get());
+    Handle space(space_id), type(type_id);
+    if (space_id < 0 || type_id < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "cannot read the dataset's shape or type");
+    }
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    hsize_t dims[2] = {0, 0};
+    if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
+    }
+    if (static_cast<std::int64_t>(dims[0]) != runs) {
+      refuse(path, std::to_string(dims[0]) + " rows",
+             "expected one row per run: run_count = " + std::to_string(runs) + " (runs/status has " +
+                 (runs >= 0 ? std::to_string(runs) : std::string("?")) + ")");
+    }
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    const bool number = type_class == H5T_INTEGER || type_class == H5T_FLOAT;
+    bool ok = true;
+    std::string wanted;
+    if (path == archive::kRunMessage) {
+      ok = type_class == H5T_STRING && rank == 1;
+      wanted = "one string per run";
+    } else if (runs_group) {
+      ok = type_class == H5T_INTEGER && rank == 1;
+      wanted = "one integer per run";
+    } else if (design_group) {
+      ok = number && rank == 1;
+      wanted = "one number per run";
+    } else {
+      ok = number || (type_class == H5T_COMPOUND && results_group);
+      wanted = "numbers";
+    }
+    if (!ok) refuse(path, "", "expected " + wanted + ", found another type or shape");
+    for (int k = 0; k < 4; ++k) seen[k] = seen[k] || path == required[k];
+  }
+  for (int k = 0; k < 4; ++k) {
+    if (!seen[k]) refuse(required[k], "", "missing dataset /" + std::string(required[k]));
+  }
+  *run_count = runs;
+}
+
 }  // namespace
 
 ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
@@ -38,14 +148,12 @@ ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snaps
 ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
   hdf5::Quiet();
   const std::string shown = path.string();
-  std::error_code ec;
-  const bool exists = std::filesystem::exists(path, ec);
-  if (ec) throw InputError(shown, "", "", "cannot read the archive: " + ec.message());
-  if (!exists) throw InputError(shown, "", "", "no such archive");
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(shown, "", "", "is a directory, not an archive");
-  if (H5Fis_hdf5(path.c_str()) <= 0)
+  // Before HDF5 sees it: a FIFO or a device would block H5Fis_hdf5 for ever or never end.
+  RequireRegularFile(path, "archive");
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    H5Eclear2(H5E_DEFAULT);
     throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
+  }
   Handle fapl = hdf5::FileAccess();
   bool snapshot = false;
   hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
@@ -64,18 +172,24 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
                          "); if no gesweep is writing it, it may be damaged");
   }
   ArchiveReader reader(path, Handle(id), snapshot);
-  const auto format = hdf5::ReadStringAttribute(id, "format");
+  std::optional<std::string> format;
+  std::optional<std::int64_t> version;
+  try {
+    format = hdf5::ReadStringAttribute(id, "format");
+    version = hdf5::ReadIntegerAttribute(id, "format_version");
+  } catch (const ArchiveError&) {
+    H5Eclear2(H5E_DEFAULT);
+  }
   if (!format || *format != archive::kFormatName) {
     throw InputError(shown, "format", format.value_or(""),
                      "not a gesweep archive (no format = \"gesweep-archive\")");
   }
-  const auto version = hdf5::ReadIntegerAttribute(id, "format_version");
   if (!version || *version > archive::kFormatVersion) {
     throw InputError(shown, "format_version", version ? std::to_string(*version) : "",
                      "expected format version <= " + std::to_string(archive::kFormatVersion) +
                          " (this engine is older than the archive)");
   }
-  reader.run_count_ = reader.IntegerAttribute("run_count");
+  ValidateLayout(id, shown, &reader.run_count_);
   return reader;
 }
 

@@ -275,9 +275,8 @@ int RunBoundary(const BoundaryFlags& flags) {
   std::vector<double> speeds;
   if (!flags.speeds.empty()) {
     speeds = ParseRange(flags.speeds, "--speeds-mps");
-    for (double v : speeds) RequirePositiveSpeed(v, "--speeds-mps");
+    RequireWithinLimit(speeds, "speed_mps", "--speeds-mps");
   } else {
-    RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
     speeds.push_back(flags.speed_mps);
   }
   const LongitudinalModel model = flags.model.BuildModel();
@@ -341,7 +340,7 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<BoundaryFlags>();
       flags->model.AddTo(app, /*aircraft_required=*/false);
-      auto* speed = app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s");
+      auto* speed = AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s");
       auto* speeds = app.add_option("--speeds-mps", flags->speeds, "Speeds a:b:n (n evenly spaced) or a,b,c");
       speed->excludes(speeds);
       auto* archive =

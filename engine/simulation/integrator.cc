@@ -25,6 +25,8 @@ std::string_view ToString(IntegrationStatus status) {
       return "non_finite";
     case IntegrationStatus::kStepSizeUnderflow:
       return "step_size_underflow";
+    case IntegrationStatus::kCancelled:
+      return "cancelled";
   }
   return "unknown";
 }
