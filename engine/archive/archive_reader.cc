@@ -1,6 +1,7 @@
 #include "engine/archive/archive_reader.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <sstream>
@@ -30,6 +31,18 @@ std::string Hex(std::uint64_t value) {
 herr_t CollectDataset(hid_t, const char* name, const H5O_info_t* info, void* data) {
   if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->emplace_back(name);
   return 0;
+}
+
+// The physical and the recorded size of a file HDF5 refused as truncated, from its message
+// ("truncated file: eof = 3145728, sblock->base_addr = 0, stored_eof = 3390612"), when it is that.
+std::optional<std::pair<std::uintmax_t, std::uintmax_t>> TruncatedSizes(const std::string& error) {
+  const auto eof = error.find("truncated file: eof = ");
+  const auto stored = error.find("stored_eof = ");
+  if (eof == std::string::npos || stored == std::string::npos) return std::nullopt;
+  const std::uintmax_t actual = std::strtoull(error.c_str() + eof + 22, nullptr, 10);
+  const std::uintmax_t recorded = std::strtoull(error.c_str() + stored + 13, nullptr, 10);
+  if (recorded <= actual) return std::nullopt;
+  return std::make_pair(actual, recorded);
 }
 
 bool StartsWith(const std::string& text, const std::string& prefix) {
@@ -145,7 +158,7 @@ void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_coun
 ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
     : path_(std::move(path)), file_(std::move(file)), snapshot_(snapshot) {}
 
-ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
+ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair_truncated) {
   hdf5::Quiet();
   const std::string shown = path.string();
   // Before HDF5 sees it: a FIFO or a device would block H5Fis_hdf5 for ever or never end.
@@ -167,6 +180,24 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
     H5Eclear2(H5E_DEFAULT);
   }
   if (id < 0) {
+    // A write that failed half-way (disk full, a file-size limit) leaves the file shorter than the
+    // size HDF5 recorded for it: "truncated file: eof = A, ..., stored_eof = B".
+    const auto truncated = TruncatedSizes(first_error);
+    if (truncated && repair_truncated) {
+      // The writer resuming it reads only its complete batches (statuses first, metadata checksummed)
+      // into a fresh file that replaces it; the missing tail, zeros, belongs to the batch that failed.
+      std::error_code ec;
+      if (std::filesystem::file_size(path, ec) == truncated->first && !ec) {
+        std::filesystem::resize_file(path, truncated->second, ec);
+        if (!ec) return Open(path, /*repair_truncated=*/false);
+      }
+    }
+    if (truncated) {
+      throw InputError(shown, "", "",
+                       "the file is " + std::to_string(truncated->second - truncated->first) +
+                           " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
+                           "batches are kept: gesweep run STUDY -o " + shown + " --resume repairs it and goes on");
+    }
     throw InputError(shown, "", "",
                      "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
                          "); if no gesweep is writing it, it may be damaged");

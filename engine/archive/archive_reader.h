@@ -25,7 +25,11 @@ class ArchiveReader {
   /// (run_count, design_runs, first_run, chunk_runs), runs/ or design/ missing, a per-run dataset
   /// (runs/, design/, results/, the series) without one row per run or of a type its readers cannot
   /// convert. Every reader (query, boundary, report, sensitivity, merge, resume) goes through it.
-  static ArchiveReader Open(const std::filesystem::path& path);
+  /// A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size limit)
+  /// is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
+  /// with zeros to its recorded size and opened as a snapshot, whose complete batches the resume
+  /// copies into a fresh archive.
+  static ArchiveReader Open(const std::filesystem::path& path, bool repair_truncated = false);
 
   ArchiveReader(ArchiveReader&&) = default;
   ArchiveReader& operator=(ArchiveReader&&) = default;

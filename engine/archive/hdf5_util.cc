@@ -8,6 +8,12 @@
 namespace gesweep::hdf5 {
 namespace {
 
+// At static initialisation, before the library's first call: no clean-up at exit. HDF5 1.10 closes
+// every file still open from an atexit handler, and a file whose close already failed (a full disk)
+// makes that handler crash (SIGSEGV in H5F__close_cb) after gesweep has printed its error. The engine
+// closes what it opens; the handler adds nothing.
+const bool kNoCleanUpAtExit = H5dont_atexit() >= 0;
+
 struct StackText {
   std::string innermost;  // the description of the innermost (first) entry
   int system_error = 0;   // an "errno = N" some entry quotes (HDF5's sec2 driver on a failed write)

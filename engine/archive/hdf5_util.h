@@ -32,6 +32,8 @@ class ArchiveError : public std::runtime_error {
 namespace hdf5 {
 
 /// Turns off HDF5's automatic error printing on the calling thread (errors become exceptions).
+/// (hdf5_util.cc also turns off HDF5's clean-up at exit, at static initialisation: it crashes on a
+/// file whose close failed on a full disk.)
 void Quiet();
 
 /// The cause of the calling thread's HDF5 error, in one line ("" when the stack is empty): the

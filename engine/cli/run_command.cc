@@ -228,6 +228,29 @@ void CheckArchivePath(const RunFlags& flags, const Study& study) {
                   {flags.output + ".partial", flags.output + ".lock"});
 }
 
+// Space the archive's file system must have free before a sweep starts or resumes: HDF5 1.10 can
+// leave a variable-length attribute it was rewriting damaged when a write fails for want of space
+// (found resuming on a full disk: "len not positive after adjustment for EOA"), so a sweep does not
+// start on a disk that cannot take a few batches. A disk that fills later stops the sweep cleanly.
+constexpr std::uintmax_t kMinimumFreeBytes = 16u << 20;
+
+void CheckFreeSpace(const RunFlags& flags, const SweepPlan& plan) {
+  std::filesystem::path directory = std::filesystem::path(flags.output).parent_path();
+  if (directory.empty()) directory = ".";
+  std::error_code ec;
+  const std::filesystem::space_info space = std::filesystem::space(directory, ec);
+  if (ec) return;  // unknown (the writer reports a missing directory itself)
+  const auto batch_bytes = static_cast<std::uintmax_t>(plan.storage().bytes_per_run) *
+                           static_cast<std::uintmax_t>(plan.chunk_runs());
+  const std::uintmax_t needed = std::max(kMinimumFreeBytes, 2 * batch_bytes);
+  if (space.available >= needed) return;
+  throw ArchiveError("not enough space for the archive " + flags.output + ": " +
+                         FormatBytes(static_cast<double>(space.available)) + " free on its file system, at least " +
+                         FormatBytes(static_cast<double>(needed)) +
+                         " needed to start safely; free some space and rerun (nothing was written)",
+                     "no space left on device");
+}
+
 // One line for an archive the sweep could not write (disk full, quota, I/O error): which archive,
 // the cause, what is kept and how to go on.
 std::string WriteFailure(const RunFlags& flags, const std::string& cause, std::int64_t runs_kept) {
@@ -285,6 +308,12 @@ int Run(const RunFlags& flags) {
   const SignalCancellation signals;
   ArchiveOpenReport opened;
   std::unique_ptr<ArchiveWriter> writer;
+  try {
+    CheckFreeSpace(flags, plan);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
+    return 1;
+  }
   try {
     writer =
         ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
