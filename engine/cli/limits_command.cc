@@ -39,10 +39,18 @@ int RunLimits(const std::string& format) {
     return 0;
   }
   if (format == "markdown") {
+    // "<" and ">" would be taken for HTML tags (scale.<coefficient>), "|" for a column.
+    auto escape = [](std::string_view text) {
+      std::string out;
+      for (char c : text) {
+        out += c == '<' ? "&lt;" : (c == '>' ? "&gt;" : (c == '|' ? "\\|" : std::string(1, c)));
+      }
+      return out;
+    };
     std::cout << "| Input | Range | Units | Why |\n|---|---|---|---|\n";
     for (const InputLimit& limit : InputLimits()) {
       std::cout << "| `" << limit.name << "` | " << Interval(limit) << " | " << limit.units << " | "
-                << limit.reason << " |\n";
+                << escape(limit.reason) << " |\n";
     }
     std::cout << "\nAt most " << ShortNumber(kMaximumStepsPerRun)
               << " integration steps per run: duration_s / step_s (RK4), duration_s / max_step_s (dopri5 "

@@ -58,7 +58,7 @@ std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream out;
   if (seconds < 60) {
-    out << std::fixed << std::setprecision(seconds < 10 ? 1 : 0) << seconds << " s";
+    out << std::fixed << std::setprecision(seconds < 1 ? 2 : (seconds < 10 ? 1 : 0)) << seconds << " s";
     return out.str();
   }
   const auto total = static_cast<long long>(std::llround(seconds));
@@ -202,17 +202,20 @@ int DryRun(const SweepPlan& plan, int threads, const RunFlags& flags) {
   std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes))
             << " before compression (" << FormatBytes(static_cast<double>(storage.bytes_per_run))
             << " per run" << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
-  const std::string per_run = ShortNumber(std::round(cost.seconds_per_run * 1e9) / 1e3);
+  const double us = cost.seconds_per_run * 1e6;
+  const std::string per_run = us < 1e3   ? ShortNumber(std::round(us * 100) / 100) + " us"
+                              : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
+                                         : ShortNumber(std::round(us / 1e4) / 100) + " s";
   if (cost.lower_bound) {
     std::cout << "time         more than " << FormatDuration(cost.estimated_seconds) << " on " << threads
               << " thread" << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
               << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
-              << " us per run); --dry-run-budget-s measures longer\n";
+              << " per run); --dry-run-budget-s measures longer\n";
   } else {
     std::cout << "time         about " << FormatDuration(cost.estimated_seconds) << " ("
               << FormatDuration(cost.estimated_seconds_low) << " to " << FormatDuration(cost.estimated_seconds_high)
               << ", 95 %) on " << threads << " thread" << (threads > 1 ? "s" : "") << " (" << per_run
-              << " us per run, from " << cost.timed_runs << " sample run" << (cost.timed_runs == 1 ? "" : "s")
+              << " per run, from " << cost.timed_runs << " sample run" << (cost.timed_runs == 1 ? "" : "s")
               << " after " << cost.warmup_runs << " warm-up, in " << ShortNumber(std::round(cost.measured_s * 10) / 10)
               << " s)\n";
   }

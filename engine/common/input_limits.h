@@ -21,7 +21,7 @@ namespace gesweep {
 
 /// The most integration steps one run may take: a run whose step count (duration / step, or a
 /// landing's time limit / largest step) exceeds it is refused before it starts. 1e8 RK4 steps of
-/// Eq. (1) take about 8 s on one core (docs/simulation.md); more is almost certainly a typo in a step.
+/// Eq. (1) take about 7 s on one core (docs/limits.md); more is almost certainly a typo in a step.
 inline constexpr double kMaximumStepsPerRun = 1e8;
 
 /// The range of one input quantity. Values are finite unless `allows_infinity` (then +inf also).

@@ -65,6 +65,9 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   });
 
   std::atomic<std::int64_t> next_burst{0};
+  // A shard no larger than what the budget can sample is measured once over: sampling more would
+  // take longer than the sweep itself.
+  std::atomic<std::int64_t> timed_total{0};
   std::vector<ThreadResult> results(static_cast<std::size_t>(options.threads));
   auto sample = [&](ThreadResult& out) {
     ResultBlock block;
@@ -72,7 +75,7 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
     block.Reset(plan, 0);
     RunWorkspace workspace(plan);
     bool warm = false;
-    while (!expired.load()) {
+    while (!expired.load() && timed_total.load() < runs) {
       const std::int64_t k = next_burst.fetch_add(1);
       const double where = std::fmod((static_cast<double>(k) + 0.5) * kGoldenRatioFraction, 1.0);
       const std::int64_t first =
@@ -102,6 +105,7 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
         continue;
       }
       out.bursts.push_back({done, seconds});
+      timed_total.fetch_add(done);
     }
   };
   std::vector<std::thread> workers;

@@ -5,7 +5,9 @@
 /// How. Each thread first runs one warm-up burst (model built, caches and code paged in; not
 /// counted), then bursts of a few consecutive design runs -- consecutive, as the sweep runs them,
 /// so that the per-worker model cache behaves as in the sweep -- starting at points of the
-/// golden-ratio sequence over the shard (no grid axis aliases with it). Every sample run gets a
+/// golden-ratio sequence over the shard (no grid axis aliases with it), until the budget is spent or
+/// as many runs as the shard holds were timed (a small sweep is measured once over, not for the
+/// whole budget). Every sample run gets a
 /// cancellation flag that fires at the deadline (or when `stop` is set), so even a single run
 /// longer than the budget cannot make the estimate overrun it. The estimate is the mean time per
 /// run on one thread, under the contention of the others, times the run count over the threads;

@@ -1,8 +1,10 @@
 #!/usr/bin/python3
-"""Writes the limits table's ranges into schemas/study.schema.json (docs/limits.md).
+"""Writes the limits table into schemas/study.schema.json and docs/limits.md.
 
-    /usr/bin/python3 scripts/limits/sync_schema.py build/gesweep      # rewrites the schema in place
-    /usr/bin/python3 scripts/limits/sync_schema.py build/gesweep --check
+    /usr/bin/python3 scripts/limits/sync.py build/gesweep      # rewrites both in place
+    /usr/bin/python3 scripts/limits/sync.py build/gesweep --check
+
+docs/limits.md: everything after its "## The table" heading is `gesweep limits --format markdown`.
 
 The table (engine/common/input_limits.cc, printed by `gesweep limits --format json`) is the one source
 of every range; the schema states the same bounds at the places tests/sweep/schema_sync_test.cc checks:
@@ -16,6 +18,8 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SCHEMA = ROOT / "schemas" / "study.schema.json"
+DOC = ROOT / "docs" / "limits.md"
+DOC_HEADING = "## The table\n\n"
 # The catalogue's parameters that take their range from a family entry of the table.
 FAMILIES = {"scale.": "scale_factor", "lqr.q_": "lqr.q", "x": "verification_input"}
 
@@ -45,7 +49,7 @@ def places(schema, limits):
             if limit is None and name.startswith(prefix) and (prefix != "x" or name[1:].isdigit()):
                 limit = limits[family]
         if limit is None:
-            raise SystemExit(f"sync_schema: parameters.{name} has no entry in the limits table")
+            raise SystemExit(f"sync: parameters.{name} has no entry in the limits table")
         yield entry, limit
     for name, limit in limits.items():
         analysis, _, key = name.partition(".")
@@ -77,10 +81,19 @@ def main():
             for k in current:
                 del entry[k]
             entry.update(wanted)
+    markdown = subprocess.run([gesweep, "limits", "--format", "markdown"], check=True, capture_output=True,
+                              text=True).stdout
+    doc = DOC.read_text()
+    head = doc.split(DOC_HEADING, 1)[0] if DOC_HEADING in doc else doc.rstrip("\n") + "\n\n"
+    new_doc = head + DOC_HEADING + markdown
+    if new_doc != doc:
+        differences += 1
+        print(f"{DOC}: the table differs from gesweep limits --format markdown")
     if check:
         return 1 if differences else 0
     SCHEMA.write_text(json.dumps(schema, indent=2, ensure_ascii=False) + "\n")
-    print(f"sync_schema: {differences} entries updated in {SCHEMA}")
+    DOC.write_text(new_doc)
+    print(f"sync: {differences} differences written ({SCHEMA.name}, {DOC.name})")
     return 0
 
 
