@@ -5,6 +5,7 @@
 #include <tbb/info.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <chrono>
@@ -17,6 +18,7 @@
 #include <thread>
 
 #include "engine/archive/archive_writer.h"
+#include "engine/archive/write_cost.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/signals.h"
@@ -146,19 +148,43 @@ class ProgressPrinter {
   bool stopping_ = false;
 };
 
-int DryRun(const SweepPlan& plan, int threads, const RunFlags& flags) {
+// Wall time per run of the sweep from its parts (docs/sweep.md, "Dry run"): `compute_s` per run on
+// one worker (measured with every worker busy), `write_s` per run on the one writer thread, which runs
+// beside the workers: the slowest of the workers' share, the writer, and both sharing the cores.
+double WallPerRun(double compute_s, double write_s, int threads) {
+  const int cores = std::max(1, tbb::info::default_concurrency());
+  const int busy = std::min(threads + 1, cores);
+  return std::max({compute_s / threads, write_s, (compute_s + write_s) / busy});
+}
+
+int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
   RunCostEstimate cost;
+  WriteCostEstimate write;
   {
     const SignalCancellation signals;
+    // Most of the budget to the runs, the rest to one real batch written to a scratch archive.
     RunCostOptions options;
     options.threads = threads;
-    options.budget_s = flags.dry_run_budget_s;
+    options.budget_s = 0.75 * flags.dry_run_budget_s;
     cost = EstimateRunCost(plan, options, signals.flag());
-    if (cost.stopped) {
+    if (!cost.stopped && !cost.lower_bound) {
+      try {
+        write = MeasureWriteCost(plan, cost.seconds_per_run, 0.15 * flags.dry_run_budget_s,
+                                 0.1 * flags.dry_run_budget_s);
+      } catch (const ArchiveError&) {
+        write = WriteCostEstimate{};  // no scratch space: the estimate leaves the writer out, and says so
+      }
+    }
+    if (cost.stopped || signals.cancelled()) {
       std::cerr << "gesweep: dry run stopped by signal " << signals.signal() << "\n";
       return signals.exit_code();
     }
   }
+  const double runs = static_cast<double>(plan.run_count());
+  const double estimate_s = runs * WallPerRun(cost.seconds_per_run, write.seconds_per_run, threads);
+  const double low_s = runs * WallPerRun(cost.seconds_per_run_low, write.seconds_per_run_low, threads);
+  const double high_s =
+      cost.lower_bound ? INFINITY : runs * WallPerRun(cost.seconds_per_run_high, write.seconds_per_run_high, threads);
   const auto& storage = plan.storage();
   const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
@@ -178,14 +204,15 @@ int DryRun(const SweepPlan& plan, int threads, const RunFlags& flags) {
         {"design_storage_bytes", storage.design_bytes},
         {"seconds_per_run", cost.seconds_per_run},
         {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
+        {"write_seconds_per_run", write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
         {"calibration_runs", cost.timed_runs},
         {"warmup_runs", cost.warmup_runs},
         {"measured_seconds", cost.measured_s},
         {"budget_seconds", flags.dry_run_budget_s},
         {"lower_bound", cost.lower_bound},
         {"threads", threads},
-        {"estimated_seconds", cost.estimated_seconds},
-        {"estimated_seconds_interval", {cost.estimated_seconds_low, JsonNumber(cost.estimated_seconds_high)}}};
+        {"estimated_seconds", estimate_s},
+        {"estimated_seconds_interval", {low_s, JsonNumber(high_s)}}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -207,17 +234,21 @@ int DryRun(const SweepPlan& plan, int threads, const RunFlags& flags) {
                               : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
                                          : ShortNumber(std::round(us / 1e4) / 100) + " s";
   if (cost.lower_bound) {
-    std::cout << "time         more than " << FormatDuration(cost.estimated_seconds) << " on " << threads
+    std::cout << "time         more than " << FormatDuration(estimate_s) << " on " << threads
               << " thread" << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
               << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
               << " per run); --dry-run-budget-s measures longer\n";
   } else {
-    std::cout << "time         about " << FormatDuration(cost.estimated_seconds) << " ("
-              << FormatDuration(cost.estimated_seconds_low) << " to " << FormatDuration(cost.estimated_seconds_high)
-              << ", 95 %) on " << threads << " thread" << (threads > 1 ? "s" : "") << " (" << per_run
-              << " per run, from " << cost.timed_runs << " sample run" << (cost.timed_runs == 1 ? "" : "s")
-              << " after " << cost.warmup_runs << " warm-up, in " << ShortNumber(std::round(cost.measured_s * 10) / 10)
-              << " s)\n";
+    std::cout << "time         about " << FormatDuration(estimate_s) << " (" << FormatDuration(low_s) << " to "
+              << FormatDuration(high_s) << ", 95 %) on " << threads << " thread" << (threads > 1 ? "s" : "") << " ("
+              << per_run << " per run on a thread, from " << cost.timed_runs << " sample run"
+              << (cost.timed_runs == 1 ? "" : "s") << " after " << cost.warmup_runs << " warm-up";
+    if (write.measured) {
+      std::cout << "; writing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
+    } else {
+      std::cout << "; writing not measured";
+    }
+    std::cout << ")\n";
   }
   std::cout << "batches      " << plan.block_count() << " of " << plan.chunk_runs() << " runs\n";
   return 0;

@@ -1,7 +1,6 @@
 #include "engine/simulation/integrator.h"
 
 #include <cmath>
-#include <sstream>
 
 #include "engine/common/errors.h"
 
@@ -33,12 +32,7 @@ std::string_view ToString(IntegrationStatus status) {
 
 namespace {
 
-std::string Text(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+std::string Text(double value) { return ShortNumber(value); }
 
 }  // namespace
 

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"

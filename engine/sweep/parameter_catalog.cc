@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "engine/aircraft/coefficient.h"
 #include "engine/common/errors.h"
