@@ -46,8 +46,8 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   const std::int64_t burst = std::min<std::int64_t>({options.burst_runs, plan.chunk_runs(), runs});
 
   // The sample runs' cancellation flag: set at the deadline or when `stop` is.
-  std::atomic<bool> expired{false};
-  std::atomic<bool> stopped{false};
+  std::atomic<bool> stopped{stop != nullptr && stop->load()};
+  std::atomic<bool> expired{stopped.load()};
   std::mutex mutex;
   std::condition_variable wake;
   bool finished = false;
@@ -120,7 +120,7 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   watchdog.join();
 
   RunCostEstimate estimate;
-  estimate.stopped = stopped.load();
+  estimate.stopped = stopped.load() || (stop != nullptr && stop->load());
   estimate.measured_s = std::chrono::duration<double>(Clock::now() - start).count();
   std::vector<double> per_run;  // each timed burst's seconds per run
   double seconds = 0;

@@ -87,6 +87,7 @@ TEST(RunCost, AStopFlagEndsTheMeasurement) {
   options.budget_s = 5;  // had the flag been ignored: 5 s and stopped == false
   const RunCostEstimate e = EstimateRunCost(plan, options, &stop);
   EXPECT_TRUE(e.stopped);
+  EXPECT_EQ(e.timed_runs, 0) << "set before the start, the flag lets no run be measured";
 }
 
 }  // namespace
