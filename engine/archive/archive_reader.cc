@@ -275,6 +275,22 @@ std::vector<std::int8_t> ArchiveReader::ReadStatus(std::int64_t first, std::int6
 std::vector<std::string> ArchiveReader::ReadMessages(std::int64_t first, std::int64_t count) const {
   Handle dataset(H5Dopen2(file_.get(), archive::kRunMessage, H5P_DEFAULT), "open runs/message");
   Handle type(H5Dget_type(dataset.get()), "type of runs/message");
+  if (H5Tis_variable_str(type.get()) > 0) {
+    // Variable-length strings: HDF5 allocates each one; they are copied and given back.
+    Handle memory_type(H5Tcopy(H5T_C_S1), "string type");
+    Check(H5Tset_size(memory_type.get(), H5T_VARIABLE), "string size");
+    Check(H5Tset_cset(memory_type.get(), H5Tget_cset(type.get())), "string charset");
+    std::vector<char*> pointers(static_cast<std::size_t>(count), nullptr);
+    Handle memory;
+    Handle space = hdf5::SelectRows(dataset.get(), first, count, &memory);
+    Check(H5Dread(dataset.get(), memory_type.get(), memory.get(), space.get(), H5P_DEFAULT, pointers.data()),
+          "read runs/message of " + path_.string());
+    std::vector<std::string> messages;
+    messages.reserve(pointers.size());
+    for (const char* text : pointers) messages.emplace_back(text != nullptr ? text : "");
+    H5Dvlen_reclaim(memory_type.get(), memory.get(), H5P_DEFAULT, pointers.data());
+    return messages;
+  }
   const std::size_t length = H5Tget_size(type.get());
   std::vector<char> buffer(static_cast<std::size_t>(count) * length);
   ReadRows(archive::kRunMessage, first, count, type.get(), buffer.data());

@@ -309,7 +309,7 @@ void BuildFile(Bytes& in, const std::string& path) {
     std::vector<std::string> texts;
     const auto values = Values(in, type.get(), count, texts);
     if (!values.empty()) H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
-    while (in.Below(3) == 0) Attribute(in, dataset.get());
+    while (!in.Done() && in.Below(3) == 0) Attribute(in, dataset.get());
   }
   H5Eclear2(H5E_DEFAULT);
 }
@@ -352,7 +352,11 @@ void Exercise(const std::string& path) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   gesweep::hdf5::Quiet();
-  static const std::string path = "/dev/shm/gesweep_fuzz_archive_" + std::to_string(::getpid()) + ".h5";
+  // GESWEEP_FUZZ_ARCHIVE_OUT keeps the file an input made (a builder program's HDF5 file), to turn a
+  // crash into a regression case the real binary can read (tests/bad_inputs/archive_fuzz_regressions).
+  static const std::string path = std::getenv("GESWEEP_FUZZ_ARCHIVE_OUT") != nullptr
+                                      ? std::getenv("GESWEEP_FUZZ_ARCHIVE_OUT")
+                                      : "/dev/shm/gesweep_fuzz_archive_" + std::to_string(::getpid()) + ".h5";
   if (size == 0) return 0;
   if (data[0] % 2 == 0) {
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
