@@ -36,7 +36,8 @@ Handle VariableStringType() {
 }
 
 // The strings of an attribute of string type, fixed or variable length, scalar or a list.
-std::vector<std::string> ReadTexts(hid_t attribute, hid_t file_type, std::size_t count, const std::string& what) {
+std::vector<std::string> ReadTexts(hid_t attribute, hid_t file_type, std::size_t count,
+                                   const std::string& what) {
   std::vector<std::string> texts;
   if (count == 0) return texts;
   if (H5Tis_variable_str(file_type) > 0) {
@@ -79,8 +80,8 @@ AttributeValue ReadAttribute(hid_t object, const std::string& name, const std::s
       break;
     case H5T_INTEGER:
     case H5T_FLOAT:
-      value.kind =
-          H5Tget_class(type.get()) == H5T_INTEGER ? AttributeValue::Kind::kInteger : AttributeValue::Kind::kFloat;
+      value.kind = H5Tget_class(type.get()) == H5T_INTEGER ? AttributeValue::Kind::kInteger
+                                                           : AttributeValue::Kind::kFloat;
       value.numbers.resize(count);
       if (count > 0) Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, value.numbers.data()), "read " + what);
       break;
@@ -153,8 +154,8 @@ void ReadUnsignedRows(const ArchiveReader& archive, const std::string& path, std
   if (count > 0) archive.ReadRows(path, first, count, H5T_NATIVE_UINT64, out.data());
 }
 
-std::vector<std::string> ReadTextRows(const ArchiveReader& archive, const std::string& path, std::int64_t first,
-                                      std::int64_t count) {
+std::vector<std::string> ReadTextRows(const ArchiveReader& archive, const std::string& path,
+                                      std::int64_t first, std::int64_t count) {
   if (path == archive::kRunMessage) return archive.ReadMessages(first, count);
   std::vector<std::string> texts;
   if (count <= 0) return texts;

@@ -29,8 +29,8 @@ enum class StoredType {
 
 /// One dataset of an archive with the attributes that describe a column.
 struct DatasetInfo {
-  std::string path;                  ///< without a leading "/", e.g. "design/height_m"
-  std::vector<std::int64_t> shape;   ///< dimensions ({} for a scalar dataset)
+  std::string path;                 ///< without a leading "/", e.g. "design/height_m"
+  std::vector<std::int64_t> shape;  ///< dimensions ({} for a scalar dataset)
   StoredType type = StoredType::kOther;
   std::size_t element_bytes = 0;     ///< bytes of one stored element
   std::string units;                 ///< attribute `units` ("" when absent)
@@ -57,17 +57,17 @@ void ReadUnsignedRows(const ArchiveReader& archive, const std::string& path, std
 /// Reads rows [first, first + count) of the 1-D string dataset at `path` (fixed or variable length;
 /// a fixed-length string ends at its first NUL). runs/message is read by ArchiveReader::ReadMessages,
 /// whatever its storage. Throws ArchiveError.
-std::vector<std::string> ReadTextRows(const ArchiveReader& archive, const std::string& path, std::int64_t first,
-                                      std::int64_t count);
+std::vector<std::string> ReadTextRows(const ArchiveReader& archive, const std::string& path,
+                                      std::int64_t first, std::int64_t count);
 
 /// An attribute as stored: text or numbers, one (scalar) or a list.
 struct AttributeValue {
   enum class Kind { kText, kInteger, kFloat, kOther };
   std::string name;
   Kind kind = Kind::kOther;
-  bool scalar = true;                ///< a scalar dataspace (else a list, possibly of one)
-  std::vector<std::string> texts;    ///< kText
-  std::vector<double> numbers;       ///< kInteger (converted, exact up to 2^53) and kFloat
+  bool scalar = true;              ///< a scalar dataspace (else a list, possibly of one)
+  std::vector<std::string> texts;  ///< kText
+  std::vector<double> numbers;     ///< kInteger (converted, exact up to 2^53) and kFloat
 };
 
 /// Every attribute of the object (group or dataset) at `path` ("/" for the root), in name order.

@@ -167,12 +167,13 @@ int RunQueryCommand(const QueryFlags& flags) {
                          "lists runs; with --group-by/--aggregate the output columns are the groups and "
                          "the statistics");
       }
-      if (flags.memory_mb < 1 || flags.memory_mb > (std::int64_t{1} << 30)) {
+      if (flags.memory_mb < 1 || flags.memory_mb > (std::int64_t{1} << 20)) {
         throw InputError("command line", "--memory-mb", std::to_string(flags.memory_mb),
-                         "expected megabytes, 1 to 2^30");
+                         "expected megabytes, 1 to 1048576");
       }
       if (flags.max_groups < 1) {
-        throw InputError("command line", "--max-groups", std::to_string(flags.max_groups), "expected a count >= 1");
+        throw InputError("command line", "--max-groups", std::to_string(flags.max_groups),
+                         "expected a count >= 1");
       }
       AggregateRequest request;
       request.where = flags.where;
@@ -218,9 +219,10 @@ const CommandRegistrar kRegistrar{Command{
                      "Columns whose equal values form a group, comma-separated (wildcards allowed); "
                      "with --aggregate")
           ->delimiter(',');
-      app.add_option("--aggregate", flags->aggregates,
-                     "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
-                     "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
+      app.add_option(
+          "--aggregate", flags->aggregates,
+          "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
+          "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
       app.add_option("--memory-mb", flags->memory_mb,
                      "Memory for exact medians and quantiles (default 256); past it, more passes")
           ->each([flags](const std::string&) { flags->memory_given = true; });

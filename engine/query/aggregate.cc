@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <numeric>
 #include <optional>
 #include <unordered_map>
@@ -101,7 +102,8 @@ std::string Label(const AggregateSpec& spec, const ColumnCatalog& catalog) {
 }
 
 // Parses one item ("mean(phugoid/*)", "quantile(sink_rate_mps, 0.95)", "count") into specs.
-std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog& catalog, const std::string& flag) {
+std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog& catalog,
+                                     const std::string& flag) {
   const std::string item = Trim(raw);
   auto fail = [&](const std::string& why) -> void {
     throw InputError("command line", flag, "'" + item + "'", why);
@@ -113,8 +115,8 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
   const std::size_t open = item.find('(');
   const std::string name = Trim(item.substr(0, open));
   static const std::pair<const char*, AggregateKind> kKinds[] = {
-      {"count", AggregateKind::kCount}, {"sum", AggregateKind::kSum},         {"min", AggregateKind::kMin},
-      {"max", AggregateKind::kMax},     {"mean", AggregateKind::kMean},       {"std", AggregateKind::kStd},
+      {"count", AggregateKind::kCount},   {"sum", AggregateKind::kSum},          {"min", AggregateKind::kMin},
+      {"max", AggregateKind::kMax},       {"mean", AggregateKind::kMean},        {"std", AggregateKind::kStd},
       {"median", AggregateKind::kMedian}, {"quantile", AggregateKind::kQuantile}};
   std::optional<AggregateKind> kind;
   for (const auto& [word, k] : kKinds) {
@@ -124,11 +126,12 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
     std::vector<std::string> words;
     for (const auto& entry : kKinds) words.push_back(entry.first);
     const std::string nearest = NearestName(name, words);
-    fail("unknown statistic '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") + "; " +
-         kForms);
+    fail("unknown statistic '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
+         "; " + kForms);
   }
   if (open == std::string::npos) {
-    if (*kind != AggregateKind::kCount) fail(std::string(KindName(*kind)) + " needs a column: " + name + "(c)");
+    if (*kind != AggregateKind::kCount)
+      fail(std::string(KindName(*kind)) + " needs a column: " + name + "(c)");
     AggregateSpec spec;
     spec.label = "count";
     return {spec};
@@ -143,13 +146,15 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
   if (*kind == AggregateKind::kQuantile) {
     if (extra != 1) fail("quantile takes a column and a probability: quantile(c, 0.95)");
     const auto p = ParseNumber(Trim(arguments[1]));
-    if (!p || !(*p >= 0.0 && *p <= 1.0)) fail("expected a probability 0 <= p <= 1, found '" + Trim(arguments[1]) + "'");
+    if (!p || !(*p >= 0.0 && *p <= 1.0))
+      fail("expected a probability 0 <= p <= 1, found '" + Trim(arguments[1]) + "'");
     base.p = *p;
   } else if (*kind == AggregateKind::kStd) {
     if (extra > 1) fail("std takes a column and, optionally, ddof 0 or 1: std(c) or std(c, 0)");
     if (extra == 1) {
       const std::string ddof = Trim(arguments[1]);
-      if (ddof != "0" && ddof != "1") fail("expected ddof 0 (population) or 1 (sample), found '" + ddof + "'");
+      if (ddof != "0" && ddof != "1")
+        fail("expected ddof 0 (population) or 1 (sample), found '" + ddof + "'");
       base.ddof = ddof == "0" ? 0 : 1;
     }
   } else if (extra != 0) {
@@ -175,7 +180,7 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
 // Streaming statistics of one column in one group; NaN values are skipped.
 struct Moments {
   std::int64_t n = 0;
-  double mean = 0, m2 = 0;        // Welford
+  double mean = 0, m2 = 0;         // Welford
   double sum = 0, correction = 0;  // Neumaier's compensated sum
   double min = std::numeric_limits<double>::infinity();
   double max = -std::numeric_limits<double>::infinity();
@@ -291,8 +296,8 @@ struct Target {
   std::uint32_t unit = 0;
   std::int64_t rank = 0;
   std::uint64_t low = 0, high = ~std::uint64_t{0};  // key range that holds the value (inclusive)
-  std::int64_t below = 0;                          // the unit's values with a key under `low`
-  std::int64_t inside = 0;                         // its values with a key in [low, high]
+  std::int64_t below = 0;                           // the unit's values with a key under `low`
+  std::int64_t inside = 0;                          // its values with a key in [low, high]
   bool found = false;
   double value = kNaN;
 };
@@ -343,12 +348,13 @@ class Aggregator {
           group_columns_.push_back(c);
       }
     }
-    specs_ = ParseAggregates(request_.aggregates.empty() ? std::vector<std::string>{"count"} : request_.aggregates,
-                             catalog_);
+    specs_ = ParseAggregates(
+        request_.aggregates.empty() ? std::vector<std::string>{"count"} : request_.aggregates, catalog_);
     if (!request_.where.empty()) filter_.emplace(RowFilter::Parse(request_.where, catalog_, "--where"));
     GESWEEP_DEMAND(request_.chunk_rows > 0);
     if (request_.max_groups < 1) {
-      throw InputError("command line", "--max-groups", std::to_string(request_.max_groups), "expected a count >= 1");
+      throw InputError("command line", "--max-groups", std::to_string(request_.max_groups),
+                       "expected a count >= 1");
     }
     // The budget holds at least one histogram, so every pass makes progress.
     if (request_.memory_bytes < kHistogramBytes + kEntryBytes) {
@@ -384,10 +390,12 @@ class Aggregator {
         column.path = source.path;
         const bool keeps_units = spec.kind != AggregateKind::kCount;
         if (keeps_units) column.units = source.units;
-        column.integer = spec.kind == AggregateKind::kCount ||
-                         (source.integer && (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax ||
-                                             spec.kind == AggregateKind::kSum));
-        if (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax) column.levels = source.levels;
+        column.integer =
+            spec.kind == AggregateKind::kCount ||
+            (source.integer && (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax ||
+                                spec.kind == AggregateKind::kSum));
+        if (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax)
+          column.levels = source.levels;
         column.description = std::string(KindName(spec.kind)) + " of " + source.path;
       } else {
         column.integer = true;
@@ -466,7 +474,8 @@ class Aggregator {
     return static_cast<std::uint32_t>(static_cast<std::size_t>(group) * order_columns_.size() + order_column);
   }
 
-  void Read(const std::vector<int>& columns, std::int64_t first, std::int64_t count, const std::vector<int>& skip) {
+  void Read(const std::vector<int>& columns, std::int64_t first, std::int64_t count,
+            const std::vector<int>& skip) {
     for (int c : columns) {
       if (std::find(skip.begin(), skip.end(), c) != skip.end()) continue;
       ReadColumn(archive_, catalog_.column(c), first, count, values_[static_cast<std::size_t>(c)]);
@@ -487,7 +496,16 @@ class Aggregator {
     const std::int64_t budget_entries = request_.memory_bytes / kEntryBytes;
     keeping_ = !order_columns_.empty();
     if (!order_columns_.empty()) selected_.Resize(summary_.runs);
-    if (keeping_) entries_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(budget_entries, 1 << 20)));
+    if (keeping_) {
+      // The whole budget at once: address space only, touched (resident) as values come, and never
+      // copied by a reallocation that would briefly hold 1.5 budgets. Where even the address space
+      // is refused, the buffer grows in steps that stop at the budget.
+      try {
+        entries_.reserve(static_cast<std::size_t>(budget_entries));
+      } catch (const std::bad_alloc&) {
+        entries_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(budget_entries, 1 << 20)));
+      }
+    }
     std::vector<char> keep, condition;
     const std::vector<int> no_skip;
     for (std::int64_t first = 0; first < summary_.runs; first += request_.chunk_rows) {
@@ -531,6 +549,9 @@ class Aggregator {
             entries_.clear();
             entries_.shrink_to_fit();
             break;
+          }
+          if (entries_.size() == entries_.capacity()) {
+            entries_.reserve(std::min(2 * entries_.capacity(), static_cast<std::size_t>(budget_entries)));
           }
           entries_.push_back(Entry{Unit(g, j), Canonical(value)});
         }
@@ -665,7 +686,13 @@ class Aggregator {
       shift[h] = s;
     }
     std::vector<std::int64_t> counts(histogram_targets.size() * kHistogramBuckets, 0);
+    // The planned sizes are known exactly: no reallocation.
     std::vector<Entry> unit_entries, target_entries;
+    std::int64_t unit_values = 0, target_values = 0;
+    for (std::uint32_t unit : collect_units) unit_values += UnitCount(unit);
+    for (std::size_t t : collect_targets) target_values += targets_[t].inside;
+    unit_entries.reserve(static_cast<std::size_t>(unit_values));
+    target_entries.reserve(static_cast<std::size_t>(target_values));
     for (std::int64_t first = 0; first < summary_.runs; first += request_.chunk_rows) {
       const std::int64_t count = std::min(request_.chunk_rows, summary_.runs - first);
       if (!selected_.Any(first, count)) continue;
@@ -718,7 +745,8 @@ class Aggregator {
         const std::int64_t in_bucket = counts[h * kHistogramBuckets + static_cast<std::size_t>(b)];
         if (target.rank < below + in_bucket) {
           const std::uint64_t offset = static_cast<std::uint64_t>(b) << shift[h];
-          const std::uint64_t width_minus_one = shift[h] >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << shift[h]) - 1;
+          const std::uint64_t width_minus_one =
+              shift[h] >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << shift[h]) - 1;
           const std::uint64_t new_low = target.low + offset;
           const std::uint64_t new_high =
               target.high - new_low <= width_minus_one ? target.high : new_low + width_minus_one;
@@ -740,7 +768,8 @@ class Aggregator {
   double TargetValue(std::uint32_t unit, std::int64_t rank) const {
     const auto begin = targets_.begin() + static_cast<std::ptrdiff_t>(unit_begin_[unit]);
     const auto end = targets_.begin() + static_cast<std::ptrdiff_t>(unit_begin_[unit + 1]);
-    const auto it = std::lower_bound(begin, end, rank, [](const Target& t, std::int64_t r) { return t.rank < r; });
+    const auto it =
+        std::lower_bound(begin, end, rank, [](const Target& t, std::int64_t r) { return t.rank < r; });
     GESWEEP_DEMAND(it != end && it->rank == rank && it->found);
     return it->value;
   }
@@ -873,8 +902,8 @@ class Aggregator {
 
 }  // namespace
 
-std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts, const ColumnCatalog& catalog,
-                                           const std::string& flag) {
+std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts,
+                                           const ColumnCatalog& catalog, const std::string& flag) {
   std::vector<AggregateSpec> specs;
   for (const std::string& text : texts) {
     for (const std::string& item : SplitTopLevel(text)) {

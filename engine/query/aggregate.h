@@ -43,10 +43,10 @@ enum class AggregateKind { kCount, kSum, kMin, kMax, kMean, kStd, kMedian, kQuan
 /// One statistic of the output.
 struct AggregateSpec {
   AggregateKind kind = AggregateKind::kCount;
-  int column = -1;     ///< catalogue column; -1 for `count` (runs in the group)
-  double p = 0.5;      ///< kQuantile: the probability, 0 <= p <= 1
-  int ddof = 1;        ///< kStd: delta degrees of freedom, 0 or 1
-  std::string label;   ///< output column name, e.g. "quantile(sink_rate_mps, 0.95)"
+  int column = -1;    ///< catalogue column; -1 for `count` (runs in the group)
+  double p = 0.5;     ///< kQuantile: the probability, 0 <= p <= 1
+  int ddof = 1;       ///< kStd: delta degrees of freedom, 0 or 1
+  std::string label;  ///< output column name, e.g. "quantile(sink_rate_mps, 0.95)"
   bool operator==(const AggregateSpec& other) const {
     return kind == other.kind && column == other.column && p == other.p && ddof == other.ddof;
   }
@@ -55,7 +55,8 @@ struct AggregateSpec {
 /// Parses --aggregate items: each text is a comma-separated list (commas inside parentheses belong
 /// to the item). Wildcards expand to one item per matching non-text column; a repeated item counts
 /// once. Throws InputError(source "command line", key `flag`) naming the item at fault.
-std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts, const ColumnCatalog& catalog,
+std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts,
+                                           const ColumnCatalog& catalog,
                                            const std::string& flag = "--aggregate");
 
 /// What to compute.
@@ -65,10 +66,10 @@ struct AggregateRequest {
   std::vector<std::string> aggregates;  ///< --aggregate texts; empty: "count"
   std::string sort;                     ///< an output column (group column or aggregate); empty: key order
   bool descending = false;
-  std::int64_t limit = -1;                         ///< at most this many groups; < 0: all
-  std::int64_t chunk_rows = 1 << 16;               ///< runs read at a time
+  std::int64_t limit = -1;                              ///< at most this many groups; < 0: all
+  std::int64_t chunk_rows = 1 << 16;                    ///< runs read at a time
   std::int64_t memory_bytes = std::int64_t{256} << 20;  ///< budget for exact medians and quantiles
-  std::int64_t max_groups = 1'000'000;             ///< more groups than this are refused
+  std::int64_t max_groups = 1'000'000;                  ///< more groups than this are refused
 };
 
 /// Computes the aggregates and hands one row per group to `sink` (group columns, then one column per

@@ -1,11 +1,12 @@
 #include "engine/query/expression.h"
 
+#include <re2/re2.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <re2/re2.h>
 
 #include "engine/common/errors.h"
 
@@ -38,9 +39,9 @@ struct RowFilter::Node {
   // kString: the literal; kCompare/kArithmetic: the operator; kFunction: its name;
   // kMatch: "contains" (text is then the substring) or the pattern of "matches".
   std::string text;
-  bool negated = false;                 // kIn, kMatch: "not in", "not contains", "not matches"
-  std::vector<double> numbers;          // kIn: the listed numbers (level codes), sorted, no NaN
-  std::vector<std::string> strings;     // kIn on a text column: the listed strings, sorted
+  bool negated = false;                   // kIn, kMatch: "not in", "not contains", "not matches"
+  std::vector<double> numbers;            // kIn: the listed numbers (level codes), sorted, no NaN
+  std::vector<std::string> strings;       // kIn on a text column: the listed strings, sorted
   std::shared_ptr<const re2::RE2> regex;  // kMatch with "matches"
   std::unique_ptr<Node> left, right;
 };
@@ -75,9 +76,8 @@ constexpr int kMaxHeight = 1024;
 constexpr std::size_t kEchoedLength = 80;
 
 bool IsKeyword(const std::string& name) {
-  static const char* const kKeywords[] = {"and",   "or",       "not",      "true", "false",
-                                          "inf",   "nan",      "abs",      "isnan", "isfinite",
-                                          "in",    "contains", "matches"};
+  static const char* const kKeywords[] = {"and", "or",    "not",      "true", "false",    "inf",    "nan",
+                                          "abs", "isnan", "isfinite", "in",   "contains", "matches"};
   return std::any_of(std::begin(kKeywords), std::end(kKeywords), [&](const char* k) { return name == k; });
 }
 
@@ -107,10 +107,10 @@ class Parser {
 
  private:
   [[noreturn]] void Fail(int position, const std::string& what) const {
-    const std::string shown = text_.size() <= kEchoedLength
-                                  ? "'" + text_ + "'"
-                                  : "'" + text_.substr(0, kEchoedLength) + "...' (" +
-                                        std::to_string(text_.size()) + " characters)";
+    const std::string shown =
+        text_.size() <= kEchoedLength
+            ? "'" + text_ + "'"
+            : "'" + text_.substr(0, kEchoedLength) + "...' (" + std::to_string(text_.size()) + " characters)";
     throw InputError("command line", flag_, shown, "at column " + std::to_string(position) + ": " + what);
   }
 
@@ -327,7 +327,8 @@ class Parser {
     if (it == column.levels.end()) {
       std::string levels;
       for (const auto& level : column.levels) levels += (levels.empty() ? "" : ", ") + level;
-      Fail(position, "\"" + literal + "\" is not a level of " + column.name + " (expected one of " + levels + ")");
+      Fail(position,
+           "\"" + literal + "\" is not a level of " + column.name + " (expected one of " + levels + ")");
     }
     return static_cast<double>(it - column.levels.begin());
   }
@@ -429,15 +430,15 @@ class Parser {
     const Token word = Take();
     if (left->type == Type::kBool) Fail(left->position, "a condition cannot be compared; use and, or, not");
     if (left->type == Type::kString) {
-      Fail(left->position, "\"" + left->text + "\" is a string; write the column on the left of " + word.text);
+      Fail(left->position,
+           "\"" + left->text + "\" is a string; write the column on the left of " + word.text);
     }
     const bool text_column = left->type == Type::kText;
     const bool level_column = IsLevelColumn(*left);
     auto node = Make(Kind::kIn, Type::kBool, word.position);
     node->negated = negated;
     if (word.text == "in") {
-      if (!TakeOperator("("))
-        Fail(Peek().position, "expected '(' after in, e.g. speed_mps in (30, 32.0208)");
+      if (!TakeOperator("(")) Fail(Peek().position, "expected '(' after in, e.g. speed_mps in (30, 32.0208)");
       do {
         double number = 0;
         std::string text;
@@ -478,14 +479,16 @@ class Parser {
       re2::RE2::Options options;
       options.set_log_errors(false);  // the error comes back as data, never printed here
       auto compiled = std::make_shared<const re2::RE2>(pattern.text, options);
-      if (!compiled->ok()) Fail(pattern.position, "not a regular expression (RE2 syntax): " + compiled->error());
+      if (!compiled->ok())
+        Fail(pattern.position, "not a regular expression (RE2 syntax): " + compiled->error());
       regex = std::move(compiled);
     }
     if (level_column) {
       const RunColumn& column = catalog_.column(left->column);
       for (std::size_t level = 0; level < column.levels.size(); ++level) {
         const std::string& name = column.levels[level];
-        const bool hit = regex ? re2::RE2::PartialMatch(name, *regex) : name.find(pattern.text) != std::string::npos;
+        const bool hit =
+            regex ? re2::RE2::PartialMatch(name, *regex) : name.find(pattern.text) != std::string::npos;
         if (hit) node->numbers.push_back(static_cast<double>(level));
       }
       node->left = std::move(left);
@@ -720,7 +723,8 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
       const std::vector<double> a = Evaluate(*node.left, values, n);
       for (std::size_t i = 0; i < n; ++i) {
         // A missing value (NaN) is in no list, and so "not in" every one, as != holds for it.
-        const bool hit = !std::isnan(a[i]) && std::binary_search(node.numbers.begin(), node.numbers.end(), a[i]);
+        const bool hit =
+            !std::isnan(a[i]) && std::binary_search(node.numbers.begin(), node.numbers.end(), a[i]);
         out[i] = hit != node.negated ? 1.0 : 0.0;
       }
       return out;

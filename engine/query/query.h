@@ -25,9 +25,10 @@ class ArchiveReader;
 
 /// What to select.
 struct QueryRequest {
-  std::string where;                 ///< condition (expression.h); empty: every complete run
-  std::vector<std::string> columns;  ///< column names or wildcards (ColumnCatalog::Expand); empty: DefaultColumns
-  std::string sort;                  ///< column to sort by; empty: run order
+  std::string where;  ///< condition (expression.h); empty: every complete run
+  std::vector<std::string>
+      columns;       ///< column names or wildcards (ColumnCatalog::Expand); empty: DefaultColumns
+  std::string sort;  ///< column to sort by; empty: run order
   bool descending = false;
   std::int64_t limit = -1;            ///< at most this many rows; < 0: all
   std::int64_t chunk_rows = 1 << 16;  ///< runs read at a time (memory bound)

@@ -173,8 +173,7 @@ class JsonWriter final : public QueryRowSink {
     out_ << (first_ ? "]" : "\n ]") << ",\n \"runs\": " << s.runs << ", \"complete\": " << s.complete
          << ", \"matched\": " << s.matched << ", \"shown\": " << s.shown;
     if (s.groups >= 0) out_ << ", \"groups\": " << s.groups << ", \"passes\": " << s.passes;
-    out_
-         << ", \"snapshot\": " << (s.snapshot ? "true" : "false") << "}\n";
+    out_ << ", \"snapshot\": " << (s.snapshot ? "true" : "false") << "}\n";
   }
 
  private:

@@ -1,11 +1,12 @@
 #include "engine/query/run_columns.h"
 
+#include <fnmatch.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fnmatch.h>
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"

@@ -72,7 +72,8 @@ class ColumnCatalog {
   /// Of does); `design_order` lists the design parameters' names. For tests and the fuzz target,
   /// which need a catalogue without an archive. status_column()/index_column() are -1 when
   /// runs/status or runs/index is not among `columns`.
-  static ColumnCatalog FromColumns(std::vector<RunColumn> columns, const std::vector<std::string>& design_order,
+  static ColumnCatalog FromColumns(std::vector<RunColumn> columns,
+                                   const std::vector<std::string>& design_order,
                                    std::vector<OtherDataset> others = {});
 
   const std::vector<RunColumn>& columns() const { return columns_; }

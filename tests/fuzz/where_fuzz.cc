@@ -27,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static std::int64_t rows = 0;
   static const std::vector<gesweep::ColumnValues> values = gesweep::testing::WhereFuzzValues(catalog, &rows);
   const std::string text(reinterpret_cast<const char*>(data), size);
-  gesweep::testing::CheckWhereContract(text, catalog, values, rows,
-                                       [](const char* what, const std::string& detail) { Defect(what, detail); });
+  gesweep::testing::CheckWhereContract(
+      text, catalog, values, rows, [](const char* what, const std::string& detail) { Defect(what, detail); });
   return 0;
 }

@@ -133,7 +133,8 @@ struct Expected {
 };
 
 Expected Compute(std::vector<double> values, const std::vector<double>& ps) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }),
+               values.end());
   std::sort(values.begin(), values.end());
   Expected e;
   const auto n = values.size();
@@ -185,8 +186,10 @@ TEST_F(AggregateTest, EveryStatisticPerGroupEqualsAPlainComputation) {
   request.aggregates = {
       "count, count(stability_margin_per_s), min(stability_margin_per_s), max(stability_margin_per_s)",
       "mean(stability_margin_per_s),std(stability_margin_per_s),std(stability_margin_per_s, 0)",
-      "median(stability_margin_per_s), quantile(stability_margin_per_s, 0.05),quantile(stability_margin_per_s,0.95)",
-      "quantile(stability_margin_per_s, 0), quantile(stability_margin_per_s, 1), sum(stability_margin_per_s)"};
+      "median(stability_margin_per_s), quantile(stability_margin_per_s, "
+      "0.05),quantile(stability_margin_per_s,0.95)",
+      "quantile(stability_margin_per_s, 0), quantile(stability_margin_per_s, 1), "
+      "sum(stability_margin_per_s)"};
   const Collector result = Run(*modes_, request);
   ASSERT_EQ(result.names.size(), 14U);
   EXPECT_EQ(result.names[0], "speed_mps");
@@ -230,10 +233,14 @@ TEST_F(AggregateTest, MediansAndQuantilesAreExactWhateverTheMemoryBudget) {
                         "quantile(stability_margin_per_s, 0.37), quantile(stability_margin_per_s, 0.999)",
                         "median(height_m), quantile(height_m, 0.25), quantile(speed_mps, 0.3)",
                         "quantile(speed_mps, 0.85), median(speed_mps)"};
-  const std::vector<double> expected = {sigma_all.median,       sigma_all.quantiles.at(0.001),
-                                        sigma_all.quantiles.at(0.37), sigma_all.quantiles.at(0.999),
-                                        height_all.median,      height_all.quantiles.at(0.25),
-                                        speed_all.quantiles.at(0.3), speed_all.quantiles.at(0.85),
+  const std::vector<double> expected = {sigma_all.median,
+                                        sigma_all.quantiles.at(0.001),
+                                        sigma_all.quantiles.at(0.37),
+                                        sigma_all.quantiles.at(0.999),
+                                        height_all.median,
+                                        height_all.quantiles.at(0.25),
+                                        speed_all.quantiles.at(0.3),
+                                        speed_all.quantiles.at(0.85),
                                         speed_all.median};
   // 20,000 values per column x 3 columns x 16 bytes = 960 KB kept by one pass; smaller budgets need
   // collecting passes (64 KB, 1 MB per column) or histogram narrowing (16 KB: one histogram at a time).
@@ -300,7 +307,8 @@ TEST_F(AggregateTest, MissingValuesAreSkippedAndLevelsCountAsCodes) {
       EXPECT_EQ(row[5].number, e.min);
     }
     const std::vector<double>& f = flags.at(key);
-    ExpectNear(row[6].number, static_cast<double>(std::count(f.begin(), f.end(), 1.0)) / 40.0, "fraction stable");
+    ExpectNear(row[6].number, static_cast<double>(std::count(f.begin(), f.end(), 1.0)) / 40.0,
+               "fraction stable");
   }
   EXPECT_TRUE(some_missing);  // the test means something only if some runs have no boundary
   EXPECT_TRUE(some_empty);    // and some groups none at all (25 m/s; no h-derivatives)
@@ -343,7 +351,8 @@ TEST_F(AggregateTest, RefusalsComeBeforeAnyOutput) {
   request.aggregates = {"avg(height_m)"};
   EXPECT_NE(Refusal(*modes_, request).find("unknown statistic 'avg'"), std::string::npos);
   request.aggregates = {"quantile(height_m, 1.5)"};
-  EXPECT_NE(Refusal(*modes_, request).find("expected a probability 0 <= p <= 1, found '1.5'"), std::string::npos);
+  EXPECT_NE(Refusal(*modes_, request).find("expected a probability 0 <= p <= 1, found '1.5'"),
+            std::string::npos);
   request.aggregates = {"quantile(height_m)"};
   EXPECT_NE(Refusal(*modes_, request).find("quantile takes a column and a probability"), std::string::npos);
   request.aggregates = {"std(height_m, 2)"};
@@ -359,7 +368,8 @@ TEST_F(AggregateTest, RefusalsComeBeforeAnyOutput) {
   request.max_groups = 2000;
   EXPECT_EQ(Refusal(*modes_, request), "");
   request.sort = "mean(height_m)";
-  EXPECT_NE(Refusal(*modes_, request).find("sort by an output column: one of height_m, count"), std::string::npos);
+  EXPECT_NE(Refusal(*modes_, request).find("sort by an output column: one of height_m, count"),
+            std::string::npos);
 }
 
 TEST_F(AggregateTest, WildcardsExpandToOneStatisticPerNumericColumn) {

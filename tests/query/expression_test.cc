@@ -45,7 +45,8 @@ class ExpressionTest : public ::testing::Test {
   }
 
   // The rows (of `values`) that `where` keeps.
-  std::vector<int> Rows(const std::string& where, const std::vector<ColumnValues>& values, std::int64_t n) const {
+  std::vector<int> Rows(const std::string& where, const std::vector<ColumnValues>& values,
+                        std::int64_t n) const {
     const RowFilter filter = RowFilter::Parse(where, catalog_);
     std::vector<char> keep;
     filter.Evaluate(values, n, keep);
@@ -164,11 +165,9 @@ TEST_F(ExpressionTest, InListsNumbersLevelsAndTexts) {
 }
 
 TEST_F(ExpressionTest, ContainsAndMatchesOnMessagesAndLevels) {
-  const std::vector<std::string> messages = {"",
-                                             "boundary: none (stable at every height)",
+  const std::vector<std::string> messages = {"", "boundary: none (stable at every height)",
                                              "LQR: the Riccati equation has no stabilising solution",
-                                             "boundary: found",
-                                             "lqr lower case"};
+                                             "boundary: found", "lqr lower case"};
   const std::vector<ColumnValues> values = Block("message", {}, messages);
   EXPECT_EQ(Rows("message contains \"LQR\"", values, 5), (std::vector<int>{2}));
   EXPECT_EQ(Rows("message not contains 'boundary'", values, 5), (std::vector<int>{0, 2, 4}));
@@ -201,8 +200,7 @@ TEST_F(ExpressionTest, ColumnWildcardsExpandInNaturalOrder) {
   EXPECT_EQ(names("*/damping_ratio"),
             "results/modes/phugoid/damping_ratio,results/modes/short_period/damping_ratio");
   EXPECT_EQ(names("/design/*"), "design/cdh,design/h_derivatives,design/height_m,design/speed_mps");
-  EXPECT_EQ(names("*height_over_span"),
-            "results/boundary/height_over_span,results/modes/height_over_span");
+  EXPECT_EQ(names("*height_over_span"), "results/boundary/height_over_span,results/modes/height_over_span");
   // "*": index, the design in design order, status, the results, then the other runs/ columns.
   const std::vector<int> all = catalog_.Expand("*", "command line", "--columns");
   ASSERT_EQ(all.size(), catalog_.columns().size());
@@ -215,7 +213,8 @@ TEST_F(ExpressionTest, ColumnWildcardsExpandInNaturalOrder) {
     catalog_.Expand("phugiod/*", "command line", "--columns");
     ADD_FAILURE() << "no refusal";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--columns = phugiod/*: the pattern matches no column"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("--columns = phugiod/*: the pattern matches no column"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -223,7 +222,8 @@ TEST_F(ExpressionTest, ColumnWildcardsExpandInNaturalOrder) {
 TEST_F(ExpressionTest, EveryKeptFuzzInputKeepsTheContract) {
   std::int64_t rows = 0;
   const std::vector<ColumnValues> values = testing::WhereFuzzValues(catalog_, &rows);
-  const std::filesystem::path folder = std::filesystem::path(GESWEEP_SOURCE_DIR) / "tests/query/where_regressions";
+  const std::filesystem::path folder =
+      std::filesystem::path(GESWEEP_SOURCE_DIR) / "tests/query/where_regressions";
   int cases = 0;
   for (const auto& entry : std::filesystem::directory_iterator(folder)) {
     if (entry.path().extension() != ".txt") continue;
@@ -231,15 +231,16 @@ TEST_F(ExpressionTest, EveryKeptFuzzInputKeepsTheContract) {
     std::ostringstream text;
     text << in.rdbuf();
     ++cases;
-    testing::CheckWhereContract(text.str(), catalog_, values, rows, [&](const char* what, const std::string& detail) {
-      ADD_FAILURE() << entry.path().filename() << ": " << what << ": " << detail.substr(0, 300);
-      throw std::runtime_error(what);
-    });
+    testing::CheckWhereContract(
+        text.str(), catalog_, values, rows, [&](const char* what, const std::string& detail) {
+          ADD_FAILURE() << entry.path().filename() << ": " << what << ": " << detail.substr(0, 300);
+          throw std::runtime_error(what);
+        });
   }
   EXPECT_GT(cases, 0) << "no regression inputs in " << folder;
   // And the seeds of the fuzz corpus, which must all parse.
-  for (const auto& entry :
-       std::filesystem::directory_iterator(std::filesystem::path(GESWEEP_SOURCE_DIR) / "tests/fuzz/where_corpus")) {
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(GESWEEP_SOURCE_DIR) /
+                                                               "tests/fuzz/where_corpus")) {
     std::ifstream in(entry.path(), std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
