@@ -258,7 +258,7 @@ def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
         if np.mean(from_height[i]) > 0.5:
             text += (f" Above the last table row ({last_row:.5g} m) the coefficients are the free-flight row and no "
                      f"longer change with height, so the height root is exactly neutral and is left out of σ "
-                     f"(docs/model.md): σ jumps from the height root (median {np.nanmedian(sigma[i]):.2g} 1/s at "
+                     f"(docs/model.md §6): σ jumps from the height root (median {np.nanmedian(sigma[i]):.2g} 1/s at "
                      f"{heights[i]:.4g} m) to the phugoid (median {np.nanmedian(sigma[j]):.2g} 1/s at "
                      f"{heights[j]:.4g} m). The dark band at the top of the upper panel is that change of mode, not "
                      f"a change of the airplane's stability; the phugoid panel has no band.")
