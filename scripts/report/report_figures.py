@@ -14,7 +14,6 @@ from matplotlib.colors import LogNorm, Normalize, SymLogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
 
-from report_data import STATUS_OK  # noqa: E402
 
 # The paper's open-loop speed (Section IV): the root locus prefers the runs nearest to it.
 PAPER_SPEED_MPS = 32.0208
