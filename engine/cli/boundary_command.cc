@@ -35,7 +35,46 @@ struct BoundaryFlags {
   std::string archive;          // --archive: the boundary of a sweep's results
   std::vector<std::string> by;  // --by: order of the curve's axes
   bool no_write = false;        // --no-write: print only
+  std::string method = "hurwitz";  // --method: hurwitz (certified) or sampled (the former search)
 };
+
+BoundaryOptions SearchOptions(const BoundaryFlags& flags) {
+  BoundaryOptions options;
+  if (flags.method == "sampled") {
+    options.method = BoundaryMethod::kSampled;
+  } else if (flags.method != "hurwitz") {
+    throw InputError("command line", "--method", "'" + flags.method + "'", "expected hurwitz or sampled");
+  }
+  return options;
+}
+
+nlohmann::json CrossingJson(const BoundaryCrossing& c) {
+  nlohmann::json row = {{"height_m", JsonNumber(c.height_m)},
+                        {"height_over_span", JsonNumber(c.height_over_span)},
+                        {"kind", std::string(ToString(c.kind))},
+                        {"stable_below", c.stable_below},
+                        {"stable_above", c.stable_above}};
+  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
+    row["mode"] = c.mode;
+    row["eigenvalue"] = {JsonNumber(c.eigenvalue.real()), JsonNumber(c.eigenvalue.imag())};
+    row["eigenvalue_height_derivative_per_s_per_m"] = {JsonNumber(c.eigenvalue_height_derivative.real()),
+                                                       JsonNumber(c.eigenvalue_height_derivative.imag())};
+    row["mode_stable_above"] = c.mode_stable_above;
+    row["bracket_width_m"] = JsonNumber(c.bracket_width_m);
+  }
+  return row;
+}
+
+std::string CrossingText(const BoundaryCrossing& c) {
+  std::string text = FormatNumber(c.height_m, 6);
+  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
+    text += "(" + c.mode + (c.kind == CrossingKind::kHopf ? " pair" : " root") + ", " +
+            (c.mode_stable_above ? "stable above" : "unstable above") + ")";
+  } else if (c.kind == CrossingKind::kDiscontinuity) {
+    text += "(table row: " + std::string(c.stable_above ? "stable above" : "unstable above") + ")";
+  }
+  return text;
+}
 
 std::string Scientific(double value, int digits = 4) {
   if (!std::isfinite(value)) return FormatNumber(value);
@@ -295,12 +334,19 @@ int RunBoundary(const BoundaryFlags& flags) {
     std::cout << "speed_mps,height_m,height_over_span,other_crossings_m,reason\n";
   }
   std::vector<BoundarySensitivities> sensitivities;
+  const BoundaryOptions search = SearchOptions(flags);
   for (double speed : speeds) {
-    const BoundaryResult result = FindBoundary(model, speed);
+    const BoundaryResult result = FindBoundary(model, speed, search);
     if (flags.sensitivities) sensitivities.push_back(ComputeBoundarySensitivities(model, result));
     std::vector<double> others;
+    std::string other_text;
+    nlohmann::json crossings = nlohmann::json::array();
     for (const auto& crossing : result.crossings) {
-      if (!result.height_m || crossing.height_m != *result.height_m) others.push_back(crossing.height_m);
+      crossings.push_back(CrossingJson(crossing));
+      if (!result.height_m || crossing.height_m != *result.height_m) {
+        others.push_back(crossing.height_m);
+        other_text += (other_text.empty() ? "" : " ") + CrossingText(crossing);
+      }
     }
     if (flags.format == "json") {
       nlohmann::json row = {
@@ -309,19 +355,23 @@ int RunBoundary(const BoundaryFlags& flags) {
           {"height_over_span",
            result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
           {"other_crossings_m", others},
+          {"crossings", crossings},
+          {"method", flags.method},
+          {"certified", result.certified},
+          {"certificate", result.certificate},
           {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
       if (!result.height_m) row["reason"] = result.reason;
       if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
       boundaries.push_back(row);
     } else {
-      std::string other_text;
-      for (double h : others) other_text += (other_text.empty() ? "" : " ") + FormatNumber(h, 6);
       const std::string h_text = result.height_m ? FormatNumber(*result.height_m, 7) : "none";
       const std::string ratio_text = result.height_m ? FormatNumber(*result.height_m / span, 5) : "none";
       if (flags.format == "csv") {
+        std::string numbers;
+        for (double h : others) numbers += (numbers.empty() ? "" : " ") + FormatNumber(h, 6);
         std::cout << FormatNumber(speed) << "," << (result.height_m ? FormatNumber(*result.height_m) : "")
                   << "," << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\""
-                  << other_text << "\",\"" << result.reason << "\"\n";
+                  << numbers << "\",\"" << result.reason << "\"\n";
       } else {
         std::cout << std::setw(12) << FormatNumber(speed, 6) << std::setw(12) << h_text << std::setw(10)
                   << ratio_text << "  " << other_text << (other_text.empty() ? "" : " ") << result.reason
@@ -356,6 +406,9 @@ const CommandRegistrar kRegistrar{Command{
       auto* no_write =
           app.add_flag("--no-write", flags->no_write, "With --archive: print only, write nothing");
       app.add_option("--format", flags->format, "table (default), csv or json");
+      app.add_option("--method", flags->method,
+                     "hurwitz (default: every crossing of the imaginary axis, certified) or sampled (the "
+                     "former search, sigma sampled per table segment; for comparison)");
       app.add_flag("--sensitivities", flags->sensitivities,
                    "Also print dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by "
                    "|p dH*/dp| (docs/sensitivity.md)");
