@@ -253,6 +253,11 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
   // Depth first, left half on top of the stack, so intervals come out ascending.
   std::vector<Piece> stack;
   stack.push_back({p, 0.0, 1.0});
+  struct Undecided {
+    double lower, upper;
+    int sign_lower, sign_upper;
+  };
+  std::vector<Undecided> undecided;
   while (!stack.empty()) {
     Piece piece = std::move(stack.back());
     stack.pop_back();
@@ -269,8 +274,11 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
     const double width = piece.upper - piece.lower;
     // Next to an end where p ~ 0 nothing more can be decided: stop well before `resolution`.
     const double stop_width = at_end_of_range ? std::max(resolution, 0x1p-24) : resolution;
-    if (width <= stop_width || result.subdivisions >= max_subdivisions) {
-      result.intervals.push_back({piece.lower, piece.upper, false, ends_differ});
+    // Where every coefficient is within the allowance of 0, p is indistinguishable from 0: stop.
+    bool all_unknown = true;
+    for (int k = 0; k <= n && all_unknown; ++k) all_unknown = SignOf(piece.poly.coefficient(k), allowance) == 0;
+    if (width <= stop_width || all_unknown || result.subdivisions >= max_subdivisions) {
+      undecided.push_back({piece.lower, piece.upper, s0, s1});
       continue;
     }
     ++result.subdivisions;
@@ -280,6 +288,22 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
     stack.push_back(std::move(right));
     stack.push_back(std::move(left));
   }
+  // Adjacent undecided pieces form one undecided interval; its sign change is that of its ends.
+  std::sort(undecided.begin(), undecided.end(), [](const auto& a, const auto& b) { return a.lower < b.lower; });
+  for (std::size_t i = 0; i < undecided.size();) {
+    Undecided merged = undecided[i];
+    std::size_t j = i + 1;
+    while (j < undecided.size() && undecided[j].lower == merged.upper) {
+      merged.upper = undecided[j].upper;
+      merged.sign_upper = undecided[j].sign_upper;
+      ++j;
+    }
+    const bool differ = merged.sign_lower != 0 && merged.sign_upper != 0 && merged.sign_lower != merged.sign_upper;
+    result.intervals.push_back({merged.lower, merged.upper, false, differ});
+    i = j;
+  }
+  std::sort(result.intervals.begin(), result.intervals.end(),
+            [](const auto& a, const auto& b) { return a.lower_t < b.lower_t; });
   return result;
 }
 

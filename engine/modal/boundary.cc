@@ -41,65 +41,24 @@ std::string FormatMetres(double value) {
 // ---------------------------------------------------------------------------------------------
 // The former sampled search (BoundaryMethod::kSampled), unchanged but for the result's new fields.
 
-std::vector<double> ScanHeights(const std::vector<double>& table_heights, double lower, double upper,
-                                int samples_per_segment) {
-  std::vector<double> knots{lower};
-  for (double h : table_heights) {
-    if (h > lower && h < upper) knots.push_back(h);
-  }
-  knots.push_back(upper);
-  std::vector<double> heights;
-  for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
-    for (int j = 0; j <= samples_per_segment; ++j) {
-      heights.push_back(knots[i] + (knots[i + 1] - knots[i]) * j / (samples_per_segment + 1.0));
-    }
-  }
-  heights.push_back(upper);
-  return heights;
-}
-
 void SampledSearch(const LongitudinalModel& model, double speed_mps, const BoundaryOptions& options,
                    BoundaryResult& result, std::vector<double>& margins) {
-  auto sigma = [&](double height_m) {
-    ++result.margin_evaluations;
-    return StabilityMargin(model, height_m, speed_mps);
-  };
-  const std::vector<double> heights = ScanHeights(model.aircraft().table_heights_m, result.lower_height_m,
-                                                  result.upper_height_m, options.samples_per_segment);
-  margins.reserve(heights.size());
-  for (double h : heights) {
-    const double s = sigma(h);
-    if (!std::isfinite(s)) {
-      result.reason = "stability margin is not finite at H = " + FormatMetres(h);
-      margins.clear();
-      return;
-    }
-    margins.push_back(s);
+  std::vector<double> knots{result.lower_height_m};
+  for (double h : model.aircraft().table_heights_m) {
+    if (h > result.lower_height_m && h < result.upper_height_m) knots.push_back(h);
   }
-  for (std::size_t i = heights.size() - 1; i-- > 0;) {
-    const double a = heights[i], b = heights[i + 1];
-    const double sa = margins[i], sb = margins[i + 1];
-    if ((sa < 0) == (sb < 0)) continue;
-    BoundaryCrossing crossing;
-    crossing.kind = CrossingKind::kSigma;
-    crossing.stable_above = sb < 0;
-    crossing.stable_below = sa < 0;
-    if (sa == 0.0 || sb == 0.0) {
-      crossing.height_m = sa == 0.0 ? a : b;
-    } else {
-      std::uintmax_t max_iterations = 200;
-      const double tolerance = options.tolerance_m;
-      auto [low, high] = boost::math::tools::toms748_solve(
-          sigma, a, b, sa, sb, [tolerance](double x, double y) { return std::abs(y - x) <= tolerance; },
-          max_iterations);
-      crossing.height_m = 0.5 * (low + high);
-      crossing.bracket_width_m = high - low;
-    }
-    result.crossings.push_back(crossing);
+  knots.push_back(result.upper_height_m);
+  SampledSearchResult search = SampledCrossingSearch([&](double h) { return model.StateMatrix(h, speed_mps); },
+                                                     knots, options.samples_per_segment, options.tolerance_m);
+  result.margin_evaluations = search.margin_evaluations;
+  if (!search.finite) {
+    result.reason = search.non_finite_reason;
+    return;
   }
-  result.certificate =
-      "none: sigma sampled at " + std::to_string(heights.size()) +
-      " heights; a pair of crossings between two samples is not seen";
+  margins = std::move(search.margins);
+  result.crossings.assign(search.crossings.rbegin(), search.crossings.rend());
+  result.certificate = "none: sigma sampled at " + std::to_string(margins.size()) +
+                       " heights; a pair of crossings between two samples is not seen";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -136,8 +95,9 @@ class Search {
   CrossingSearchResult Run() {
     polynomials_.resize(segments_.size());
     std::vector<Candidate> candidates;
-    // Per segment and criterion: an undecided interval touches t = 0 / t = 1 (the criterion ~0 there).
-    std::vector<std::array<bool, 2>> zero_at_lower(segments_.size()), zero_at_upper(segments_.size());
+    // Per segment and criterion, where the criterion is ~0 at an end (within the rounding allowance,
+    // or exactly, divided out): the t up to which the undecided region reaches (−1: not ~0 there).
+    std::vector<std::array<double, 2>> lower_zone(segments_.size()), upper_zone(segments_.size());
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       if (!BuildPolynomials(s)) return result_;
       for (int c = 0; c < 2; ++c) {
@@ -146,12 +106,17 @@ class Search {
         const BernsteinPolynomial& poly = hopf ? p.hopf : p.real;
         const double allowance = kRoundingAllowance * (hopf ? p.hopf_scale : p.real_scale);
         const RootIsolation isolation = IsolateRoots(poly, allowance);
-        zero_at_lower[s][c] = isolation.sign_at_lower == 0 || (!hopf && segments_[s].real_root_at_lower);
-        zero_at_upper[s][c] = isolation.sign_at_upper == 0 || (!hopf && segments_[s].real_root_at_upper);
+        lower_zone[s][c] = (!hopf && segments_[s].real_root_at_lower) ? 0.0 : -1.0;
+        upper_zone[s][c] = (!hopf && segments_[s].real_root_at_upper) ? 1.0 : -1.0;
         for (const RootInterval& interval : isolation.intervals) {
-          const bool touches_end = (interval.lower_t == 0.0 && isolation.sign_at_lower == 0) ||
-                                   (interval.upper_t == 1.0 && isolation.sign_at_upper == 0);
-          if (touches_end) continue;  // decided at the table row below
+          if (interval.lower_t == 0.0 && isolation.sign_at_lower == 0) {
+            lower_zone[s][c] = interval.upper_t;  // decided with the segment below
+            continue;
+          }
+          if (interval.upper_t == 1.0 && isolation.sign_at_upper == 0) {
+            upper_zone[s][c] = interval.lower_t;  // decided with the segment above
+            continue;
+          }
           if (!interval.certified) {
             Uncertify("an unresolved cluster of roots of " + CriterionName(hopf, s) + " within " +
                       FormatMetres((interval.upper_t - interval.lower_t) * Length(s)) + " of H = " +
@@ -165,19 +130,34 @@ class Search {
         }
       }
     }
-    // Table rows where a criterion vanishes: a crossing when it has opposite signs just below and just
-    // above on a continuous family (a jump is handled by the stability comparison below).
+    // Where a criterion is ~0 at a table row or an end of the range: the region the isolation left
+    // undecided there is decided by the signs of the exact criterion at its two sides (an odd number
+    // of roots when they differ). Wider than kKnotOffset, it may hide an even number: not certified.
+    auto check_zone_width = [&](std::size_t s, int c, double width_t, double end_m) {
+      if (width_t > kKnotOffset * 1.0000001) {
+        Uncertify(CriterionName(c == 0, s) + " is indistinguishable from 0 within " +
+                  FormatMetres(width_t * Length(s)) + " of H = " + FormatMetres(end_m) +
+                  "; a close pair of crossings there cannot be excluded");
+      }
+    };
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      for (int c = 0; c < 2; ++c) {
+        if (lower_zone[s][c] >= 0) check_zone_width(s, c, lower_zone[s][c], segments_[s].lower_height_m);
+        if (upper_zone[s][c] >= 0) check_zone_width(s, c, 1.0 - upper_zone[s][c], segments_[s].upper_height_m);
+      }
+    }
     for (std::size_t s = 0; s + 1 < segments_.size(); ++s) {
       if (!Continuous(s)) continue;
       for (int c = 0; c < 2; ++c) {
-        if (!zero_at_upper[s][c] && !zero_at_lower[s + 1][c]) continue;
+        if (upper_zone[s][c] < 0 && lower_zone[s + 1][c] < 0) continue;
         const bool hopf = c == 0;
         // Where a₅ becomes identically 0 at the row, the neutral root arrives there and stays (the
         // stability comparison reports it); Δ₄ = a₄Δ₃ continues Δ₃ across the row.
         const bool mixed = segments_[s].deflated != segments_[s + 1].deflated;
         if (mixed && !hopf) continue;
-        const double below = segments_[s].upper_height_m - kKnotOffset * Length(s);
-        const double above = segments_[s + 1].lower_height_m + kKnotOffset * Length(s + 1);
+        const double below_t = std::min(upper_zone[s][c] < 0 ? 1.0 : upper_zone[s][c], 1.0 - kKnotOffset);
+        const double above_t = std::max(lower_zone[s + 1][c] < 0 ? 0.0 : lower_zone[s + 1][c], kKnotOffset);
+        const double below = HeightAt(s, below_t), above = HeightAt(s + 1, above_t);
         const double fb = ExactCriterion(s, below, hopf, mixed), fa = ExactCriterion(s + 1, above, hopf, mixed);
         if ((fb < 0) != (fa < 0) && fb != 0 && fa != 0) candidates.push_back({below, above, hopf, s, true, mixed});
       }
@@ -536,6 +516,57 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
 }
 
 }  // namespace
+
+SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>& matrix,
+                                          const std::vector<double>& knots, int samples_per_segment,
+                                          double tolerance_m) {
+  GESWEEP_DEMAND(knots.size() >= 2 && samples_per_segment >= 0);
+  SampledSearchResult result;
+  auto sigma = [&](double height_m) {
+    ++result.margin_evaluations;
+    return AnalyzeModes(matrix(height_m)).stability_margin_per_s;
+  };
+  std::vector<double> heights;
+  for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
+    for (int j = 0; j <= samples_per_segment; ++j) {
+      heights.push_back(knots[i] + (knots[i + 1] - knots[i]) * j / (samples_per_segment + 1.0));
+    }
+  }
+  heights.push_back(knots.back());
+  result.margins.reserve(heights.size());
+  for (double h : heights) {
+    const double s = sigma(h);
+    if (!std::isfinite(s)) {
+      result.finite = false;
+      result.non_finite_reason = "stability margin is not finite at H = " + FormatMetres(h);
+      result.margins.clear();
+      return result;
+    }
+    result.margins.push_back(s);
+  }
+  for (std::size_t i = 0; i + 1 < heights.size(); ++i) {
+    const double a = heights[i], b = heights[i + 1];
+    const double sa = result.margins[i], sb = result.margins[i + 1];
+    if ((sa < 0) == (sb < 0)) continue;
+    BoundaryCrossing crossing;
+    crossing.kind = CrossingKind::kSigma;
+    crossing.stable_above = sb < 0;
+    crossing.stable_below = sa < 0;
+    crossing.mode_stable_above = crossing.stable_above;
+    if (sa == 0.0 || sb == 0.0) {
+      crossing.height_m = sa == 0.0 ? a : b;
+    } else {
+      std::uintmax_t max_iterations = 200;
+      auto [low, high] = boost::math::tools::toms748_solve(
+          sigma, a, b, sa, sb, [tolerance_m](double x, double y) { return std::abs(y - x) <= tolerance_m; },
+          max_iterations);
+      crossing.height_m = 0.5 * (low + high);
+      crossing.bracket_width_m = high - low;
+    }
+    result.crossings.push_back(crossing);
+  }
+  return result;
+}
 
 std::string_view ToString(CrossingKind kind) {
   switch (kind) {

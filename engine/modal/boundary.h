@@ -145,4 +145,20 @@ struct CrossingSearchResult {
 /// scales height_over_span.
 CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m);
 
+/// The result of SampledCrossingSearch.
+struct SampledSearchResult {
+  std::vector<BoundaryCrossing> crossings;  ///< ascending, kind kSigma
+  std::vector<double> margins;              ///< σ at every sample
+  int margin_evaluations = 0;
+  bool finite = true;
+  std::string non_finite_reason;
+};
+
+/// The former search (BoundaryMethod::kSampled) on any family: σ of A(H) at `samples_per_segment`
+/// points inside each interval between consecutive `knots` and at the knots, then TOMS 748 to
+/// `tolerance_m` at each sign change. A pair of sign changes between two samples is not seen.
+SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>& matrix,
+                                          const std::vector<double>& knots, int samples_per_segment,
+                                          double tolerance_m);
+
 }  // namespace gesweep
