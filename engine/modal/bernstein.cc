@@ -53,6 +53,24 @@ struct ChebyshevToBernstein {
   }
 };
 
+// cos(kπ(i + ½)/m) for the Chebyshev transforms of m ≤ kMaxConversionDegree + 2 nodes.
+struct CosineTables {
+  std::vector<std::vector<double>> table;  // table[m][k·m + i]
+  CosineTables() {
+    table.resize(kMaxConversionDegree + 3);
+    for (int m = 1; m <= kMaxConversionDegree + 2; ++m) {
+      auto& t = table[static_cast<std::size_t>(m)];
+      t.resize(static_cast<std::size_t>(m * m));
+      for (int k = 0; k < m; ++k)
+        for (int i = 0; i < m; ++i) t[static_cast<std::size_t>(k * m + i)] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
+    }
+  }
+};
+const CosineTables& Cosines() {
+  static const CosineTables tables;
+  return tables;
+}
+
 int SignOf(double value, double allowance) {
   if (value > allowance) return 1;
   if (value < -allowance) return -1;
@@ -111,15 +129,22 @@ std::vector<double> BernsteinPolynomial::ChebyshevNodes(int m) {
 
 BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const std::vector<double>& values, int degree,
                                                               double* tail) {
+  return FromChebyshevSamples(values.data(), static_cast<int>(values.size()), degree, tail);
+}
+
+BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* values, int m, int degree, double* tail) {
   static const ChebyshevToBernstein table;
-  const int m = static_cast<int>(values.size());
   GESWEEP_DEMAND(m >= 1 && degree >= 0 && degree < m && degree <= kMaxConversionDegree);
   // Node i is x_i = −cos θ_i, θ_i = π(i + ½)/m, so T_k(x_i) = (−1)^k cos(k θ_i).
   double largest_dropped = 0;
   std::array<double, kMax + 1> c{};
-  for (int k = 0; k < m; ++k) {
+  GESWEEP_DEMAND(m <= kMaxConversionDegree + 2);
+  const double* cosines = Cosines().table[static_cast<std::size_t>(m)].data();
+  // Coefficients beyond degree + 1 are not needed: the first dropped one shows a wrong bound.
+  const int computed = std::min(m, degree + 2);
+  for (int k = 0; k < computed; ++k) {
     double sum = 0;
-    for (int i = 0; i < m; ++i) sum += values[static_cast<std::size_t>(i)] * std::cos(k * std::numbers::pi * (i + 0.5) / m);
+    for (int i = 0; i < m; ++i) sum += values[i] * cosines[k * m + i];
     double ck = (k % 2 == 0 ? 2.0 : -2.0) * sum / m;
     if (k == 0) ck *= 0.5;
     if (k <= degree) {
@@ -148,7 +173,8 @@ double BernsteinPolynomial::MaxAbsCoefficient() const {
 }
 
 double BernsteinPolynomial::operator()(double t) const {
-  std::array<double, kMax + 1> work = b_;
+  std::array<double, kMax + 1> work;
+  std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
   for (int r = 1; r <= degree_; ++r) {
     for (int k = 0; k <= degree_ - r; ++k) {
       work[static_cast<std::size_t>(k)] =
@@ -196,7 +222,8 @@ BernsteinPolynomial BernsteinPolynomial::DividedByOneMinusT() const {
 }
 
 void BernsteinPolynomial::Split(BernsteinPolynomial& left, BernsteinPolynomial& right) const {
-  std::array<double, kMax + 1> work = b_;
+  std::array<double, kMax + 1> work;
+  std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
   left.degree_ = right.degree_ = degree_;
   const int n = degree_;
   left.b_[0] = work[0];

@@ -22,9 +22,11 @@ class BernsteinPolynomial {
   /// From values at the n+1 Chebyshev points of BernsteinPolynomial::ChebyshevNodes(n + 1), for a
   /// polynomial known to have degree ≤ `degree` ≤ n: the Chebyshev interpolant (exact for such a
   /// polynomial, up to rounding) truncated to `degree` and converted to the Bernstein basis.
-  /// `tail` receives the largest |Chebyshev coefficient| dropped by the truncation (rounding-level
+  /// `tail` receives |the first Chebyshev coefficient| dropped by the truncation (rounding-level
   /// when the degree bound holds).
   static BernsteinPolynomial FromChebyshevSamples(const std::vector<double>& values, int degree, double* tail);
+  /// The same from m values in an array.
+  static BernsteinPolynomial FromChebyshevSamples(const double* values, int m, int degree, double* tail);
   /// The m Chebyshev points of the first kind on [0, 1], ascending.
   static std::vector<double> ChebyshevNodes(int m);
 

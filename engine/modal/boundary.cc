@@ -4,6 +4,7 @@
 #include <boost/math/tools/toms748_solve.hpp>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <sstream>
 
 #include "engine/aircraft/atmosphere.h"
@@ -69,6 +70,32 @@ struct SegmentPolynomials {
   std::array<BernsteinPolynomial, 6> a;  // a[1..5]
   BernsteinPolynomial hopf, real;        // Δ₄ and a₅, or Δ₃ and a₄ when deflated
   double hopf_scale = 0, real_scale = 0;
+  bool hopf_excluded = false;  // interval arithmetic showed Δ has no root here
+  bool hopf_built = false;
+};
+
+// A closed interval, for the quick exclusion of a segment.
+struct Range {
+  double lo = 0, hi = 0;
+  static Range Of(const BernsteinPolynomial& p) {
+    Range r{p.coefficient(0), p.coefficient(0)};
+    for (int k = 1; k <= p.degree(); ++k) {
+      r.lo = std::min(r.lo, p.coefficient(k));
+      r.hi = std::max(r.hi, p.coefficient(k));
+    }
+    return r;
+  }
+  friend Range operator*(Range x, Range y) {
+    const double a = x.lo * y.lo, b = x.lo * y.hi, c = x.hi * y.lo, d = x.hi * y.hi;
+    return {std::min({a, b, c, d}), std::max({a, b, c, d})};
+  }
+  friend Range operator-(Range x, Range y) { return {x.lo - y.hi, x.hi - y.lo}; }
+  Range Squared() const {
+    if (lo >= 0) return {lo * lo, hi * hi};
+    if (hi <= 0) return {hi * hi, lo * lo};
+    return {0.0, std::max(lo * lo, hi * hi)};
+  }
+  bool ExcludesZero(double margin) const { return lo > margin || hi < -margin; }
 };
 
 double HopfCriterion(const CharacteristicCoefficients& a, bool deflated) {
@@ -103,11 +130,12 @@ class Search {
       for (int c = 0; c < 2; ++c) {
         const bool hopf = c == 0;
         const SegmentPolynomials& p = polynomials_[s];
+        lower_zone[s][c] = (!hopf && segments_[s].real_root_at_lower) ? 0.0 : -1.0;
+        upper_zone[s][c] = (!hopf && segments_[s].real_root_at_upper) ? 1.0 : -1.0;
+        if (hopf && p.hopf_excluded) continue;
         const BernsteinPolynomial& poly = hopf ? p.hopf : p.real;
         const double allowance = kRoundingAllowance * (hopf ? p.hopf_scale : p.real_scale);
         const RootIsolation isolation = IsolateRoots(poly, allowance);
-        lower_zone[s][c] = (!hopf && segments_[s].real_root_at_lower) ? 0.0 : -1.0;
-        upper_zone[s][c] = (!hopf && segments_[s].real_root_at_upper) ? 1.0 : -1.0;
         for (const RootInterval& interval : isolation.intervals) {
           if (interval.lower_t == 0.0 && isolation.sign_at_lower == 0) {
             lower_zone[s][c] = interval.upper_t;  // decided with the segment below
@@ -209,9 +237,8 @@ class Search {
     for (int k = 1; k <= 5; ++k) degree = std::max(degree, segment.coefficient_degrees[static_cast<std::size_t>(k)]);
     // One node more than the degree needs: the tail of every coefficient checks its degree bound.
     const int m = degree + 2;
-    const std::vector<double> nodes = BernsteinPolynomial::ChebyshevNodes(m);
-    std::array<std::vector<double>, 6> values;
-    for (auto& v : values) v.resize(static_cast<std::size_t>(m));
+    const std::vector<double>& nodes = Nodes(m);
+    std::array<std::array<double, BernsteinPolynomial::kMaxDegree + 2>, 6> values;
     double entry_scale = 0;
     for (int i = 0; i < m; ++i) {
       const double h = HeightAt(s, nodes[static_cast<std::size_t>(i)]);
@@ -228,14 +255,16 @@ class Search {
     }
     SegmentPolynomials& p = polynomials_[s];
     std::array<double, 6> scale{};
+    double entry_power = 1.0;
     for (int k = 1; k <= 5; ++k) {
       double tail = 0;
       const int dk = segment.coefficient_degrees[static_cast<std::size_t>(k)];
       p.a[static_cast<std::size_t>(k)] =
-          BernsteinPolynomial::FromChebyshevSamples(values[static_cast<std::size_t>(k)], dk, &tail);
+          BernsteinPolynomial::FromChebyshevSamples(values[static_cast<std::size_t>(k)].data(), m, dk, &tail);
       scale[static_cast<std::size_t>(k)] = p.a[static_cast<std::size_t>(k)].MaxAbsCoefficient();
       // A coefficient is a sum of products of k entries: its rounding is relative to entry_scale^k.
-      const double floor = 1e-15 * std::pow(entry_scale, k) * 10.0;
+      entry_power *= entry_scale;
+      const double floor = 1e-14 * entry_power;
       if (tail > kTailTolerance * scale[static_cast<std::size_t>(k)] + floor) {
         Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " + FormatMetres(segment.upper_height_m) +
                   ": a" + std::to_string(k) + " is not a polynomial of degree " + std::to_string(dk) +
@@ -245,36 +274,59 @@ class Search {
     }
     const auto& a = p.a;
     const auto& S = scale;
+    // Faithfulness: each fitted coefficient against the exact one (true ρ) at a point that is no node.
+    constexpr double kCheckT = 0.3819660112501051;  // 2 − φ
+    const CharacteristicCoefficients exact = Exact(s, HeightAt(s, kCheckT));
+    double worst = 0;
+    for (int k = 1; k <= 5; ++k) {
+      const double error = std::abs(a[static_cast<std::size_t>(k)](kCheckT) - exact[static_cast<std::size_t>(k)]);
+      worst = std::max(worst, error / S[static_cast<std::size_t>(k)]);
+    }
+    if (!(worst <= kFaithfulness)) {
+      Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " + FormatMetres(segment.upper_height_m) +
+                ": the fitted coefficients do not reproduce the exact model (relative error " +
+                std::to_string(worst) + ")");
+    }
+    // Interval bounds of each aₖ over the segment (the range of its Bernstein coefficients).
+    std::array<Range, 6> r;
+    for (int k = 1; k <= 5; ++k) r[static_cast<std::size_t>(k)] = Range::Of(a[static_cast<std::size_t>(k)]);
     if (!segment.deflated) {
-      const BernsteinPolynomial e = a[1] * a[4] - a[5];
-      p.hopf = (a[1] * a[2] - a[3]) * (a[3] * a[4] - a[2] * a[5]) - e * e;
+      p.hopf_scale = (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
+      p.real_scale = S[5];
       // An exact zero of a₅ at an end (column 4 of A vanishes there) is divided out: the quotient
       // has the other roots, and its sign at that end is a₅'s just inside.
       p.real = a[5];
       if (segment.real_root_at_lower) p.real = p.real.DividedByT();
       if (segment.real_root_at_upper) p.real = p.real.DividedByOneMinusT();
-      p.hopf_scale = (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
-      p.real_scale = S[5];
+      // Δ₄ by interval arithmetic first: most segments are far from any root, and then the degree-27
+      // products are not needed.
+      const Range e = r[1] * r[4] - r[5];
+      const Range bound = (r[1] * r[2] - r[3]) * (r[3] * r[4] - r[2] * r[5]) - e.Squared();
+      p.hopf_excluded = bound.ExcludesZero(kRoundingAllowance * p.hopf_scale);
     } else {
-      p.hopf = a[1] * a[2] * a[3] - a[3] * a[3] - a[1] * a[1] * a[4];
-      p.real = a[4];
       p.hopf_scale = S[1] * S[2] * S[3] + S[3] * S[3] + S[1] * S[1] * S[4];
       p.real_scale = S[4];
+      p.real = a[4];
+      const Range bound = r[1] * r[2] * r[3] - r[3].Squared() - r[1].Squared() * r[4];
+      p.hopf_excluded = bound.ExcludesZero(kRoundingAllowance * p.hopf_scale);
     }
-    // Faithfulness: the polynomial against the exact criterion (true ρ) at a point that is no node.
-    constexpr double kCheckT = 0.3819660112501051;  // 2 − φ
-    const CharacteristicCoefficients exact = Exact(s, HeightAt(s, kCheckT));
-    const double hopf_error = std::abs(p.hopf(kCheckT) - HopfCriterion(exact, segment.deflated));
-    double divisor = 1.0;
-    if (!segment.deflated && segment.real_root_at_lower) divisor *= kCheckT;
-    if (!segment.deflated && segment.real_root_at_upper) divisor *= 1.0 - kCheckT;
-    const double real_error = std::abs(p.real(kCheckT) * divisor - RealCriterion(exact, segment.deflated));
-    if (!(hopf_error <= kFaithfulness * p.hopf_scale) || !(real_error <= kFaithfulness * p.real_scale)) {
-      Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " + FormatMetres(segment.upper_height_m) +
-                ": the fitted criteria do not reproduce the exact model (relative error " +
-                std::to_string(std::max(hopf_error / p.hopf_scale, real_error / p.real_scale)) + ")");
-    }
+    if (!p.hopf_excluded) BuildHopf(s);
     return true;
+  }
+
+  // The Bernstein form of Δ₄ (Δ₃ when deflated) of segment s.
+  const BernsteinPolynomial& BuildHopf(std::size_t s) {
+    SegmentPolynomials& p = polynomials_[s];
+    if (p.hopf_built) return p.hopf;
+    const auto& a = p.a;
+    if (!segments_[s].deflated) {
+      const BernsteinPolynomial e = a[1] * a[4] - a[5];
+      p.hopf = (a[1] * a[2] - a[3]) * (a[3] * a[4] - a[2] * a[5]) - e * e;
+    } else {
+      p.hopf = a[1] * a[2] * a[3] - a[3] * a[3] - a[1] * a[1] * a[4];
+    }
+    p.hopf_built = true;
+    return p.hopf;
   }
 
   // Refines a candidate on the exact model, checks it is a crossing, classifies it.
@@ -302,7 +354,7 @@ class Search {
     } else {
       // The exact model does not change sign where the polynomial does: ρ̂ moved a root out of a
       // bracket narrower than the interpolation error. Keep the polynomial's root and say so.
-      const BernsteinPolynomial& poly = c.hopf ? polynomials_[c.segment].hopf : polynomials_[c.segment].real;
+      const BernsteinPolynomial& poly = c.hopf ? BuildHopf(c.segment) : polynomials_[c.segment].real;
       double tl = (lower - segment.lower_height_m) / Length(c.segment);
       double tu = (upper - segment.lower_height_m) / Length(c.segment);
       const bool rising = poly(tu) > poly(tl);
@@ -324,7 +376,7 @@ class Search {
     crossing.bracket_width_m = width;
     crossing.deflated = deflated;
     const double dt_dH = 1.0 / Length(s);
-    const BernsteinPolynomial& criterion = c.hopf ? p.hopf : p.a[deflated ? 4 : 5];
+    const BernsteinPolynomial& criterion = c.hopf ? BuildHopf(s) : p.a[deflated ? 4 : 5];
     crossing.criterion_height_derivative = criterion.Derivative()(t) * dt_dH;
     // dλ/dH = −(∂p/∂H)(λ) / p'(λ) with p(s, H) = det(sI − A(H)) (the quartic factor when deflated).
     const int n = deflated ? 4 : 5;
@@ -427,6 +479,17 @@ class Search {
     result_.stable_at_upper = stable.back();
   }
 
+  static const std::vector<double>& Nodes(int m) {
+    static const std::vector<std::vector<double>> nodes = [] {
+      std::vector<std::vector<double>> all;
+      for (int i = 0; i <= BernsteinPolynomial::kMaxDegree + 1; ++i) {
+        all.push_back(i == 0 ? std::vector<double>{} : BernsteinPolynomial::ChebyshevNodes(i));
+      }
+      return all;
+    }();
+    return nodes[static_cast<std::size_t>(m)];
+  }
+
   const std::vector<MatrixSegment>& segments_;
   double wingspan_m_;
   std::vector<SegmentPolynomials> polynomials_;
@@ -469,10 +532,12 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
     if (hi <= rows.front()) source = Source::kHeld;
     if (lo >= rows.back()) source = Source::kFreeFlight;
     const int coefficient_degree = source == Source::kTable ? interpolation_degree : 0;
-    // Each of rows 0-2 of det(sE − A') (E carries Mẇ) is affine in entries ∝ ρ·C(H): a product of at
-    // most min(k + 1, 3) of them makes aₖ, each of degree 2 (ρ̂) + that of C(H).
+    // The expansion of det(sI − A) (hurwitz.cc) makes aₖ a sum of products of at most min(k, 3)
+    // factors ∝ ρ·C(H) (in a₅ the terms with four cancel exactly: Zw·Mh − Zh·Mw is what remains of
+    // Zw·(Mh + Mẇ Zh) − Zh·(Mw + Mẇ Zw)), each of degree 2 (ρ̂) + that of C(H). The Chebyshev tail
+    // of each fit checks the bound.
     for (int k = 1; k <= 5; ++k) {
-      segment.coefficient_degrees[static_cast<std::size_t>(k)] = std::min(k + 1, 3) * (2 + coefficient_degree);
+      segment.coefficient_degrees[static_cast<std::size_t>(k)] = std::min(k, 3) * (2 + coefficient_degree);
     }
     auto coefficients = [&table, source](double h) {
       switch (source) {
@@ -591,7 +656,6 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
   result.lower_height_m = std::isnan(options.lower_height_m) ? aircraft.wheel_contact_height_m : options.lower_height_m;
   result.upper_height_m = std::isnan(options.upper_height_m) ? aircraft.table_heights_m.back() : options.upper_height_m;
   GESWEEP_DEMAND(result.upper_height_m > result.lower_height_m);
-  const std::string range = FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
 
   bool all_stable = false, all_unstable = false;
   if (options.method == BoundaryMethod::kSampled) {
@@ -613,17 +677,17 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
       return result;
     }
     result.certified = search.certified;
-    std::ostringstream certificate;
-    certificate.precision(2);
     if (search.certified) {
-      certificate << "every root of Delta4 and a5 in " << range << " isolated on " << segments.size()
-                  << " segments (Descartes' rule on the Bernstein basis); rho(H) by its quadratic "
-                     "interpolant per segment, relative error <= "
-                  << result.density_interpolation_bound;
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "every root of Delta4 and a5 in %.7g m to %.7g m isolated on %zu segments (Descartes' rule on "
+                    "the Bernstein basis); rho(H) by its quadratic interpolant per segment, relative error <= %.2g",
+                    result.lower_height_m, result.upper_height_m, segments.size(),
+                    result.density_interpolation_bound);
+      result.certificate = text;
     } else {
-      certificate << "not certified: " << search.uncertified_reason;
+      result.certificate = "not certified: " + search.uncertified_reason;
     }
-    result.certificate = certificate.str();
     for (auto& crossing : search.crossings) {
       if (options.tolerance_m < crossing.bracket_width_m) crossing.bracket_width_m = options.tolerance_m;
     }
@@ -646,6 +710,7 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
     }
   }
   if (!result.height_m) {
+    const std::string range = FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
     if (all_stable) {
       result.reason = "stable at every height from " + range;
     } else if (all_unstable) {

@@ -5,7 +5,47 @@
 
 namespace gesweep {
 
+namespace {
+
+// A has the sparsity of Eq. (1): row Δθ = [0 0 1 0 0], row ΔH = [0 −1 0 u0 0], and zeros at
+// (Δu, q), (Δw, Δθ), (q, Δθ).
+bool HasEquation1Pattern(const Matrix5d& A) {
+  return A(0, 2) == 0.0 && A(1, 3) == 0.0 && A(2, 3) == 0.0 && A(3, 0) == 0.0 && A(3, 1) == 0.0 &&
+         A(3, 2) == 1.0 && A(3, 3) == 0.0 && A(3, 4) == 0.0 && A(4, 0) == 0.0 && A(4, 1) == -1.0 &&
+         A(4, 2) == 0.0 && A(4, 4) == 0.0;
+}
+
+// det(sI − A) expanded for that pattern (the expansion checked against the Hessenberg path in
+// tests/modal/hurwitz_test.cc): a sum of products, rounding relative to its terms as the reduction.
+CharacteristicCoefficients Equation1Polynomial(const Matrix5d& A) {
+  const double a00 = A(0, 0), a01 = A(0, 1), a03 = A(0, 3), a04 = A(0, 4);
+  const double a10 = A(1, 0), a11 = A(1, 1), a12 = A(1, 2), a14 = A(1, 4);
+  const double a20 = A(2, 0), a21 = A(2, 1), a22 = A(2, 2), a24 = A(2, 4);
+  const double a43 = A(4, 3);
+  const double m01 = a00 * a11 - a01 * a10;  // leading 2×2 minor
+  const double m12 = a11 * a22 - a12 * a21;
+  const double m02 = a00 * a22;
+  CharacteristicCoefficients a;
+  a[0] = 1.0;
+  a[1] = -a00 - a11 - a22;
+  a[2] = m01 + m02 + m12 + a14;
+  a[3] = -a00 * m12 - a01 * (a12 * a20 - a10 * a22) - a03 * a20 + a04 * a10 + a12 * a24 - a14 * a22 -
+         a00 * a14 - a24 * a43;
+  a[4] = a00 * (a14 * a22 - a12 * a24 + a24 * a43) + a03 * (a11 * a20 - a10 * a21) +
+         a04 * (a12 * a20 - a10 * a22 - a20 * a43) + a43 * (a11 * a24 - a14 * a21);
+  a[5] = a43 * (a00 * (a14 * a21 - a11 * a24) + a01 * (a10 * a24 - a14 * a20) + a04 * (a11 * a20 - a10 * a21)) +
+         a03 * (a10 * a24 - a14 * a20);
+  return a;
+}
+
+}  // namespace
+
 CharacteristicCoefficients CharacteristicPolynomial(const Matrix5d& A) {
+  if (HasEquation1Pattern(A)) return Equation1Polynomial(A);
+  return HessenbergCharacteristicPolynomial(A);
+}
+
+CharacteristicCoefficients HessenbergCharacteristicPolynomial(const Matrix5d& A) {
   // Householder reduction to upper Hessenberg form H = QᵀAQ (same characteristic polynomial).
   double h[5][5];
   for (int i = 0; i < 5; ++i)

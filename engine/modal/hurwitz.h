@@ -17,10 +17,15 @@ namespace gesweep {
 /// Coefficients a₀ = 1, a₁, …, a₅ of det(sI − A) (index k: the coefficient of s^{5−k}).
 using CharacteristicCoefficients = std::array<double, 6>;
 
-/// det(sI − A) by an orthogonal (Householder) reduction of A to upper Hessenberg form and the
-/// Hessenberg recurrence for the leading minors (Wilkinson, The Algebraic Eigenvalue Problem, §7.11):
-/// backward stable in the reduction, about 150 flops. A must be finite.
+/// det(sI − A). For a matrix with the sparsity of Eq. (1) (rows Δθ and ΔH kinematic, zeros at
+/// (Δu, q), (Δw, Δθ), (q, Δθ)) by its expansion, about 60 flops; otherwise by
+/// HessenbergCharacteristicPolynomial. A must be finite.
 CharacteristicCoefficients CharacteristicPolynomial(const Matrix5d& A);
+
+/// det(sI − A) of any A by an orthogonal (Householder) reduction to upper Hessenberg form and the
+/// Hessenberg recurrence for the leading minors (Wilkinson, The Algebraic Eigenvalue Problem, §7.11):
+/// backward stable in the reduction, about 300 flops.
+CharacteristicCoefficients HessenbergCharacteristicPolynomial(const Matrix5d& A);
 
 /// det(sI − A) by the Faddeev–LeVerrier recurrence, in any scalar type: with std::complex<double> and
 /// A + i·h·dA it gives the directional derivative of every coefficient exactly (complex step), which

@@ -24,8 +24,8 @@ using hdf5::Handle;
 constexpr const char* kMarginPath = "results/modes/stability_margin_per_s";
 constexpr const char* kHeightPath = "design/height_m";
 constexpr std::int64_t kChunkRows = 1 << 16;
-// Samples per table segment inside a grid bracket: the grid already brackets the change; these
-// catch a second pair of changes inside one grid cell, where the refinement keeps the highest.
+// Samples per table segment inside a grid bracket, for BoundaryMethod::kSampled only (the default
+// Hurwitz finder enumerates every crossing in the bracket; it keeps the highest).
 constexpr int kRefineSamplesPerSegment = 8;
 // The rebuilt model must give the archived σ at the bracket's ends. The same engine gives the same
 // bits; this slack only absorbs a different compiler's rounding, not a different model.
@@ -309,8 +309,9 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
             "model (docs/report.md)");
     hdf5::WriteAttribute(
         g, "method",
-        "grid bracket from the archived sigma; FindBoundary (TOMS 748) on the model rebuilt from the "
-        "archive's aircraft_text and the run's parameters, inside the bracket");
+        "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+        "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+        "parameters, inside the bracket");
     hdf5::WriteAttribute(g, "keys", boundary.key_names);
     hdf5::WriteAttribute(g, "source_dataset", kMarginPath);
     hdf5::WriteAttribute(g, "along", kHeightPath);
@@ -372,7 +373,7 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
     WriteDoubles(g, "grid_upper_height_m", upper, "m",
                  "Grid height just above the sign change (sigma < 0); NaN when none");
     WriteDoubles(g, "bracket_width_m", width, "m",
-                 "Width of the refinement's final TOMS 748 bracket; NaN when none");
+                 "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
     WriteNumbers(g, "grid_crossings", H5T_STD_I32LE, H5T_NATIVE_INT32, crossings.data(), n, "1",
                  "Sign changes of sigma between neighbouring grid heights of this point");
     WriteNumbers(g, "heights", H5T_STD_I32LE, H5T_NATIVE_INT32, heights.data(), n, "1",

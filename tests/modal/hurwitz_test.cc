@@ -66,6 +66,32 @@ TEST(CharacteristicPolynomial, AgreesWithFaddeevLeVerrierOnRandomMatrices) {
   }
 }
 
+TEST(CharacteristicPolynomial, TheExpansionForEquation1AgreesWithTheReduction) {
+  // Random matrices with the sparsity of Eq. (1) take the expanded path; the Hessenberg path and
+  // Faddeev-LeVerrier are the oracles.
+  std::mt19937_64 random(9);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    Matrix5d A = Matrix5d::Zero();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 5; ++j) A(i, j) = n(random);
+    A(0, 2) = A(1, 3) = A(2, 3) = 0.0;
+    A(0, 3) = -9.80665;
+    A(1, 2) = 30 + n(random);
+    A(3, 2) = 1.0;
+    A(4, 1) = -1.0;
+    A(4, 3) = A(1, 2);
+    const CharacteristicCoefficients fast = CharacteristicPolynomial(A);
+    const CharacteristicCoefficients reduced = HessenbergCharacteristicPolynomial(A);
+    const auto flv = FaddeevLeVerrier<double>(A);
+    for (int k = 1; k < 6; ++k) {
+      const double scale = std::pow(A.norm(), k) * 10;
+      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], reduced[static_cast<std::size_t>(k)], 1e-14 * scale) << k;
+      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], flv[static_cast<std::size_t>(k)], 1e-13 * scale) << k;
+    }
+  }
+}
+
 TEST(HurwitzDelta4, IsOrlandosProductOfRootSums) {
   // Orlando (1911): Δ_{n−1} = Π_{i<j} (λᵢ + λⱼ) for a monic polynomial of degree 5; the oracle takes
   // the eigenvalues from Eigen's EigenSolver.
