@@ -97,6 +97,7 @@ void AddSensitivitiesJson(const BoundarySensitivities& s, nlohmann::json& row) {
                     {"value_unit", std::string(p.parameter.Unit())},
                     {"dH_dp", JsonNumber(p.height_derivative)},
                     {"dH_dp_unit", HeightDerivativeUnit(p.parameter)},
+                    {"dH_dp_implicit", JsonNumber(p.implicit_height_derivative)},
                     {"p_dH_dp_m", JsonNumber(p.relative_height_derivative_m)},
                     {"dsigma_dp_per_s", JsonNumber(p.margin_derivative)},
                     {"method", p.method == DerivativeMethod::kExact ? "exact" : "central_difference"}});
