@@ -78,6 +78,19 @@ void BM_Modes(benchmark::State& state) {
 }
 BENCHMARK(BM_Modes)->Threads(1)->Threads(2)->UseRealTime();
 
+// The same with LAPACK's small-matrix QR (dgehd2 + dlahqr) instead of Eigen's EigenSolver.
+void BM_ModesLapack(benchmark::State& state) {
+  const LongitudinalModel& model = Model();
+  const std::vector<double>& heights = SweepHeights();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(heights[i++ & 1023], kSpeed_mps), EigenvalueSolver::kLapack);
+    benchmark::DoNotOptimize(modal.stability_margin_per_s);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ModesLapack);
+
 // The parts: building A(H, u0), and the eigen-analysis of a fixed A.
 void BM_StateMatrix(benchmark::State& state) {
   const LongitudinalModel& model = Model();
