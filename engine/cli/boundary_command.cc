@@ -4,12 +4,14 @@
 // With --archive, the boundary of a sweep's results instead: the sign change of the archived stability
 // margin along height for each value of the other axes, refined on each run's model and written to
 // /analysis/boundary (docs/report.md, "gesweep boundary --archive").
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <optional>
 #include <sstream>
 
+#include "engine/analysis/boundary_curve.h"
 #include "engine/analysis/local_sensitivity.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/hdf5_util.h"
@@ -253,6 +255,48 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
   }
 }
 
+nlohmann::json CurveJson(const BoundaryCurve& curve) {
+  nlohmann::json points = nlohmann::json::array(), events = nlohmann::json::array();
+  for (const auto& p : curve.points) {
+    points.push_back({{"speed_mps", p.speed_mps},
+                      {"height_m", p.height_m},
+                      {"height_over_span", p.height_over_span},
+                      {"dH_du_m_per_mps", JsonNumber(p.height_speed_derivative)},
+                      {"kind", std::string(ToString(p.kind))},
+                      {"mode", p.mode},
+                      {"certified", p.certified},
+                      {"branch", p.branch}});
+  }
+  for (const auto& e : curve.events) {
+    events.push_back({{"speed_mps", e.speed_mps},
+                      {"what", e.what},
+                      {"height_below_m", JsonNumber(e.height_below_m)},
+                      {"height_above_m", JsonNumber(e.height_above_m)},
+                      {"reason", e.reason}});
+  }
+  return {{"speed_range_mps", {curve.lower_speed_mps, curve.upper_speed_mps}},
+          {"points", points},
+          {"events", events},
+          {"accepted_steps", curve.accepted_steps},
+          {"rejected_steps", curve.rejected_steps},
+          {"finder_calls", curve.finder_calls}};
+}
+
+void PrintCurveSummary(const BoundaryCurve& curve) {
+  std::cout << "# curve traced from " << FormatNumber(curve.lower_speed_mps, 6) << " to "
+            << FormatNumber(curve.upper_speed_mps, 6) << " m/s by continuation on the crossing criterion: "
+            << curve.points.size() << " points, " << curve.rejected_steps << " steps rejected, " << curve.finder_calls
+            << " certified checks\n";
+  for (const auto& e : curve.events) {
+    std::cout << "#   at " << FormatNumber(e.speed_mps, 7) << " m/s the boundary " << e.what;
+    if (e.what == "appears") std::cout << " at H* = " << FormatNumber(e.height_above_m, 6) << " m (below: " << e.reason << ")";
+    if (e.what == "ends") std::cout << " at H* = " << FormatNumber(e.height_below_m, 6) << " m (above: " << e.reason << ")";
+    if (e.what == "jumps")
+      std::cout << " from " << FormatNumber(e.height_below_m, 6) << " to " << FormatNumber(e.height_above_m, 6) << " m";
+    std::cout << "\n";
+  }
+}
+
 int RunArchiveBoundary(const BoundaryFlags& flags) {
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
@@ -313,14 +357,35 @@ int RunBoundary(const BoundaryFlags& flags) {
         "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
   }
   std::vector<double> speeds;
-  if (!flags.speeds.empty()) {
+  std::optional<BoundaryCurve> curve;
+  const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
+  const LongitudinalModel model = flags.model.BuildModel();
+  if (!flags.speeds.empty() && colons == 1) {
+    // a:b: the traced curve, printed at its own points.
+    const std::string a = flags.speeds.substr(0, flags.speeds.find(':'));
+    const std::string b = flags.speeds.substr(flags.speeds.find(':') + 1);
+    const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
+    const double lower = ends[0], upper = ends[1];
+    RequirePositiveSpeed(lower, "--speeds-mps");
+    RequirePositiveSpeed(upper, "--speeds-mps");
+    if (!(upper > lower)) throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
+    BoundaryCurveOptions options;
+    options.search = SearchOptions(flags);
+    curve = TraceBoundary(model, lower, upper, options);
+    for (const auto& p : curve->points) speeds.push_back(p.speed_mps);
+  } else if (!flags.speeds.empty()) {
     speeds = ParseRange(flags.speeds, "--speeds-mps");
     for (double v : speeds) RequirePositiveSpeed(v, "--speeds-mps");
+    if (colons == 2 && speeds.size() > 1 && speeds.back() > speeds.front()) {
+      // a:b:n: the curve traced over [a, b], printed at the n speeds.
+      BoundaryCurveOptions options;
+      options.search = SearchOptions(flags);
+      curve = TraceBoundary(model, speeds.front(), speeds.back(), options);
+    }
   } else {
     RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
     speeds.push_back(flags.speed_mps);
   }
-  const LongitudinalModel model = flags.model.BuildModel();
   const double span = model.aircraft().wingspan_m;
 
   nlohmann::json boundaries = nlohmann::json::array();
@@ -337,14 +402,21 @@ int RunBoundary(const BoundaryFlags& flags) {
   std::vector<BoundarySensitivities> sensitivities;
   const BoundaryOptions search = SearchOptions(flags);
   for (double speed : speeds) {
-    const BoundaryResult result = FindBoundary(model, speed, search);
+    BoundaryResult result = FindBoundary(model, speed, search);
+    if (curve && result.height_m) {
+      // The printed H* is the curve's (Newton on the criterion from the traced points); the finder,
+      // run here for the other crossings, gives the same root to rounding.
+      if (const auto on_curve = BoundaryOnCurve(model, *curve, speed)) {
+        if (std::abs(*on_curve - *result.height_m) <= 1e-6) result.height_m = *on_curve;
+      }
+    }
     if (flags.sensitivities) sensitivities.push_back(ComputeBoundarySensitivities(model, result));
     std::vector<double> others;
     std::string other_text;
     nlohmann::json crossings = nlohmann::json::array();
     for (const auto& crossing : result.crossings) {
       crossings.push_back(CrossingJson(crossing));
-      if (!result.height_m || crossing.height_m != *result.height_m) {
+      if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9) {
         others.push_back(crossing.height_m);
         other_text += (other_text.empty() ? "" : " ") + CrossingText(crossing);
       }
@@ -380,8 +452,13 @@ int RunBoundary(const BoundaryFlags& flags) {
       }
     }
   }
-  if (flags.format == "json") std::cout << nlohmann::json{{"boundaries", boundaries}}.dump(2) << "\n";
+  if (flags.format == "json") {
+    nlohmann::json out{{"boundaries", boundaries}};
+    if (curve) out["curve"] = CurveJson(*curve);
+    std::cout << out.dump(2) << "\n";
+  }
   if (flags.format == "table") {
+    if (curve) PrintCurveSummary(*curve);
     for (const auto& s : sensitivities) PrintSensitivitiesTable(s);
   }
   return 0;
@@ -393,7 +470,9 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<BoundaryFlags>();
       flags->model.AddTo(app, /*aircraft_required=*/false);
       auto* speed = app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s");
-      auto* speeds = app.add_option("--speeds-mps", flags->speeds, "Speeds a:b:n (n evenly spaced) or a,b,c");
+      auto* speeds = app.add_option("--speeds-mps", flags->speeds,
+                                    "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
+                                    "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
       speed->excludes(speeds);
       auto* archive =
           app.add_option("--archive", flags->archive,
