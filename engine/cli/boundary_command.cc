@@ -337,8 +337,39 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
           sensitivities[i] = ComputeBoundarySensitivities(models.Model(p.parameters), p.refined);
       }
     }
-    if (!flags.no_write) WriteBoundaryGroup(flags.archive, boundary, CommandLine(flags));
+    // With speed the only other axis, the curve H*(u0) traced on the continuous model over the
+    // archive's speeds, beside the per-point boundary (the report draws it on the stability map).
+    std::optional<BoundaryCurve> curve;
+    if (boundary.key_names == std::vector<std::string>{"speed_mps"} && boundary.points.size() >= 2) {
+      const double lower = boundary.points.front().key_values[0], upper = boundary.points.back().key_values[0];
+      if (upper > lower && lower > 0) {
+        curve = TraceBoundary(models.Model(boundary.points.front().parameters), lower, upper);
+      }
+    }
+    if (!flags.no_write) {
+      WriteBoundaryGroup(flags.archive, boundary, CommandLine(flags));
+      if (curve) {
+        BoundaryCurveRecord record;
+        record.wingspan_m = boundary.wingspan_m;
+        for (const auto& p : curve->points) {
+          record.speed_mps.push_back(p.speed_mps);
+          record.height_m.push_back(p.height_m);
+          record.height_over_span.push_back(p.height_over_span);
+          record.height_speed_derivative.push_back(p.height_speed_derivative);
+          record.branch.push_back(p.branch);
+        }
+        for (const auto& e : curve->events) {
+          record.event_speed_mps.push_back(e.speed_mps);
+          record.event_what.push_back(e.what);
+        }
+        WriteBoundaryCurveGroup(flags.archive, record, CommandLine(flags));
+      }
+    }
     PrintArchiveBoundary(boundary, flags, sensitivities, !flags.no_write);
+    if (curve && flags.format == "table") {
+      PrintCurveSummary(*curve);
+      if (!flags.no_write) std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
+    }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
     return 1;

@@ -383,4 +383,42 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
   file.Close("close " + shown);
 }
 
+void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
+                             const std::string& command_line) {
+  hdf5::Quiet();
+  const std::string shown = archive.string();
+  Handle fapl = hdf5::FileAccess();
+  const hid_t id = H5Fopen(archive.c_str(), H5F_ACC_RDWR, fapl.get());
+  if (id < 0) {
+    const std::string detail = hdf5::LastError();
+    H5Eclear2(H5E_DEFAULT);
+    throw InputError(shown, "", "", "cannot open the archive for writing (HDF5: " + detail + ")");
+  }
+  Handle file(id);
+  hdf5::ReplaceGroup(file.get(), kBoundaryCurveGroup, [&](const std::string& temporary) {
+    Handle group(H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                 "create group " + temporary);
+    const hid_t g = group.get();
+    hdf5::WriteAttribute(g, "description",
+                         "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
+                         "the continuous model over the archive's speed range, every point confirmed by the "
+                         "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
+    hdf5::WriteAttribute(g, "wingspan_m", curve.wingspan_m);
+    hdf5::WriteAttribute(g, "engine_version", EngineVersion());
+    hdf5::WriteAttribute(g, "created", UtcTimestamp());
+    hdf5::WriteAttribute(g, "command_line", command_line);
+    WriteDoubles(g, "speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
+    WriteDoubles(g, "height_m", curve.height_m, "m", "Boundary height H* at that speed");
+    WriteDoubles(g, "height_over_span", curve.height_over_span, "1", "H*/b");
+    WriteDoubles(g, "height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
+                 "dH*/du0 by the implicit-function theorem on the crossing criterion");
+    WriteNumbers(g, "branch", H5T_STD_I32LE, H5T_NATIVE_INT32, curve.branch.data(), curve.branch.size(), "1",
+                 "Branch of each point (a new one after each event)");
+    WriteDoubles(g, "event_speed_mps", curve.event_speed_mps, "m/s",
+                 "Speeds where the boundary appears, ends or jumps to another crossing");
+    WriteStrings(g, "event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
+  });
+  file.Close("close " + shown);
+}
+
 }  // namespace gesweep
