@@ -387,6 +387,7 @@ int RunBoundary(const BoundaryFlags& flags) {
         "command line", "--format", "csv",
         "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
   }
+  const BoundaryOptions search = SearchOptions(flags);  // validated before anything is printed
   std::vector<double> speeds;
   std::optional<BoundaryCurve> curve;
   const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
@@ -431,7 +432,6 @@ int RunBoundary(const BoundaryFlags& flags) {
     std::cout << "speed_mps,height_m,height_over_span,other_crossings_m,reason\n";
   }
   std::vector<BoundarySensitivities> sensitivities;
-  const BoundaryOptions search = SearchOptions(flags);
   for (double speed : speeds) {
     BoundaryResult result = FindBoundary(model, speed, search);
     if (curve && result.height_m) {
