@@ -195,6 +195,17 @@ def _map_overlays(ax, archive, key, heights, speeds, grid, zero_label):
                     marker="o", ms=3, mec="k", mew=0.4)
             handles.append(Line2D([], [], color="#ffd000", lw=0.9, marker="o", ms=3.5, mec="k", mew=0.4,
                                   label="H* refined on the continuous model (/analysis/boundary)"))
+    # The curve H*(u0) traced by continuation (gesweep boundary --archive, issue 16), when the map's
+    # only other axis is speed.
+    if "analysis/boundary_curve" in archive.file and len(key) == 0:
+        traced = archive.file["analysis/boundary_curve"]
+        branches = traced["branch"][...]
+        for branch in np.unique(branches):
+            on = branches == branch
+            ax.plot(traced["speed_mps"][...][on], traced["height_m"][...][on], color="#ff00c8", lw=1.4)
+        if len(branches):
+            handles.append(Line2D([], [], color="#ff00c8", lw=1.4,
+                                  label="H*(u0) traced by continuation (/analysis/boundary_curve)"))
     if b > 0:
         ax.axhline(0.5 * b, color="#00a000", ls="--", lw=1.4)
         handles.append(Line2D([], [], color="#00a000", ls="--", lw=1.4,

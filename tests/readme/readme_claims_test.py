@@ -11,7 +11,7 @@ README shows; this test runs those commands with the real gesweep binary and com
 
 Usage: readme_claims_test.py GESWEEP_BINARY [fast|sobol]
   fast (default): everything but the Sobol study, a few seconds;
-  sobol: the Sobol paragraph (40,960 boundary runs, about 30 s of CPU).
+  sobol: the Sobol paragraph (327,680 boundary runs, about 15 s of CPU).
 """
 import json
 import os
