@@ -24,8 +24,8 @@ using hdf5::Handle;
 constexpr const char* kMarginPath = "results/modes/stability_margin_per_s";
 constexpr const char* kHeightPath = "design/height_m";
 constexpr std::int64_t kChunkRows = 1 << 16;
-// Samples per table segment inside a grid bracket: the grid already brackets the change; these
-// catch a second pair of changes inside one grid cell, where the refinement keeps the highest.
+// Samples per table segment inside a grid bracket, for BoundaryMethod::kSampled only (the default
+// Hurwitz finder enumerates every crossing in the bracket; it keeps the highest).
 constexpr int kRefineSamplesPerSegment = 8;
 // The rebuilt model must give the archived σ at the bracket's ends. The same engine gives the same
 // bits; this slack only absorbs a different compiler's rounding, not a different model.
@@ -309,8 +309,9 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
             "model (docs/report.md)");
     hdf5::WriteAttribute(
         g, "method",
-        "grid bracket from the archived sigma; FindBoundary (TOMS 748) on the model rebuilt from the "
-        "archive's aircraft_text and the run's parameters, inside the bracket");
+        "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+        "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+        "parameters, inside the bracket");
     hdf5::WriteAttribute(g, "keys", boundary.key_names);
     hdf5::WriteAttribute(g, "source_dataset", kMarginPath);
     hdf5::WriteAttribute(g, "along", kHeightPath);
@@ -372,12 +373,50 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
     WriteDoubles(g, "grid_upper_height_m", upper, "m",
                  "Grid height just above the sign change (sigma < 0); NaN when none");
     WriteDoubles(g, "bracket_width_m", width, "m",
-                 "Width of the refinement's final TOMS 748 bracket; NaN when none");
+                 "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
     WriteNumbers(g, "grid_crossings", H5T_STD_I32LE, H5T_NATIVE_INT32, crossings.data(), n, "1",
                  "Sign changes of sigma between neighbouring grid heights of this point");
     WriteNumbers(g, "heights", H5T_STD_I32LE, H5T_NATIVE_INT32, heights.data(), n, "1",
                  "Grid heights with a finite sigma (complete ok runs) of this point");
     WriteStrings(g, "reason", reasons, "Why there is no boundary (empty when there is one)");
+  });
+  file.Close("close " + shown);
+}
+
+void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
+                             const std::string& command_line) {
+  hdf5::Quiet();
+  const std::string shown = archive.string();
+  Handle fapl = hdf5::FileAccess();
+  const hid_t id = H5Fopen(archive.c_str(), H5F_ACC_RDWR, fapl.get());
+  if (id < 0) {
+    const std::string detail = hdf5::LastError();
+    H5Eclear2(H5E_DEFAULT);
+    throw InputError(shown, "", "", "cannot open the archive for writing (HDF5: " + detail + ")");
+  }
+  Handle file(id);
+  hdf5::ReplaceGroup(file.get(), kBoundaryCurveGroup, [&](const std::string& temporary) {
+    Handle group(H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                 "create group " + temporary);
+    const hid_t g = group.get();
+    hdf5::WriteAttribute(g, "description",
+                         "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
+                         "the continuous model over the archive's speed range, every point confirmed by the "
+                         "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
+    hdf5::WriteAttribute(g, "wingspan_m", curve.wingspan_m);
+    hdf5::WriteAttribute(g, "engine_version", EngineVersion());
+    hdf5::WriteAttribute(g, "created", UtcTimestamp());
+    hdf5::WriteAttribute(g, "command_line", command_line);
+    WriteDoubles(g, "speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
+    WriteDoubles(g, "height_m", curve.height_m, "m", "Boundary height H* at that speed");
+    WriteDoubles(g, "height_over_span", curve.height_over_span, "1", "H*/b");
+    WriteDoubles(g, "height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
+                 "dH*/du0 by the implicit-function theorem on the crossing criterion");
+    WriteNumbers(g, "branch", H5T_STD_I32LE, H5T_NATIVE_INT32, curve.branch.data(), curve.branch.size(), "1",
+                 "Branch of each point (a new one after each event)");
+    WriteDoubles(g, "event_speed_mps", curve.event_speed_mps, "m/s",
+                 "Speeds where the boundary appears, ends or jumps to another crossing");
+    WriteStrings(g, "event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
   });
   file.Close("close " + shown);
 }
