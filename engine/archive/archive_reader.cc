@@ -45,6 +45,9 @@ std::optional<std::pair<std::uintmax_t, std::uintmax_t>> TruncatedSizes(const st
   return std::make_pair(actual, recorded);
 }
 
+// Read attempts of a metadata block in a snapshot (SWMR read) open; see ArchiveReader::Open.
+constexpr unsigned kSnapshotReadAttempts = 24;
+
 bool StartsWith(const std::string& text, const std::string& prefix) {
   return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
 }
@@ -174,7 +177,12 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
   if (id < 0) {
     first_error = hdf5::LastError();
     H5Eclear2(H5E_DEFAULT);
-    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot.
+    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot. An SWMR
+    // reader re-reads a metadata block whose checksum fails (a writer may be rewriting it), sleeping
+    // 1 ns, 2 ns, 4 ns, ... between attempts; HDF5's default of 100 attempts sleeps for hours on a
+    // damaged file (fuzz_archive: opens that never returned). 24 attempts sleep 17 ms in all, far
+    // longer than a writer takes to flush one block.
+    Check(H5Pset_metadata_read_attempts(fapl.get(), kSnapshotReadAttempts), "metadata read attempts");
     id = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get());
     snapshot = id >= 0;
     H5Eclear2(H5E_DEFAULT);
