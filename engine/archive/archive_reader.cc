@@ -199,51 +199,41 @@ void ArchiveReader::VerifyRunIds(const SweepPlan& plan, const std::vector<std::i
 
 void ArchiveReader::CopyBlocks(ArchiveWriter& writer, const std::vector<std::int64_t>& blocks,
                                int chunk_runs) const {
-  // Consecutive blocks are copied together, a bounded number of chunks per piece; every piece
-  // covers whole chunks of the target, so each chunk is still written exactly once.
-  constexpr std::int64_t kChunksPerPiece = 64;
-  std::vector<std::pair<std::int64_t, std::int64_t>> ranges;  // [first block, last block]
-  for (std::int64_t block : blocks) {
-    if (!ranges.empty() && ranges.back().second + 1 == block &&
-        block - ranges.back().first < kChunksPerPiece) {
-      ranges.back().second = block;
-    } else {
-      ranges.emplace_back(block, block);
-    }
-  }
+  // Raw chunk copy (H5Dread_chunk / H5Dwrite_chunk): the complete batches of the crashed file are
+  // taken as they are stored, nothing is inflated or deflated again, each target chunk written
+  // once. runs/status last, after a flush, as when the batches were first written.
+  const archive::ArchiveLayout& layout = writer.layout();
   std::vector<unsigned char> buffer;
-  auto copy = [&](const std::string& path, hid_t target) {
-    Handle source(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
-    Handle type(H5Dget_type(source.get()), "type of " + path);
-    const auto dims = hdf5::Dimensions(source.get());
-    const std::size_t row_bytes =
-        static_cast<std::size_t>(dims.size() == 2 ? dims[1] : 1) * H5Tget_size(type.get());
-    for (const auto& [first_block, last_block] : ranges) {
-      const std::int64_t first = first_block * chunk_runs;
-      const std::int64_t count = std::min<std::int64_t>((last_block + 1) * chunk_runs, run_count_) - first;
-      buffer.resize(static_cast<std::size_t>(count) * row_bytes);
-      Handle memory;
-      Handle space = hdf5::SelectRows(source.get(), first, count, &memory);
-      Check(H5Dread(source.get(), type.get(), memory.get(), space.get(), H5P_DEFAULT, buffer.data()),
-            "read " + path + " of " + path_.string());
-      Handle target_memory;
-      Handle target_space = hdf5::SelectRows(target, first, count, &target_memory);
-      Check(H5Dwrite(target, type.get(), target_memory.get(), target_space.get(), H5P_DEFAULT, buffer.data()),
-            "copy " + path);
+  auto copy = [&](int index) {
+    const archive::StoredDataset& stored = layout.datasets()[static_cast<std::size_t>(index)];
+    Handle source(H5Dopen2(file_.get(), stored.path.c_str(), H5P_DEFAULT), "open " + stored.path);
+    const hid_t target = writer.datasets_[static_cast<std::size_t>(index)].get();
+    for (std::int64_t block : blocks) {
+      const std::int64_t first = block * chunk_runs;
+      const std::int64_t end = std::min<std::int64_t>(first + chunk_runs, run_count_);
+      for (std::int64_t row = first; row < end; row += stored.chunk_rows) {
+        const hsize_t offset[2] = {static_cast<hsize_t>(row), 0};
+        unsigned mask = 0;
+        haddr_t address = HADDR_UNDEF;
+        hsize_t size = 0;
+        Check(H5Dget_chunk_info_by_coord(source.get(), offset, &mask, &address, &size),
+              "chunk of " + stored.path + " in " + path_.string());
+        if (address == HADDR_UNDEF || size == 0) continue;  // never written (e.g. a batch without messages)
+        buffer.resize(static_cast<std::size_t>(size));
+        std::uint32_t filters = 0;
+        Check(H5Dread_chunk(source.get(), H5P_DEFAULT, offset, &filters, buffer.data()),
+              "read a chunk of " + stored.path + " of " + path_.string());
+        Check(H5Dwrite_chunk(target, H5P_DEFAULT, filters, offset, buffer.size(), buffer.data()),
+              "copy a chunk of " + stored.path);
+      }
     }
   };
-  const SweepPlan& plan = writer.plan_;
-  for (std::size_t c = 0; c < writer.design_.size(); ++c) {
-    copy(archive::DesignPath(
-             ParameterCatalog()[static_cast<std::size_t>(plan.design().spec().parameters[c].id)].name),
-         writer.design_[c].get());
+  const int status = layout.status_dataset();
+  for (int d = 0; d < static_cast<int>(layout.datasets().size()); ++d) {
+    if (d != status) copy(d);
   }
-  for (std::size_t c = 0; c < writer.results_.size(); ++c)
-    copy(plan.schema().columns[c].path, writer.results_[c].get());
-  copy(archive::kRunIndex, writer.index_.get());
-  copy(archive::kRunId, writer.id_.get());
-  copy(archive::kRunMessage, writer.message_.get());
-  copy(archive::kRunStatus, writer.status_.get());
+  Check(H5Fflush(writer.file_.get(), H5F_SCOPE_LOCAL), "flush " + writer.path_.string());
+  copy(status);
 }
 
 }  // namespace gesweep

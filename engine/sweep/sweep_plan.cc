@@ -56,7 +56,7 @@ void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* 
   *count = split(shard.index + 1) - *first;
 }
 
-std::int64_t BookkeepingBytesPerRun() { return 8 /* index */ + 8 /* id */ + 1 /* status */ + kMessageLength; }
+std::int64_t BookkeepingBytesPerRun() { return 8 /* index */ + 8 /* id */ + 1 /* status */; }
 
 std::string FormatBytes(double bytes) {
   const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};

@@ -97,10 +97,12 @@ class SweepPlan {
 /// Formats a byte count for people: "812 B", "3.4 MB", "1.2 TB" (powers of 1000).
 std::string FormatBytes(double bytes);
 
-/// Bytes per run of the bookkeeping columns (index, id, status, message).
+/// Bytes per run of the bookkeeping columns (index, id, status; runs/message is sparse -- only the
+/// chunks holding a message are stored -- and is not counted).
 std::int64_t BookkeepingBytesPerRun();
 
-/// Fixed length of a run's stored message, bytes (longer messages are cut).
-inline constexpr int kMessageLength = 160;
+/// Most bytes of a run's stored message (runs/message, fixed-length UTF-8); a longer message is cut
+/// at a character boundary and ends in "..." (docs/sweep.md, "Messages").
+inline constexpr int kMessageLength = 1024;
 
 }  // namespace gesweep
