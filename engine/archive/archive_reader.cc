@@ -76,7 +76,37 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
                          " (this engine is older than the archive)");
   }
   reader.run_count_ = reader.IntegerAttribute("run_count");
+  if (reader.StringAttribute("merge_kind") == "virtual") reader.CheckVirtualSources();
   return reader;
+}
+
+void ArchiveReader::CheckVirtualSources() const {
+  // A virtual archive reads its shards in place, and HDF5 silently gives fill values for a shard
+  // it cannot find: refuse instead, naming it.
+  const std::string shown = path_.string();
+  const std::filesystem::path directory = path_.parent_path();
+  const std::string fingerprint = StringAttribute("study_fingerprint");
+  for (const std::string& source : StringListAttribute("virtual_sources")) {
+    const std::filesystem::path shard = std::filesystem::path(source).is_absolute() ? std::filesystem::path(source)
+                                                                                    : directory / source;
+    std::error_code ec;
+    auto refuse = [&](const std::string& why) {
+      throw InputError(shown, "virtual_sources", source,
+                       why + ": a virtual archive (gesweep merge) reads its shard files in place, so they must "
+                             "stay where they were merged (relative to this file); put it back, or merge again "
+                             "(gesweep merge --copy makes a self-contained archive)");
+    };
+    if (!std::filesystem::is_regular_file(shard, ec)) refuse("shard file " + shard.string() + " is missing");
+    Handle fapl = hdf5::FileAccess();
+    const hid_t id = H5Fopen(shard.c_str(), H5F_ACC_RDONLY, fapl.get());
+    H5Eclear2(H5E_DEFAULT);
+    if (id < 0) refuse("shard file " + shard.string() + " cannot be opened (in use by a writer, or damaged)");
+    Handle file(id);
+    if (hdf5::ReadStringAttribute(id, "study_fingerprint").value_or("") != fingerprint ||
+        hdf5::ReadIntegerAttribute(id, "complete").value_or(0) != 1) {
+      refuse("shard file " + shard.string() + " has changed since the merge (another study, or not complete)");
+    }
+  }
 }
 
 void ArchiveReader::Close() { file_.Reset(); }

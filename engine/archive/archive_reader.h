@@ -20,7 +20,8 @@ class ArchiveReader {
  public:
   /// Opens an archive. Throws InputError (source = the path) when it is missing, not HDF5, not a
   /// gesweep archive, of a newer format version, or cannot be opened at all (e.g. a writer is
-  /// setting it up right now: "archive in use").
+  /// setting it up right now: "archive in use"), and when it is a virtual merged archive one of
+  /// whose shard files is missing, unreadable or changed.
   static ArchiveReader Open(const std::filesystem::path& path);
 
   ArchiveReader(ArchiveReader&&) = default;
@@ -74,6 +75,7 @@ class ArchiveReader {
 
  private:
   ArchiveReader(std::filesystem::path path, hdf5::Handle file, bool snapshot);
+  void CheckVirtualSources() const;
   std::filesystem::path path_;
   hdf5::Handle file_;
   bool snapshot_ = false;

@@ -436,6 +436,11 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   std::string resumed_at;
   if (exists && mode == ArchiveOpenMode::kResume) {
     ArchiveReader existing = ArchiveReader::Open(path);
+    if (!existing.StringListAttribute("merged_from").empty()) {
+      throw InputError("command line", "-o", shown,
+                       "is a merged archive (gesweep merge), not a shard a sweep writes; resume the shards, "
+                       "then merge again");
+    }
     existing.CheckSameSweep(plan, shown);
     plan.set_chunk_runs(static_cast<int>(existing.IntegerAttribute("chunk_runs")));
     complete_blocks = existing.CompleteBlocks(plan.chunk_runs());

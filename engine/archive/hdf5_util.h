@@ -12,15 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/archive_error.h"
+
 namespace gesweep {
-
-/// An archive could not be read or written (I/O error, disk full, corrupt file). Not a person's
-/// bad input (that is InputError); the CLI reports it and exits with code 1.
-class ArchiveError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 namespace hdf5 {
 
 /// Turns off HDF5's automatic error printing on the calling thread (errors become exceptions).
