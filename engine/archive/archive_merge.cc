@@ -123,7 +123,11 @@ void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& sh
   const auto dims = hdf5::Dimensions(reference);
   std::vector<hsize_t> out_dims{static_cast<hsize_t>(design_runs)};
   if (dims.size() == 2) out_dims.push_back(static_cast<hsize_t>(dims[1]));
-  Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), nullptr), "dataspace");
+  // One chunk in all: an unlimited row dimension, as the writer does (HDF5 1.10's single-chunk index
+  // mishandles direct chunk writes).
+  std::vector<hsize_t> max_dims = out_dims;
+  if (out_dims[0] <= static_cast<hsize_t>(chunk_rows[widest])) max_dims[0] = H5S_UNLIMITED;
+  Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), max_dims.data()), "dataspace");
   Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
                 "create " + path);
   hdf5::CopyAttributes(reference, target.get());

@@ -48,8 +48,13 @@ Handle Creation(const archive::StoredDataset& d, hid_t fill_type) {
 }
 
 Handle CreateDataset(hid_t file, const std::string& path, hid_t type, const std::vector<hsize_t>& dims,
-                     hid_t dcpl) {
-  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), "dataspace");
+                     hid_t dcpl, hsize_t chunk_rows) {
+  // A dataset of exactly one chunk gets an unlimited row dimension: with fixed dimensions HDF5
+  // 1.10 gives it its "single chunk" index, after whose direct chunk write H5Dread in the same
+  // session returns the stored (filtered) bytes instead of the values.
+  std::vector<hsize_t> maxdims = dims;
+  if (dims[0] <= chunk_rows) maxdims[0] = H5S_UNLIMITED;
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), "dataspace");
   return Handle(H5Dcreate2(file, path.c_str(), type, space.get(), H5P_DEFAULT, dcpl, H5P_DEFAULT),
                 "create dataset " + path);
 }
@@ -243,7 +248,7 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     std::vector<hsize_t> dims{rows};
     if (stored.width > 1) dims.push_back(static_cast<hsize_t>(stored.width));
     hdf5::CreateGroups(file, stored.path.substr(0, stored.path.rfind('/')));
-    Handle d = CreateDataset(file, stored.path, type, dims, dcpl.get());
+    Handle d = CreateDataset(file, stored.path, type, dims, dcpl.get(), static_cast<hsize_t>(stored.chunk_rows));
     switch (stored.source) {
       case archive::ValueSource::kDesign: {
         const DesignParameter& parameter = parameters[static_cast<std::size_t>(stored.column)];

@@ -223,6 +223,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   options.cancel = &g_cancel;
   options.ranks_per_node = flags.ranks_per_node;
   options.merge = flags.merge == "copy" ? MergeKind::kCopy : MergeKind::kVirtual;
+  MpiFinalizer finalize_after_printing;
   SweepProgress progress;
   std::unique_ptr<ProgressPrinter> printer;
   const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();

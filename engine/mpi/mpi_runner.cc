@@ -52,33 +52,17 @@ void CheckMpi(int code, const char* what) {
   throw MpiError(std::string("MPI error in ") + what + ": " + std::string(text, static_cast<std::size_t>(length)));
 }
 
-// Initialises MPI for the runner's lifetime (FUNNELED: only the main thread calls MPI) and
-// finalises it when it initialised it -- not while an exception unwinds, when other ranks may still
-// wait in a collective (the caller then aborts the job).
-class MpiSession {
- public:
-  MpiSession() : exceptions_(std::uncaught_exceptions()) {
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (!initialized) {
-      int provided = 0;
-      CheckMpi(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
-      owner_ = true;
-      GESWEEP_DEMAND(provided >= MPI_THREAD_FUNNELED);
-    }
-  }
-  ~MpiSession() {
-    int finalized = 0;
-    MPI_Finalized(&finalized);
-    if (owner_ && !finalized && std::uncaught_exceptions() == exceptions_) MPI_Finalize();
-  }
-  MpiSession(const MpiSession&) = delete;
-  MpiSession& operator=(const MpiSession&) = delete;
-
- private:
-  bool owner_ = false;
-  int exceptions_ = 0;
-};
+// MPI for the runner: initialised here when the caller has not (FUNNELED: only the main thread
+// calls MPI); finalised by FinalizeMpi once the caller has printed the outcome -- a rank that
+// finalises before its output is out may lose it when mpirun is stopping the job.
+void EnsureMpi() {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (initialized) return;
+  int provided = 0;
+  CheckMpi(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  GESWEEP_DEMAND(provided >= MPI_THREAD_FUNNELED);
+}
 
 // ---- Who is who ----
 
@@ -421,6 +405,13 @@ std::int64_t BatchMessageBytes(const SweepPlan& plan, int rows) {
   return static_cast<std::int64_t>(rows) * (8 + 8 + 1 + 8 * doubles);
 }
 
+void FinalizeMpi() {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  if (initialized && !finalized) MPI_Finalize();
+}
+
 [[noreturn]] void AbortMpi(int code) {
   int initialized = 0, finalized = 0;
   MPI_Initialized(&initialized);
@@ -431,7 +422,7 @@ std::int64_t BatchMessageBytes(const SweepPlan& plan, int rows) {
 
 MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, SweepProgress* progress,
                            const MpiStartCallback& on_started) {
-  MpiSession session;
+  EnsureMpi();
   SweepProgress local_progress;
   SweepProgress& shown = progress ? *progress : local_progress;
   MpiSweepReport report;
@@ -798,6 +789,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       if (!progressed) std::this_thread::sleep_for(kIdlePoll);
     }
     compute.join();
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (outcome.cancelled && t.rank != 0) report.cancelled = true;
     report.runs_computed = computed.runs_done.load();
 

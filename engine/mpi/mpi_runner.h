@@ -83,7 +83,8 @@ struct MpiSweepReport {
 
 /// Runs `plan` across every rank of MPI_COMM_WORLD. Collective: every rank calls it with an equal
 /// plan and options. Initialises MPI (MPI_THREAD_FUNNELED: only each rank's calling thread calls
-/// MPI) unless it already is, and finalises it before returning when it initialised it. `progress`
+/// MPI) unless it already is; the caller prints the outcome, then calls FinalizeMpi (an
+/// MpiFinalizer does). `progress`
 /// (rank 0) is kept up to date while it runs: runs to do, and runs done over all ranks (as the
 /// ranks last reported them). Throws only for what no rank can recover from (an MPI error, a bug);
 /// the caller then prints and calls AbortMpi.
@@ -93,6 +94,18 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
 /// Ends every rank of the job (MPI_Abort) after the caller printed why: for an exception out of
 /// RunStudyMpi, which may leave other ranks waiting.
 [[noreturn]] void AbortMpi(int code);
+
+/// Finalises MPI if it is initialised and not finalised yet.
+void FinalizeMpi();
+
+/// Calls FinalizeMpi when it goes out of scope (hold it around RunStudyMpi and the printing of
+/// its outcome).
+struct MpiFinalizer {
+  MpiFinalizer() = default;
+  MpiFinalizer(const MpiFinalizer&) = delete;
+  MpiFinalizer& operator=(const MpiFinalizer&) = delete;
+  ~MpiFinalizer() { FinalizeMpi(); }
+};
 
 /// The shard of node `node` of `nodes` for the merged archive `output`: out.h5 -> out.node0-of-2.h5.
 std::filesystem::path NodeArchivePath(const std::filesystem::path& output, int node, int nodes);

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
     options.cancel = &g_cancel;
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
+    gesweep::MpiFinalizer finalize_after_printing;
     gesweep::MpiSweepReport report;
     try {
       report = gesweep::RunStudyMpi(plan, options);
@@ -62,12 +63,19 @@ int main(int argc, char** argv) {
       std::cerr << "mpi_runner_driver: error: " << e.what() << "\n";
       gesweep::AbortMpi(1);
     }
-    // The driver prints only the outcome line the test reads (rank 0), not the CLI's messages.
-    if (report.rank == 0 && !quiet) {
-      std::cerr << "mpi_runner_driver: ranks " << report.ranks << " nodes " << report.nodes << " runs per rank";
-      for (const auto r : report.runs_per_rank) std::cerr << " " << r;
-      std::cerr << "; ok " << report.runs_ok << " failed " << report.runs_failed << " pending " << report.runs_pending
-                << (report.merged ? "; merged" : "") << (report.error.empty() ? "" : "; error: " + report.error) << "\n";
+    // The outcome in the CLI's words (tests/mpi/mpi_test.py reads them from either), rank 0 only.
+    if (report.rank == 0) {
+      if (report.error_code) {
+        std::cerr << "gesweep: error: " << report.error << "\n";
+      } else if (!quiet || report.cancelled || report.runs_failed) {
+        std::cerr << "mpi_runner_driver: " << report.ranks << " ranks on " << report.nodes << " nodes (runs per rank:";
+        for (const auto r : report.runs_per_rank) std::cerr << " " << r;
+        std::cerr << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
+                  << " pending" << (report.merged ? "; merged" : "") << "\n";
+        if (report.runs_complete_at_start)
+          std::cerr << "mpi_runner_driver: resuming: " << report.runs_complete_at_start << " runs already complete\n";
+        if (report.cancelled) std::cerr << "mpi_runner_driver: stopped by a signal; continue with --resume\n";
+      }
     }
     if (report.error_code) return report.error_code;
     if (report.cancelled) return 128 + g_signal.load();
