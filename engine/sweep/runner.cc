@@ -65,16 +65,15 @@ void AppendMessage(std::string& message, std::string_view analysis, const std::s
   message.append(analysis).append(": ").append(text);
 }
 
-// Cuts a message to the stored length without splitting a UTF-8 sequence.
-void Truncate(std::string& message) {
+}  // namespace
+
+void TruncateMessage(std::string& message) {
   if (static_cast<int>(message.size()) <= kMessageLength) return;
   std::size_t cut = static_cast<std::size_t>(kMessageLength) - 3;
   while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;
   message.resize(cut);
   message += "...";
 }
-
-}  // namespace
 
 void ResultBlock::Allocate(const SweepPlan& plan) {
   const auto capacity = static_cast<std::size_t>(plan.chunk_runs());
@@ -150,7 +149,7 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
       model = &workspace.Model(plan);
     } catch (const std::exception& e) {
       AppendMessage(message, "model", e.what());
-      Truncate(message);
+      TruncateMessage(message);
       block.status[r] = static_cast<std::int8_t>(RunStatus::kFailed);
       return;
     }
@@ -169,7 +168,7 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
     ok = ok && outcome.ok;
     AppendMessage(message, analysis->name(), outcome.message);
   }
-  Truncate(message);
+  TruncateMessage(message);
   block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
 }
 

@@ -109,6 +109,10 @@ class RunWorkspace {
   std::optional<LongitudinalModel> model_;
 };
 
+/// Cuts a run's message to the stored length (kMessageLength bytes) without splitting a UTF-8
+/// sequence, ending it in "..." when it was cut.
+void TruncateMessage(std::string& message);
+
 /// Runs design run `design_index` (row `row` of `block`): fills its design values, id, status,
 /// message and results. Never throws for a numerical problem or an exception of an analysis: the
 /// run is marked failed with the message.
