@@ -125,6 +125,82 @@ std::vector<std::string> ArchiveReader::StringListAttribute(const std::string& n
   return hdf5::ReadStringListAttribute(file_.get(), name);
 }
 
+namespace {
+
+// The object at `path`, or an invalid handle when there is none.
+Handle OpenObject(hid_t file, const std::string& path) {
+  if (!hdf5::Exists(file, path)) return Handle();
+  return Handle(H5Oopen(file, path.c_str(), H5P_DEFAULT), "open " + path);
+}
+
+}  // namespace
+
+std::optional<std::string> ArchiveReader::StringAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadStringAttribute(o.get(), name);
+}
+
+std::optional<std::int64_t> ArchiveReader::IntegerAttributeOf(const std::string& object,
+                                                              const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadIntegerAttribute(o.get(), name);
+}
+
+std::optional<double> ArchiveReader::DoubleAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadDoubleAttribute(o.get(), name);
+}
+
+std::vector<std::string> ArchiveReader::StringListAttributeOf(const std::string& object,
+                                                              const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return {};
+  return hdf5::ReadStringListAttribute(o.get(), name);
+}
+
+std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o || H5Aexists(o.get(), name.c_str()) <= 0) return {};
+  Handle attribute(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle type(H5Aget_type(attribute.get()), "type of attribute " + name);
+  const H5T_class_t type_class = H5Tget_class(type.get());
+  if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) {
+    throw ArchiveError(path_.string() + ": attribute " + name + " of " + object + " is not numeric");
+  }
+  Handle space(H5Aget_space(attribute.get()), "space of attribute " + name);
+  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
+  std::vector<double> values(count);
+  if (count > 0) Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()), "read attribute " + name);
+  return values;
+}
+
+bool ArchiveReader::Exists(const std::string& path) const { return hdf5::Exists(file_.get(), path); }
+
+ArchiveReader::DatasetInfo ArchiveReader::Describe(const std::string& path) const {
+  Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path + " of " + path_.string());
+  Handle type(H5Dget_type(dataset.get()), "type of " + path);
+  DatasetInfo info;
+  switch (H5Tget_class(type.get())) {
+    case H5T_FLOAT: info.kind = DatasetInfo::Kind::kFloat; break;
+    case H5T_INTEGER: info.kind = DatasetInfo::Kind::kInteger; break;
+    case H5T_COMPOUND: info.kind = DatasetInfo::Kind::kCompound; break;
+    case H5T_STRING: info.kind = DatasetInfo::Kind::kString; break;
+    default: info.kind = DatasetInfo::Kind::kOther; break;
+  }
+  info.dims = hdf5::Dimensions(dataset.get());
+  return info;
+}
+
+std::vector<std::int64_t> ArchiveReader::ReadIntegers(const std::string& path, std::int64_t first,
+                                                      std::int64_t count) const {
+  std::vector<std::int64_t> values(static_cast<std::size_t>(count));
+  ReadRows(path, first, count, H5T_NATIVE_INT64, values.data());
+  return values;
+}
+
 std::vector<std::string> ArchiveReader::Datasets() const {
   std::vector<std::string> names;
   Check(H5Ovisit2(file_.get(), H5_INDEX_NAME, H5_ITER_INC, CollectDataset, &names, H5O_INFO_BASIC),
