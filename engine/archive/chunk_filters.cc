@@ -10,9 +10,11 @@ namespace gesweep::archive {
 // zlib's allocations come from buffers this filter keeps: a fresh deflateInit + deflate + deflateEnd
 // per chunk, exactly as compress2 (and so HDF5) does, but without asking the C library for a quarter
 // of a megabyte and giving it back every chunk (on a shared VM that costs more than compressing a
-// small chunk). Every buffer is zeroed when handed out, as the calloc behind zlib's default
-// allocator does, so the stream is the same as compress2's bit for bit: zlib reads a few bytes past
-// the data in its window (WIN_INIT) and they must be the zeros calloc gives.
+// small chunk). The first allocation, zlib's deflate_state, is zeroed as the calloc behind zlib's
+// default allocator would; the window, hash chains and pending buffer are not: zlib writes them
+// before it reads them (it zeroes the bytes past the data it may scan itself, WIN_INIT), so the
+// stream is compress2's bit for bit -- chunk_filters_test checks it against compress2 on thousands
+// of inputs with deliberately dirty buffers, and against HDF5's own filter.
 struct ChunkFilter::Zlib {
   std::vector<std::vector<unsigned char>> buffers;
   std::size_t next = 0;
@@ -23,7 +25,7 @@ struct ChunkFilter::Zlib {
     std::vector<unsigned char>& buffer = self->buffers[self->next++];
     const std::size_t bytes = static_cast<std::size_t>(items) * size;
     if (buffer.size() < bytes) buffer.resize(bytes);
-    std::memset(buffer.data(), 0, bytes);
+    if (self->next == 1) std::memset(buffer.data(), 0, bytes);  // the deflate_state
     return buffer.data();
   }
   static void Release(voidpf, voidpf) {}
