@@ -7,6 +7,7 @@
 
 #include "engine/analysis/eigen_sensitivity.h"
 #include "engine/common/errors.h"
+#include "engine/modal/hurwitz.h"
 
 namespace gesweep {
 namespace {
@@ -126,6 +127,27 @@ EigenSensitivities ComputeEigenSensitivities(const LongitudinalModel& model, dou
   return result;
 }
 
+double CriterionDirectionalDerivative(const Matrix5d& A, const Matrix5d& dA, bool hopf, bool deflated) {
+  // Complex step: c(A + i·h·dA) = c(A) + i·h·∂c·dA + O(h²) with no subtraction, so h can be tiny.
+  constexpr double kStep = 1e-30;
+  using Complex = std::complex<double>;
+  const Eigen::Matrix<Complex, 5, 5> Z = A.cast<Complex>() + Complex(0.0, kStep) * dA.cast<Complex>();
+  const std::array<Complex, 6> a = FaddeevLeVerrier<Complex>(Z);
+  Complex c;
+  if (hopf) {
+    c = deflated ? HurwitzDelta3(a) : HurwitzDelta4(a);
+  } else {
+    c = deflated ? a[4] : a[5];
+  }
+  return c.imag() / kStep;
+}
+
+double ImplicitBoundaryDerivative(const Matrix5d& A, const Matrix5d& dA_dp, const Matrix5d& dA_dH, bool hopf,
+                                  bool deflated) {
+  return -CriterionDirectionalDerivative(A, dA_dp, hopf, deflated) /
+         CriterionDirectionalDerivative(A, dA_dH, hopf, deflated);
+}
+
 std::string HeightDerivativeUnit(const ModelParameter& p) {
   switch (p.kind) {
     case ModelParameterKind::kCoefficientScale:
@@ -159,6 +181,12 @@ BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& mode
     return result;
   }
   result.valid = true;
+  // The boundary's crossing, for the implicit-function form.
+  const BoundaryCrossing* crossing = nullptr;
+  for (const auto& c : boundary.crossings) {
+    if (c.height_m == result.height_m && (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal)) crossing = &c;
+  }
+  const Matrix5d A = model.StateMatrix(result.height_m, boundary.speed_mps);
   for (const auto& row : result.eigen.parameters) {
     BoundaryParameterSensitivity s;
     s.parameter = row.parameter;
@@ -166,6 +194,13 @@ BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& mode
     s.margin_derivative = row.margin_derivative;
     s.height_derivative = -row.margin_derivative / result.margin_height_derivative_per_s_per_m;
     s.relative_height_derivative_m = row.value * s.height_derivative;
+    if (crossing && row.enters_state_matrix) {
+      s.implicit_height_derivative = ImplicitBoundaryDerivative(
+          A, StateMatrixDerivative(model, result.height_m, boundary.speed_mps, row.parameter),
+          result.eigen.height_step.dA_dH, crossing->kind == CrossingKind::kHopf, crossing->deflated);
+    } else if (!row.enters_state_matrix) {
+      s.implicit_height_derivative = 0.0;
+    }
     s.enters_state_matrix = row.enters_state_matrix;
     s.method = row.method;
     result.parameters.push_back(s);

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <complex>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,10 @@ struct BoundaryParameterSensitivity {
   double margin_derivative = 0;      ///< ∂σ/∂p at (H*, u0), 1/s per unit of p
   double height_derivative = 0;      ///< ∂H*/∂p, m per unit of p (HeightDerivativeUnit)
   double relative_height_derivative_m = 0;  ///< p·∂H*/∂p, m: the change of H* per unit relative change of p
+  /// ∂H*/∂p by the implicit-function theorem on the crossing criterion c(H*, p) = 0 of the boundary
+  /// (Δ₄ for a Hopf crossing, a₅ for a real one; Δ₃, a₄ where a₅ ≡ 0): −(∂c/∂p)/(∂c/∂H), without
+  /// eigenvectors (ImplicitBoundaryDerivative). NaN when the boundary's crossing is not classified.
+  double implicit_height_derivative = std::numeric_limits<double>::quiet_NaN();
   bool enters_state_matrix = true;
   DerivativeMethod method = DerivativeMethod::kExact;
 };
@@ -83,6 +88,15 @@ struct BoundarySensitivities {
   EigenSensitivities eigen;             ///< everything at (H*, u0)
   std::vector<BoundaryParameterSensitivity> parameters;  ///< in the order asked for
 };
+
+/// The directional derivative of a crossing criterion along dA (Δ₄ or a₅ of det(sI − A); with
+/// `deflated`, Δ₃ or a₄ of the quartic factor): exact, by a complex step through Faddeev–LeVerrier
+/// (the criteria are polynomials in the entries of A).
+double CriterionDirectionalDerivative(const Matrix5d& A, const Matrix5d& dA, bool hopf, bool deflated);
+
+/// ∂H*/∂p = −(∂c/∂p)/(∂c/∂H) for the criterion c of a crossing at (H, u): dA_dp = ∂A/∂p, dA_dH = ∂A/∂H.
+double ImplicitBoundaryDerivative(const Matrix5d& A, const Matrix5d& dA_dp, const Matrix5d& dA_dH, bool hopf,
+                                  bool deflated);
 
 /// ∂H*/∂p = −(∂σ/∂p)/(∂σ/∂H) at the boundary of `boundary` (found by FindBoundary on `model`).
 /// Not valid (with a reason) when the boundary has no H* or ∂σ/∂H is zero or not finite.

@@ -4,12 +4,14 @@
 // With --archive, the boundary of a sweep's results instead: the sign change of the archived stability
 // margin along height for each value of the other axes, refined on each run's model and written to
 // /analysis/boundary (docs/report.md, "gesweep boundary --archive").
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <optional>
 #include <sstream>
 
+#include "engine/analysis/boundary_curve.h"
 #include "engine/analysis/local_sensitivity.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_error.h"
@@ -35,7 +37,46 @@ struct BoundaryFlags {
   std::string archive;          // --archive: the boundary of a sweep's results
   std::vector<std::string> by;  // --by: order of the curve's axes
   bool no_write = false;        // --no-write: print only
+  std::string method = "hurwitz";  // --method: hurwitz (certified) or sampled (the former search)
 };
+
+BoundaryOptions SearchOptions(const BoundaryFlags& flags) {
+  BoundaryOptions options;
+  if (flags.method == "sampled") {
+    options.method = BoundaryMethod::kSampled;
+  } else if (flags.method != "hurwitz") {
+    throw InputError("command line", "--method", "'" + flags.method + "'", "expected hurwitz or sampled");
+  }
+  return options;
+}
+
+nlohmann::json CrossingJson(const BoundaryCrossing& c) {
+  nlohmann::json row = {{"height_m", JsonNumber(c.height_m)},
+                        {"height_over_span", JsonNumber(c.height_over_span)},
+                        {"kind", std::string(ToString(c.kind))},
+                        {"stable_below", c.stable_below},
+                        {"stable_above", c.stable_above}};
+  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
+    row["mode"] = c.mode;
+    row["eigenvalue"] = {JsonNumber(c.eigenvalue.real()), JsonNumber(c.eigenvalue.imag())};
+    row["eigenvalue_height_derivative_per_s_per_m"] = {JsonNumber(c.eigenvalue_height_derivative.real()),
+                                                       JsonNumber(c.eigenvalue_height_derivative.imag())};
+    row["mode_stable_above"] = c.mode_stable_above;
+    row["bracket_width_m"] = JsonNumber(c.bracket_width_m);
+  }
+  return row;
+}
+
+std::string CrossingText(const BoundaryCrossing& c) {
+  std::string text = FormatNumber(c.height_m, 6);
+  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
+    text += "(" + c.mode + (c.kind == CrossingKind::kHopf ? " pair" : " root") + ", " +
+            (c.mode_stable_above ? "stable above" : "unstable above") + ")";
+  } else if (c.kind == CrossingKind::kDiscontinuity) {
+    text += "(table row: " + std::string(c.stable_above ? "stable above" : "unstable above") + ")";
+  }
+  return text;
+}
 
 std::string Scientific(double value, int digits = 4) {
   if (!std::isfinite(value)) return FormatNumber(value);
@@ -58,6 +99,7 @@ void AddSensitivitiesJson(const BoundarySensitivities& s, nlohmann::json& row) {
                     {"value_unit", std::string(p.parameter.Unit())},
                     {"dH_dp", JsonNumber(p.height_derivative)},
                     {"dH_dp_unit", HeightDerivativeUnit(p.parameter)},
+                    {"dH_dp_implicit", JsonNumber(p.implicit_height_derivative)},
                     {"p_dH_dp_m", JsonNumber(p.relative_height_derivative_m)},
                     {"dsigma_dp_per_s", JsonNumber(p.margin_derivative)},
                     {"method", p.method == DerivativeMethod::kExact ? "exact" : "central_difference"}});
@@ -213,6 +255,48 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
   }
 }
 
+nlohmann::json CurveJson(const BoundaryCurve& curve) {
+  nlohmann::json points = nlohmann::json::array(), events = nlohmann::json::array();
+  for (const auto& p : curve.points) {
+    points.push_back({{"speed_mps", p.speed_mps},
+                      {"height_m", p.height_m},
+                      {"height_over_span", p.height_over_span},
+                      {"dH_du_m_per_mps", JsonNumber(p.height_speed_derivative)},
+                      {"kind", std::string(ToString(p.kind))},
+                      {"mode", p.mode},
+                      {"certified", p.certified},
+                      {"branch", p.branch}});
+  }
+  for (const auto& e : curve.events) {
+    events.push_back({{"speed_mps", e.speed_mps},
+                      {"what", e.what},
+                      {"height_below_m", JsonNumber(e.height_below_m)},
+                      {"height_above_m", JsonNumber(e.height_above_m)},
+                      {"reason", e.reason}});
+  }
+  return {{"speed_range_mps", {curve.lower_speed_mps, curve.upper_speed_mps}},
+          {"points", points},
+          {"events", events},
+          {"accepted_steps", curve.accepted_steps},
+          {"rejected_steps", curve.rejected_steps},
+          {"finder_calls", curve.finder_calls}};
+}
+
+void PrintCurveSummary(const BoundaryCurve& curve) {
+  std::cout << "# curve traced from " << FormatNumber(curve.lower_speed_mps, 6) << " to "
+            << FormatNumber(curve.upper_speed_mps, 6) << " m/s by continuation on the crossing criterion: "
+            << curve.points.size() << " points, " << curve.rejected_steps << " steps rejected, " << curve.finder_calls
+            << " certified checks\n";
+  for (const auto& e : curve.events) {
+    std::cout << "#   at " << FormatNumber(e.speed_mps, 7) << " m/s the boundary " << e.what;
+    if (e.what == "appears") std::cout << " at H* = " << FormatNumber(e.height_above_m, 6) << " m (below: " << e.reason << ")";
+    if (e.what == "ends") std::cout << " at H* = " << FormatNumber(e.height_below_m, 6) << " m (above: " << e.reason << ")";
+    if (e.what == "jumps")
+      std::cout << " from " << FormatNumber(e.height_below_m, 6) << " to " << FormatNumber(e.height_above_m, 6) << " m";
+    std::cout << "\n";
+  }
+}
+
 int RunArchiveBoundary(const BoundaryFlags& flags) {
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
@@ -253,8 +337,39 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
           sensitivities[i] = ComputeBoundarySensitivities(models.Model(p.parameters), p.refined);
       }
     }
-    if (!flags.no_write) WriteBoundaryGroup(flags.archive, boundary, CommandLine(flags));
+    // With speed the only other axis, the curve H*(u0) traced on the continuous model over the
+    // archive's speeds, beside the per-point boundary (the report draws it on the stability map).
+    std::optional<BoundaryCurve> curve;
+    if (boundary.key_names == std::vector<std::string>{"speed_mps"} && boundary.points.size() >= 2) {
+      const double lower = boundary.points.front().key_values[0], upper = boundary.points.back().key_values[0];
+      if (upper > lower && lower > 0) {
+        curve = TraceBoundary(models.Model(boundary.points.front().parameters), lower, upper);
+      }
+    }
+    if (!flags.no_write) {
+      WriteBoundaryGroup(flags.archive, boundary, CommandLine(flags));
+      if (curve) {
+        BoundaryCurveRecord record;
+        record.wingspan_m = boundary.wingspan_m;
+        for (const auto& p : curve->points) {
+          record.speed_mps.push_back(p.speed_mps);
+          record.height_m.push_back(p.height_m);
+          record.height_over_span.push_back(p.height_over_span);
+          record.height_speed_derivative.push_back(p.height_speed_derivative);
+          record.branch.push_back(p.branch);
+        }
+        for (const auto& e : curve->events) {
+          record.event_speed_mps.push_back(e.speed_mps);
+          record.event_what.push_back(e.what);
+        }
+        WriteBoundaryCurveGroup(flags.archive, record, CommandLine(flags));
+      }
+    }
     PrintArchiveBoundary(boundary, flags, sensitivities, !flags.no_write);
+    if (curve && flags.format == "table") {
+      PrintCurveSummary(*curve);
+      if (!flags.no_write) std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
+    }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
     return 1;
@@ -272,15 +387,37 @@ int RunBoundary(const BoundaryFlags& flags) {
         "command line", "--format", "csv",
         "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
   }
+  const BoundaryOptions search = SearchOptions(flags);  // validated before anything is printed
   std::vector<double> speeds;
-  if (!flags.speeds.empty()) {
+  std::optional<BoundaryCurve> curve;
+  const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
+  const LongitudinalModel model = flags.model.BuildModel();
+  if (!flags.speeds.empty() && colons == 1) {
+    // a:b: the traced curve, printed at its own points.
+    const std::string a = flags.speeds.substr(0, flags.speeds.find(':'));
+    const std::string b = flags.speeds.substr(flags.speeds.find(':') + 1);
+    const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
+    const double lower = ends[0], upper = ends[1];
+    RequirePositiveSpeed(lower, "--speeds-mps");
+    RequirePositiveSpeed(upper, "--speeds-mps");
+    if (!(upper > lower)) throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
+    BoundaryCurveOptions options;
+    options.search = SearchOptions(flags);
+    curve = TraceBoundary(model, lower, upper, options);
+    for (const auto& p : curve->points) speeds.push_back(p.speed_mps);
+  } else if (!flags.speeds.empty()) {
     speeds = ParseRange(flags.speeds, "--speeds-mps");
     for (double v : speeds) RequirePositiveSpeed(v, "--speeds-mps");
+    if (colons == 2 && speeds.size() > 1 && speeds.back() > speeds.front()) {
+      // a:b:n: the curve traced over [a, b], printed at the n speeds.
+      BoundaryCurveOptions options;
+      options.search = SearchOptions(flags);
+      curve = TraceBoundary(model, speeds.front(), speeds.back(), options);
+    }
   } else {
     RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
     speeds.push_back(flags.speed_mps);
   }
-  const LongitudinalModel model = flags.model.BuildModel();
   const double span = model.aircraft().wingspan_m;
 
   nlohmann::json boundaries = nlohmann::json::array();
@@ -296,11 +433,24 @@ int RunBoundary(const BoundaryFlags& flags) {
   }
   std::vector<BoundarySensitivities> sensitivities;
   for (double speed : speeds) {
-    const BoundaryResult result = FindBoundary(model, speed);
+    BoundaryResult result = FindBoundary(model, speed, search);
+    if (curve && result.height_m) {
+      // The printed H* is the curve's (Newton on the criterion from the traced points); the finder,
+      // run here for the other crossings, gives the same root to rounding.
+      if (const auto on_curve = BoundaryOnCurve(model, *curve, speed)) {
+        if (std::abs(*on_curve - *result.height_m) <= 1e-6) result.height_m = *on_curve;
+      }
+    }
     if (flags.sensitivities) sensitivities.push_back(ComputeBoundarySensitivities(model, result));
     std::vector<double> others;
+    std::string other_text;
+    nlohmann::json crossings = nlohmann::json::array();
     for (const auto& crossing : result.crossings) {
-      if (!result.height_m || crossing.height_m != *result.height_m) others.push_back(crossing.height_m);
+      crossings.push_back(CrossingJson(crossing));
+      if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9) {
+        others.push_back(crossing.height_m);
+        other_text += (other_text.empty() ? "" : " ") + CrossingText(crossing);
+      }
     }
     if (flags.format == "json") {
       nlohmann::json row = {
@@ -309,19 +459,23 @@ int RunBoundary(const BoundaryFlags& flags) {
           {"height_over_span",
            result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
           {"other_crossings_m", others},
+          {"crossings", crossings},
+          {"method", flags.method},
+          {"certified", result.certified},
+          {"certificate", result.certificate},
           {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
       if (!result.height_m) row["reason"] = result.reason;
       if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
       boundaries.push_back(row);
     } else {
-      std::string other_text;
-      for (double h : others) other_text += (other_text.empty() ? "" : " ") + FormatNumber(h, 6);
       const std::string h_text = result.height_m ? FormatNumber(*result.height_m, 7) : "none";
       const std::string ratio_text = result.height_m ? FormatNumber(*result.height_m / span, 5) : "none";
       if (flags.format == "csv") {
+        std::string numbers;
+        for (double h : others) numbers += (numbers.empty() ? "" : " ") + FormatNumber(h, 6);
         std::cout << FormatNumber(speed) << "," << (result.height_m ? FormatNumber(*result.height_m) : "")
                   << "," << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\""
-                  << other_text << "\",\"" << result.reason << "\"\n";
+                  << numbers << "\",\"" << result.reason << "\"\n";
       } else {
         std::cout << std::setw(12) << FormatNumber(speed, 6) << std::setw(12) << h_text << std::setw(10)
                   << ratio_text << "  " << other_text << (other_text.empty() ? "" : " ") << result.reason
@@ -329,8 +483,13 @@ int RunBoundary(const BoundaryFlags& flags) {
       }
     }
   }
-  if (flags.format == "json") std::cout << nlohmann::json{{"boundaries", boundaries}}.dump(2) << "\n";
+  if (flags.format == "json") {
+    nlohmann::json out{{"boundaries", boundaries}};
+    if (curve) out["curve"] = CurveJson(*curve);
+    std::cout << out.dump(2) << "\n";
+  }
   if (flags.format == "table") {
+    if (curve) PrintCurveSummary(*curve);
     for (const auto& s : sensitivities) PrintSensitivitiesTable(s);
   }
   return 0;
@@ -342,7 +501,9 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<BoundaryFlags>();
       flags->model.AddTo(app, /*aircraft_required=*/false);
       auto* speed = app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s");
-      auto* speeds = app.add_option("--speeds-mps", flags->speeds, "Speeds a:b:n (n evenly spaced) or a,b,c");
+      auto* speeds = app.add_option("--speeds-mps", flags->speeds,
+                                    "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
+                                    "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
       speed->excludes(speeds);
       auto* archive =
           app.add_option("--archive", flags->archive,
@@ -356,6 +517,9 @@ const CommandRegistrar kRegistrar{Command{
       auto* no_write =
           app.add_flag("--no-write", flags->no_write, "With --archive: print only, write nothing");
       app.add_option("--format", flags->format, "table (default), csv or json");
+      app.add_option("--method", flags->method,
+                     "hurwitz (default: every crossing of the imaginary axis, certified) or sampled (the "
+                     "former search, sigma sampled per table segment; for comparison)");
       app.add_flag("--sensitivities", flags->sensitivities,
                    "Also print dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by "
                    "|p dH*/dp| (docs/sensitivity.md)");

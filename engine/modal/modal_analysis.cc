@@ -11,6 +11,13 @@
 // LAPACK (reference or OpenBLAS), Fortran calling convention.
 extern "C" void dgebal_(const char* job, const int* n, double* a, const int* lda, int* ilo, int* ihi,
                         double* scale, int* info, std::size_t job_length);
+// Unblocked Householder reduction to Hessenberg form, and the double-shift QR of a Hessenberg matrix
+// (what dhseqr calls for n < 75): LAPACK's own small-matrix path, without workspace queries.
+extern "C" void dgehd2_(const int* n, const int* ilo, const int* ihi, double* a, const int* lda, double* tau,
+                        double* work, int* info);
+extern "C" void dlahqr_(const int* wantt, const int* wantz, const int* n, const int* ilo, const int* ihi,
+                        double* h, const int* ldh, double* wr, double* wi, const int* iloz, const int* ihiz,
+                        double* z, const int* ldz, int* info);
 
 namespace gesweep {
 namespace {
@@ -36,7 +43,31 @@ bool IsReal(std::complex<double> z) {
   return std::abs(z.imag()) <= kRealRootRelativeTolerance * std::max(1.0, std::abs(z));
 }
 
+// The eigenvalues of a balanced 5×5 by LAPACK: dgehd2 then dlahqr (eigenvalues only). false when the
+// QR did not converge (info > 0), then Eigen's solver is used.
+bool LapackEigenvalues(Matrix5d a, std::array<std::complex<double>, 5>& values) {
+  const int n = 5, one = 1, no = 0;
+  int info = 0;
+  double tau[4], work[5], wr[5], wi[5], z[1];
+  dgehd2_(&n, &one, &n, a.data(), &n, tau, work, &info);
+  for (int j = 0; j < 5; ++j)
+    for (int i = j + 2; i < 5; ++i) a(i, j) = 0.0;  // dgehd2 leaves its reflectors there
+  dlahqr_(&no, &no, &n, &one, &n, a.data(), &n, wr, wi, &one, &n, z, &one, &info);
+  if (info != 0) return false;
+  for (int i = 0; i < 5; ++i) values[static_cast<std::size_t>(i)] = {wr[i], wi[i]};
+  return true;
+}
+
 }  // namespace
+
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver) {
+  std::array<std::complex<double>, 5> values;
+  const Matrix5d balanced = Balanced(A);
+  if (solver == EigenvalueSolver::kLapack && LapackEigenvalues(balanced, values)) return values;
+  const Eigen::EigenSolver<Matrix5d> eigen(balanced, /*computeEigenvectors=*/false);
+  for (int i = 0; i < 5; ++i) values[static_cast<std::size_t>(i)] = eigen.eigenvalues()[i];
+  return values;
+}
 
 std::string_view ToString(ModeClassification classification) {
   switch (classification) {
@@ -66,7 +97,7 @@ ModeProperties DescribeMode(std::complex<double> lambda) {
   return mode;
 }
 
-ModalAnalysis AnalyzeModes(const Matrix5d& A) {
+ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
   ModalAnalysis result;
   if (!A.allFinite()) {
     result.finite = false;
@@ -75,8 +106,7 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A) {
     result.stability_margin_per_s = nan;
     return result;
   }
-  Eigen::EigenSolver<Matrix5d> solver(Balanced(A), /*computeEigenvectors=*/false);
-  const auto& values = solver.eigenvalues();
+  const std::array<std::complex<double>, 5> values = Eigenvalues5(A, solver);
 
   std::vector<std::complex<double>> pairs;  // one representative (Im > 0) per complex pair
   std::vector<double> reals;

@@ -47,11 +47,22 @@ struct ModalAnalysis {
   bool finite = true;   ///< false when A had a non-finite entry (then nothing else is meaningful)
 };
 
+/// Which QR computes the eigenvalues (after LAPACK's dgebal balancing in both cases).
+enum class EigenvalueSolver {
+  kEigen,   ///< Eigen's EigenSolver (default)
+  /// LAPACK dgehd2 + dlahqr, the double-shift QR that dhseqr uses at this size: the same spectrum,
+  /// but measured 1.4 times slower than Eigen's at 5×5 (docs/performance.md, "Modes"), so not the default.
+  kLapack,
+};
+
+/// The five eigenvalues of A (balanced first), in the solver's order. A must be finite.
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
+
 /// Eigenvalues of A (any real 5×5), modes identified by MODEL.md §6. When a pair has split, the
 /// remaining complex pair is the short period if its |λ| exceeds every real root's, otherwise the
 /// phugoid; the split mode takes the two real roots of largest magnitude and the height mode the
 /// remaining one. With no pair left, roots are assigned by magnitude.
-ModalAnalysis AnalyzeModes(const Matrix5d& A);
+ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
 
 /// Properties of one eigenvalue (MODEL.md §6).
 ModeProperties DescribeMode(std::complex<double> eigenvalue);

@@ -21,8 +21,8 @@ namespace {
 constexpr const char* kMarginPath = "results/modes/stability_margin_per_s";
 constexpr const char* kHeightPath = "design/height_m";
 constexpr std::int64_t kChunkRows = 1 << 16;
-// Samples per table segment inside a grid bracket: the grid already brackets the change; these
-// catch a second pair of changes inside one grid cell, where the refinement keeps the highest.
+// Samples per table segment inside a grid bracket, for BoundaryMethod::kSampled only (the default
+// Hurwitz finder enumerates every crossing in the bracket; it keeps the highest).
 constexpr int kRefineSamplesPerSegment = 8;
 // The rebuilt model must give the archived σ at the bracket's ends. The same engine gives the same
 // bits; this slack only absorbs a different compiler's rounding, not a different model.
@@ -255,8 +255,9 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
                     "design/height_m with unstable below and stable above, refined on the run's continuous "
                     "model (docs/report.md)");
     g.Attribute("method",
-                "grid bracket from the archived sigma; FindBoundary (TOMS 748) on the model rebuilt from the "
-                "archive's aircraft_text and the run's parameters, inside the bracket");
+                "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+                "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+                "parameters, inside the bracket");
     g.Attribute("keys", boundary.key_names);
     g.Attribute("source_dataset", kMarginPath);
     g.Attribute("along", kHeightPath);
@@ -305,10 +306,33 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
     found_dataset.Attribute("fill", std::int64_t{-1});
     g.Numbers("grid_lower_height_m", lower, "m", "Grid height just below the sign change (sigma >= 0); NaN when none");
     g.Numbers("grid_upper_height_m", upper, "m", "Grid height just above the sign change (sigma < 0); NaN when none");
-    g.Numbers("bracket_width_m", width, "m", "Width of the refinement's final TOMS 748 bracket; NaN when none");
+    g.Numbers("bracket_width_m", width, "m", "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
     g.Numbers("grid_crossings", crossings, "1", "Sign changes of sigma between neighbouring grid heights of this point");
     g.Numbers("heights", heights, "1", "Grid heights with a finite sigma (complete ok runs) of this point");
     g.Strings("reason", reasons, "Why there is no boundary (empty when there is one)");
+  });
+}
+
+void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
+                             const std::string& command_line) {
+  WriteAnalysisProduct(archive, kBoundaryCurveGroup, "", [&](ProductGroup& g) {
+    g.Attribute("description",
+                "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
+                "the continuous model over the archive's speed range, every point confirmed by the "
+                "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
+    g.Attribute("wingspan_m", curve.wingspan_m);
+    g.Attribute("engine_version", EngineVersion());
+    g.Attribute("created", UtcTimestamp());
+    g.Attribute("command_line", command_line);
+    g.Numbers("speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
+    g.Numbers("height_m", curve.height_m, "m", "Boundary height H* at that speed");
+    g.Numbers("height_over_span", curve.height_over_span, "1", "H*/b");
+    g.Numbers("height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
+              "dH*/du0 by the implicit-function theorem on the crossing criterion");
+    g.Numbers("branch", curve.branch, "1", "Branch of each point (a new one after each event)");
+    g.Numbers("event_speed_mps", curve.event_speed_mps, "m/s",
+              "Speeds where the boundary appears, ends or jumps to another crossing");
+    g.Strings("event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
   });
 }
 

@@ -80,4 +80,22 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
 /// The path of the group: "analysis/boundary".
 inline constexpr const char* kBoundaryGroup = "analysis/boundary";
 
+/// A boundary curve H*(u0) traced by continuation on the continuous model (engine/analysis/
+/// boundary_curve.h), as plain arrays in ascending speed, to store beside /analysis/boundary.
+struct BoundaryCurveRecord {
+  std::vector<double> speed_mps, height_m, height_over_span, height_speed_derivative;
+  std::vector<std::int32_t> branch;  ///< a new branch after each event
+  std::vector<double> event_speed_mps;
+  std::vector<std::string> event_what;  ///< "appears", "ends", "jumps"
+  double wingspan_m = 0;
+};
+
+/// Writes `curve` to the group analysis/boundary_curve (replacing a previous one, as WriteBoundaryGroup).
+/// Same preconditions and errors as WriteBoundaryGroup.
+void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
+                             const std::string& command_line);
+
+/// The path of the group: "analysis/boundary_curve".
+inline constexpr const char* kBoundaryCurveGroup = "analysis/boundary_curve";
+
 }  // namespace gesweep

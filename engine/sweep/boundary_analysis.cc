@@ -1,6 +1,7 @@
 // Adapter: the `boundary` analysis. The stability boundary H*(u0) of the run's own model at the
-// run's speed (docs/MODEL.md §6), by FindBoundary: a bracketing root finder on the continuous
-// model, not a grid. Makes H* a sweepable scalar (issue 7: Sobol indices of H*).
+// run's speed (docs/MODEL.md §6), by FindBoundary: the certified Hurwitz finder by default (every
+// crossing of the imaginary axis, issue 16), or the former sampled search with method = "sampled".
+// Makes H* a sweepable scalar (issue 7: Sobol indices of H*).
 #include <cmath>
 #include <limits>
 
@@ -10,8 +11,10 @@
 namespace gesweep {
 namespace {
 
-// Measured (docs/sweep.md): about 300 eigen-analyses with the default scan, about 5 ms.
-constexpr double kBoundaryCost_us = 5000.0;
+// Measured (docs/performance.md, "Boundary"): the Hurwitz finder about 40 µs, the sampled search
+// (about 300 eigen-analyses) about 1 ms; the estimate keeps a margin for slower machines.
+constexpr double kHurwitzBoundaryCost_us = 100.0;
+constexpr double kSampledBoundaryCost_us = 5000.0;
 // The default tolerance of BoundaryOptions is 0.1 mm; a study may ask for anything down to this.
 constexpr double kFinestTolerance_m = 1e-9;
 constexpr int kMaximumSamplesPerSegment = 10000;
@@ -23,7 +26,9 @@ class BoundaryAnalysis final : public Analysis {
 
   std::string_view name() const override { return "boundary"; }
   std::vector<ParameterId> parameters_used() const override { return {speed_}; }
-  double nominal_run_cost_us() const override { return kBoundaryCost_us; }
+  double nominal_run_cost_us() const override {
+    return options_.method == BoundaryMethod::kHurwitz ? kHurwitzBoundaryCost_us : kSampledBoundaryCost_us;
+  }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions&) override {
     height_ = schema.Add(OutputColumn::Real(
@@ -35,14 +40,20 @@ class BoundaryAnalysis final : public Analysis {
     found_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/boundary/found", "1",
                                               "1 when a boundary was found in the scanned range",
                                               {"false", "true"}));
-    crossings_ =
-        schema.Add(OutputColumn::Integer(ColumnType::kInt32, "results/boundary/crossing_count", "1",
-                                         "Number of sign changes of sigma found in the scanned range"));
+    crossings_ = schema.Add(OutputColumn::Integer(
+        ColumnType::kInt32, "results/boundary/crossing_count", "1",
+        "Number of crossings found in the scanned range: of the imaginary axis by any eigenvalue "
+        "(method hurwitz), of sigma through 0 (method sampled)"));
     lowest_ = schema.Add(OutputColumn::Real(
         "results/boundary/lowest_crossing_height_m", "m",
-        "Lowest sign change of sigma found (equals H* when there is one crossing); NaN when none"));
+        "Lowest crossing found (equals H* when there is one crossing); NaN when none"));
     evaluations_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, "results/boundary/margin_evaluations",
                                                     "1", "Eigen-analyses spent locating it"));
+    certified_ = schema.Add(OutputColumn::Integer(
+        ColumnType::kInt8, "results/boundary/certified", "1",
+        "1 when every crossing in the range was isolated with certainty (method hurwitz; "
+        "docs/model.md, 'The boundary by the Hurwitz criterion'); 0 for method sampled",
+        {"false", "true"}));
   }
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
@@ -50,6 +61,7 @@ class BoundaryAnalysis final : public Analysis {
     row.Set(found_, result.height_m ? 1.0 : 0.0);
     row.Set(crossings_, static_cast<double>(result.crossings.size()));
     row.Set(evaluations_, result.margin_evaluations);
+    row.Set(certified_, result.certified ? 1.0 : 0.0);
     if (!result.crossings.empty()) row.Set(lowest_, result.crossings.back().height_m);
     if (result.height_m) {
       row.Set(height_, *result.height_m);
@@ -64,14 +76,23 @@ class BoundaryAnalysis final : public Analysis {
   double wingspan_m_;
   BoundaryOptions options_;
   ParameterId speed_ = RequireParameter("speed_mps");
-  int height_ = 0, height_over_span_ = 0, found_ = 0, crossings_ = 0, lowest_ = 0, evaluations_ = 0;
+  int height_ = 0, height_over_span_ = 0, found_ = 0, crossings_ = 0, lowest_ = 0, evaluations_ = 0,
+      certified_ = 0;
 };
 
 }  // namespace
 
 std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, const Aircraft* aircraft) {
-  settings.RejectUnknownKeys({"lower_height_m", "upper_height_m", "tolerance_m", "samples_per_segment"});
+  settings.RejectUnknownKeys({"lower_height_m", "upper_height_m", "tolerance_m", "samples_per_segment", "method"});
   BoundaryOptions options;
+  if (settings.Has("method")) {
+    const std::string method = settings.String("method");
+    if (method == "sampled") {
+      options.method = BoundaryMethod::kSampled;
+    } else if (method != "hurwitz") {
+      settings.Fail("method", method, "expected \"hurwitz\" (certified, the default) or \"sampled\" (the former search)");
+    }
+  }
   if (settings.Has("lower_height_m")) options.lower_height_m = settings.PositiveNumber("lower_height_m");
   if (settings.Has("upper_height_m")) options.upper_height_m = settings.PositiveNumber("upper_height_m");
   const double lower =

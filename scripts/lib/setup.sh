@@ -12,6 +12,7 @@ GESWEEP_PACKAGES=(
   libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5
   libopenmpi-dev openmpi-bin
   python3 python3-numpy python3-scipy python3-h5py python3-matplotlib python3-jsonschema
+  chromium  # headless, for tests/report: the report page loads and shows every figure
 )
 
 gesweep_install_deps() {

@@ -34,7 +34,13 @@ th { background: #f0f0f0; } td.num { text-align: right; font-variant-numeric: ta
 pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
 details { margin: 0.5em 0; } summary { cursor: pointer; }
 nav a { margin-right: 1em; }
+div.long { max-height: 36em; overflow-y: auto; display: inline-block; border: 1px solid #ccc; }
+div.long table { margin: 0; } div.long th { position: sticky; top: 0; }
+@media print { div.long { max-height: none; overflow: visible; } }
 """
+
+# A table of more rows than this scrolls inside a box (every row is in the page, none behind a click).
+LONG_TABLE_ROWS = 40
 
 
 def esc(value):
@@ -93,11 +99,9 @@ def boundary_section(archives):
                      f"on each run's continuous model; b = {fmt(float(attrs.get('wingspan_m', float('nan'))), 5)} m. "
                      f"Written by <code>{esc(attrs.get('command_line', ''))}</code> on {esc(attrs.get('created', ''))}."
                      f"</p>")
+        # Every point in view, not behind a click: a long table scrolls inside its box, headers kept.
         rendered = table(headers, rows, numeric=set(range(len(keys) + 2)))
-        if len(rows) > 20:
-            parts.append(f"<details><summary>the {len(rows)} points</summary>{rendered}</details>")
-        else:
-            parts.append(rendered)
+        parts.append(f'<div class="long">{rendered}</div>' if len(rows) > LONG_TABLE_ROWS else rendered)
     return "\n".join(parts)
 
 
@@ -151,7 +155,10 @@ def provenance_section(archives):
 
 
 def figure_html(figure):
-    return (f'<figure><img src="{esc(figure.file)}" alt="{esc(figure.title)}">'
+    anchor = "figure-" + os.path.splitext(figure.file)[0]
+    # The image links to itself: a figure wider than the page is shown scaled, one click gives it full size.
+    return (f'<figure id="{esc(anchor)}"><a href="{esc(figure.file)}"><img src="{esc(figure.file)}" '
+            f'alt="{esc(figure.title)}"></a>'
             f"<figcaption><b>{esc(figure.title)}.</b> {esc(figure.caption)}</figcaption></figure>")
 
 

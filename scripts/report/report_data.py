@@ -37,7 +37,11 @@ class Aircraft:
         limits = data.get("limits", {})
         self.wheel_contact_height_m = limits.get("wheel_contact_height_m", math.nan)
         self.stall_speed_mps = limits.get("stall_speed_mps", math.nan)
-        self.table_heights_m = list(data.get("table", {}).get("height_m", []))
+        table = data.get("table", {})
+        self.table_heights_m = list(table.get("height_m", []))
+        # Coefficient columns of the finite rows, by name (CMalphadot, ...), as in the aircraft file.
+        self.table = {name: list(values) for name, values in table.items()
+                      if name != "height_m" and isinstance(values, list) and len(values) == len(self.table_heights_m)}
 
 
 class Archive:

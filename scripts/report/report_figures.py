@@ -12,8 +12,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize, SymLogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
 
-from report_data import STATUS_OK  # noqa: E402
 
 # The paper's open-loop speed (Section IV): the root locus prefers the runs nearest to it.
 PAPER_SPEED_MPS = 32.0208
@@ -22,8 +22,18 @@ PAPER_SPEED_MPS = 32.0208
 LOCUS_SPEED_WINDOW_MPS = 0.5
 # Runs of two archives are at the same speed when within this (studies store 32.0208 exactly).
 SAME_SPEED_MPS = 1e-6
-# Where the names of the marked heights sit relative to their points (offset points), in height order.
-LOCUS_LABEL_OFFSETS = [(10, 8), (12, 2), (-95, 10), (12, -16)]
+# A group at exactly the paper's speed is preferred for the root locus when it has at least this many
+# heights (fewer draw a polygon, not a locus: the 11 Table A2 heights are drawn as circles over it).
+LOCUS_DENSE_HEIGHTS = 50
+# Distances (points) from a marked height at which its label is tried, nearest first.
+LOCUS_LABEL_RADII_PT = (14, 26, 42, 60, 85, 115)
+# A step of the short-period locus this many times its median step is "fast" and explained in the caption.
+LOCUS_FAST_STEP_RATIO = 8.0
+# The derivatives that set the short-period root (pitch stiffness and damping, lift slope).
+SHORT_PERIOD_DERIVATIVES = ("CMalphadot", "CMq", "CMalpha", "CLalpha")
+DERIVATIVE_NAMES = {"CMalphadot": "CMα̇", "CMq": "CMq", "CMalpha": "CMα", "CLalpha": "CLα"}
+DERIVATIVE_MATHTEXT = {"CMalphadot": r"$C_{M\dot{\alpha}}$", "CMq": r"$C_{Mq}$", "CMalpha": r"$C_{M\alpha}$",
+                       "CLalpha": r"$C_{L\alpha}$"}
 DPI = 110
 # Heights spaced by a constant ratio to this relative tolerance are drawn on a log axis.
 GEOMETRIC_SPACING_TOLERANCE = 1e-6
@@ -33,6 +43,10 @@ MAX_MAP_PANELS = 4
 SIGMA_LINEAR_PER_S = 1e-3
 MISSING_COLOUR = "#b0b0b0"
 MAX_OPEN_LOOP_LINES = 12
+# The open-loop lines take tab10's colours, its brown too: the wheel-contact line there is black.
+WHEEL_COLOUR_OPEN_LOOP = "k"
+# Names at the ends of the open-loop lines are at least this fraction of the height axis apart.
+OPEN_LOOP_END_LABEL_GAP = 0.045
 MAX_LANDING_LINES = 6
 
 plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 8.5,
@@ -93,82 +107,172 @@ def _h_derivatives_label(archive, key):
 
 
 def stability_maps(archives, outdir):
+    """One stability-map figure per group of an archive's runs over height x speed (up to
+    MAX_MAP_PANELS groups: one per value of any other swept parameter)."""
     figures = []
     for archive in archives:
         if not (archive.has("results/modes/stability_margin_per_s") and "height_m" in archive.design_names
                 and "speed_mps" in archive.design_names):
             continue
-        height = archive.param("height_m")
-        speed = archive.param("speed_mps")
-        sigma = archive.column("results/modes/stability_margin_per_s")
-        boundary = archive.boundary()
-        b = archive.aircraft.wingspan_m
         for number, (key, rows) in enumerate(archive.groups(("height_m", "speed_mps"))[:MAX_MAP_PANELS]):
-            rows = rows[archive.ok[rows]]
-            heights, speeds = np.unique(height[rows]), np.unique(speed[rows])
-            if len(heights) < 2 or len(speeds) < 2:
-                continue
-            grid = np.full((len(heights), len(speeds)), np.nan)
-            grid[np.searchsorted(heights, height[rows]), np.searchsorted(speeds, speed[rows])] = sigma[rows]
-            low, high = np.nanmin(grid), np.nanmax(grid)
-            extent = max(abs(low), abs(high), 1e-12)
-            # Symmetric about σ = 0 (white), logarithmic beyond SIGMA_LINEAR_PER_S so that the small
-            # margins near the boundary are as visible as the large ones near the ground.
-            linear = min(SIGMA_LINEAR_PER_S, extent / 10)
-            norm = SymLogNorm(linthresh=linear, linscale=0.6, vmin=-extent, vmax=extent, base=10)
-            fig, ax = plt.subplots(figsize=(8.6, 5.4), layout="constrained")
-            colours = plt.get_cmap("RdBu_r").copy()
-            colours.set_bad(MISSING_COLOUR)  # a run not complete (or failed): not white, which is σ = 0
-            mesh = ax.pcolormesh(speeds, heights, np.ma.masked_invalid(grid), cmap=colours, norm=norm,
-                                 shading="nearest", rasterized=True)
-            bar = fig.colorbar(mesh, ax=ax, pad=0.02)
-            bar.set_label("stability margin σ (1/s): red unstable (σ > 0), blue stable")
-            handles = []
-            if low < 0 < high:
-                ax.contour(speeds, heights, grid, levels=[0.0], colors="k", linewidths=2.4)
-                handles.append(Line2D([], [], color="k", lw=2.4, label="σ = 0 on the grid"))
-            if boundary is not None and "speed_mps" in boundary["keys"]:
-                select = np.ones(len(boundary["speed_mps"]), dtype=bool)
-                for name, value in key.items():
-                    if name in boundary:
-                        select &= boundary[name] == value
-                found = select & np.isfinite(boundary["height_m"])
-                if np.any(found):
-                    ax.plot(boundary["speed_mps"][found], boundary["height_m"][found], color="#ffd000", lw=0.9,
-                            marker="o", ms=3, mec="k", mew=0.4)
-                    handles.append(Line2D([], [], color="#ffd000", lw=0.9, marker="o", ms=3.5, mec="k", mew=0.4,
-                                          label="H* refined on the continuous model (/analysis/boundary)"))
-            if b > 0:
-                ax.axhline(0.5 * b, color="#00a000", ls="--", lw=1.4)
-                handles.append(Line2D([], [], color="#00a000", ls="--", lw=1.4,
-                                      label=f"H/b = 0.5 (H = {0.5 * b:.4g} m): the paper's boundary"))
-            wheel = archive.aircraft.wheel_contact_height_m
-            if wheel > 0 and heights[0] <= wheel <= heights[-1]:
-                ax.axhline(wheel, color="saddlebrown", lw=1.2)
-                handles.append(Line2D([], [], color="saddlebrown", lw=1.2, label=f"wheel contact ({wheel:.3g} m)"))
-            if _geometric(heights):
-                ax.set_yscale("log")
-                ticks = [t for t in (0.8, 1, 1.5, 2, 3, 4, 5, 7, 10, 14, 20, 30, 50) if heights[0] <= t <= heights[-1]]
-                ax.set_yticks(ticks)
-                ax.set_yticklabels([f"{t:g}" for t in ticks])
-                ax.minorticks_off()
-            ax.set_xlim(speeds[0], speeds[-1])
-            ax.set_ylim(heights[0], heights[-1])
-            _span_axis(ax, b)
-            ax.set_xlabel("reference speed u0 (m/s)")
-            ax.set_ylabel("height H of the mean chord above ground (m)")
-            suffix = f" ({_h_derivatives_label(archive, key)})" if key else ""
-            ax.set_title(f"{archive.aircraft.name or 'aircraft'}: stability margin over height and speed{suffix}")
-            ax.legend(handles=handles, loc="upper right", framealpha=0.9)
-            name = _save(fig, outdir, f"stability_map_{_slug(archive.study_name)}_{number}.png")
-            figures.append(Figure(name, f"Stability map ({archive.study_name}){suffix}",
-                                  f"σ, the largest real part of the eigenvalues of Eq. (1) (the neutral height root left "
-                                  f"out), over {len(speeds)} speeds × {len(heights)} heights ({len(rows)} runs of "
-                                  f"{os.path.basename(archive.path)}). Colours are centred on σ = 0 (white); grey cells have no "
-                                  f"complete ok run. The black "
-                                  f"line is σ = 0 on the grid; the yellow curve, where present, is the boundary H* "
-                                  f"refined on the continuous model by gesweep boundary --archive."))
+            figure = _stability_map(archive, key, rows[archive.ok[rows]], outdir, number)
+            if figure is not None:
+                figures.append(figure)
     return figures
+
+
+def _height_speed_grid(archive, rows, heights, speeds, path):
+    """A per-run column on the heights x speeds grid of `rows` (NaN where no ok run)."""
+    grid = np.full((len(heights), len(speeds)), np.nan)
+    height, speed = archive.param("height_m")[rows], archive.param("speed_mps")[rows]
+    grid[np.searchsorted(heights, height), np.searchsorted(speeds, speed)] = archive.column(path)[rows]
+    return grid
+
+
+def _stability_map(archive, key, rows, outdir, number):
+    """The stability map of one group of runs: σ over height x speed and, when the archive has it, the
+    phugoid's own real part on the same colour scale; every line of the map is drawn by
+    _map_overlays."""
+    heights, speeds = np.unique(archive.param("height_m")[rows]), np.unique(archive.param("speed_mps")[rows])
+    if len(heights) < 2 or len(speeds) < 2:
+        return None
+    sigma = _height_speed_grid(archive, rows, heights, speeds, "results/modes/stability_margin_per_s")
+    panels = [(sigma, "σ = 0 on the grid", "stability margin σ: the largest Re λ, the exactly neutral height root left out")]
+    phugoid = None
+    if archive.has("results/modes/phugoid/eigenvalue_re_per_s"):
+        phugoid = _height_speed_grid(archive, rows, heights, speeds, "results/modes/phugoid/eigenvalue_re_per_s")
+        zero = "σ = 0 (upper panel), Re λ = 0 (lower panel) on the grid"
+        panels = [(sigma, zero, panels[0][2]), (phugoid, zero, "the phugoid's own margin: Re λ of the phugoid")]
+    extent = max(max(np.nanmax(np.abs(grid)) for grid, _, _ in panels), 1e-12)
+    # Symmetric about 0 (white), logarithmic beyond SIGMA_LINEAR_PER_S so that the small margins near
+    # the boundary are as visible as the large ones near the ground; one scale for both panels.
+    norm = SymLogNorm(linthresh=min(SIGMA_LINEAR_PER_S, extent / 10), linscale=0.6, vmin=-extent, vmax=extent,
+                      base=10)
+    colours = plt.get_cmap("RdBu_r").copy()
+    colours.set_bad(MISSING_COLOUR)  # a run not complete (or failed): not white, which is σ = 0
+    fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(8.8, 1.4 + 4.3 * len(panels)), layout="constrained",
+                             gridspec_kw={"height_ratios": [1] * len(panels) + [0.2]})
+    legend_axis = axes[-1]
+    mesh, handles = None, {}
+    for ax, (grid, zero_label, title) in zip(axes[:-1], panels):
+        mesh = ax.pcolormesh(speeds, heights, np.ma.masked_invalid(grid), cmap=colours, norm=norm,
+                             shading="nearest", rasterized=True)
+        for handle in _map_overlays(ax, archive, key, heights, speeds, grid, zero_label):
+            handles.setdefault(handle.get_label(), handle)
+        _map_axes(ax, archive, heights, speeds)
+        ax.set_title(title)
+    for ax in axes[:-2]:
+        ax.set_xlabel("")
+    bar = fig.colorbar(mesh, ax=list(axes[:-1]), pad=0.02, aspect=35)
+    bar.set_label("σ, Re λ (1/s): red unstable (> 0), blue stable (< 0)")
+    legend_axis.axis("off")
+    legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
+    suffix = f" ({_h_derivatives_label(archive, key)})" if key else ""
+    fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: stability over height and speed{suffix}")
+    name = _save(fig, outdir, f"stability_map_{_slug(archive.study_name)}_{number}.png")
+    return Figure(name, f"Stability map ({archive.study_name}){suffix}",
+                  _map_caption(archive, rows, heights, speeds, sigma, phugoid))
+
+
+def _map_overlays(ax, archive, key, heights, speeds, grid, zero_label):
+    """The lines over one panel of the stability map; returns their legend handles. Everything drawn
+    over the map is here: the zero contour of the panel's quantity, the refined boundary H*, H/b = 0.5,
+    the wheel-contact height and the last table row."""
+    handles = []
+    b = archive.aircraft.wingspan_m
+    if np.nanmin(grid) < 0 < np.nanmax(grid):
+        ax.contour(speeds, heights, grid, levels=[0.0], colors="k", linewidths=2.4)
+        handles.append(Line2D([], [], color="k", lw=2.4, label=zero_label))
+    boundary = archive.boundary()
+    if boundary is not None and "speed_mps" in boundary["keys"]:
+        select = np.ones(len(boundary["speed_mps"]), dtype=bool)
+        for name, value in key.items():
+            if name in boundary:
+                select &= boundary[name] == value
+        found = select & np.isfinite(boundary["height_m"])
+        if np.any(found):
+            ax.plot(boundary["speed_mps"][found], boundary["height_m"][found], color="#ffd000", lw=0.9,
+                    marker="o", ms=3, mec="k", mew=0.4)
+            handles.append(Line2D([], [], color="#ffd000", lw=0.9, marker="o", ms=3.5, mec="k", mew=0.4,
+                                  label="H* refined on the continuous model (/analysis/boundary)"))
+    # The curve H*(u0) traced by continuation (gesweep boundary --archive, issue 16), when the map's
+    # only other axis is speed.
+    if "analysis/boundary_curve" in archive.file and len(key) == 0:
+        traced = archive.file["analysis/boundary_curve"]
+        branches = traced["branch"][...]
+        for branch in np.unique(branches):
+            on = branches == branch
+            ax.plot(traced["speed_mps"][...][on], traced["height_m"][...][on], color="#ff00c8", lw=1.4)
+        if len(branches):
+            handles.append(Line2D([], [], color="#ff00c8", lw=1.4,
+                                  label="H*(u0) traced by continuation (/analysis/boundary_curve)"))
+    if b > 0:
+        ax.axhline(0.5 * b, color="#00a000", ls="--", lw=1.4)
+        handles.append(Line2D([], [], color="#00a000", ls="--", lw=1.4,
+                              label=f"H/b = 0.5 ({0.5 * b:.5g} m): the paper's boundary"))
+    wheel = archive.aircraft.wheel_contact_height_m
+    if wheel > 0 and heights[0] <= wheel <= heights[-1]:
+        ax.axhline(wheel, color="saddlebrown", lw=1.2)
+        handles.append(Line2D([], [], color="saddlebrown", lw=1.2, label=f"wheel contact ({wheel:.3g} m)"))
+    last_row = _last_table_row_m(archive)
+    if heights[0] < last_row < heights[-1]:
+        ax.axhline(last_row, color="0.25", ls=":", lw=1.2)
+        handles.append(Line2D([], [], color="0.25", ls=":", lw=1.2,
+                              label=f"last table row ({last_row:.5g} m): free-flight coefficients above"))
+    return handles
+
+
+def _map_axes(ax, archive, heights, speeds):
+    if _geometric(heights):
+        ax.set_yscale("log")
+        ticks = [t for t in (0.8, 1, 1.5, 2, 3, 4, 5, 7, 10, 14, 20, 30, 50) if heights[0] <= t <= heights[-1]]
+        ax.set_yticks(ticks)
+        ax.set_yticklabels([f"{t:g}" for t in ticks])
+        ax.minorticks_off()
+    ax.set_xlim(speeds[0], speeds[-1])
+    ax.set_ylim(heights[0], heights[-1])
+    _span_axis(ax, archive.aircraft.wingspan_m)
+    ax.set_xlabel("reference speed u0 (m/s)")
+    ax.set_ylabel("height H of the mean chord (m)")
+
+
+def _last_table_row_m(archive):
+    rows = archive.aircraft.table_heights_m
+    return float(rows[-1]) if rows else math.nan
+
+
+def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
+    text = (f"Eigen-analysis of Eq. (1) over {len(speeds)} speeds × {len(heights)} heights ({len(rows)} runs of "
+            f"{os.path.basename(archive.path)}). Colours are centred on 0 (white), linear within "
+            f"±{SIGMA_LINEAR_PER_S:g} 1/s and logarithmic beyond, one scale for both panels; grey cells have no "
+            f"complete ok run. The yellow curve, where present, is the boundary H* refined on the continuous "
+            f"model by gesweep boundary --archive.")
+    if phugoid is None:
+        return text
+    height_root = (_height_speed_grid(archive, rows, heights, speeds, "results/modes/height/eigenvalue_re_per_s")
+                   if archive.has("results/modes/height/eigenvalue_re_per_s") else None)
+    stable = np.isfinite(sigma) & (sigma < 0)
+    from_height = stable & (sigma == height_root) if height_root is not None else np.zeros_like(stable)
+    if np.any(from_height):
+        values = sigma[from_height]
+        text += (f" σ is the largest real part of the three modes: in {100 * from_height.sum() / stable.sum():.0f} % "
+                 f"of the stable cells it is the height root (median {np.median(values):.2g} 1/s; within "
+                 f"±{SIGMA_LINEAR_PER_S:g} 1/s, nearly white, in "
+                 f"{100 * np.mean(np.abs(values) < SIGMA_LINEAR_PER_S):.0f} % of them), not the phugoid, so the upper "
+                 f"panel does not show how damped the phugoid is; the lower panel does.")
+    last_row = _last_table_row_m(archive)
+    above, below = heights > last_row, heights < last_row
+    if np.any(above) and np.any(below):
+        i, j = np.nonzero(below)[0][-1], np.nonzero(above)[0][0]
+        # The band is there when σ just below the last row is mostly the height root.
+        if np.mean(from_height[i]) > 0.5:
+            text += (f" Above the last table row ({last_row:.5g} m) the coefficients are the free-flight row and no "
+                     f"longer change with height, so the height root is exactly neutral and is left out of σ "
+                     f"(docs/model.md §6): σ jumps from the height root (median {np.nanmedian(sigma[i]):.2g} 1/s at "
+                     f"{heights[i]:.4g} m) to the phugoid (median {np.nanmedian(sigma[j]):.2g} 1/s at "
+                     f"{heights[j]:.4g} m). The dark band at the top of the upper panel is that change of mode, not "
+                     f"a change of the airplane's stability; the phugoid panel has no band.")
+    return text
 
 
 def _locus_groups(archives):
@@ -191,19 +295,95 @@ def _locus_groups(archives):
 
 
 def _locus_source(groups):
-    """The group for the root locus: h-derivatives on, speed within LOCUS_SPEED_WINDOW_MPS of the
-    paper's, most heights, then nearest speed."""
+    """The group for the root locus: h-derivatives on; at exactly the paper's speed with at least
+    LOCUS_DENSE_HEIGHTS heights if any group is, else within LOCUS_SPEED_WINDOW_MPS of it; then the most
+    heights, then the nearest speed."""
     best = None
     for group in groups:
         archive, key, rows, speed, on = group
         distinct = len(np.unique(archive.param("height_m")[rows]))
         if distinct < 5:
             continue
-        score = (0 if on else 1, abs(speed - PAPER_SPEED_MPS) > LOCUS_SPEED_WINDOW_MPS, -distinct,
-                 abs(speed - PAPER_SPEED_MPS))
+        at_paper_speed = abs(speed - PAPER_SPEED_MPS) < SAME_SPEED_MPS and distinct >= LOCUS_DENSE_HEIGHTS
+        score = (0 if on else 1, 0 if at_paper_speed else 1, abs(speed - PAPER_SPEED_MPS) > LOCUS_SPEED_WINDOW_MPS,
+                 -distinct, abs(speed - PAPER_SPEED_MPS))
         if best is None or score < best[0]:
             best = (score, group)
     return None if best is None else best[1]
+
+
+def _label_candidates():
+    """Offsets (points) tried for a label, nearest first."""
+    out = []
+    for radius in LOCUS_LABEL_RADII_PT:
+        for degrees in (45, 0, -45, 90, -90, 135, 180, -135):
+            angle = math.radians(degrees)
+            out.append((radius * math.cos(angle), radius * math.sin(angle)))
+    return out
+
+
+def _place_labels(fig, ax, points, anchors, texts, taken):
+    """Writes `texts` beside the points `anchors` (data coordinates) of a panel whose curve is `points`
+    (N x 2), each at the first offset where its text overlaps no label already placed (`taken`, display
+    boxes), covers the fewest points of the curve and stays inside the axes. Needs the layout done
+    (the figure's layout engine executed); the labels are left out of the layout after it."""
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    curve = ax.transData.transform(points)
+    for anchor, text in zip(anchors, texts):
+        best = None
+        for dx, dy in _label_candidates():
+            label = ax.annotate(text, anchor, xytext=(dx, dy), textcoords="offset points", fontsize=8,
+                                ha="left" if dx > 1 else ("right" if dx < -1 else "center"),
+                                va="bottom" if dy > 1 else ("top" if dy < -1 else "center"),
+                                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85),
+                                arrowprops=dict(arrowstyle="-", color="0.4", lw=0.6, shrinkA=0, shrinkB=2))
+            label.update_positions(renderer)
+            box = Text.get_window_extent(label, renderer).expanded(1.08, 1.15)
+            inside = (box.x0 >= frame.x0 and box.x1 <= frame.x1 and box.y0 >= frame.y0 and box.y1 <= frame.y1)
+            covered = int(np.count_nonzero((curve[:, 0] >= box.x0) & (curve[:, 0] <= box.x1) & (curve[:, 1] >= box.y0)
+                                           & (curve[:, 1] <= box.y1)))
+            cost = (sum(box.overlaps(other) for other in taken), 0 if inside else 1, covered)
+            if best is None or cost < best[0]:
+                if best is not None:
+                    best[1].remove()
+                best = (cost, label, box)
+            else:
+                label.remove()
+            if cost == (0, 0, 0):
+                break
+        best[1].set_in_layout(False)
+        taken.append(best[2])
+
+
+def _fast_segment(archive, height, re, im):
+    """Where the short-period root moves farthest per grid step, if it stands out (a step more than
+    LOCUS_FAST_STEP_RATIO times the median): (lower row, upper row, coefficient, value below, value
+    above, index of the step) of the aircraft's table interval that holds it and of its short-period
+    derivative that changes most there relative to its range; else None."""
+    rows = archive.aircraft.table_heights_m
+    if len(height) < 3 or len(rows) < 2:
+        return None
+    step = np.hypot(np.diff(re), np.diff(im))
+    k = int(np.argmax(step))
+    if not step[k] > LOCUS_FAST_STEP_RATIO * np.median(step):
+        return None
+    middle = 0.5 * (height[k] + height[k + 1])
+    j = int(np.searchsorted(rows, middle))
+    if not 0 < j < len(rows):
+        return None
+    best = None
+    for name in SHORT_PERIOD_DERIVATIVES:
+        values = archive.aircraft.table.get(name)
+        if not values:
+            continue
+        scale = max(abs(v) for v in values)
+        change = abs(values[j] - values[j - 1]) / scale if scale > 0 else 0.0
+        if best is None or change > best[0]:
+            best = (change, name, values[j - 1], values[j])
+    if best is None:
+        return None
+    return rows[j - 1], rows[j], best[1], best[2], best[3], k
 
 
 def root_locus(archives, outdir):
@@ -215,11 +395,12 @@ def root_locus(archives, outdir):
     height = archive.param("height_m")[rows]
     modes = {m: (archive.column(f"results/modes/{m}/eigenvalue_re_per_s")[rows],
                  archive.column(f"results/modes/{m}/eigenvalue_im_per_s")[rows]) for m in ("short_period", "phugoid", "height")}
+    at_paper_speed = abs(speed - PAPER_SPEED_MPS) < SAME_SPEED_MPS
     # The paper's own points: runs at exactly its speed at a few heights (the Table A2 study), if any.
     table_points = None
     for other in groups:
-        if (other is not source and other[4] == on and abs(other[3] - speed) < SAME_SPEED_MPS
-                and abs(other[3] - PAPER_SPEED_MPS) < SAME_SPEED_MPS and len(other[2]) <= 30):
+        if (other is not source and other[4] == on and abs(other[3] - speed) < SAME_SPEED_MPS and at_paper_speed
+                and len(other[2]) <= 30):
             a, _, r, _, _ = other
             table_points = (a.param("height_m")[r], {m: (a.column(f"results/modes/{m}/eigenvalue_re_per_s")[r],
                                                          a.column(f"results/modes/{m}/eigenvalue_im_per_s")[r])
@@ -227,8 +408,10 @@ def root_locus(archives, outdir):
             break
     b = archive.aircraft.wingspan_m
     norm = LogNorm(height.min(), height.max()) if height.min() > 0 else Normalize(height.min(), height.max())
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.9), layout="constrained",
-                             gridspec_kw={"width_ratios": [1, 1, 0.9]})
+    fig = plt.figure(figsize=(14, 5.6), layout="constrained")
+    grid = fig.add_gridspec(2, 3, width_ratios=[1, 1, 0.9], height_ratios=[1, 0.07])
+    axes = [fig.add_subplot(grid[0, i]) for i in range(3)]
+    legend_axis = fig.add_subplot(grid[1, :])
     # Heights named along the locus: the lowest, H/b = 0.5, H/b = 1 and the highest.
     marks = sorted({0, len(height) - 1} | {int(np.argmin(np.abs(height - r * b))) for r in (0.5, 1.0)
                                             if b > 0 and height.min() <= r * b <= height.max()})
@@ -237,16 +420,12 @@ def root_locus(archives, outdir):
         re, im = modes[mode]
         ax.plot(re, im, color="0.55", lw=0.8, zorder=1)
         scatter = ax.scatter(re, im, c=height, cmap="viridis", norm=norm, s=16, zorder=2, edgecolors="none")
-        for n, i in enumerate(marks):
-            text = f"{height[i]:.3g} m" + (f" (H/b {height[i] / b:.2f})" if b > 0 else "")
-            offset = LOCUS_LABEL_OFFSETS[n] if len(marks) == len(LOCUS_LABEL_OFFSETS) else (10, 8 - 14 * (n % 2))
-            ax.annotate(text, (re[i], im[i]), textcoords="offset points", xytext=offset, fontsize=8,
-                        arrowprops=dict(arrowstyle="-", color="0.4", lw=0.6))
         ax.scatter(re[-1:], im[-1:], marker="*", s=140, color="k", zorder=3)
         ax.scatter(re[:1], im[:1], marker="X", s=80, color="#c00000", zorder=3)
         if table_points is not None:
             tre, tim = table_points[1][mode]
             ax.scatter(tre, tim, marker="o", s=46, facecolors="none", edgecolors="k", lw=1.0, zorder=4)
+        ax.margins(0.12)
         low, high = ax.get_xlim()
         if low < 0 < high:
             ax.axvline(0.0, color="#c00000", lw=0.9, ls="--")
@@ -275,24 +454,61 @@ def root_locus(archives, outdir):
         handles.append(Line2D([], [], color="#00a000", ls="--", label="H/b = 0.5"))
     if table_points is not None:
         handles.append(Line2D([], [], marker="o", ls="", mfc="none", mec="k",
-                              label=f"Table A2 heights at {PAPER_SPEED_MPS} m/s ({table_points[2]})"))
-    axes[2].legend(handles=handles, loc="lower right", fontsize=7.5)
+                              label=f"Table A2 heights ({table_points[2]})"))
+    legend_axis.axis("off")
+    legend_axis.legend(handles=handles, loc="center", ncols=len(handles), frameon=False)
     bar = fig.colorbar(scatter, ax=axes, pad=0.01, aspect=30)
     bar.set_label("height H (m)")
     others = {k: v for k, v in key.items() if k != "speed_mps"}
-    condition = f"u0 = {speed:.6g} m/s, " + ("with" if on else "without") + " h-derivatives"
+    if at_paper_speed:
+        condition = f"u0 = {speed:.6g} m/s, the paper's speed, "
+    else:
+        condition = (f"u0 = {speed:.6g} m/s, the speed of {archive.study_name} nearest the paper's "
+                     f"{PAPER_SPEED_MPS} m/s, ")
+    condition += ("with" if on else "without") + " h-derivatives"
     if any(k != "h_derivatives" for k in others):
         condition += ", " + archive.key_text({k: v for k, v in others.items() if k != "h_derivatives"})
     fig.suptitle(f"Root locus as height falls from {height[-1]:.3g} m to {height[0]:.3g} m ({condition})")
+    # Labels last, where they cover nothing: on the laid-out figure (the layout alone, not a full draw).
+    fig.get_layout_engine().execute(fig)
+    taken = []
+    texts = [f"{height[i]:.3g} m" + (f" (H/b {height[i] / b:.2f})" if b > 0 else "") for i in marks]
+    fast = _fast_segment(archive, height, *modes["short_period"])
+    for ax, mode in ((axes[0], "short_period"), (axes[1], "phugoid")):
+        points = np.column_stack(modes[mode])
+        anchors, labels = [points[i] for i in marks], list(texts)
+        if fast is not None and mode == "short_period":
+            low_row, high_row, coefficient, below, above, _ = fast
+            # At the middle (in log H) of the table interval, where the stretch is.
+            anchors.append(points[int(np.argmin(np.abs(np.log(height) - 0.5 * np.log(low_row * high_row))))])
+            labels.append(f"{low_row:g} to {high_row:g} m: {DERIVATIVE_MATHTEXT.get(coefficient, coefficient)} "
+                          f"{below:g} → {above:g}".replace("-", "−"))
+        _place_labels(fig, ax, points, anchors, labels, taken)
     name = _save(fig, outdir, "root_locus.png")
-    top_note = ""
+    caption = (f"Eigenvalues of Eq. (1) at {len(height)} heights of {os.path.basename(archive.path)} "
+               f"(study {archive.study_name}) at u0 = {speed:.6g} m/s"
+               + (" (the paper's speed)" if at_paper_speed else
+                  f", the nearest of its speeds to the paper's {PAPER_SPEED_MPS} m/s (no archive of this report "
+                  f"has at least {LOCUS_DENSE_HEIGHTS} heights at exactly that speed)")
+               + ", coloured by height (conjugates omitted). The red cross marks the lowest height, the star the "
+                 "highest.")
+    if fast is not None:
+        low_row, high_row, coefficient, below, above, _ = fast
+        caption += (f" The dotted straight stretch of the short-period locus lies between the table rows at "
+                    f"{low_row:g} m and {high_row:g} m, where {DERIVATIVE_NAMES.get(coefficient, coefficient)} "
+                    f"jumps from {below:g} to {above:g} (the aircraft file's table, the paper's Table A2). The "
+                    f"coefficients are interpolated linearly between rows, so over that height interval the root "
+                    f"moves far and nearly straight, and the heights, evenly spaced in log H, land far apart on it.")
     if archive.aircraft.table_heights_m and height[-1] >= archive.aircraft.table_heights_m[-1]:
-        top_note = (f" At and above the last table row ({archive.aircraft.table_heights_m[-1]:g} m) the coefficients "
+        caption += (f" At and above the last table row ({archive.aircraft.table_heights_m[-1]:g} m) the coefficients "
                     f"are the free-flight row, so the star is the free-flight end of the locus.")
-    return [Figure(name, "Root locus against height",
-                   f"Eigenvalues of Eq. (1) at {len(height)} heights of {os.path.basename(archive.path)} "
-                   f"(study {archive.study_name}), coloured by height (conjugates omitted). The red cross marks the "
-                   f"lowest height, the star the highest.{top_note}")]
+    return [Figure(name, "Root locus against height", caption)]
+
+
+def _distinct_styles(n):
+    """n (colour, line style) pairs told apart at a glance (a sequential map makes neighbouring start
+    heights look alike): Matplotlib's qualitative tab10, solid, then dashed beyond ten."""
+    return [(plt.get_cmap("tab10")(i % 10), "-" if i < 10 else "--") for i in range(n)]
 
 
 def open_loop(archives, outdir):
@@ -318,21 +534,22 @@ def open_loop(archives, outdir):
         fig, (left, right, legend_axis) = plt.subplots(1, 3, figsize=(13, 4.9), layout="constrained",
                                                        gridspec_kw={"width_ratios": [1.6, 1, 0.62]})
         axes = (left, right)
-        colors = plt.cm.viridis(np.linspace(0, 0.92, len(rows)))
+        styles = _distinct_styles(len(rows))
+        colors = [colour for colour, _ in styles]
         for ax, t_max in ((axes[0], time[-1]), (axes[1], min(10.0, time[-1]))):
-            for color, row, h in zip(colors, rows, series):
+            for (color, line_style), row, h in zip(styles, rows, series):
                 label = f"H0 = {height0[row]:.5g} m"
                 if b > 0:
                     label += f" (H/b {height0[row] / b:.2f})"
                 extra = _h_derivatives_label(archive, groups.get(int(row), {}))
                 if extra:
                     label += ", " + extra
-                ax.plot(time, h, color=color, lw=1.3, label=label)
+                ax.plot(time, h, color=color, ls=line_style, lw=1.3, label=label)
                 finite = np.nonzero(np.isfinite(h))[0]
                 if len(finite) and finite[-1] < len(h) - 1:
                     ax.plot(time[finite[-1]], h[finite[-1]], "x", color=color, ms=7, mew=1.6)
             if wheel > 0:
-                ax.axhline(wheel, color="saddlebrown", lw=1.4)
+                ax.axhline(wheel, color=WHEEL_COLOUR_OPEN_LOOP, lw=1.6)
             if b > 0:
                 ax.axhline(0.5 * b, color="#00a000", ls="--", lw=1.1)
             ax.set_xlim(0, t_max)
@@ -340,11 +557,21 @@ def open_loop(archives, outdir):
             ax.set_xlabel("time t (s)")
             ax.set_ylabel("height H (m)")
             ax.grid(alpha=0.3)
+        # The runs still airborne at the end are named at their ends: their lines overlap most.
+        ends = [(h[-1], f"{height0[row]:.5g} m", color) for color, row, h in zip(colors, rows, series)
+                if np.isfinite(h[-1])]
+        gap = OPEN_LOOP_END_LABEL_GAP * (axes[0].get_ylim()[1] - axes[0].get_ylim()[0])
+        placed = []
+        for y, text, color in sorted(ends):
+            y_label = max([y] + [p + gap for p in placed[-1:]])
+            placed.append(y_label)
+            axes[0].annotate(text, (time[-1], y_label), xytext=(4, 0), textcoords="offset points",
+                             annotation_clip=False, fontsize=8, color=color, va="center", ha="left")
         _span_axis(axes[1], b)
         axes[0].set_title("whole run")
         axes[1].set_title("first 10 s")
         handles, labels = axes[0].get_legend_handles_labels()
-        handles += [Line2D([], [], color="saddlebrown", lw=1.4), Line2D([], [], color="#00a000", ls="--"),
+        handles += [Line2D([], [], color=WHEEL_COLOUR_OPEN_LOOP, lw=1.6), Line2D([], [], color="#00a000", ls="--"),
                     Line2D([], [], color="k", marker="x", ls="")]
         labels += [f"wheel contact ({wheel:.3g} m)", "H/b = 0.5", "end of the run (touchdown, stall, divergence)"]
         legend_axis.axis("off")
@@ -358,7 +585,9 @@ def open_loop(archives, outdir):
         figures.append(Figure(name, f"Open-loop height histories ({archive.study_name})",
                               f"Height against time after the elevator pulse, from each start height of "
                               f"{os.path.basename(archive.path)} (the paper's Fig. 4 study when it is "
-                              f"paper_fig4_open_loop). A cross ends a run before the time limit."))
+                              f"paper_fig4_open_loop), one colour per start height. A cross ends a run before the "
+                              f"time limit; the runs still airborne at the end are named by their start height at the "
+                              f"right of the whole-run panel."))
     return figures
 
 
@@ -391,7 +620,7 @@ def landing(archives, outdir):
         wheel = archive.aircraft.wheel_contact_height_m
         for ax in (axes[0, 0], axes[0, 1]):
             if wheel > 0:
-                ax.axhline(wheel, color="saddlebrown", lw=1.2)
+                ax.axhline(wheel, color="saddlebrown", lw=1.2, label=f"wheel contact ({wheel:.3g} m)")
             ax.set_xlabel("distance past the glide-slope transmitter (m)")
             ax.set_ylabel("height H (m)")
         b = archive.aircraft.wingspan_m

@@ -12,10 +12,11 @@ namespace gesweep {
 namespace {
 
 using testing::AnceAircraftPath;
+using testing::PaperDataDir;
 using testing::ReadFile;
-using testing::SharedDataDir;
 
-// The oracle for the transcription of ance.toml: the paper's tables as CSV in ../shared/data.
+// The oracle for the transcription of ance.toml: the paper's Tables A1 and A2 as CSV in
+// studies/aircraft/data (copied from the paper's Appendix A independently of ance.toml).
 std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path) {
   std::vector<std::vector<std::string>> rows;
   std::istringstream text(ReadFile(path));
@@ -33,9 +34,10 @@ std::vector<std::vector<std::string>> ReadCsv(const std::filesystem::path& path)
 
 TEST(AircraftFile, AnceMatchesThePapersTables) {
   const Aircraft aircraft = LoadAircraftFile(AnceAircraftPath());
-  const auto a2_path = SharedDataDir() / "ance_table_a2.csv";
-  const auto a1_path = SharedDataDir() / "ance_table_a1.csv";
-  if (!std::filesystem::exists(a2_path)) GTEST_SKIP() << "shared data not found at " << a2_path;
+  const auto a2_path = PaperDataDir() / "ance_table_a2.csv";
+  const auto a1_path = PaperDataDir() / "ance_table_a1.csv";
+  ASSERT_TRUE(std::filesystem::is_regular_file(a1_path)) << "missing " << a1_path;
+  ASSERT_TRUE(std::filesystem::is_regular_file(a2_path)) << "missing " << a2_path;
 
   std::map<std::string, double> a1;
   for (const auto& row : ReadCsv(a1_path)) {
@@ -52,10 +54,13 @@ TEST(AircraftFile, AnceMatchesThePapersTables) {
   EXPECT_EQ(aircraft.wheel_contact_height_m, a1["wheel_contact_height"]);
 
   const auto table = ReadCsv(a2_path);
+  ASSERT_GE(table.size(), 2u) << a2_path << ": a header and at least one row expected";
   const auto& header = table[0];
   std::size_t finite_row = 0;
+  bool free_flight_row_seen = false;
   for (std::size_t r = 1; r < table.size(); ++r) {
     const bool free_flight = table[r][0] == "inf";
+    free_flight_row_seen = free_flight_row_seen || free_flight;
     if (!free_flight) {
       EXPECT_EQ(aircraft.table_heights_m[finite_row], std::stod(table[r][0]));
     }
@@ -70,6 +75,7 @@ TEST(AircraftFile, AnceMatchesThePapersTables) {
     if (!free_flight) ++finite_row;
   }
   EXPECT_EQ(finite_row, aircraft.table_heights_m.size());
+  EXPECT_TRUE(free_flight_row_seen) << a2_path << ": no free-flight (inf) row";
 }
 
 // A minimal valid aircraft, edited by each bad-input case.

@@ -20,6 +20,7 @@
 #include "engine/control/landing_simulation.h"
 #include "engine/control/riccati.h"
 #include "engine/modal/boundary.h"
+#include "engine/modal/hurwitz.h"
 #include "engine/modal/modal_analysis.h"
 #include "engine/simulation/derivative_kernel.h"
 #include "engine/simulation/open_loop.h"
@@ -76,6 +77,19 @@ void BM_Modes(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_Modes)->Threads(1)->Threads(2)->UseRealTime();
+
+// The same with LAPACK's small-matrix QR (dgehd2 + dlahqr) instead of Eigen's EigenSolver.
+void BM_ModesLapack(benchmark::State& state) {
+  const LongitudinalModel& model = Model();
+  const std::vector<double>& heights = SweepHeights();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(heights[i++ & 1023], kSpeed_mps), EigenvalueSolver::kLapack);
+    benchmark::DoNotOptimize(modal.stability_margin_per_s);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ModesLapack);
 
 // The parts: building A(H, u0), and the eigen-analysis of a fixed A.
 void BM_StateMatrix(benchmark::State& state) {
@@ -192,18 +206,37 @@ void BM_Balance(benchmark::State& state) {
 }
 BENCHMARK(BM_Balance);
 
-// --- One boundary search (MODEL.md §6): scan σ along height, then bracket the sign change ---
+// --- One boundary search (MODEL.md §6) at 32.0208 m/s: the certified Hurwitz finder (default) and
+// the former sampled search (σ at ~280 heights, TOMS 748 at the sign change), side by side ---
 
-void BM_Boundary(benchmark::State& state) {
+void RunBoundary(benchmark::State& state, BoundaryMethod method) {
+  BoundaryOptions options;
+  options.method = method;
   BoundaryResult result;
   for (auto _ : state) {
-    result = FindBoundary(Model(), kSpeed_mps);
+    result = FindBoundary(Model(), kSpeed_mps, options);
     benchmark::DoNotOptimize(result.height_m);
   }
   state.counters["eigen_analyses"] = result.margin_evaluations;
+  state.counters["characteristic_polynomials"] = result.polynomial_evaluations;
   state.counters["boundary_m"] = result.height_m.value_or(NAN);
+  state.counters["certified"] = result.certified ? 1 : 0;
 }
+void BM_Boundary(benchmark::State& state) { RunBoundary(state, BoundaryMethod::kHurwitz); }
 BENCHMARK(BM_Boundary)->Unit(benchmark::kMicrosecond);
+void BM_BoundarySampled(benchmark::State& state) { RunBoundary(state, BoundaryMethod::kSampled); }
+BENCHMARK(BM_BoundarySampled)->Unit(benchmark::kMicrosecond);
+
+// The Hurwitz finder's unit of work: one characteristic polynomial of A (Hessenberg + recurrence).
+void BM_CharacteristicPolynomial(benchmark::State& state) {
+  Matrix5d a = Model().StateMatrix(kModesHeight_m, kSpeed_mps);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(a.data());
+    const CharacteristicCoefficients c = CharacteristicPolynomial(a);
+    benchmark::DoNotOptimize(c.data());
+  }
+}
+BENCHMARK(BM_CharacteristicPolynomial);
 
 // --- One right-hand-side evaluation of the open loop (MODEL.md §7), in the integrator's pattern:
 // consecutive calls at nearby heights, so the segment hint usually hits (the worst case, a new

@@ -49,6 +49,9 @@ name = "kill_scan_stoppable"
 aircraft = "{AIRCRAFT}"
 [analyses.modes]
 [analyses.boundary]
+# The former sampled search (about 1 ms a run, 20x the certified finder): the runs must last long
+# enough for the test to interrupt the sweep.
+method = "sampled"
 [output]
 chunk_runs = 16
 [parameters]

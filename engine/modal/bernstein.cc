@@ -1,0 +1,337 @@
+#include "engine/modal/bernstein.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+constexpr int kMax = BernsteinPolynomial::kMaxDegree;
+// Chebyshev-to-Bernstein conversion is tabulated up to this degree (the characteristic coefficients
+// of a PCHIP segment reach 15).
+constexpr int kMaxConversionDegree = 24;
+
+struct Binomials {
+  double c[2 * kMax + 2][2 * kMax + 2] = {};
+  Binomials() {
+    for (int n = 0; n < 2 * kMax + 2; ++n) {
+      c[n][0] = c[n][n] = 1.0;
+      for (int k = 1; k < n; ++k) c[n][k] = c[n - 1][k - 1] + c[n - 1][k];
+    }
+  }
+};
+const Binomials& Binomial() {
+  static const Binomials table;
+  return table;
+}
+
+// conversion[D][m][k]: the k-th Bernstein coefficient (degree D) of T_m(2t − 1), m ≤ D.
+struct ChebyshevToBernstein {
+  std::vector<std::vector<std::vector<double>>> conversion;
+  ChebyshevToBernstein() {
+    conversion.resize(kMaxConversionDegree + 1);
+    // T_m at its own degree m, by T_{m+1} = 2x T_m − T_{m−1} with x = 2t − 1 = [−1, 1] in degree 1.
+    std::vector<BernsteinPolynomial> T;
+    T.push_back(BernsteinPolynomial::Constant(1.0));
+    const BernsteinPolynomial x = BernsteinPolynomial::FromCoefficients({-1.0, 1.0});
+    T.push_back(x);
+    for (int m = 1; m < kMaxConversionDegree; ++m) {
+      T.push_back(BernsteinPolynomial::Constant(2.0) * x * T[static_cast<std::size_t>(m)] -
+                  T[static_cast<std::size_t>(m - 1)]);
+    }
+    for (int D = 0; D <= kMaxConversionDegree; ++D) {
+      conversion[static_cast<std::size_t>(D)].resize(static_cast<std::size_t>(D + 1));
+      for (int m = 0; m <= D; ++m) {
+        const BernsteinPolynomial e = T[static_cast<std::size_t>(m)].Elevated(D);
+        auto& row = conversion[static_cast<std::size_t>(D)][static_cast<std::size_t>(m)];
+        for (int k = 0; k <= D; ++k) row.push_back(e.coefficient(k));
+      }
+    }
+  }
+};
+
+// cos(kπ(i + ½)/m) for the Chebyshev transforms of m ≤ kMaxConversionDegree + 2 nodes.
+struct CosineTables {
+  std::vector<std::vector<double>> table;  // table[m][k·m + i]
+  CosineTables() {
+    table.resize(kMaxConversionDegree + 3);
+    for (int m = 1; m <= kMaxConversionDegree + 2; ++m) {
+      auto& t = table[static_cast<std::size_t>(m)];
+      t.resize(static_cast<std::size_t>(m * m));
+      for (int k = 0; k < m; ++k)
+        for (int i = 0; i < m; ++i) t[static_cast<std::size_t>(k * m + i)] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
+    }
+  }
+};
+const CosineTables& Cosines() {
+  static const CosineTables tables;
+  return tables;
+}
+
+int SignOf(double value, double allowance) {
+  if (value > allowance) return 1;
+  if (value < -allowance) return -1;
+  return 0;
+}
+
+// The largest number of sign variations of any sequence within `allowance` of b: coefficients of
+// unknown sign (0) are free.
+int MaxSignVariations(const BernsteinPolynomial& p, double allowance) {
+  int variations = 0;
+  int last = 0;     // last certain sign, 0 before the first
+  int unknown = 0;  // unknown signs since it
+  for (int k = 0; k <= p.degree(); ++k) {
+    const int s = SignOf(p.coefficient(k), allowance);
+    if (s == 0) {
+      ++unknown;
+      continue;
+    }
+    if (last == 0) {
+      variations += unknown;
+    } else {
+      const int gaps = unknown + 1;
+      const bool must_differ = s != last;
+      variations += ((gaps % 2 == 1) == must_differ) ? gaps : gaps - 1;
+    }
+    last = s;
+    unknown = 0;
+  }
+  return last == 0 ? p.degree() : variations + unknown;
+}
+
+}  // namespace
+
+BernsteinPolynomial BernsteinPolynomial::FromCoefficients(const std::vector<double>& b) {
+  GESWEEP_DEMAND(!b.empty() && b.size() <= kMax + 1);
+  BernsteinPolynomial p;
+  p.degree_ = static_cast<int>(b.size()) - 1;
+  std::copy(b.begin(), b.end(), p.b_.begin());
+  return p;
+}
+
+BernsteinPolynomial BernsteinPolynomial::Constant(double c) {
+  BernsteinPolynomial p;
+  p.degree_ = 0;
+  p.b_[0] = c;
+  return p;
+}
+
+std::vector<double> BernsteinPolynomial::ChebyshevNodes(int m) {
+  std::vector<double> t(static_cast<std::size_t>(m));
+  for (int i = 0; i < m; ++i) {
+    t[static_cast<std::size_t>(i)] = 0.5 * (1.0 - std::cos(std::numbers::pi * (i + 0.5) / m));
+  }
+  return t;
+}
+
+BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const std::vector<double>& values, int degree,
+                                                              double* tail) {
+  return FromChebyshevSamples(values.data(), static_cast<int>(values.size()), degree, tail);
+}
+
+BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* values, int m, int degree, double* tail) {
+  static const ChebyshevToBernstein table;
+  GESWEEP_DEMAND(m >= 1 && degree >= 0 && degree < m && degree <= kMaxConversionDegree);
+  // Node i is x_i = −cos θ_i, θ_i = π(i + ½)/m, so T_k(x_i) = (−1)^k cos(k θ_i).
+  double largest_dropped = 0;
+  std::array<double, kMax + 1> c{};
+  GESWEEP_DEMAND(m <= kMaxConversionDegree + 2);
+  const double* cosines = Cosines().table[static_cast<std::size_t>(m)].data();
+  // Coefficients beyond degree + 1 are not needed: the first dropped one shows a wrong bound.
+  const int computed = std::min(m, degree + 2);
+  for (int k = 0; k < computed; ++k) {
+    double sum = 0;
+    for (int i = 0; i < m; ++i) sum += values[i] * cosines[k * m + i];
+    double ck = (k % 2 == 0 ? 2.0 : -2.0) * sum / m;
+    if (k == 0) ck *= 0.5;
+    if (k <= degree) {
+      c[static_cast<std::size_t>(k)] = ck;
+    } else {
+      largest_dropped = std::max(largest_dropped, std::abs(ck));
+    }
+  }
+  if (tail) *tail = largest_dropped;
+  BernsteinPolynomial p;
+  p.degree_ = degree;
+  const auto& conversion = table.conversion[static_cast<std::size_t>(degree)];
+  for (int mm = 0; mm <= degree; ++mm) {
+    const double ck = c[static_cast<std::size_t>(mm)];
+    if (ck == 0.0) continue;
+    const auto& row = conversion[static_cast<std::size_t>(mm)];
+    for (int k = 0; k <= degree; ++k) p.b_[static_cast<std::size_t>(k)] += ck * row[static_cast<std::size_t>(k)];
+  }
+  return p;
+}
+
+double BernsteinPolynomial::MaxAbsCoefficient() const {
+  double largest = 0;
+  for (int k = 0; k <= degree_; ++k) largest = std::max(largest, std::abs(b_[static_cast<std::size_t>(k)]));
+  return largest;
+}
+
+double BernsteinPolynomial::operator()(double t) const {
+  std::array<double, kMax + 1> work;
+  std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
+  for (int r = 1; r <= degree_; ++r) {
+    for (int k = 0; k <= degree_ - r; ++k) {
+      work[static_cast<std::size_t>(k)] =
+          (1.0 - t) * work[static_cast<std::size_t>(k)] + t * work[static_cast<std::size_t>(k + 1)];
+    }
+  }
+  return work[0];
+}
+
+BernsteinPolynomial BernsteinPolynomial::Derivative() const {
+  BernsteinPolynomial d;
+  if (degree_ == 0) return Constant(0.0);
+  d.degree_ = degree_ - 1;
+  for (int k = 0; k < degree_; ++k) {
+    d.b_[static_cast<std::size_t>(k)] = degree_ * (b_[static_cast<std::size_t>(k + 1)] - b_[static_cast<std::size_t>(k)]);
+  }
+  return d;
+}
+
+BernsteinPolynomial BernsteinPolynomial::Elevated(int degree) const {
+  GESWEEP_DEMAND(degree >= degree_ && degree <= kMax);
+  if (degree == degree_) return *this;
+  BernsteinPolynomial ones;
+  ones.degree_ = degree - degree_;
+  for (int k = 0; k <= ones.degree_; ++k) ones.b_[static_cast<std::size_t>(k)] = 1.0;
+  return *this * ones;
+}
+
+BernsteinPolynomial BernsteinPolynomial::DividedByT() const {
+  if (degree_ == 0) return Constant(0.0);
+  // t·q(t) in degree n has coefficients q_{j−1}·j/n (j ≥ 1) and 0.
+  BernsteinPolynomial q;
+  q.degree_ = degree_ - 1;
+  for (int j = 1; j <= degree_; ++j) q.b_[static_cast<std::size_t>(j - 1)] = b_[static_cast<std::size_t>(j)] * degree_ / j;
+  return q;
+}
+
+BernsteinPolynomial BernsteinPolynomial::DividedByOneMinusT() const {
+  if (degree_ == 0) return Constant(0.0);
+  // (1 − t)·q(t) in degree n has coefficients q_j·(n − j)/n (j < n) and 0.
+  BernsteinPolynomial q;
+  q.degree_ = degree_ - 1;
+  for (int j = 0; j < degree_; ++j) q.b_[static_cast<std::size_t>(j)] = b_[static_cast<std::size_t>(j)] * degree_ / (degree_ - j);
+  return q;
+}
+
+void BernsteinPolynomial::Split(BernsteinPolynomial& left, BernsteinPolynomial& right) const {
+  std::array<double, kMax + 1> work;
+  std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
+  left.degree_ = right.degree_ = degree_;
+  const int n = degree_;
+  left.b_[0] = work[0];
+  right.b_[static_cast<std::size_t>(n)] = work[static_cast<std::size_t>(n)];
+  for (int r = 1; r <= n; ++r) {
+    for (int k = 0; k <= n - r; ++k) {
+      work[static_cast<std::size_t>(k)] = 0.5 * (work[static_cast<std::size_t>(k)] + work[static_cast<std::size_t>(k + 1)]);
+    }
+    left.b_[static_cast<std::size_t>(r)] = work[0];
+    right.b_[static_cast<std::size_t>(n - r)] = work[static_cast<std::size_t>(n - r)];
+  }
+}
+
+BernsteinPolynomial operator*(const BernsteinPolynomial& p, const BernsteinPolynomial& q) {
+  const int m = p.degree_, n = q.degree_;
+  GESWEEP_DEMAND(m + n <= BernsteinPolynomial::kMaxDegree);
+  const auto& C = Binomial().c;
+  std::array<double, kMax + 1> ps{}, qs{};
+  for (int i = 0; i <= m; ++i) ps[static_cast<std::size_t>(i)] = p.b_[static_cast<std::size_t>(i)] * C[m][i];
+  for (int j = 0; j <= n; ++j) qs[static_cast<std::size_t>(j)] = q.b_[static_cast<std::size_t>(j)] * C[n][j];
+  BernsteinPolynomial r;
+  r.degree_ = m + n;
+  for (int i = 0; i <= m; ++i) {
+    for (int j = 0; j <= n; ++j) r.b_[static_cast<std::size_t>(i + j)] += ps[static_cast<std::size_t>(i)] * qs[static_cast<std::size_t>(j)];
+  }
+  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] /= C[m + n][k];
+  return r;
+}
+
+BernsteinPolynomial operator+(const BernsteinPolynomial& p, const BernsteinPolynomial& q) {
+  const int n = std::max(p.degree_, q.degree_);
+  BernsteinPolynomial a = p.Elevated(n), b = q.Elevated(n);
+  for (int k = 0; k <= n; ++k) a.b_[static_cast<std::size_t>(k)] += b.b_[static_cast<std::size_t>(k)];
+  return a;
+}
+
+BernsteinPolynomial operator-(const BernsteinPolynomial& p, const BernsteinPolynomial& q) {
+  const int n = std::max(p.degree_, q.degree_);
+  BernsteinPolynomial a = p.Elevated(n), b = q.Elevated(n);
+  for (int k = 0; k <= n; ++k) a.b_[static_cast<std::size_t>(k)] -= b.b_[static_cast<std::size_t>(k)];
+  return a;
+}
+
+RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, double resolution,
+                           int max_subdivisions) {
+  RootIsolation result;
+  const int n = p.degree();
+  result.sign_at_lower = SignOf(p.coefficient(0), allowance);
+  result.sign_at_upper = SignOf(p.coefficient(n), allowance);
+  struct Piece {
+    BernsteinPolynomial poly;
+    double lower, upper;
+  };
+  // Depth first, left half on top of the stack, so intervals come out ascending.
+  std::vector<Piece> stack;
+  stack.push_back({p, 0.0, 1.0});
+  struct Undecided {
+    double lower, upper;
+    int sign_lower, sign_upper;
+  };
+  std::vector<Undecided> undecided;
+  while (!stack.empty()) {
+    Piece piece = std::move(stack.back());
+    stack.pop_back();
+    const int variations = MaxSignVariations(piece.poly, allowance);
+    if (variations == 0) continue;
+    const int s0 = SignOf(piece.poly.coefficient(0), allowance);
+    const int s1 = SignOf(piece.poly.coefficient(n), allowance);
+    const bool ends_differ = s0 != 0 && s1 != 0 && s0 != s1;
+    if (variations == 1 && ends_differ) {
+      result.intervals.push_back({piece.lower, piece.upper, true, true});
+      continue;
+    }
+    const bool at_end_of_range = (piece.lower == 0.0 && s0 == 0) || (piece.upper == 1.0 && s1 == 0);
+    const double width = piece.upper - piece.lower;
+    // Next to an end where p ~ 0 nothing more can be decided: stop well before `resolution`.
+    const double stop_width = at_end_of_range ? std::max(resolution, 0x1p-24) : resolution;
+    // Where every coefficient is within the allowance of 0, p is indistinguishable from 0: stop.
+    bool all_unknown = true;
+    for (int k = 0; k <= n && all_unknown; ++k) all_unknown = SignOf(piece.poly.coefficient(k), allowance) == 0;
+    if (width <= stop_width || all_unknown || result.subdivisions >= max_subdivisions) {
+      undecided.push_back({piece.lower, piece.upper, s0, s1});
+      continue;
+    }
+    ++result.subdivisions;
+    Piece left{{}, piece.lower, 0.5 * (piece.lower + piece.upper)};
+    Piece right{{}, left.upper, piece.upper};
+    piece.poly.Split(left.poly, right.poly);
+    stack.push_back(std::move(right));
+    stack.push_back(std::move(left));
+  }
+  // Adjacent undecided pieces form one undecided interval; its sign change is that of its ends.
+  std::sort(undecided.begin(), undecided.end(), [](const auto& a, const auto& b) { return a.lower < b.lower; });
+  for (std::size_t i = 0; i < undecided.size();) {
+    Undecided merged = undecided[i];
+    std::size_t j = i + 1;
+    while (j < undecided.size() && undecided[j].lower == merged.upper) {
+      merged.upper = undecided[j].upper;
+      merged.sign_upper = undecided[j].sign_upper;
+      ++j;
+    }
+    const bool differ = merged.sign_lower != 0 && merged.sign_upper != 0 && merged.sign_lower != merged.sign_upper;
+    result.intervals.push_back({merged.lower, merged.upper, false, differ});
+    i = j;
+  }
+  std::sort(result.intervals.begin(), result.intervals.end(),
+            [](const auto& a, const auto& b) { return a.lower_t < b.lower_t; });
+  return result;
+}
+
+}  // namespace gesweep

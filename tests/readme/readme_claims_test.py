@@ -1,0 +1,372 @@
+#!/usr/bin/python3
+"""README's numbers held to the engine (issue 19): every figure README quotes comes from a command
+README shows; this test runs those commands with the real gesweep binary and compares.
+
+- A copied output block (the modes table, the boundary lines, the map_h_terms excerpt) must be the
+  command's output line for line, numbers within LAST_DIGIT units of their last printed digit.
+- A number in prose is the engine's value rounded: it agrees within ROUNDED units of its last digit.
+- The README text of each claim is found by a pattern with the numbers as groups, so an edited claim
+  fails here until its check is edited too; the numbers themselves come from README and the engine,
+  none from this file (the paper's 2.5935 m and 2.4912 m are the paper's).
+
+Usage: readme_claims_test.py GESWEEP_BINARY [fast|sobol]
+  fast (default): everything but the Sobol study, a few seconds;
+  sobol: the Sobol paragraph (327,680 boundary runs, about 15 s of CPU).
+"""
+import json
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+GESWEEP = os.path.abspath(sys.argv.pop(1))
+PART = sys.argv.pop(1) if len(sys.argv) > 1 and sys.argv[1] in ("fast", "sobol") else "fast"
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+WORK = tempfile.mkdtemp(prefix="gesweep_readme_")
+ANCE = "studies/aircraft/ance.toml"
+
+# A prose number is the engine's value rounded to the digits shown: within half a unit of the last.
+ROUNDED = 0.5
+# A copied output block may differ by one unit in a number's last printed digit (another machine's
+# LAPACK or libm can round the last digit the other way); text must be identical.
+LAST_DIGIT = 1.0
+# The paper's values README compares with (Table A2, Section IV of the paper), not the engine's.
+PAPER_BOUNDARY_M = 2.5935
+PAPER_SPEED_MPS = 32.0208
+PAPER_FIG4_DIP_M = 2.4912
+# "Climbs steeply below u": the rise of H* over the grid step below u is at least this many times the
+# rise over the step above it.
+STEEP_RATIO = 3.0
+# "Almost nothing" / "not at all": under this fraction of the largest effect (local sensitivities), or a
+# total Sobol index under this (less than 1 % of the variance).
+NEGLIGIBLE = 0.01
+# "Interact strongly": each factor's total Sobol index exceeds its first-order index by at least this.
+STRONG_INTERACTION = 0.1
+# Free-flight phugoid crossover: bisection on the speed to this (m/s), well below the quoted digit.
+CROSSOVER_RESOLUTION_MPS = 1e-3
+
+NUMBER = re.compile(r"[-+−]?(?:\d[\d,]*\.?\d*|\.\d+)(?:e[-+]?\d+)?")
+
+with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as _f:
+    README = _f.read()
+PROSE = " ".join(README.split())  # prose patterns are written with single spaces
+
+
+def number(text):
+    return float(text.replace("−", "-").replace(",", "").replace("+", ""))
+
+
+def last_digit(text):
+    """The value of one unit in the last digit of a number as written ("2.7008" -> 1e-4, "4.2e-4" ->
+    1e-5, "96,000" -> 1)."""
+    text = text.replace("−", "-").replace(",", "")
+    mantissa, _, exponent = text.lower().partition("e")
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    return 10.0 ** (-decimals + (int(exponent) if exponent else 0))
+
+
+def gesweep(*args, check=True):
+    result = subprocess.run([GESWEEP, *args], capture_output=True, text=True, cwd=ROOT, timeout=900)
+    if check and result.returncode not in (0, 3):
+        raise AssertionError(f"gesweep {' '.join(args)} exited {result.returncode}: {result.stderr}")
+    return result.stdout
+
+
+def readme_command(line):
+    """A README command line as arguments for the binary; results/ paths go to the test's directory."""
+    words = shlex.split(line.split(" #")[0])
+    assert words[0] == "./build/gesweep", line
+    return [w.replace("results/", WORK + "/") for w in words[1:]]
+
+
+def claim(pattern):
+    """The groups of README's prose claim that `pattern` (single spaces) matches."""
+    match = re.search(pattern, PROSE)
+    assert match is not None, f"README no longer says /{pattern}/: update the claim and this test together"
+    return match.groupdict()
+
+
+class Checks(unittest.TestCase):
+    def agrees(self, quoted, value, units=ROUNDED, what=""):
+        tolerance = units * last_digit(quoted) * (1 + 1e-9)
+        self.assertLessEqual(abs(number(quoted) - value), tolerance,
+                             f"{what}: README says {quoted}, the engine gives {value!r} (tolerance {tolerance:g})")
+
+    def lines_agree(self, readme_line, engine_line):
+        try:
+            self.same_lines(readme_line, engine_line)
+            return True
+        except AssertionError:
+            return False
+
+    def same_lines(self, readme_line, engine_line):
+        """Text identical, numbers within LAST_DIGIT units of README's last digit."""
+        # Runs of spaces are one: a column's alignment follows its widest number.
+        self.assertEqual([" ".join(t.split()) for t in NUMBER.split(readme_line)],
+                         [" ".join(t.split()) for t in NUMBER.split(engine_line)],
+                         f"\nREADME: {readme_line}\nengine: {engine_line}")
+        for quoted, value in zip(NUMBER.findall(readme_line), NUMBER.findall(engine_line)):
+            self.agrees(quoted, number(value), LAST_DIGIT, f"in the line {readme_line.strip()!r}")
+
+
+def output_block_after(command):
+    """The commands of README's sh block holding `command`, and the plain block right after it."""
+    blocks = list(re.finditer(r"```(\w*)\n(.*?)```", README, re.S))
+    for i, block in enumerate(blocks):
+        if block.group(1) == "sh" and command in block.group(2):
+            following = blocks[i + 1]
+            assert following.group(1) == "" and README[block.end():following.start()].strip() == "", \
+                f"README's block of {command!r} is not followed by its output"
+            commands = [line for line in block.group(2).splitlines() if line.startswith("./build/gesweep")]
+            return commands, following.group(2).splitlines()
+    raise AssertionError(f"README no longer shows {command!r}")
+
+
+def boundary_rows(text):
+    """speed -> (H* or None, note) of a `gesweep boundary --archive` table."""
+    rows = {}
+    for line in text.splitlines():
+        if line.startswith("#") or "speed_mps" in line or not line.strip():
+            continue
+        fields = line.split()
+        speed = float(fields[0])
+        # "speed none none reason..." or "speed H* H*/b lower - upper [note...]"
+        rows[speed] = (None, " ".join(fields[3:])) if fields[1] == "none" else (float(fields[1]), " ".join(fields[6:]))
+    return rows
+
+
+def modes_json(speed, heights):
+    return json.loads(gesweep("modes", "--aircraft", ANCE, "--speed-mps", repr(speed), "--heights-m", heights,
+                              "--format", "json"))["rows"]
+
+
+class Fast(Checks):
+    def test_copied_output_blocks(self):
+        for command in ("--speed-mps 32.0208 --table-heights", "--speed-mps 32.0208 --no-h-derivatives"):
+            with self.subTest(block=command):
+                commands, expected = output_block_after(command)
+                printed = "".join(gesweep(*readme_command(c)) for c in commands).splitlines()
+                self.assertEqual(len(expected), len(printed), "\n".join(printed))
+                for readme_line, engine_line in zip(expected, printed):
+                    self.same_lines(readme_line, engine_line)
+
+    def test_map_h_terms_excerpt(self):
+        block = re.search(r"```\n(\$ \./build/gesweep run studies/map_h_terms\.toml.*?)```", README, re.S)
+        self.assertIsNotNone(block, "README no longer shows the map_h_terms run and boundary")
+        output, commands_seen = [], 0
+        for line in block.group(1).splitlines():
+            if line.startswith("$ "):
+                output = gesweep(*readme_command(line[2:])).splitlines()
+                commands_seen += 1
+                position = 0
+                continue
+            # An excerpt: each README line is one of the last command's lines, in order.
+            while position < len(output) and not self.lines_agree(line, output[position]):
+                position += 1
+            self.assertLess(position, len(output), f"README's line {line!r} is not in the output:\n" + "\n".join(output))
+            self.same_lines(line, output[position])
+            position += 1
+        self.assertEqual(commands_seen, 2)
+
+    def test_boundary_at_the_paper_speed(self):
+        said = claim(r"The engine finds the sign change of the largest real part at H\* = (?P<h>[\d.]+) m "
+                     r"\(H/b = (?P<r>[\d.]+)\) at the paper's speed")
+        line = gesweep("boundary", "--aircraft", ANCE, "--speed-mps", "32.0208").splitlines()[-1].split()
+        self.assertEqual(number(line[0]), PAPER_SPEED_MPS)
+        self.agrees(said["h"], number(line[1]), what="H*")
+        self.agrees(said["r"], number(line[2]), what="H*/b")
+
+    def test_the_table_row_at_half_the_span(self):
+        said = claim(r"at the table row H/b = 0\.5 it is just unstable \(σ = (?P<sigma>\+[\d.]+e-\d+) s⁻¹: the "
+                     r"phugoid, time to double (?P<minutes>\d+) min\), at H/b = 0\.578 stable")
+        half, above = modes_json(PAPER_SPEED_MPS, "2.5935,2.9987")
+        self.assertAlmostEqual(half["height_over_span"], 0.5, places=3)
+        self.agrees(said["sigma"], half["stability_margin_per_s"], what="σ at H/b = 0.5")
+        self.assertEqual(half["stability_margin_per_s"], half["modes"]["phugoid"]["re"], "σ is the phugoid's")
+        self.agrees(said["minutes"], half["modes"]["phugoid"]["time_to_half_or_double_s"] / 60, what="doubling")
+        self.assertEqual(f"{above['height_over_span']:.3f}", "0.578")
+        self.assertLess(above["stability_margin_per_s"], 0)
+        claim(r"The mode that goes unstable is the phugoid; the height \(subsidence\) root stays stable\.")
+        for row in modes_json(PAPER_SPEED_MPS, "0.7882,1.0374,1.2968,1.5561,2.0748,2.5935"):
+            self.assertGreater(row["modes"]["phugoid"]["re"], 0, row["height_m"])
+            self.assertLess(row["modes"]["height"]["re"], 0, row["height_m"])
+
+    def test_free_flight_phugoid_crossover(self):
+        said = claim(r"Below about (?P<u>[\d.]+) m/s the ANCE's phugoid is slightly unstable even in free flight")
+        low, high = 20.0, PAPER_SPEED_MPS
+        self.assertGreater(modes_json(low, "inf")[0]["stability_margin_per_s"], 0)
+        self.assertLess(modes_json(high, "inf")[0]["stability_margin_per_s"], 0)
+        while high - low > CROSSOVER_RESOLUTION_MPS:
+            middle = 0.5 * (low + high)
+            if modes_json(middle, "inf")[0]["stability_margin_per_s"] > 0:
+                low = middle
+            else:
+                high = middle
+        self.agrees(said["u"], 0.5 * (low + high), what="free-flight crossover speed")
+
+    def test_stability_map_paragraph(self):
+        said = claim(r"from (?P<u1>\d+) to (?P<u2>\d+) m/s it stays between (?P<hmin>[\d.]+) m \(at (?P<umin>[\d.]+) "
+                     r"m/s, (?P<pmin>−[\d.]+) % of the paper's 2\.5935 m\) and (?P<hmax>[\d.]+) m \(at "
+                     r"(?P<umax>[\d.]+) m/s, (?P<pmax>\+[\d.]+) %\); at the map's speed nearest the paper's, "
+                     r"(?P<unear>[\d.]+) m/s, it is (?P<hnear>[\d.]+) m; below (?P<ukink>[\d.]+) m/s it climbs "
+                     r"steeply, to (?P<htop>[\d.]+) m at (?P<utop>[\d.]+) m/s, and at (?P<ulast>[\d.]+) m/s and below "
+                     r"the phugoid is unstable at every height of the map, free flight included")
+        gesweep(*readme_command("./build/gesweep run studies/stability_map.toml -o results/stability_map.h5 -q"))
+        rows = boundary_rows(gesweep(*readme_command("./build/gesweep boundary --archive results/stability_map.h5")))
+        speeds = sorted(rows)
+        found = [(u, rows[u][0]) for u in speeds if rows[u][0] is not None]
+        window = [(u, h) for u, h in found if number(said["u1"]) <= u <= number(said["u2"])]
+        self.assertEqual(window[-1][0], number(said["u2"]))
+        u, h = min(window, key=lambda p: p[1])
+        self.agrees(said["hmin"], h, what="lowest H*")
+        self.agrees(said["umin"], u, what="speed of the lowest H*")
+        self.agrees(said["pmin"], 100 * (h / PAPER_BOUNDARY_M - 1), what="lowest H* against the paper's")
+        u, h = max(window, key=lambda p: p[1])
+        self.agrees(said["hmax"], h, what="highest H*")
+        self.agrees(said["umax"], u, what="speed of the highest H*")
+        self.agrees(said["pmax"], 100 * (h / PAPER_BOUNDARY_M - 1), what="highest H* against the paper's")
+        u = min(speeds, key=lambda s: abs(s - PAPER_SPEED_MPS))
+        self.agrees(said["unear"], u, what="map speed nearest the paper's")
+        self.agrees(said["hnear"], rows[u][0], what="H* there")
+        kink = min(speeds, key=lambda s: abs(s - number(said["ukink"])))
+        self.agrees(said["ukink"], kink, what="speed below which H* climbs steeply")
+        i = speeds.index(kink)
+        below = rows[speeds[i - 1]][0] - rows[kink][0]
+        above = rows[kink][0] - rows[speeds[i + 1]][0]
+        self.assertGreater(below, STEEP_RATIO * above, "the climb below the quoted speed is not steep")
+        u, h = found[0]
+        self.agrees(said["utop"], u, what="lowest speed with a boundary")
+        self.agrees(said["htop"], h, what="H* there")
+        unstable = [s for s in speeds if rows[s][0] is None]
+        self.assertTrue(all("unstable at every grid height" in rows[s][1] for s in unstable), rows)
+        self.assertEqual(unstable, speeds[:len(unstable)])
+        self.agrees(said["ulast"], unstable[-1], what="highest speed unstable at every height")
+        self.assertGreater(modes_json(unstable[-1], "inf")[0]["stability_margin_per_s"], 0, "free flight")
+
+    def test_run_counts(self):
+        def runs(study):
+            # the dry run's "design  grid, 96000 runs" line
+            return int(re.search(r"^design\b.*?(\d+) runs", gesweep("run", study, "--dry-run"), re.M).group(1))
+        stability_map, sobol = runs("studies/stability_map.toml"), runs("studies/sensitivity_boundary.toml")
+        self.agrees(claim(r"# (?P<n>[\d,]+) modes runs")["n"], stability_map)
+        self.agrees(claim(r"the (?P<n>[\d,]+)-run stability map")["n"], stability_map)
+        self.agrees(claim(r"a (?P<n>[\d,]+)-run Sobol study of H\*")["n"], sobol)
+        self.agrees(claim(r"N = \d+, (?P<n>[\d,]+) boundary runs")["n"], sobol)
+
+    def test_local_sensitivities(self):
+        said = claim(r"At the paper's speed the largest are CDo \((?P<CDo>−[\d.]+) m\), speed \((?P<speed>−[\d.]+) m\), "
+                     r"CLo \((?P<CLo>\+[\d.]+) m\), Iy \((?P<Iy>\+[\d.]+) m\), CMα \((?P<CMalpha>−[\d.]+) m\) and CLα "
+                     r"\((?P<CLalpha>\+[\d.]+) m\); CLh contributes (?P<CLh>\+[\d.]+) m and CMh almost nothing, so 10 % "
+                     r"more parasite drag lowers the boundary by about (?P<drag>[\d.]+) m and 10 % more CLh raises it by "
+                     r"(?P<clh_cm>\d+) cm")
+        effect = {}
+        text = gesweep(*readme_command(
+            "./build/gesweep boundary --aircraft studies/aircraft/ance.toml --speed-mps 32.0208 --sensitivities"))
+        for line in text.splitlines():
+            # "parameter value dH*/dp unit p_dH*/dp_m dsigma/dp_per_s"; a unit may hold a space
+            fields = line.split()
+            if len(fields) >= 6 and not line.startswith("#") and NUMBER.fullmatch(fields[-2]):
+                effect[fields[0]] = float(fields[-2])
+        names = {"CDo": "scale.CDo", "speed": "speed_mps", "CLo": "scale.CLo", "Iy": "pitch_inertia_kgm2",
+                 "CMalpha": "scale.CMalpha", "CLalpha": "scale.CLalpha", "CLh": "scale.CLh"}
+        for key, parameter in names.items():
+            self.agrees(said[key], effect[parameter], what=parameter)
+        ranked = sorted(effect, key=lambda p: -abs(effect[p]))
+        self.assertEqual(set(ranked[:6]), {names[k] for k in ("CDo", "speed", "CLo", "Iy", "CMalpha", "CLalpha")})
+        self.assertLess(abs(effect["scale.CMh"]), NEGLIGIBLE * abs(effect[ranked[0]]))
+        self.agrees(said["drag"], -0.1 * effect["scale.CDo"], what="10 % more CDo")
+        self.agrees(said["clh_cm"], 100 * 0.1 * effect["scale.CLh"], what="10 % more CLh")
+
+    def test_open_loop_table(self):
+        command = claim(r"```sh (?P<c>\./build/gesweep simulate .*? --format json) ```")["c"].replace(" \\ ", " ")
+        args = readme_command(command)
+        rows = re.findall(r"^\| ([\d., ]+) \| (.*?) \| .*? \|$", README.split("**The engine's finding beside the "
+                                                                          "paper's** (ten start heights")[1], re.M)
+        self.assertEqual(sum(len(h.split(",")) for h, _ in rows), 10, rows)
+        summaries = {}
+        for heights, engine in rows:
+            for h in heights.split(","):
+                run = list(args)
+                run[run.index("--height-m") + 1] = h.strip()
+                summaries[h.strip()] = json.loads(gesweep(*run))["summary"]
+            quoted_times = re.findall(r"touchdown at ([\d., ]+) s", engine)
+            if quoted_times:
+                times = [t.strip() for t in quoted_times[0].split(",")]
+                self.assertEqual(len(times), len(heights.split(",")))
+                for h, t in zip(heights.split(","), times):
+                    self.assertEqual(summaries[h.strip()]["end_event"], "touchdown", h)
+                    self.agrees(t, summaries[h.strip()]["end_time_s"], what=f"touchdown from {h.strip()} m")
+            if "airborne" in engine:
+                for h in heights.split(","):
+                    self.assertEqual(summaries[h.strip()]["end_event"], "time_limit", h)
+                    end = re.search(r"airborne at ([\d.]+) s", engine)
+                    if end:
+                        self.agrees(end.group(1), summaries[h.strip()]["end_time_s"], what=f"end from {h.strip()} m")
+            dip = re.search(r"dips to ([\d.]+) m at ([\d.]+) s", engine)
+            if dip:
+                summary = summaries[heights.strip()]
+                self.agrees(dip.group(1), summary["min_height_m"], what="dip")
+                self.agrees(dip.group(2), summary["min_height_time_s"], what="time of the dip")
+                ratio = claim(r"the engine's first dip is (?P<n>\w+) times the paper's")["n"]
+                start = float(heights)
+                self.agrees(str(["one", "two", "three", "four", "five"].index(ratio) + 1),
+                            (start - summary["min_height_m"]) / (start - PAPER_FIG4_DIP_M), what="dip ratio")
+
+    def test_landing(self):
+        said = claim(r"The engine lands both ways: with h-derivatives at (?P<t1>[\d.]+) s with a sink rate of "
+                     r"(?P<s1>[\d.]+) m/s, without them at (?P<t2>[\d.]+) s with (?P<s2>[\d.]+) m/s")
+
+        def land(*extra):
+            lines = gesweep("land", "--aircraft", ANCE, "--summary-only", *extra).splitlines()
+            return dict(zip(lines[0].split(","), lines[1].split(",")))
+        for flags, time_key, sink_key in (((), "t1", "s1"), (("--no-h-derivatives",), "t2", "s2")):
+            summary = land(*flags)
+            self.assertEqual(summary["outcome"], "landed")
+            self.agrees(said[time_key], float(summary["touchdown_time_s"]), what=f"touchdown {flags}")
+            self.agrees(said[sink_key], float(summary["touchdown_sink_rate_mps"]), what=f"sink rate {flags}")
+        claim(r"\(`--plant-height-reference fixed --plant-reference-height-m 500`\), the h-term becomes a large "
+              r"force near the ground and the run diverges")
+        self.assertEqual(land("--plant-height-reference", "fixed", "--plant-reference-height-m", "500")["outcome"],
+                         "diverged")
+
+
+class Sobol(Checks):
+    def test_sobol_paragraph(self):
+        said = claim(r"the boundary height H\* is set by CMα \(total Sobol index (?P<CMalpha>[\d.]+), 95 % interval "
+                     r"(?P<CMalpha_lo>[\d.]+)–(?P<CMalpha_hi>[\d.]+)\), the pitch inertia Iy \((?P<Iy>[\d.]+), "
+                     r"(?P<Iy_lo>[\d.]+)–(?P<Iy_hi>[\d.]+)\) and CLα \((?P<CLalpha>[\d.]+), (?P<CLalpha_lo>[\d.]+)–"
+                     r"(?P<CLalpha_hi>[\d.]+)\), which interact strongly, while CDh through k \((?P<k>[\d.]+)\) and CLh "
+                     r"\((?P<CLh>[\d.]+)\) matter little and CMq, CMα̇ and CMh not at all \(N = (?P<n>\d+)")
+        commands = re.search(r"```sh\n(\./build/gesweep run studies/sensitivity_boundary\.toml.*?)```", README, re.S)
+        self.assertIsNotNone(commands, "README no longer shows the Sobol commands")
+        text = ""
+        for line in commands.group(1).splitlines():
+            text = gesweep(*readme_command(line))
+        indices = {}
+        for line in text.splitlines():
+            match = re.match(r"\s+(\S+)\s+(\S+)\s+\[(\S+), (\S+)\]\s+(\S+)\s+\[(\S+), (\S+)\]", line)
+            if match:
+                indices[match.group(1)] = [float(v) for v in match.groups()[1:]]
+        self.assertIn(f"N = {said['n']} base samples", text)
+        names = {"CMalpha": "scale.CMalpha", "Iy": "pitch_inertia_kgm2", "CLalpha": "scale.CLalpha"}
+        for key, parameter in names.items():
+            first, _, _, total, low, high = indices[parameter]
+            self.agrees(said[key], total, what=f"S_T of {parameter}")
+            self.agrees(said[key + "_lo"], low, what=f"S_T interval of {parameter}")
+            self.agrees(said[key + "_hi"], high, what=f"S_T interval of {parameter}")
+            self.assertGreater(total - first, STRONG_INTERACTION, f"{parameter} interacts strongly")
+        self.agrees(said["k"], indices["scale.k"][3], what="S_T of k")
+        self.agrees(said["CLh"], indices["scale.CLh"][3], what="S_T of CLh")
+        for parameter in ("scale.CMq", "scale.CMalphadot", "scale.CMh"):
+            self.assertLess(indices[parameter][3], NEGLIGIBLE, f"{parameter}: 'not at all'")
+
+
+if __name__ == "__main__":
+    suite = unittest.defaultTestLoader.loadTestsFromTestCase(Fast if PART == "fast" else Sobol)
+    result = unittest.TextTestRunner(verbosity=2).run(suite)
+    shutil.rmtree(WORK, ignore_errors=True)
+    sys.exit(0 if result.wasSuccessful() else 1)
