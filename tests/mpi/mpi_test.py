@@ -18,7 +18,10 @@ RunStudyMpi directly, or `gesweep run --mpi`), and requires:
   - a second MPI run into the existing archive is refused (exit 2, one error line, archive intact);
   - `--resume` of the complete run computes nothing and leaves the archive equal to the reference;
   - an MPI run stopped by SIGTERM (a longer study) leaves resumable node shards whose `--resume`
-    under MPI equals the reference.
+    under MPI equals the reference;
+  - an MPI run SIGKILLed mid-run (mpirun and every rank, its process group) leaves node shards that
+    open as snapshots (h5py, swmr=True) holding only correct complete runs, and `--resume` under MPI
+    completes them into an archive equal to the reference (crash safety per node writer).
 Exit 0 pass, 1 fail.
 """
 
@@ -203,6 +206,50 @@ def check_interrupted(args, study, work):
     print(f"SIGTERM mid-run: exit {process.returncode}, archive closed; --resume under MPI: equal to the reference")
 
 
+def check_killed(args, study, work):
+    """SIGKILL to mpirun and every rank mid-run, then --resume under MPI: equal to the reference."""
+    import h5py
+    import numpy as np
+    reference = os.path.join(work, "interrupted-reference.h5")  # made by check_interrupted
+    candidate = os.path.join(work, "killed.h5")
+    shards = node_shards(candidate, 2)
+    process = subprocess.Popen(mpi_command(args, study, candidate), cwd=ROOT, env=mpi_env(), start_new_session=True,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + TIMEOUT_S
+    complete = 0
+    while process.poll() is None and time.monotonic() < deadline and complete < 500:
+        time.sleep(0.05)
+        try:
+            complete = 0
+            for shard in shards:
+                with h5py.File(shard, "r", swmr=True) as f:
+                    complete += int((f["runs/status"][()] != 0).sum())
+        except (OSError, KeyError):
+            complete = 0
+    os.killpg(os.getpgid(process.pid), signal.SIGKILL)
+    process.wait(timeout=TIMEOUT_S)
+    if complete < 500:
+        raise Failure(f"the MPI run ended (or wrote nothing) before it could be killed ({complete} runs complete)")
+    with h5py.File(reference, "r") as ref:
+        expected = ref["results/boundary/height_m"][()]
+        for shard in shards:
+            with h5py.File(shard, "r", swmr=True) as f:
+                first = int(f.attrs["first_run"])
+                status = f["runs/status"][()]
+                done = status != 0
+                got = f["results/boundary/height_m"][()][done]
+                want = expected[first:first + len(status)][done]
+                if got.tobytes() != want.tobytes():
+                    raise Failure(f"{shard}: complete runs differ from the reference after SIGKILL")
+    resumed = run(mpi_command(args, study, candidate, ["--resume"]), env=mpi_env(), check_codes=(0, 3))
+    if "resuming:" not in resumed.stderr:
+        raise Failure(f"the resumed run did not report resuming:\n{resumed.stderr}")
+    check_layout("killed", candidate, 2, virtual=True)
+    compare(reference, candidate)
+    print(f"SIGKILL mid-run ({complete} runs complete in the node shards): snapshots correct; --resume under MPI: "
+          f"equal to the reference")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--gesweep", required=True)
@@ -223,6 +270,7 @@ def main():
             for study, spread_required in STUDIES:
                 check_study(args, study, spread_required, work)
             check_interrupted(args, INTERRUPT_STUDY, work)
+            check_killed(args, INTERRUPT_STUDY, work)
     except (Failure, subprocess.TimeoutExpired) as e:
         print(f"FAIL: {e}", file=sys.stderr)
         return 1
