@@ -35,7 +35,7 @@ std::string_view ToString(SensitivityStatus status) {
     case SensitivityStatus::kTooFewBlocks: return "too_few_blocks";
     case SensitivityStatus::kZeroVariance: return "zero_variance";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 ConfidenceInterval PercentileInterval(std::vector<double> statistics, double confidence_level) {

@@ -180,7 +180,7 @@ std::string_view ToString(DesignKind kind) {
     case DesignKind::kMorris:
       return "morris";
   }
-  return "?";
+  GESWEEP_UNREACHABLE();
 }
 
 std::string_view ToString(Distribution distribution) {
