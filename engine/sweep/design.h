@@ -6,7 +6,7 @@
 ///  - grid:   the cartesian product of its axes, the last axis varying fastest (C order);
 ///  - list:   explicit rows (inline or from CSV);
 ///  - lhs:    Latin hypercube, seeded (a keyed Feistel permutation per dimension, cycle-walked);
-///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (layout below);
+///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (row layout: see below);
 ///  - morris: r trajectories of D+1 rows, p levels, seeded (Morris 1991).
 ///
 /// These are the only designs of the project: the sensitivity estimators of engine/analysis are fed,
