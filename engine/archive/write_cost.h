@@ -1,7 +1,8 @@
 #pragma once
-/// The writer's share of a sweep's time, for the dry run's estimate (docs/sweep.md, "Dry run"): a
-/// cheap analysis (modes: microseconds per run) is bound by the one writer thread (shuffle, deflate
-/// and checksums of every column, two flushes per batch), not by the workers.
+/// The archive's share of a sweep's time, for the dry run's estimate (docs/sweep.md, "Dry run"): for a
+/// cheap analysis (modes: microseconds per run) encoding the batches (shuffle, deflate and checksums
+/// of every column, done by the workers) costs as much as the runs, and the one writer thread stores
+/// the encoded chunks (two flushes per batch).
 
 #include <filesystem>
 
@@ -11,16 +12,17 @@ namespace gesweep {
 
 /// What MeasureWriteCost measured.
 struct WriteCostEstimate {
-  double seconds_per_run = 0;  ///< the writer thread's time per run (0 when not measured)
+  double seconds_per_run = 0;  ///< the writer thread's time per run, storing (0 when not measured)
   double seconds_per_run_low = 0;   ///< 95 % interval of it (equal to it with fewer than 3 batches)
   double seconds_per_run_high = 0;
+  double encode_seconds_per_run = 0;  ///< a worker's time per run encoding its batch (0 when not measured)
   std::int64_t runs_written = 0;
   bool measured = false;       ///< false: skipped (`compute_budget_s` too small for one real batch)
 };
 
 /// Computes one real batch of `plan` (its first batch's runs, so the data compress as the sweep's
 /// will), when that takes less than `compute_budget_s` on one thread at `seconds_per_run_compute`,
-/// then writes it as several batches of a scratch archive in a fresh temporary directory
+/// then encodes it (timed: the workers' share) and writes it as several batches of a scratch archive in a fresh temporary directory
 /// (std::filesystem::temp_directory_path) with the real writer, timing the writes until
 /// `write_budget_s` is spent (at least one), and deletes the directory. Nothing is written near the
 /// sweep's own archive. Throws ArchiveError when the scratch archive cannot be written.

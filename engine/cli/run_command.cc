@@ -183,10 +183,13 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
     }
   }
   const double runs = static_cast<double>(plan.run_count());
-  const double estimate_s = runs * WallPerRun(cost.seconds_per_run, write.seconds_per_run, threads);
-  const double low_s = runs * WallPerRun(cost.seconds_per_run_low, write.seconds_per_run_low, threads);
-  const double high_s =
-      cost.lower_bound ? INFINITY : runs * WallPerRun(cost.seconds_per_run_high, write.seconds_per_run_high, threads);
+  // The workers run and encode; the writer thread stores.
+  const double encode = write.encode_seconds_per_run;
+  const double estimate_s = runs * WallPerRun(cost.seconds_per_run + encode, write.seconds_per_run, threads);
+  const double low_s = runs * WallPerRun(cost.seconds_per_run_low + encode, write.seconds_per_run_low, threads);
+  const double high_s = cost.lower_bound ? INFINITY
+                                         : runs * WallPerRun(cost.seconds_per_run_high + encode,
+                                                             write.seconds_per_run_high, threads);
   const auto& storage = plan.storage();
   const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
@@ -207,6 +210,8 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
         {"seconds_per_run", cost.seconds_per_run},
         {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
         {"write_seconds_per_run", write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
+        {"encode_seconds_per_run",
+         write.measured ? nlohmann::json(write.encode_seconds_per_run) : nlohmann::json(nullptr)},
         {"calibration_runs", cost.timed_runs},
         {"warmup_runs", cost.warmup_runs},
         {"measured_seconds", cost.measured_s},
@@ -246,7 +251,8 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
               << per_run << " per run on a thread, from " << cost.timed_runs << " sample run"
               << (cost.timed_runs == 1 ? "" : "s") << " after " << cost.warmup_runs << " warm-up";
     if (write.measured) {
-      std::cout << "; writing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
+      std::cout << "; encoding " << ShortNumber(std::round(write.encode_seconds_per_run * 1e8) / 100)
+                << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
     } else {
       std::cout << "; writing not measured";
     }
