@@ -264,9 +264,11 @@ BENCHMARK(BM_Balance);
 // --- One boundary search (MODEL.md §6) at 32.0208 m/s: the certified Hurwitz finder (default) and
 // the former sampled search (σ at ~280 heights, TOMS 748 at the sign change), side by side ---
 
-void RunBoundary(benchmark::State& state, BoundaryMethod method) {
+void RunBoundary(benchmark::State& state, BoundaryMethod method,
+                 EigenvalueSolver solver = EigenvalueSolver::kFixedSize) {
   BoundaryOptions options;
   options.method = method;
+  options.eigenvalue_solver = solver;
   BoundaryResult result;
   for (auto _ : state) {
     result = FindBoundary(Model(), kSpeed_mps, options);
@@ -281,6 +283,12 @@ void BM_Boundary(benchmark::State& state) { RunBoundary(state, BoundaryMethod::k
 BENCHMARK(BM_Boundary)->Unit(benchmark::kMicrosecond);
 void BM_BoundarySampled(benchmark::State& state) { RunBoundary(state, BoundaryMethod::kSampled); }
 BENCHMARK(BM_BoundarySampled)->Unit(benchmark::kMicrosecond);
+// The sampled search exactly as it was before issue 16 (Eigen's EigenSolver for every σ): the
+// reference of the issue's target (1/20 of it).
+void BM_BoundarySampledEigen(benchmark::State& state) {
+  RunBoundary(state, BoundaryMethod::kSampled, EigenvalueSolver::kEigen);
+}
+BENCHMARK(BM_BoundarySampledEigen)->Unit(benchmark::kMicrosecond);
 
 // The Hurwitz finder's unit of work: one characteristic polynomial of A (Hessenberg + recurrence).
 void BM_CharacteristicPolynomial(benchmark::State& state) {
