@@ -62,7 +62,7 @@ void ValidateBootstrapOptions(const BootstrapOptions& options, const std::string
                      "expected a number of resamples >= 0 (0: no confidence intervals)");
   }
   if (!(options.confidence_level > 0.0 && options.confidence_level < 1.0)) {
-    throw InputError(source, "confidence_level", std::to_string(options.confidence_level),
+    throw InputError(source, "confidence_level", ShortNumber(options.confidence_level),
                      "expected a level strictly between 0 and 1, e.g. 0.95");
   }
 }

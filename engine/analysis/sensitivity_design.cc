@@ -24,11 +24,11 @@ void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string
       throw InputError(source, range.name, "", "parameter listed twice; expected distinct names");
     }
     if (!std::isfinite(range.lower) || !std::isfinite(range.upper) || !(range.lower < range.upper)) {
-      throw InputError(source, range.name, "[" + std::to_string(range.lower) + ", " + std::to_string(range.upper) + "]",
+      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
                        "expected finite bounds with lower < upper");
     }
     if (range.log_uniform && !(range.lower > 0.0)) {
-      throw InputError(source, range.name, "[" + std::to_string(range.lower) + ", " + std::to_string(range.upper) + "]",
+      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
                        "expected 0 < lower for a log-uniform parameter");
     }
   }

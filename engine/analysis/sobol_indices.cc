@@ -173,7 +173,7 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
   result.output_variance = variance;
   if (!(variance > 0.0)) {
     result.status = SensitivityStatus::kZeroVariance;
-    result.message = "the output is the same in every used run (" + std::to_string(mean) +
+    result.message = "the output is the same in every used run (" + ShortNumber(mean) +
                      "); its sensitivity indices are undefined";
     return result;
   }

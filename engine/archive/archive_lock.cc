@@ -8,10 +8,13 @@
 #include <cstring>
 
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 
 namespace gesweep {
 
 ArchiveLock ArchiveLock::Acquire(const std::filesystem::path& archive, const std::string& retry_hint) {
+  // Before the lock file is made beside it: a device or a FIFO is no archive to write into.
+  RequireRegularFile(archive, "archive");
   ArchiveLock lock;
   lock.lock_path_ = archive.string() + ".lock";
   std::error_code ec;

@@ -8,6 +8,7 @@
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 
 namespace gesweep {
 namespace {
@@ -55,17 +56,13 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
   if (!std::filesystem::is_directory(directory, ec)) {
     throw InputError("command line", "-o", shown, "the directory " + directory.string() + " does not exist");
   }
-  if (std::filesystem::is_directory(output, ec)) {
-    throw InputError("command line", "-o", shown,
-                     "is a directory; expected an archive file name such as all.h5");
-  }
+  // The one output check of every command (engine/common/output_guard.h): not an input (the same
+  // file, a hard link or a symlink to it), and a regular file when it exists.
+  std::vector<NamedInput> named;
+  for (const auto& input : inputs) named.push_back({input, "shard archive"});
+  CheckOutputPath(output, OutputKind::kFile, named, "-o", {output.string() + ".partial"});
   if (std::filesystem::exists(output, ec) && !force) {
     throw InputError("command line", "-o", shown, "already exists; pass --force to replace it");
-  }
-  for (const auto& input : inputs) {
-    if (std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec)) {
-      throw InputError("command line", "-o", shown, "is also one of the inputs");
-    }
   }
 
   // Open every shard and check it belongs.

@@ -1,13 +1,16 @@
 #include "engine/archive/archive_reader.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <sstream>
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_writer.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
@@ -30,22 +33,143 @@ herr_t CollectDataset(hid_t, const char* name, const H5O_info_t* info, void* dat
   return 0;
 }
 
+// The physical and the recorded size of a file HDF5 refused as truncated, from its message
+// ("truncated file: eof = 3145728, sblock->base_addr = 0, stored_eof = 3390612"), when it is that.
+std::optional<std::pair<std::uintmax_t, std::uintmax_t>> TruncatedSizes(const std::string& error) {
+  const auto eof = error.find("truncated file: eof = ");
+  const auto stored = error.find("stored_eof = ");
+  if (eof == std::string::npos || stored == std::string::npos) return std::nullopt;
+  const std::uintmax_t actual = std::strtoull(error.c_str() + eof + 22, nullptr, 10);
+  const std::uintmax_t recorded = std::strtoull(error.c_str() + stored + 13, nullptr, 10);
+  if (recorded <= actual) return std::nullopt;
+  return std::make_pair(actual, recorded);
+}
+
+// Read attempts of a metadata block in a snapshot (SWMR read) open; see ArchiveReader::Open.
+constexpr unsigned kSnapshotReadAttempts = 24;
+
+bool StartsWith(const std::string& text, const std::string& prefix) {
+  return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
+}
+
+// The layout every reader relies on (schemas/archive.md), checked from metadata alone when an archive
+// is opened, so that a damaged or foreign file is refused with one line (exit 2) instead of failing
+// later in a reader: the root attributes the readers use, runs/ and design/ present, and every
+// per-run dataset one row per run, of a type its readers can convert.
+void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_count) {
+  auto refuse = [&shown](const std::string& key, const std::string& value, const std::string& why) {
+    throw InputError(shown, key, value, why + " (a damaged archive, or one not written by gesweep)");
+  };
+  auto integer = [&](const char* name) {
+    std::optional<std::int64_t> value;
+    try {
+      value = hdf5::ReadIntegerAttribute(file, name);
+    } catch (const ArchiveError&) {
+      refuse(name, "", "expected an integer root attribute");
+    }
+    if (!value) refuse(name, "", "missing root attribute");
+    return *value;
+  };
+  const std::int64_t runs = integer("run_count");
+  const std::int64_t design_runs = integer("design_runs");
+  const std::int64_t first_run = integer("first_run");
+  const std::int64_t chunk_runs = integer("chunk_runs");
+  if (runs < 0) refuse("run_count", std::to_string(runs), "expected a run count >= 0");
+  if (chunk_runs < 1) refuse("chunk_runs", std::to_string(chunk_runs), "expected a batch size >= 1");
+  if (first_run < 0 || design_runs < 0 || first_run > design_runs || runs > design_runs - first_run) {
+    refuse("first_run", std::to_string(first_run),
+           "expected first_run + run_count <= design_runs = " + std::to_string(design_runs));
+  }
+  for (const char* group : {archive::kRunsGroup, archive::kDesignGroup}) {
+    H5O_info_t info{};
+    if (!hdf5::Exists(file, group) || H5Oget_info_by_name2(file, group, &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0 ||
+        info.type != H5O_TYPE_GROUP) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(group, "", "missing group /" + std::string(group));
+    }
+  }
+  std::vector<std::string> datasets;
+  if (H5Ovisit2(file, H5_INDEX_NAME, H5_ITER_INC, CollectDataset, &datasets, H5O_INFO_BASIC) < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    refuse("", "", "cannot list its datasets");
+  }
+  bool seen[4] = {false, false, false, false};
+  const char* required[4] = {archive::kRunIndex, archive::kRunId, archive::kRunStatus, archive::kRunMessage};
+  for (const std::string& path : datasets) {
+    const bool runs_group = StartsWith(path, std::string(archive::kRunsGroup) + "/");
+    const bool design_group = StartsWith(path, std::string(archive::kDesignGroup) + "/");
+    const bool results_group = StartsWith(path, std::string(archive::kResultsGroup) + "/");
+    const bool series_group = StartsWith(path, std::string(archive::kSeriesGroup) + "/");
+    if (!runs_group && !design_group && !results_group && !series_group) continue;
+    const hid_t raw = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+    if (raw < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "cannot open the dataset");
+    }
+    Handle dataset(raw);
+    // A series group holds the shared time axes too (one value per sample, not per run).
+    if (series_group && H5Aexists(dataset.get(), "time_axis") <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      continue;
+    }
+    const hid_t space_id = H5Dget_space(dataset.get());
+    const hid_t type_id = H5Dget_type(dataset.get());
+    Handle space(space_id), type(type_id);
+    if (space_id < 0 || type_id < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "cannot read the dataset's shape or type");
+    }
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    hsize_t dims[2] = {0, 0};
+    if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
+      H5Eclear2(H5E_DEFAULT);
+      refuse(path, "", "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
+    }
+    if (static_cast<std::int64_t>(dims[0]) != runs) {
+      refuse(path, std::to_string(dims[0]) + " rows",
+             "expected one row per run: run_count = " + std::to_string(runs) + " (runs/status has " +
+                 (runs >= 0 ? std::to_string(runs) : std::string("?")) + ")");
+    }
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    const bool number = type_class == H5T_INTEGER || type_class == H5T_FLOAT;
+    bool ok = true;
+    std::string wanted;
+    if (path == archive::kRunMessage) {
+      ok = type_class == H5T_STRING && rank == 1;
+      wanted = "one string per run";
+    } else if (runs_group) {
+      ok = type_class == H5T_INTEGER && rank == 1;
+      wanted = "one integer per run";
+    } else if (design_group) {
+      ok = number && rank == 1;
+      wanted = "one number per run";
+    } else {
+      ok = number || (type_class == H5T_COMPOUND && results_group);
+      wanted = "numbers";
+    }
+    if (!ok) refuse(path, "", "expected " + wanted + ", found another type or shape");
+    for (int k = 0; k < 4; ++k) seen[k] = seen[k] || path == required[k];
+  }
+  for (int k = 0; k < 4; ++k) {
+    if (!seen[k]) refuse(required[k], "", "missing dataset /" + std::string(required[k]));
+  }
+  *run_count = runs;
+}
+
 }  // namespace
 
 ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
     : path_(std::move(path)), file_(std::move(file)), snapshot_(snapshot) {}
 
-ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
+ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair_truncated) {
   hdf5::Quiet();
   const std::string shown = path.string();
-  std::error_code ec;
-  const bool exists = std::filesystem::exists(path, ec);
-  if (ec) throw InputError(shown, "", "", "cannot read the archive: " + ec.message());
-  if (!exists) throw InputError(shown, "", "", "no such archive");
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(shown, "", "", "is a directory, not an archive");
-  if (H5Fis_hdf5(path.c_str()) <= 0)
+  // Before HDF5 sees it: a FIFO or a device would block H5Fis_hdf5 for ever or never end.
+  RequireRegularFile(path, "archive");
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    H5Eclear2(H5E_DEFAULT);
     throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
+  }
   Handle fapl = hdf5::FileAccess();
   bool snapshot = false;
   hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
@@ -53,29 +177,58 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path) {
   if (id < 0) {
     first_error = hdf5::LastError();
     H5Eclear2(H5E_DEFAULT);
-    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot.
+    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot. An SWMR
+    // reader re-reads a metadata block whose checksum fails (a writer may be rewriting it), sleeping
+    // 1 ns, 2 ns, 4 ns, ... between attempts; HDF5's default of 100 attempts sleeps for hours on a
+    // damaged file (fuzz_archive: opens that never returned). 24 attempts sleep 17 ms in all, far
+    // longer than a writer takes to flush one block.
+    Check(H5Pset_metadata_read_attempts(fapl.get(), kSnapshotReadAttempts), "metadata read attempts");
     id = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get());
     snapshot = id >= 0;
     H5Eclear2(H5E_DEFAULT);
   }
   if (id < 0) {
+    // A write that failed half-way (disk full, a file-size limit) leaves the file shorter than the
+    // size HDF5 recorded for it: "truncated file: eof = A, ..., stored_eof = B".
+    const auto truncated = TruncatedSizes(first_error);
+    if (truncated && repair_truncated) {
+      // The writer resuming it reads only its complete batches (statuses first, metadata checksummed)
+      // into a fresh file that replaces it; the missing tail, zeros, belongs to the batch that failed.
+      std::error_code ec;
+      if (std::filesystem::file_size(path, ec) == truncated->first && !ec) {
+        std::filesystem::resize_file(path, truncated->second, ec);
+        if (!ec) return Open(path, /*repair_truncated=*/false);
+      }
+    }
+    if (truncated) {
+      throw InputError(shown, "", "",
+                       "the file is " + std::to_string(truncated->second - truncated->first) +
+                           " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
+                           "batches are kept: gesweep run STUDY -o " + shown + " --resume repairs it and goes on");
+    }
     throw InputError(shown, "", "",
                      "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
                          "); if no gesweep is writing it, it may be damaged");
   }
   ArchiveReader reader(path, Handle(id), snapshot);
-  const auto format = hdf5::ReadStringAttribute(id, "format");
+  std::optional<std::string> format;
+  std::optional<std::int64_t> version;
+  try {
+    format = hdf5::ReadStringAttribute(id, "format");
+    version = hdf5::ReadIntegerAttribute(id, "format_version");
+  } catch (const ArchiveError&) {
+    H5Eclear2(H5E_DEFAULT);
+  }
   if (!format || *format != archive::kFormatName) {
     throw InputError(shown, "format", format.value_or(""),
                      "not a gesweep archive (no format = \"gesweep-archive\")");
   }
-  const auto version = hdf5::ReadIntegerAttribute(id, "format_version");
   if (!version || *version > archive::kFormatVersion) {
     throw InputError(shown, "format_version", version ? std::to_string(*version) : "",
                      "expected format version <= " + std::to_string(archive::kFormatVersion) +
                          " (this engine is older than the archive)");
   }
-  reader.run_count_ = reader.IntegerAttribute("run_count");
+  ValidateLayout(id, shown, &reader.run_count_);
   return reader;
 }
 
@@ -130,6 +283,22 @@ std::vector<std::int8_t> ArchiveReader::ReadStatus(std::int64_t first, std::int6
 std::vector<std::string> ArchiveReader::ReadMessages(std::int64_t first, std::int64_t count) const {
   Handle dataset(H5Dopen2(file_.get(), archive::kRunMessage, H5P_DEFAULT), "open runs/message");
   Handle type(H5Dget_type(dataset.get()), "type of runs/message");
+  if (H5Tis_variable_str(type.get()) > 0) {
+    // Variable-length strings: HDF5 allocates each one; they are copied and given back.
+    Handle memory_type(H5Tcopy(H5T_C_S1), "string type");
+    Check(H5Tset_size(memory_type.get(), H5T_VARIABLE), "string size");
+    Check(H5Tset_cset(memory_type.get(), H5Tget_cset(type.get())), "string charset");
+    std::vector<char*> pointers(static_cast<std::size_t>(count), nullptr);
+    Handle memory;
+    Handle space = hdf5::SelectRows(dataset.get(), first, count, &memory);
+    Check(H5Dread(dataset.get(), memory_type.get(), memory.get(), space.get(), H5P_DEFAULT, pointers.data()),
+          "read runs/message of " + path_.string());
+    std::vector<std::string> messages;
+    messages.reserve(pointers.size());
+    for (const char* text : pointers) messages.emplace_back(text != nullptr ? text : "");
+    H5Dvlen_reclaim(memory_type.get(), memory.get(), H5P_DEFAULT, pointers.data());
+    return messages;
+  }
   const std::size_t length = H5Tget_size(type.get());
   std::vector<char> buffer(static_cast<std::size_t>(count) * length);
   ReadRows(archive::kRunMessage, first, count, type.get(), buffer.data());

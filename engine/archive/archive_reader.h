@@ -18,10 +18,18 @@ class ArchiveWriter;
 /// A read-only view of one archive.
 class ArchiveReader {
  public:
-  /// Opens an archive. Throws InputError (source = the path) when it is missing, not HDF5, not a
-  /// gesweep archive, of a newer format version, or cannot be opened at all (e.g. a writer is
-  /// setting it up right now: "archive in use").
-  static ArchiveReader Open(const std::filesystem::path& path);
+  /// Opens an archive. Throws InputError (source = the path) when it is missing, not a regular file
+  /// (a FIFO or a device is refused before anything reads it), not HDF5, not a gesweep archive, of
+  /// a newer format version, cannot be opened at all (e.g. a writer is setting it up right now:
+  /// "archive in use"), or breaks the layout its readers rely on: a root attribute they use missing
+  /// (run_count, design_runs, first_run, chunk_runs), runs/ or design/ missing, a per-run dataset
+  /// (runs/, design/, results/, the series) without one row per run or of a type its readers cannot
+  /// convert. Every reader (query, boundary, report, sensitivity, merge, resume) goes through it.
+  /// A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size limit)
+  /// is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
+  /// with zeros to its recorded size and opened as a snapshot, whose complete batches the resume
+  /// copies into a fresh archive.
+  static ArchiveReader Open(const std::filesystem::path& path, bool repair_truncated = false);
 
   ArchiveReader(ArchiveReader&&) = default;
   ArchiveReader& operator=(ArchiveReader&&) = default;

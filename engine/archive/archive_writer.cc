@@ -513,7 +513,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   std::string original_start;
   std::string resumed_at;
   if (exists && mode == ArchiveOpenMode::kResume) {
-    ArchiveReader existing = ArchiveReader::Open(path);
+    ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
     existing.CheckSameSweep(plan, shown);
     plan.set_chunk_runs(static_cast<int>(existing.IntegerAttribute("chunk_runs")));
     complete_blocks = existing.CompleteBlocks(plan.chunk_runs());

@@ -1,15 +1,44 @@
 #include "engine/archive/hdf5_util.h"
 
+#include <cctype>
+#include <cstdlib>
 #include <cstring>
 #include <sstream>
 
 namespace gesweep::hdf5 {
 namespace {
 
-herr_t InnermostMessage(unsigned n, const H5E_error2_t* error, void* data) {
-  auto* message = static_cast<std::string*>(data);
-  if (n == 0 && error->desc != nullptr) *message = error->desc;
+// At static initialisation, before the library's first call: no clean-up at exit. HDF5 1.10 closes
+// every file still open from an atexit handler, and a file whose close already failed (a full disk)
+// makes that handler crash (SIGSEGV in H5F__close_cb) after gesweep has printed its error. The engine
+// closes what it opens; the handler adds nothing.
+const bool kNoCleanUpAtExit = H5dont_atexit() >= 0;
+
+struct StackText {
+  std::string innermost;  // the description of the innermost (first) entry
+  int system_error = 0;   // an "errno = N" some entry quotes (HDF5's sec2 driver on a failed write)
+};
+
+herr_t CollectEntry(unsigned n, const H5E_error2_t* error, void* data) {
+  auto* text = static_cast<StackText*>(data);
+  if (error->desc == nullptr) return 0;
+  const std::string desc = error->desc;
+  if (n == 0) text->innermost = desc;
+  const auto at = desc.find("errno = ");
+  if (text->system_error == 0 && at != std::string::npos) {
+    text->system_error = std::atoi(desc.c_str() + at + 8);
+  }
   return 0;
+}
+
+// HDF5's descriptions may hold line breaks and a list of "name = value" details; keep the sentence.
+std::string FirstClause(std::string text) {
+  const auto line = text.find_first_of("\r\n");
+  if (line != std::string::npos) text.resize(line);
+  const auto details = text.find(", time = ");
+  if (details != std::string::npos) text.resize(details);
+  while (!text.empty() && (text.back() == ' ' || text.back() == ',')) text.pop_back();
+  return text;
 }
 
 }  // namespace
@@ -17,16 +46,21 @@ herr_t InnermostMessage(unsigned n, const H5E_error2_t* error, void* data) {
 void Quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
 std::string LastError() {
-  std::string message;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, InnermostMessage, &message);
-  return message;
+  StackText text;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, CollectEntry, &text);
+  if (text.system_error > 0) {
+    std::string reason = std::strerror(text.system_error);
+    if (!reason.empty()) reason[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(reason[0])));
+    return reason;
+  }
+  return FirstClause(text.innermost);
 }
 
 std::int64_t Check(std::int64_t status, const std::string& what) {
   if (status < 0) {
     const std::string detail = LastError();
     H5Eclear2(H5E_DEFAULT);
-    throw ArchiveError(detail.empty() ? what : what + ": " + detail);
+    throw ArchiveError(detail.empty() ? what : what + ": " + detail, detail);
   }
   return status;
 }

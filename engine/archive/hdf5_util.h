@@ -15,21 +15,34 @@
 namespace gesweep {
 
 /// An archive could not be read or written (I/O error, disk full, corrupt file). Not a person's
-/// bad input (that is InputError); the CLI reports it and exits with code 1.
+/// bad input (that is InputError); the CLI reports it and exits with code 1. what() is one line,
+/// "<what was being done>: <cause>"; cause() is the cause alone ("no space left on device") when
+/// known, else what().
 class ArchiveError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit ArchiveError(const std::string& message) : std::runtime_error(message) {}
+  ArchiveError(const std::string& message, std::string cause)
+      : std::runtime_error(message), cause_(std::move(cause)) {}
+  std::string cause() const { return cause_.empty() ? std::string(what()) : cause_; }
+
+ private:
+  std::string cause_;
 };
 
 namespace hdf5 {
 
 /// Turns off HDF5's automatic error printing on the calling thread (errors become exceptions).
+/// (hdf5_util.cc also turns off HDF5's clean-up at exit, at static initialisation: it crashes on a
+/// file whose close failed on a full disk.)
 void Quiet();
 
-/// The innermost message of the calling thread's HDF5 error stack ("" when empty).
+/// The cause of the calling thread's HDF5 error, in one line ("" when the stack is empty): the
+/// operating system's reason when a system call failed (HDF5's "errno = 28" becomes "no space left
+/// on device"), else the innermost description, with HDF5's embedded line breaks and raw counters
+/// ("bytes actually written = 18446744073709551615") left out.
 std::string LastError();
 
-/// Throws ArchiveError("what: <HDF5 message>") when `status` < 0; returns it otherwise.
+/// Throws ArchiveError("what: <LastError()>", LastError()) when `status` < 0; returns it otherwise.
 std::int64_t Check(std::int64_t status, const std::string& what);
 
 /// An owned HDF5 identifier, closed with the right H5?close on destruction.

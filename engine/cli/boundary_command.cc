@@ -398,8 +398,7 @@ int RunBoundary(const BoundaryFlags& flags) {
     const std::string b = flags.speeds.substr(flags.speeds.find(':') + 1);
     const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
     const double lower = ends[0], upper = ends[1];
-    RequirePositiveSpeed(lower, "--speeds-mps");
-    RequirePositiveSpeed(upper, "--speeds-mps");
+    RequireWithinLimit(ends, "speed_mps", "--speeds-mps");
     if (!(upper > lower)) throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
     BoundaryCurveOptions options;
     options.search = SearchOptions(flags);
@@ -407,7 +406,7 @@ int RunBoundary(const BoundaryFlags& flags) {
     for (const auto& p : curve->points) speeds.push_back(p.speed_mps);
   } else if (!flags.speeds.empty()) {
     speeds = ParseRange(flags.speeds, "--speeds-mps");
-    for (double v : speeds) RequirePositiveSpeed(v, "--speeds-mps");
+    RequireWithinLimit(speeds, "speed_mps", "--speeds-mps");
     if (colons == 2 && speeds.size() > 1 && speeds.back() > speeds.front()) {
       // a:b:n: the curve traced over [a, b], printed at the n speeds.
       BoundaryCurveOptions options;
@@ -415,7 +414,6 @@ int RunBoundary(const BoundaryFlags& flags) {
       curve = TraceBoundary(model, speeds.front(), speeds.back(), options);
     }
   } else {
-    RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
     speeds.push_back(flags.speed_mps);
   }
   const double span = model.aircraft().wingspan_m;
@@ -500,7 +498,7 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<BoundaryFlags>();
       flags->model.AddTo(app, /*aircraft_required=*/false);
-      auto* speed = app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s");
+      auto* speed = AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s");
       auto* speeds = app.add_option("--speeds-mps", flags->speeds,
                                     "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
                                     "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");

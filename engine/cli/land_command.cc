@@ -13,6 +13,7 @@
 
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/control/landing_simulation.h"
 
@@ -80,6 +81,7 @@ std::string FlagOf(const std::string& key) {
     if (key == field) return flag;
   }
   if (key.rfind("q_weights.", 0) == 0) return "--q-weights (" + key.substr(10) + ")";
+  if (key == "time_limit_s (automatic)") return "--time-limit-s (automatic)";
   return key;
 }
 
@@ -113,7 +115,13 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
   try {
     ValidateLandingConfig(config, model.aircraft(), "command line");
   } catch (const InputError& error) {
-    throw InputError("command line", FlagOf(error.key()), error.value(), error.expected());
+    std::string expected = error.expected();
+    for (const char* field : {"time_limit_s", "max_step_s"}) {  // inside the step-count sentence
+      const std::string from = std::string(field) + " ";
+      const auto at = expected.find(from);
+      if (at != std::string::npos) expected.replace(at, std::string(field).size(), FlagOf(field));
+    }
+    throw InputError("command line", FlagOf(error.key()), error.value(), expected);
   }
   const double time_limit_s = LandingTimeLimit(config, model.aircraft().wheel_contact_height_m);
   if (config.output_interval_s > 0.0 && time_limit_s / config.output_interval_s > 1e7) {
@@ -222,7 +230,13 @@ int RunLand(const LandFlags& flags) {
   }
   const LongitudinalModel model = flags.model.BuildModel();
   const LandingConfig config = BuildConfig(flags, model);
-  const LandingResult result = SimulateLanding(model, config);
+  const SignalCancellation signals;
+  const LandingResult result = SimulateLanding(model, config, signals.flag());
+  if (result.cancelled) {
+    std::cerr << "gesweep: land stopped by signal " << signals.signal() << " at t = "
+              << Number(result.final_time_s) << " s; nothing written\n";
+    return signals.exit_code();
+  }
   const int exit_code = result.outcome == LandingOutcome::kDesignFailed ? 3 : 0;
 
   if (flags.format == "json") {
@@ -286,43 +300,55 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<LandFlags>();
       LandingConfig& c = flags->config;
       flags->model.AddTo(app);
-      app.add_option("--start-height-m", c.start_height_m, "Start height of the mean chord, m; default 500");
-      app.add_option("--speed-mps", c.start_speed_mps,
-                     "Start speed, also the reference speed u0 of the plant, m/s; default 52.21");
-      app.add_option("--start-pitch-deg", c.start_pitch_deg, "Start pitch angle (reference: level), deg; default 0");
-      app.add_option("--start-offset-m", c.start_glide_path_offset_m,
-                     "Start deviation d from the glide path, m, positive above; default 0");
-      app.add_option("--glide-slope-deg", c.glide_slope_deg, "Glide-slope angle, deg, positive down; default 2.5");
-      app.add_option("--flare-height-m", c.flare_height_m, "Flare height Ho, m; default 10");
-      app.add_option("--tau-s", flags->flare_time_constant_s,
-                     "Flare time constant, s; default Ho/(u0 sin(glide slope)), continuous sink rate at Ho");
+      AddLimitedOption(app, "--start-height-m", c.start_height_m, "height_m",
+                       "Start height of the mean chord, m; default 500");
+      AddLimitedOption(app, "--speed-mps", c.start_speed_mps, "speed_mps",
+                       "Start speed, also the reference speed u0 of the plant, m/s; default 52.21");
+      AddLimitedOption(app, "--start-pitch-deg", c.start_pitch_deg, "landing.start_pitch_deg",
+                       "Start pitch angle (reference: level), deg; default 0");
+      AddLimitedOption(app, "--start-offset-m", c.start_glide_path_offset_m, "landing.start_glide_path_offset_m",
+                       "Start deviation d from the glide path, m, positive above; default 0");
+      AddLimitedOption(app, "--glide-slope-deg", c.glide_slope_deg, "glide_slope_deg",
+                       "Glide-slope angle, deg, positive down; default 2.5");
+      AddLimitedOption(app, "--flare-height-m", c.flare_height_m, "flare_height_m", "Flare height Ho, m; default 10");
+      AddLimitedOption(app, "--tau-s", flags->flare_time_constant_s, "flare_tau_s",
+                       "Flare time constant, s; default Ho/(u0 sin(glide slope)), continuous sink rate at Ho");
       app.add_option("--q-weights", flags->q_weights,
                      "9 comma-separated LQR output weights on delta_u,delta_w,pitch_rate,delta_theta,delta_h,"
                      "elevator,deviation,compensator,error_integral (SI units, rad); default all 1");
-      app.add_option("--r-weight", c.r_weight, "LQR weight on the elevator command (rad^2); default 1");
-      app.add_option("--design-height-m", flags->design_height_m,
-                     "Height of the linear model used for the gain, m; default the wheel-contact height");
-      app.add_option("--design-speed-mps", flags->design_speed_mps,
-                     "Speed of the linear model used for the gain, m/s; default --speed-mps");
+      AddLimitedOption(app, "--r-weight", c.r_weight, "lqr.r", "LQR weight on the elevator command (rad^2); default 1");
+      AddLimitedOption(app, "--design-height-m", flags->design_height_m, "landing.design_height_m",
+                       "Height of the linear model used for the gain, m; default the wheel-contact height");
+      AddLimitedOption(app, "--design-speed-mps", flags->design_speed_mps, "speed_mps",
+                       "Speed of the linear model used for the gain, m/s; default --speed-mps");
       app.add_flag("--no-design-h-derivatives", flags->no_design_h_derivatives,
                    "Leave Xh, Zh, Mh out of the design model (the plant follows --no-h-derivatives)");
-      app.add_option("--actuator-pole-per-s", c.actuator_pole_per_s, "Elevator actuator pole, 1/s; default 10");
-      app.add_option("--compensator-pole-per-s", c.compensator_pole_per_s, "Compensator pole S_d, 1/s; default 10");
-      app.add_option("--elevator-min-deg", c.elevator_min_deg, "Lower elevator limit, deg; default -25");
-      app.add_option("--elevator-max-deg", c.elevator_max_deg, "Upper elevator limit, deg; default 25");
+      AddLimitedOption(app, "--actuator-pole-per-s", c.actuator_pole_per_s, "landing.actuator_pole_per_s",
+                       "Elevator actuator pole, 1/s; default 10");
+      AddLimitedOption(app, "--compensator-pole-per-s", c.compensator_pole_per_s, "landing.compensator_pole_per_s",
+                       "Compensator pole S_d, 1/s; default 10");
+      AddLimitedOption(app, "--elevator-min-deg", c.elevator_min_deg, "landing.elevator_min_deg",
+                       "Lower elevator limit, deg; default -25");
+      AddLimitedOption(app, "--elevator-max-deg", c.elevator_max_deg, "landing.elevator_max_deg",
+                       "Upper elevator limit, deg; default 25");
       app.add_option("--plant-height-reference", flags->plant_height_reference,
                      "What the plant's h-derivative terms measure dH from: path (default, the reference "
                      "trajectory) or fixed (--plant-reference-height-m)");
-      app.add_option("--plant-reference-height-m", flags->plant_reference_height_m,
-                     "Fixed reference height for --plant-height-reference fixed, m; default the top table height");
-      app.add_option("--rtol", c.relative_tolerance, "Dormand-Prince relative tolerance; default 1e-3 (ode45)");
-      app.add_option("--atol", c.absolute_tolerance, "Dormand-Prince absolute tolerance; default 1e-6");
-      app.add_option("--max-step-s", c.max_step_s, "Largest step, s; default 1");
-      app.add_option("--time-limit-s", flags->time_limit_s,
-                     "Time limit, s (outcome no_touchdown); default twice the reference trajectory's time to the wheels");
-      app.add_option("--divergence-pitch-deg", c.divergence_pitch_deg,
-                     "|pitch| that ends the run as diverged, deg; default 60");
-      auto* output_dt = app.add_option("--output-dt-s", c.output_interval_s, "Series sampling interval, s; default 0.1");
+      AddLimitedOption(app, "--plant-reference-height-m", flags->plant_reference_height_m,
+                       "landing.plant_fixed_reference_height_m",
+                       "Fixed reference height for --plant-height-reference fixed, m; default the top table height");
+      AddLimitedOption(app, "--rtol", c.relative_tolerance, "relative_tolerance",
+                       "Dormand-Prince relative tolerance; default 1e-3 (ode45)");
+      AddLimitedOption(app, "--atol", c.absolute_tolerance, "absolute_tolerance",
+                       "Dormand-Prince absolute tolerance; default 1e-6");
+      AddLimitedOption(app, "--max-step-s", c.max_step_s, "landing.max_step_s", "Largest step, s; default 1");
+      AddLimitedOption(app, "--time-limit-s", flags->time_limit_s, "landing.time_limit_s",
+                       "Time limit, s (outcome no_touchdown); default twice the reference trajectory's time to the "
+                       "wheels");
+      AddLimitedOption(app, "--divergence-pitch-deg", c.divergence_pitch_deg, "landing.divergence_pitch_deg",
+                       "|pitch| that ends the run as diverged, deg; default 60");
+      auto* output_dt = AddLimitedOption(app, "--output-dt-s", c.output_interval_s, "output_dt_s",
+                                         "Series sampling interval, s; default 0.1");
       auto* summary = app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       output_dt->excludes(summary);
       app.add_option("--format", flags->format,

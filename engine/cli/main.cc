@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   CLI::App app{"gesweep: batch parametric and sensitivity studies of airplane longitudinal dynamics "
                "in ground effect"};
   app.require_subcommand(1);
+  app.footer(
+      "Every number a flag or a study file takes has one allowed range, with its reason: gesweep limits "
+      "prints the table (docs/limits.md); each flag's range also shows beside it in SUBCOMMAND --help.");
   app.set_version_flag("--version", std::string("gesweep ") + GESWEEP_VERSION + " (" + GESWEEP_GIT_COMMIT + ")");
   auto& registry = CommandRegistry();
   std::sort(registry.begin(), registry.end(),
@@ -46,11 +49,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  using gesweep::EscapeForMessage;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-    std::cerr << "gesweep: error: " << e.what() << "\n";
+    std::string text = e.what();
+    // A limited flag's check (AddLimitedOption) returns a whole InputError line; CLI11 puts the
+    // option's name in front of it.
+    const auto whole = text.find("command line: ");
+    if (dynamic_cast<const CLI::ValidationError*>(&e) != nullptr && whole != std::string::npos) {
+      text = text.substr(whole);
+    }
+    std::cerr << "gesweep: error: " << EscapeForMessage(text) << "\n";
     return 2;
   }
   try {
@@ -58,8 +69,13 @@ int main(int argc, char** argv) {
       if (sub->parsed()) return action();
     }
   } catch (const gesweep::InputError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
+    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
     return 2;
+  } catch (const std::exception& e) {
+    // Not a person's input and not caught by the command (an I/O failure it did not expect): one
+    // line, the I/O exit code.
+    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
+    return 1;
   }
   return 2;
 }

@@ -5,22 +5,44 @@
 #include <sstream>
 
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 
 namespace gesweep::cli {
 namespace {
 
-double ParseNumber(const std::string& token, const std::string& flag, bool allow_infinity) {
-  std::string trimmed = token;
+std::string Trim(const std::string& text) {
+  std::string trimmed = text;
   trimmed.erase(0, trimmed.find_first_not_of(" \t"));
   trimmed.erase(trimmed.find_last_not_of(" \t") + 1);
-  if (allow_infinity && (trimmed == "inf" || trimmed == "infinity")) {
-    return std::numeric_limits<double>::infinity();
+  return trimmed;
+}
+
+// A number a person typed: "" when it parses (into *value), else why not.
+std::string NumberProblem(const std::string& text, double* value) {
+  const std::string trimmed = Trim(text);
+  if (trimmed == "inf" || trimmed == "infinity" || trimmed == "+inf") {
+    *value = std::numeric_limits<double>::infinity();
+    return "";
   }
-  double value = 0;
   const char* begin = trimmed.data();
   const char* end = begin + trimmed.size();
-  auto [ptr, ec] = std::from_chars(begin, end, value);
-  if (trimmed.empty() || ec != std::errc() || ptr != end || !std::isfinite(value)) {
+  // from_chars takes no leading '+'; a person may write one.
+  if (begin != end && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, *value);
+  if (ec == std::errc::result_out_of_range && ptr == end) {
+    const bool tiny = trimmed.find("e-") != std::string::npos || trimmed.find("E-") != std::string::npos;
+    return tiny ? "is closer to 0 than a double can hold (about 2.2e-308); write 0 if 0 is meant"
+                : "is past the largest magnitude a double can hold (about 1.8e308)";
+  }
+  if (trimmed.empty() || ec != std::errc() || ptr != end) return "expected a number";
+  return "";
+}
+
+double ParseNumber(const std::string& token, const std::string& flag, bool allow_infinity) {
+  double value = 0;
+  const std::string problem = NumberProblem(token, &value);
+  if (!problem.empty()) throw InputError("command line", flag, "'" + token + "'", problem);
+  if (!std::isfinite(value) && !(allow_infinity && value > 0)) {
     throw InputError("command line", flag, "'" + token + "'",
                      allow_infinity ? "expected a finite number or inf" : "expected a finite number");
   }
@@ -84,15 +106,30 @@ std::vector<double> ParseRange(const std::string& text, const std::string& flag)
   return values;
 }
 
-void RequirePositiveSpeed(double speed_mps, const std::string& flag) {
-  if (!(speed_mps > 0.0) || !std::isfinite(speed_mps)) {
-    std::ostringstream value;
-    value << speed_mps;
-    throw InputError("command line", flag, value.str(), "expected a speed > 0 m/s");
-  }
+void RequireWithinLimit(const std::vector<double>& values, const std::string& limit, const std::string& flag) {
+  for (double value : values) CheckInputLimit(limit, value, "command line", flag);
+}
+
+CLI::Option* AddLimitedOption(CLI::App& app, const std::string& flag, double& value, const std::string& limit,
+                              const std::string& description) {
+  const InputLimit& range = RequireInputLimit(limit);
+  CLI::Option* option = app.add_option(flag, value, description);
+  // The check runs on the text, before CLI11 converts it, so that an overflow is named as one.
+  // Its message is a whole InputError line; main.cc prints it as such.
+  option->check(CLI::Validator(
+      [flag, limit](std::string& text) -> std::string {
+        double number = 0;
+        std::string problem = NumberProblem(text, &number);
+        if (problem.empty()) problem = LimitProblem(RequireInputLimit(limit), number);
+        if (problem.empty()) return "";
+        return InputError("command line", flag, text, problem).what();
+      },
+      DescribeLimit(range), "LIMIT:" + limit));
+  return option;
 }
 
 std::string FormatNumber(double value, int significant) {
+  if (significant == 10) return ShortNumber(value);
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
   std::ostringstream out;

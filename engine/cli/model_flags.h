@@ -26,13 +26,22 @@ struct ModelFlags {
 };
 
 /// Parses a comma-separated list of numbers given to `flag` ("inf" allowed when allow_infinity).
+/// A number past a double's magnitude (about 1.8e308) is refused as such, not as "not a number".
 std::vector<double> ParseNumberList(const std::string& text, const std::string& flag, bool allow_infinity);
 
 /// Parses "a:b:n" (n ≥ 1 evenly spaced values from a to b) or a single number or a comma list.
 std::vector<double> ParseRange(const std::string& text, const std::string& flag);
 
-/// Throws InputError unless speed is finite and > 0.
-void RequirePositiveSpeed(double speed_mps, const std::string& flag);
+/// Throws InputError naming `flag` unless every value is within the limits table's entry `limit`
+/// (engine/common/input_limits.h).
+void RequireWithinLimit(const std::vector<double>& values, const std::string& limit, const std::string& flag);
+
+/// Adds a number flag bound to `value` whose values must be within the limits table's entry `limit`:
+/// the range shows in --help after the description, and a value outside it, a text that is not a
+/// number, or a number past a double's magnitude is refused with one line (exit 2) naming the flag,
+/// the value and the range.
+CLI::Option* AddLimitedOption(CLI::App& app, const std::string& flag, double& value, const std::string& limit,
+                              const std::string& description);
 
 /// Formats a double for table/CSV output: shortest round-trip form; "inf", "nan".
 std::string FormatNumber(double value, int significant = 10);

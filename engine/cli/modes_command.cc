@@ -6,6 +6,7 @@
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 #include "engine/modal/modal_analysis.h"
 
 namespace gesweep::cli {
@@ -39,7 +40,6 @@ std::string ModeCell(const ModeProperties& mode) {
 }
 
 int RunModes(const ModesFlags& flags) {
-  RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
   }
@@ -53,6 +53,7 @@ int RunModes(const ModesFlags& flags) {
     heights = ParseNumberList(flags.heights, "--heights-m", /*allow_infinity=*/true);
   }
   for (double h : heights) {
+    if (!std::isinf(h)) CheckInputLimit("height_m", h, "command line", "--heights-m");
     if (h < aircraft.wheel_contact_height_m) {
       throw InputError("command line", "--heights-m", FormatNumber(h),
                        "expected heights >= the wheel-contact height " +
@@ -123,7 +124,7 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<ModesFlags>();
       flags->model.AddTo(app);
-      app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s")->required();
+      AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s")->required();
       auto* heights = app.add_option("--heights-m", flags->heights, "Comma-separated heights H, m (inf: free flight)");
       auto* table = app.add_flag("--table-heights", flags->table_heights, "The aircraft's table heights and free flight");
       heights->excludes(table);

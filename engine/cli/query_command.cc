@@ -2,15 +2,17 @@
 // (docs/report.md, "gesweep query").
 //   gesweep query ARCHIVE [--where EXPR] [--columns a,b,c] [--sort col [--descending]] [--limit n]
 //                 [--format table|csv|json]
+//   gesweep query ARCHIVE [--where EXPR] [--group-by a,b] --aggregate 'count,mean(c),quantile(c, 0.95)'
+//                 [--sort OUT [--descending]] [--limit n] [--memory-mb N] [--max-groups N] [--format ...]
 //   gesweep query ARCHIVE --describe [--format table|json]
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
+#include "engine/query/aggregate.h"
 #include "engine/query/query.h"
 #include "engine/query/query_output.h"
 #include "engine/query/run_columns.h"
@@ -27,6 +29,11 @@ struct QueryFlags {
   long long limit = -1;
   std::string format = "table";
   bool describe = false;
+  std::vector<std::string> group_by;
+  std::vector<std::string> aggregates;
+  long long memory_mb = 256;
+  long long max_groups = 1'000'000;
+  bool memory_given = false, max_groups_given = false;
 };
 
 // Root attributes too long for a listing: shown by their size.
@@ -137,12 +144,49 @@ int RunQueryCommand(const QueryFlags& flags) {
   try {
     const ArchiveReader archive = ArchiveReader::Open(flags.archive);
     const ColumnCatalog catalog = ColumnCatalog::Of(archive);
+    const bool aggregating = !flags.group_by.empty() || !flags.aggregates.empty();
     if (flags.describe) {
-      if (!flags.where.empty() || !flags.columns.empty() || !flags.sort.empty() || flags.limit >= 0) {
+      if (!flags.where.empty() || !flags.columns.empty() || !flags.sort.empty() || flags.limit >= 0 ||
+          aggregating) {
         throw InputError("command line", "--describe", "",
-                         "lists what the archive holds; it takes no --where, --columns, --sort or --limit");
+                         "lists what the archive holds; it takes no --where, --columns, --sort, --limit, "
+                         "--group-by or --aggregate");
       }
       return Describe(archive, catalog, format);
+    }
+    if (flags.descending && flags.sort.empty()) {
+      throw InputError("command line", "--descending", "", "sorts by --sort; give --sort COLUMN");
+    }
+    if (!aggregating && (flags.memory_given || flags.max_groups_given)) {
+      throw InputError("command line", flags.memory_given ? "--memory-mb" : "--max-groups", "",
+                       "applies to --group-by/--aggregate only");
+    }
+    if (aggregating) {
+      if (!flags.columns.empty()) {
+        throw InputError("command line", "--columns", "",
+                         "lists runs; with --group-by/--aggregate the output columns are the groups and "
+                         "the statistics");
+      }
+      if (flags.memory_mb < 1 || flags.memory_mb > (std::int64_t{1} << 20)) {
+        throw InputError("command line", "--memory-mb", std::to_string(flags.memory_mb),
+                         "expected megabytes, 1 to 1048576");
+      }
+      if (flags.max_groups < 1) {
+        throw InputError("command line", "--max-groups", std::to_string(flags.max_groups),
+                         "expected a count >= 1");
+      }
+      AggregateRequest request;
+      request.where = flags.where;
+      request.group_by = flags.group_by;
+      request.aggregates = flags.aggregates;
+      request.sort = flags.sort;
+      request.descending = flags.descending;
+      request.limit = flags.limit;
+      request.memory_bytes = static_cast<std::int64_t>(flags.memory_mb) << 20;
+      request.max_groups = flags.max_groups;
+      const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
+      RunAggregateQuery(archive, catalog, request, *writer);
+      return 0;
     }
     QueryRequest request;
     request.where = flags.where;
@@ -150,9 +194,6 @@ int RunQueryCommand(const QueryFlags& flags) {
     request.sort = flags.sort;
     request.descending = flags.descending;
     request.limit = flags.limit;
-    if (flags.descending && flags.sort.empty()) {
-      throw InputError("command line", "--descending", "", "sorts by --sort; give --sort COLUMN");
-    }
     const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
     RunQuery(archive, catalog, request, *writer);
   } catch (const ArchiveError& e) {
@@ -171,11 +212,27 @@ const CommandRegistrar kRegistrar{Command{
                      "Condition, e.g. 'height_m < 3 and stability_margin_per_s > 0', 'status == \"failed\"' "
                      "(docs/report.md)");
       app.add_option("--columns", flags->columns,
-                     "Columns to show, comma-separated (default: index, design, status)")
+                     "Columns to show, comma-separated; wildcards such as 'phugoid/*' or '*' "
+                     "(default: index, design, status)")
           ->delimiter(',');
-      app.add_option("--sort", flags->sort, "Column to sort by (missing values last)");
+      app.add_option("--group-by", flags->group_by,
+                     "Columns whose equal values form a group, comma-separated (wildcards allowed); "
+                     "with --aggregate")
+          ->delimiter(',');
+      app.add_option(
+          "--aggregate", flags->aggregates,
+          "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
+          "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
+      app.add_option("--memory-mb", flags->memory_mb,
+                     "Memory for exact medians and quantiles (default 256); past it, more passes")
+          ->each([flags](const std::string&) { flags->memory_given = true; });
+      app.add_option("--max-groups", flags->max_groups, "Refuse more groups than this (default 1000000)")
+          ->each([flags](const std::string&) { flags->max_groups_given = true; });
+      app.add_option("--sort", flags->sort,
+                     "Column to sort by (missing values last); with --aggregate an output column");
       app.add_flag("--descending", flags->descending, "Sort largest first");
-      app.add_option("--limit", flags->limit, "Show at most this many rows (with --sort: the best n)");
+      app.add_option("--limit", flags->limit,
+                     "Show at most this many rows (with --sort: the best n); with --aggregate, groups");
       app.add_option("--format", flags->format, "table (default), csv or json");
       app.add_flag("--describe", flags->describe,
                    "List the columns with units, run counts by status, provenance");

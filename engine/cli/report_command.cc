@@ -16,6 +16,7 @@
 #include "engine/archive/hdf5_util.h"
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 #include "engine/query/report_script.h"
 
 extern char** environ;
@@ -61,25 +62,47 @@ std::vector<std::string> ExpandInputs(const std::vector<std::string>& inputs) {
   return unique;
 }
 
+// What the report writes in its directory (scripts/report/report.py): index.html through a
+// temporary, and figures named <section>_*.png, which it also deletes from an earlier report.
+bool ReportWrites(const std::string& name) {
+  if (name == "index.html" || name == "index.html.partial") return true;
+  if (name.size() < 4 || name.compare(name.size() - 4, 4, ".png") != 0) return false;
+  for (const char* prefix : {"stability_", "root_", "open_", "landing_", "sensitivity_"}) {
+    if (name.rfind(prefix, 0) == 0) return true;
+  }
+  return false;
+}
+
 int RunReport(const ReportFlags& flags) {
   const std::vector<std::string> archives = ExpandInputs(flags.inputs);
-  try {
-    for (const auto& path : archives) ArchiveReader::Open(path);  // InputError names a bad one
-  } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
-  }
   const std::filesystem::path output(flags.output);
+  std::vector<NamedInput> inputs;
+  for (const auto& path : archives) inputs.push_back({path, "input archive"});
+  // Before any archive is read or anything written: the directory is a directory (or new), and
+  // none of the files the report writes or deletes in it is an input.
+  CheckOutputPath(output, OutputKind::kDirectory, inputs, "-o");
   std::error_code ec;
-  if (std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec)) {
-    throw InputError("command line", "-o", flags.output,
-                     "is a file; expected a directory for index.html and figures");
+  for (const auto& input : inputs) {
+    const std::filesystem::path name = input.path.filename();
+    if (ReportWrites(name.string()) && SameFile(output / name, input.path)) {
+      throw InputError("command line", "-o", flags.output,
+                       "the report would replace " + (output / name).string() + ", the input archive " +
+                           input.path.string() + "; choose another directory");
+    }
   }
   const std::filesystem::path parent =
       output.has_parent_path() ? output.parent_path() : std::filesystem::path(".");
   if (!std::filesystem::is_directory(parent, ec)) {
     throw InputError("command line", "-o", flags.output,
                      "the directory " + parent.string() + " does not exist");
+  }
+  try {
+    // The same validation as query and boundary (ArchiveReader::Open): a damaged or foreign archive
+    // is refused with one line (exit 2) before the script starts or the directory is made.
+    for (const auto& path : archives) ArchiveReader::Open(path);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
+    return 1;
   }
   const std::filesystem::path script = ReportScriptPath();
   if (!std::filesystem::is_regular_file(script, ec)) {

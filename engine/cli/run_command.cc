@@ -5,11 +5,12 @@
 #include <tbb/info.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <csignal>
 #include <iomanip>
 #include <iostream>
 #include <mutex>
@@ -17,9 +18,13 @@
 #include <thread>
 
 #include "engine/archive/archive_writer.h"
+#include "engine/archive/write_cost.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
+#include "engine/cli/signals.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
+#include "engine/sweep/run_cost.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #ifdef GESWEEP_HAVE_MPI
@@ -29,20 +34,12 @@
 namespace gesweep::cli {
 namespace {
 
-// Dry-run calibration: a few runs spread over the shard, within a second.
-constexpr int kCalibrationRuns = 16;
-constexpr double kCalibrationBudget_s = 1.0;
+// Dry run: the wall time its measurement may take, whatever the study (docs/sweep.md, "Dry run").
+constexpr double kDefaultDryRunBudget_s = 2.0;
+constexpr double kMaximumDryRunBudget_s = 600.0;
 // Progress: a live bar refreshes this often on a terminal; a log line this often otherwise.
 constexpr double kBarInterval_s = 0.25;
 constexpr double kLogInterval_s = 5.0;
-
-std::atomic<bool> g_cancel{false};
-std::atomic<int> g_signal{0};
-
-extern "C" void OnSignal(int signal) {
-  g_signal.store(signal);
-  g_cancel.store(true);
-}
 
 struct RunFlags {
   std::string study;
@@ -52,6 +49,8 @@ struct RunFlags {
   bool resume = false;
   bool force = false;
   bool dry_run = false;
+  double dry_run_budget_s = kDefaultDryRunBudget_s;
+  bool threads_given = false;
   bool quiet = false;
   bool mpi = false;
   std::string format = "text";
@@ -61,7 +60,7 @@ std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream out;
   if (seconds < 60) {
-    out << std::fixed << std::setprecision(seconds < 10 ? 1 : 0) << seconds << " s";
+    out << std::fixed << std::setprecision(seconds < 1 ? 2 : (seconds < 10 ? 1 : 0)) << seconds << " s";
     return out.str();
   }
   const auto total = static_cast<long long>(std::llround(seconds));
@@ -149,14 +148,47 @@ class ProgressPrinter {
   bool stopping_ = false;
 };
 
-int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
-  int samples = 0;
-  const double per_run_s = MeasureRunCost(plan, kCalibrationRuns, kCalibrationBudget_s, &samples);
-  const double estimate_s = per_run_s * static_cast<double>(plan.run_count()) / threads;
+// Wall time per run of the sweep from its parts (docs/sweep.md, "Dry run"): `compute_s` per run on
+// one worker (measured with every worker busy), `write_s` per run on the one writer thread, which runs
+// beside the workers: the slowest of the workers' share, the writer, and both sharing the cores.
+double WallPerRun(double compute_s, double write_s, int threads) {
+  const int cores = std::max(1, tbb::info::default_concurrency());
+  const int busy = std::min(threads + 1, cores);
+  return std::max({compute_s / threads, write_s, (compute_s + write_s) / busy});
+}
+
+int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
+  RunCostEstimate cost;
+  WriteCostEstimate write;
+  {
+    const SignalCancellation signals;
+    // Most of the budget to the runs, the rest to one real batch written to a scratch archive.
+    RunCostOptions options;
+    options.threads = threads;
+    options.budget_s = 0.75 * flags.dry_run_budget_s;
+    cost = EstimateRunCost(plan, options, signals.flag());
+    if (!cost.stopped && !cost.lower_bound) {
+      try {
+        write = MeasureWriteCost(plan, cost.seconds_per_run, 0.15 * flags.dry_run_budget_s,
+                                 0.1 * flags.dry_run_budget_s);
+      } catch (const ArchiveError&) {
+        write = WriteCostEstimate{};  // no scratch space: the estimate leaves the writer out, and says so
+      }
+    }
+    if (cost.stopped || signals.cancelled()) {
+      std::cerr << "gesweep: dry run stopped by signal " << signals.signal() << "\n";
+      return signals.exit_code();
+    }
+  }
+  const double runs = static_cast<double>(plan.run_count());
+  const double estimate_s = runs * WallPerRun(cost.seconds_per_run, write.seconds_per_run, threads);
+  const double low_s = runs * WallPerRun(cost.seconds_per_run_low, write.seconds_per_run_low, threads);
+  const double high_s =
+      cost.lower_bound ? INFINITY : runs * WallPerRun(cost.seconds_per_run_high, write.seconds_per_run_high, threads);
   const auto& storage = plan.storage();
   const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
-  if (format == "json") {
+  if (flags.format == "json") {
     nlohmann::json out = {
         {"study", study.path},
         {"name", study.name},
@@ -170,10 +202,17 @@ int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
         {"series_bytes_per_run", storage.series_bytes_per_run},
         {"storage_bytes", shard_bytes},
         {"design_storage_bytes", storage.design_bytes},
-        {"seconds_per_run", per_run_s},
-        {"calibration_runs", samples},
+        {"seconds_per_run", cost.seconds_per_run},
+        {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
+        {"write_seconds_per_run", write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
+        {"calibration_runs", cost.timed_runs},
+        {"warmup_runs", cost.warmup_runs},
+        {"measured_seconds", cost.measured_s},
+        {"budget_seconds", flags.dry_run_budget_s},
+        {"lower_bound", cost.lower_bound},
         {"threads", threads},
-        {"estimated_seconds", estimate_s}};
+        {"estimated_seconds", estimate_s},
+        {"estimated_seconds_interval", {low_s, JsonNumber(high_s)}}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -190,11 +229,68 @@ int DryRun(const SweepPlan& plan, int threads, const std::string& format) {
   std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes))
             << " before compression (" << FormatBytes(static_cast<double>(storage.bytes_per_run))
             << " per run" << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
-  std::cout << "time         about " << FormatDuration(estimate_s) << " on " << threads << " thread"
-            << (threads > 1 ? "s" : "") << " (" << std::setprecision(3) << per_run_s * 1e6
-            << " us per run, from " << samples << " sample run" << (samples > 1 ? "s" : "") << ")\n";
+  const double us = cost.seconds_per_run * 1e6;
+  const std::string per_run = us < 1e3   ? ShortNumber(std::round(us * 100) / 100) + " us"
+                              : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
+                                         : ShortNumber(std::round(us / 1e4) / 100) + " s";
+  if (cost.lower_bound) {
+    std::cout << "time         more than " << FormatDuration(estimate_s) << " on " << threads
+              << " thread" << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
+              << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
+              << " per run); --dry-run-budget-s measures longer\n";
+  } else {
+    std::cout << "time         about " << FormatDuration(estimate_s) << " (" << FormatDuration(low_s) << " to "
+              << FormatDuration(high_s) << ", 95 %) on " << threads << " thread" << (threads > 1 ? "s" : "") << " ("
+              << per_run << " per run on a thread, from " << cost.timed_runs << " sample run"
+              << (cost.timed_runs == 1 ? "" : "s") << " after " << cost.warmup_runs << " warm-up";
+    if (write.measured) {
+      std::cout << "; writing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
+    } else {
+      std::cout << "; writing not measured";
+    }
+    std::cout << ")\n";
+  }
   std::cout << "batches      " << plan.block_count() << " of " << plan.chunk_runs() << " runs\n";
   return 0;
+}
+
+// The archive path, checked against the study's input files before anything is written: an output
+// never replaces an input (engine/common/output_guard.h).
+void CheckArchivePath(const RunFlags& flags, const Study& study) {
+  const std::filesystem::path output(flags.output);
+  CheckOutputPath(output, OutputKind::kFile, study.inputs, "-o",
+                  {flags.output + ".partial", flags.output + ".lock"});
+}
+
+// Space the archive's file system must have free before a sweep starts or resumes: HDF5 1.10 can
+// leave a variable-length attribute it was rewriting damaged when a write fails for want of space
+// (found resuming on a full disk: "len not positive after adjustment for EOA"), so a sweep does not
+// start on a disk that cannot take a few batches. A disk that fills later stops the sweep cleanly.
+constexpr std::uintmax_t kMinimumFreeBytes = 16u << 20;
+
+void CheckFreeSpace(const RunFlags& flags, const SweepPlan& plan) {
+  std::filesystem::path directory = std::filesystem::path(flags.output).parent_path();
+  if (directory.empty()) directory = ".";
+  std::error_code ec;
+  const std::filesystem::space_info space = std::filesystem::space(directory, ec);
+  if (ec) return;  // unknown (the writer reports a missing directory itself)
+  const auto batch_bytes = static_cast<std::uintmax_t>(plan.storage().bytes_per_run) *
+                           static_cast<std::uintmax_t>(plan.chunk_runs());
+  const std::uintmax_t needed = std::max(kMinimumFreeBytes, 2 * batch_bytes);
+  if (space.available >= needed) return;
+  throw ArchiveError("not enough space for the archive " + flags.output + ": " +
+                         FormatBytes(static_cast<double>(space.available)) + " free on its file system, at least " +
+                         FormatBytes(static_cast<double>(needed)) +
+                         " needed to start safely; free some space and rerun (nothing was written)",
+                     "no space left on device");
+}
+
+// One line for an archive the sweep could not write (disk full, quota, I/O error): which archive,
+// the cause, what is kept and how to go on.
+std::string WriteFailure(const RunFlags& flags, const std::string& cause, std::int64_t runs_kept) {
+  return "cannot write the archive " + flags.output + ": " + cause + "; the " + std::to_string(runs_kept) +
+         " runs of complete batches are kept; free the space or fix the cause, then continue with gesweep run " +
+         flags.study + " -o " + flags.output + " --resume";
 }
 
 int Run(const RunFlags& flags) {
@@ -204,45 +300,54 @@ int Run(const RunFlags& flags) {
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }
-  if (flags.threads < 0 || flags.threads > 4096) {
+  if (flags.threads_given && (flags.threads < 1 || flags.threads > 4096)) {
     throw InputError("command line", "--threads", std::to_string(flags.threads),
-                     "expected 1 to 4096 (0: all cores)");
+                     "expected 1 to 4096 worker threads; leave --threads out to use every core");
+  }
+  if (!(flags.dry_run_budget_s > 0.0) || flags.dry_run_budget_s > kMaximumDryRunBudget_s) {
+    throw InputError("command line", "--dry-run-budget-s", ShortNumber(flags.dry_run_budget_s),
+                     "expected a time in (0, " + ShortNumber(kMaximumDryRunBudget_s) + "] s");
   }
   ShardSpec shard;
   if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
   Study study = LoadStudy(flags.study);
+  if (!flags.output.empty()) CheckArchivePath(flags, study);
   SweepPlan plan(std::move(study), shard);
   const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
-  if (flags.dry_run) return DryRun(plan, threads, flags.format);
+  if (flags.dry_run) return DryRun(plan, threads, flags);
   if (flags.output.empty())
     throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
   if (flags.mpi) {
 #ifdef GESWEEP_HAVE_MPI
     // mpirun -n R gesweep run ... --mpi (docs/cluster.md, "MPI"): RunStudyMpi initialises and
     // finalises MPI itself; rank 0 alone writes the archive and prints.
-    g_cancel.store(false);
-    auto previous_int = std::signal(SIGINT, OnSignal);
-    auto previous_term = std::signal(SIGTERM, OnSignal);
+    const SignalCancellation signals;
     MpiRunOptions options;
     options.output = flags.output;
     options.mode = flags.resume ? ArchiveOpenMode::kResume
                                 : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate);
     options.threads = flags.threads;
     options.command_line = CommandLine(flags) + " --mpi";
-    options.cancel = &g_cancel;
-    options.signal = &g_signal;
+    options.cancel = signals.flag();
+    options.signal = signals.signal_number();
     options.quiet = flags.quiet;
-    const int code = RunStudyMpi(plan, options);
-    std::signal(SIGINT, previous_int);
-    std::signal(SIGTERM, previous_term);
-    return code;
+    return RunStudyMpi(plan, options);
 #else
     throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
 #endif
   }
 
+  // From here on SIGINT/SIGTERM stop the sweep between two integration steps (exit 128 + signal);
+  // what is complete stays in the archive for --resume.
+  const SignalCancellation signals;
   ArchiveOpenReport opened;
   std::unique_ptr<ArchiveWriter> writer;
+  try {
+    CheckFreeSpace(flags, plan);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
+    return 1;
+  }
   try {
     writer =
         ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
@@ -250,7 +355,8 @@ int Run(const RunFlags& flags) {
                                          : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
                             &opened);
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
+    std::cerr << "gesweep: error: cannot set up the archive " << EscapeForMessage(flags.output) << ": "
+              << EscapeForMessage(e.cause()) << "\n";
     return 1;
   }
 
@@ -274,9 +380,6 @@ int Run(const RunFlags& flags) {
     }
   }
 
-  g_cancel.store(false);
-  auto previous_int = std::signal(SIGINT, OnSignal);
-  auto previous_term = std::signal(SIGTERM, OnSignal);
   const auto start = std::chrono::steady_clock::now();
   SweepOutcome outcome;
   int exit_code = 0;
@@ -284,25 +387,29 @@ int Run(const RunFlags& flags) {
     ProgressPrinter printer(progress, !flags.quiet && progress.runs_to_do > 0);
     RunnerOptions options;
     options.threads = threads;
-    options.cancel = &g_cancel;
+    options.cancel = signals.flag();
     try {
       outcome = RunSweep(plan, opened.pending_blocks, *writer, options, &progress);
+    } catch (const ArchiveError& e) {
+      printer.Stop();  // ends its line on a terminal, so the error is one line of its own
+      std::cerr << "gesweep: error: "
+                << EscapeForMessage(WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
+                << "\n";
+      return 1;
     } catch (const std::exception& e) {
       printer.Stop();
-      std::signal(SIGINT, previous_int);
-      std::signal(SIGTERM, previous_term);
-      std::cerr << "\ngesweep: error: " << e.what()
-                << " (the runs written so far are kept; fix the cause and "
-                << "rerun with --resume)\n";
+      std::cerr << "gesweep: error: "
+                << EscapeForMessage(WriteFailure(flags, e.what(), opened.runs_complete + progress.runs_written.load()))
+                << "\n";
       return 1;
     }
   }
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
   try {
     writer->Finish();
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
+    std::cerr << "gesweep: error: "
+              << EscapeForMessage(WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
+              << "\n";
     return 1;
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -314,8 +421,8 @@ int Run(const RunFlags& flags) {
               << writer->runs_pending() << " pending -> " << flags.output << "\n";
   }
   if (outcome.cancelled) {
-    std::cerr << "gesweep: stopped by signal " << g_signal.load() << "; continue with --resume\n";
-    return 128 + g_signal.load();
+    std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
+    return signals.cancelled() ? signals.exit_code() : 1;
   }
   if (writer->runs_failed() > 0) {
     std::cerr << "gesweep: " << writer->runs_failed()
@@ -331,14 +438,18 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<RunFlags>();
       app.add_option("study", flags->study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
       app.add_option("-o,--output", flags->output, "Archive to write (HDF5), e.g. results/stability_map.h5");
-      app.add_option("--threads", flags->threads, "Worker threads (default: all cores)");
+      app.add_option("--threads", flags->threads, "Worker threads, 1 to 4096 (default, when left out: all cores)")
+          ->each([flags](const std::string&) { flags->threads_given = true; });
       app.add_option("--shard", flags->shard,
                      "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
       app.add_flag("--resume", flags->resume,
                    "Continue an existing archive: skip complete runs, run the rest");
       app.add_flag("--force", flags->force, "Replace an existing archive");
       app.add_flag("--dry-run", flags->dry_run,
-                   "Print the run count, storage and time estimates; run nothing");
+                   "Print the run count, storage and time estimates (measured on sample runs within "
+                   "--dry-run-budget-s); run nothing");
+      app.add_option("--dry-run-budget-s", flags->dry_run_budget_s,
+                     "Wall time the dry run's measurement may take, s (default 2, at most 600)");
       app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
       app.add_flag("-q,--quiet", flags->quiet, "No progress output");
       app.add_flag("--mpi", flags->mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");

@@ -10,6 +10,7 @@
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/simulation/open_loop.h"
 
@@ -45,26 +46,39 @@ struct SimulateFlags {
   throw InputError("command line", flag, FormatNumber(value), expected);
 }
 
-void RequireFinite(double value, const std::string& flag) {
-  if (!std::isfinite(value)) Refuse(flag, value, "expected a finite number");
+// Maps ValidateOpenLoopConfig's field names to the flags a person typed.
+std::string FlagOf(const std::string& key) {
+  static const std::pair<const char*, const char*> kFlags[] = {
+      {"start_height_m", "--height-m"},
+      {"reference_speed_mps", "--speed-mps"},
+      {"duration_s", "--duration-s"},
+      {"step_s", "--dt-s"},
+      {"max_step_s", "--max-step-s"},
+      {"relative_tolerance", "--rtol"},
+      {"absolute_tolerance", "--atol"},
+      {"series_interval_s", "--output-dt-s"},
+      {"elevator.start_s", "--input-start-s"},
+      {"elevator.duration_s", "--pulse-s"},
+      {"initial_offsets.delta_speed_mps", "--initial-delta-u-mps"},
+      {"initial_offsets.delta_normal_velocity_mps", "--initial-delta-w-mps"},
+      {"initial_offsets.delta_height_m", "--initial-delta-h-m"},
+  };
+  for (const auto& [field, flag] : kFlags) {
+    if (key == field) return flag;
+  }
+  return key;
 }
 
-void RequirePositive(double value, const std::string& flag, const std::string& unit) {
-  if (!(value > 0.0) || !std::isfinite(value)) Refuse(flag, value, "expected a finite number > 0 " + unit);
-}
-
-// Checks every flag with its own name before anything runs, so that errors name the flag.
+// Each flag's own range is checked as it is parsed (AddLimitedOption); here what depends on the
+// aircraft or on several flags, then the library's validation as a backstop, in the flags' names.
 OpenLoopConfig BuildConfig(const SimulateFlags& flags, const LongitudinalModel& model) {
   const Aircraft& aircraft = model.aircraft();
   OpenLoopConfig config;
-  RequirePositiveSpeed(flags.speed_mps, "--speed-mps");
   if (!(flags.speed_mps + flags.initial_delta_u_mps > aircraft.stall_speed_mps)) {
     Refuse("--speed-mps", flags.speed_mps + flags.initial_delta_u_mps,
            "expected a start speed above the stall speed " + FormatNumber(aircraft.stall_speed_mps) + " m/s of " +
                aircraft.source_path);
   }
-  RequireFinite(flags.height_m, "--height-m");
-  RequireFinite(flags.initial_delta_h_m, "--initial-delta-h-m");
   if (!(flags.height_m + flags.initial_delta_h_m > aircraft.wheel_contact_height_m)) {
     Refuse("--height-m", flags.height_m + flags.initial_delta_h_m,
            "expected a start height above the wheel-contact height " + FormatNumber(aircraft.wheel_contact_height_m) +
@@ -75,23 +89,13 @@ OpenLoopConfig BuildConfig(const SimulateFlags& flags, const LongitudinalModel& 
 
   const auto kind = ParseElevatorInputKind(flags.input);
   if (!kind) throw InputError("command line", "--input", "'" + flags.input + "'", "expected pulse, step, doublet or none");
-  RequireFinite(flags.elevator_deg, "--elevator-deg");
-  RequireFinite(flags.input_start_s, "--input-start-s");
-  if (flags.input_start_s < 0.0) Refuse("--input-start-s", flags.input_start_s, "expected a time >= 0 s");
-  if (*kind == ElevatorInputKind::kPulse || *kind == ElevatorInputKind::kDoublet) {
-    RequirePositive(flags.pulse_s, "--pulse-s", "s");
+  if ((*kind == ElevatorInputKind::kPulse || *kind == ElevatorInputKind::kDoublet) && !(flags.pulse_s > 0.0)) {
+    Refuse("--pulse-s", flags.pulse_s, "expected a pulse length > 0 s for a " + flags.input);
   }
   config.elevator = {*kind, flags.elevator_deg * kRadPerDeg, flags.input_start_s, flags.pulse_s};
 
   const auto integrator = ParseIntegratorKind(flags.integrator);
   if (!integrator) throw InputError("command line", "--integrator", "'" + flags.integrator + "'", "expected rk4 or dopri5");
-  RequirePositive(flags.dt_s, "--dt-s", "s");
-  RequirePositive(flags.duration_s, "--duration-s", "s");
-  RequirePositive(flags.rtol, "--rtol", "");
-  if (flags.rtol >= 1.0) Refuse("--rtol", flags.rtol, "expected a relative tolerance in (0, 1)");
-  RequirePositive(flags.atol, "--atol", "");
-  RequireFinite(flags.max_step_s, "--max-step-s");
-  if (flags.max_step_s < 0.0) Refuse("--max-step-s", flags.max_step_s, "expected a step >= 0 s (0: no limit)");
   config.integrator.kind = *integrator;
   config.integrator.step_s = flags.dt_s;
   config.integrator.relative_tolerance = flags.rtol;
@@ -101,22 +105,24 @@ OpenLoopConfig BuildConfig(const SimulateFlags& flags, const LongitudinalModel& 
   config.duration_s = flags.duration_s;
   if (!flags.summary_only) {
     const double output_dt = std::isnan(flags.output_dt_s) ? flags.dt_s : flags.output_dt_s;
-    RequirePositive(output_dt, "--output-dt-s", "s");
     if (flags.duration_s / output_dt > 1e7) Refuse("--output-dt-s", output_dt, "expected at most 1e7 samples");
     config.series_interval_s = output_dt;
   }
   config.freeze_derivatives = flags.frozen;
-
-  for (const auto& [flag, value] : {std::pair{"--initial-delta-u-mps", flags.initial_delta_u_mps},
-                                    {"--initial-delta-w-mps", flags.initial_delta_w_mps},
-                                    {"--initial-pitch-rate-degps", flags.initial_pitch_rate_degps},
-                                    {"--initial-pitch-deg", flags.initial_pitch_deg}}) {
-    RequireFinite(value, flag);
-  }
   config.initial_offsets = {flags.initial_delta_u_mps, flags.initial_delta_w_mps,
                             flags.initial_pitch_rate_degps * kRadPerDeg, flags.initial_pitch_deg * kRadPerDeg,
                             flags.initial_delta_h_m};
-  ValidateOpenLoopConfig(model, config, "command line");  // a backstop: the checks above name the flags
+  try {
+    ValidateOpenLoopConfig(model, config, "command line");  // the step count among others
+  } catch (const InputError& e) {
+    std::string expected = e.expected();
+    for (const char* field : {"duration_s", "max_step_s", "step_s"}) {  // inside the step-count sentence
+      const std::string from = std::string(field) + " = ";
+      const auto at = expected.find(from);
+      if (at != std::string::npos) expected.replace(at, std::string(field).size(), FlagOf(field));
+    }
+    throw InputError("command line", FlagOf(e.key()), e.value(), expected);
+  }
   return config;
 }
 
@@ -166,7 +172,14 @@ int RunSimulate(const SimulateFlags& flags) {
   }
   const LongitudinalModel model = flags.model.BuildModel();
   const OpenLoopConfig config = BuildConfig(flags, model);
-  const OpenLoopResult result = SimulateOpenLoop(model, config);
+  const SignalCancellation signals;
+  const OpenLoopResult result = SimulateOpenLoop(model, config, signals.flag());
+  if (result.summary.cancelled) {
+    std::cerr << "gesweep: simulate stopped by signal " << signals.signal() << " at t = "
+              << ShortNumber(result.summary.end_time_s) << " s of " << ShortNumber(config.duration_s)
+              << " s; nothing written\n";
+    return signals.exit_code();
+  }
 
   if (flags.format == "json") {
     nlohmann::json series = nullptr;
@@ -234,37 +247,46 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<SimulateFlags>();
       flags->model.AddTo(app);
-      app.add_option("--height-m", flags->height_m,
-                     "Start height H0 of the mean chord above ground, m; must be above the aircraft's wheel-contact "
-                     "height (0.788 m for ANCE): starts on or below it are refused")
+      AddLimitedOption(app, "--height-m", flags->height_m, "height_m",
+                       "Start height H0 of the mean chord above ground, m; must be above the aircraft's "
+                       "wheel-contact height (0.788 m for ANCE): starts on or below it are refused")
           ->required();
-      app.add_option("--speed-mps", flags->speed_mps, "Reference speed u0, m/s; must be above the stall speed")
+      AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps",
+                       "Reference speed u0, m/s; must be above the stall speed")
           ->required();
       app.add_option("--input", flags->input, "Elevator input: pulse (default), step, doublet or none");
-      app.add_option("--elevator-deg", flags->elevator_deg,
-                     "Input amplitude, degrees, positive trailing edge down (nose down); default 5");
-      app.add_option("--pulse-s", flags->pulse_s, "Pulse length (doublet: each half), s; default 0.2");
-      app.add_option("--input-start-s", flags->input_start_s, "Time of the input's first jump, s; default 0");
+      AddLimitedOption(app, "--elevator-deg", flags->elevator_deg, "pulse_amplitude_deg",
+                       "Input amplitude, degrees, positive trailing edge down (nose down); default 5");
+      AddLimitedOption(app, "--pulse-s", flags->pulse_s, "pulse_duration_s",
+                       "Pulse length (doublet: each half), s; default 0.2");
+      AddLimitedOption(app, "--input-start-s", flags->input_start_s, "open_loop.input_start_s",
+                       "Time of the input's first jump, s; default 0");
       app.add_option("--integrator", flags->integrator, "rk4 (default, fixed step) or dopri5 (adaptive)");
-      app.add_option("--dt-s", flags->dt_s, "RK4 step (dopri5: first trial step), s; default 0.015");
-      app.add_option("--rtol", flags->rtol, "dopri5 relative tolerance; default 1e-6");
-      app.add_option("--atol", flags->atol, "dopri5 absolute tolerance; default 1e-9");
-      app.add_option("--max-step-s", flags->max_step_s, "dopri5 largest step, s; default 0 (no limit)");
+      AddLimitedOption(app, "--dt-s", flags->dt_s, "open_loop.step_s",
+                       "RK4 step (dopri5: first trial step), s; default 0.015");
+      AddLimitedOption(app, "--rtol", flags->rtol, "relative_tolerance", "dopri5 relative tolerance; default 1e-6");
+      AddLimitedOption(app, "--atol", flags->atol, "absolute_tolerance", "dopri5 absolute tolerance; default 1e-9");
+      AddLimitedOption(app, "--max-step-s", flags->max_step_s, "open_loop.max_step_s",
+                       "dopri5 largest step, s; default 0 (no limit)");
       app.add_flag("--no-breakpoints", flags->no_breakpoints,
                    "Let steps straddle the input's jumps (the paper's plain fixed-step RK4)");
-      app.add_option("--duration-s", flags->duration_s, "Time limit, s; default 300");
-      auto* output_dt = app.add_option("--output-dt-s", flags->output_dt_s,
-                                       "Series sampling interval, s (interpolated inside steps); default --dt-s");
+      AddLimitedOption(app, "--duration-s", flags->duration_s, "open_loop.duration_s", "Time limit, s; default 300");
+      auto* output_dt = AddLimitedOption(app, "--output-dt-s", flags->output_dt_s, "output_dt_s",
+                                         "Series sampling interval, s (interpolated inside steps); default --dt-s");
       auto* summary = app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       output_dt->excludes(summary);
       app.add_flag("--frozen", flags->frozen,
                    "Freeze A and B at the start condition (the classical linear response) instead of re-evaluating");
-      app.add_option("--initial-delta-u-mps", flags->initial_delta_u_mps, "Initial offset of u, m/s");
-      app.add_option("--initial-delta-w-mps", flags->initial_delta_w_mps, "Initial offset of w (positive down), m/s");
-      app.add_option("--initial-pitch-rate-degps", flags->initial_pitch_rate_degps, "Initial pitch rate, deg/s");
-      app.add_option("--initial-pitch-deg", flags->initial_pitch_deg, "Initial offset of the pitch angle, deg");
-      app.add_option("--initial-delta-h-m", flags->initial_delta_h_m,
-                     "Initial offset of H, m (the derivatives see H0 + offset)");
+      AddLimitedOption(app, "--initial-delta-u-mps", flags->initial_delta_u_mps, "open_loop.initial_delta_u_mps",
+                       "Initial offset of u, m/s");
+      AddLimitedOption(app, "--initial-delta-w-mps", flags->initial_delta_w_mps, "open_loop.initial_delta_w_mps",
+                       "Initial offset of w (positive down), m/s");
+      AddLimitedOption(app, "--initial-pitch-rate-degps", flags->initial_pitch_rate_degps,
+                       "open_loop.initial_pitch_rate_degps", "Initial pitch rate, deg/s");
+      AddLimitedOption(app, "--initial-pitch-deg", flags->initial_pitch_deg, "open_loop.initial_pitch_deg",
+                       "Initial offset of the pitch angle, deg");
+      AddLimitedOption(app, "--initial-delta-h-m", flags->initial_delta_h_m, "open_loop.initial_delta_h_m",
+                       "Initial offset of H, m (the derivatives see H0 + offset)");
       app.add_option("--format", flags->format,
                      "csv (default: the time series; with --summary-only one summary row) or json "
                      "({\"run\", \"summary\", \"series\"})");

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace gesweep {
 
@@ -33,8 +34,18 @@ class InputError : public std::runtime_error {
   int line_ = 0;
 };
 
-/// A number as a person would write it in a message: shortest form up to 10 significant digits.
+/// A number as a person would write it in a message: shortest form up to 10 significant digits,
+/// scientific where that is shorter ("1e-10", never "0.000000"); "nan", "inf", "-inf". The one number
+/// formatter of every message (InputError values, run messages, CLI refusals).
 std::string ShortNumber(double value);
+
+/// `text` made safe to print on a terminal as part of one line: valid UTF-8 passes unchanged; line
+/// breaks and tabs become "\n", "\r", "\t"; every other control character (C0, DEL and the C1
+/// controls U+0080-U+009F, which include the 8-bit CSI) becomes "\xNN" or "\u00NN"; every byte
+/// that is not part of a valid UTF-8 sequence becomes "\xNN". The result is printable and never
+/// holds a byte that could start an escape sequence or split a character. Applying it twice
+/// changes nothing more than applying it once (the output is printable).
+std::string EscapeForMessage(std::string_view text);
 
 /// Aborts with file, line and message when an internal invariant is broken (Drake's DEMAND).
 #define GESWEEP_DEMAND(condition)                                                              \

@@ -1,9 +1,14 @@
 #include "engine/common/toml_reader.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
+
+#include "engine/common/input_limits.h"
+#include "engine/common/output_guard.h"
 
 namespace gesweep {
 namespace {
@@ -44,29 +49,30 @@ std::string NearestName(std::string_view key, const std::vector<std::string>& ca
 }
 
 std::string ReadTextFile(const std::filesystem::path& path, std::string_view what) {
+  const std::string noun(what);
+  const std::string article = noun.find_first_of("aeiou") == 0 ? "an " : "a ";
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
   if (ec && ec != std::errc::no_such_file_or_directory) {
     // e.g. a symlink loop ("Too many levels of symbolic links") or a permission problem on a folder.
-    throw InputError(path.string(), "", "",
-                     std::string("cannot read ") + std::string(what) + ": " + ec.message());
+    throw InputError(path.string(), "", "", "cannot read the " + noun + ": " + ec.message());
   }
   if (!std::filesystem::exists(status)) {
-    throw InputError(path.string(), "", "", std::string("cannot read ") + std::string(what) + ": no such file");
+    throw InputError(path.string(), "", "", "cannot read the " + noun + ": no such file");
   }
   if (std::filesystem::is_directory(status)) {
-    throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
-                                                " file, found a directory");
+    throw InputError(path.string(), "", "", "expected " + article + noun + ", found a directory");
   }
   if (!std::filesystem::is_regular_file(status)) {
     // A FIFO or a device could block or never end: refuse it at once.
-    throw InputError(path.string(), "", "", std::string("expected ") + std::string(what) +
-                                                " file, found something that is not a regular file");
+    throw InputError(path.string(), "", "",
+                     "expected " + article + noun + ", found " + DescribeFileType(path) +
+                         " (not a regular file)");
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw InputError(path.string(), "", "",
-                     std::string("cannot open ") + std::string(what) + " (permission denied?)");
+                     "cannot open the " + noun + " (permission denied?)");
   }
   std::ostringstream text;
   text << in.rdbuf();
@@ -74,11 +80,32 @@ std::string ReadTextFile(const std::filesystem::path& path, std::string_view wha
   return text.str();
 }
 
+std::string MagnitudeProblem(const std::string& token) {
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size() || errno != ERANGE) return "";
+  return value == 0.0 ? "is closer to 0 than a double can hold (about 2.2e-308); write 0 if 0 is meant"
+                      : "is past the largest magnitude a double can hold (about 1.8e308)";
+}
+
 toml::table ParseToml(std::string_view text, const std::string& source) {
   try {
     return toml::parse(text, source);
   } catch (const toml::parse_error& e) {
     std::string description(e.description());
+    // toml++ says a number too large for a double "could not be interpreted as a value": say why.
+    const auto open = description.find('\'');
+    const auto close = open == std::string::npos ? open : description.find('\'', open + 1);
+    if (description.find("could not be interpreted") != std::string::npos && close != std::string::npos) {
+      std::string token = description.substr(open + 1, close - open - 1);
+      token.erase(std::remove(token.begin(), token.end(), '_'), token.end());  // TOML's digit separators
+      const std::string magnitude = MagnitudeProblem(token);
+      if (!magnitude.empty()) {
+        throw InputError(source, "", "'" + token + "'", "the number " + magnitude,
+                         static_cast<int>(e.source().begin.line));
+      }
+    }
     throw InputError(source, "", "", "TOML syntax error: " + description,
                      static_cast<int>(e.source().begin.line));
   }
@@ -87,11 +114,7 @@ toml::table ParseToml(std::string_view text, const std::string& source) {
 std::string DescribeNode(const toml::node& node) {
   if (auto s = node.as_string()) return "\"" + s->get() + "\"";
   if (auto i = node.as_integer()) return std::to_string(i->get());
-  if (auto f = node.as_floating_point()) {
-    std::ostringstream out;
-    out << f->get();
-    return out.str();
-  }
+  if (auto f = node.as_floating_point()) return ShortNumber(f->get());
   if (auto b = node.as_boolean()) return b->get() ? "true" : "false";
   if (node.is_array()) return "[...]";
   if (node.is_table()) return "{...}";
@@ -149,6 +172,14 @@ std::optional<double> TomlSection::OptionalNumber(std::string_view key) const {
     Fail(key, DescribeNode(*node), "expected a number");
   }
   if (!std::isfinite(value)) Fail(key, DescribeNode(*node), "expected a finite number");
+  return value;
+}
+
+std::optional<double> TomlSection::OptionalLimitedNumber(std::string_view key, std::string_view limit_name) const {
+  const auto value = OptionalNumber(key);
+  if (!value) return value;
+  const std::string problem = LimitProblem(RequireInputLimit(limit_name), *value);
+  if (!problem.empty()) Fail(key, DescribeNode(*Node(key)), problem);
   return value;
 }
 

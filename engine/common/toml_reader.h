@@ -22,7 +22,12 @@ std::string NearestName(std::string_view key, const std::vector<std::string>& ca
 /// Reads a whole text file; throws InputError (source = path) when it cannot be read.
 std::string ReadTextFile(const std::filesystem::path& path, std::string_view what);
 
-/// Parses TOML text; a syntax error becomes an InputError with its line.
+/// Whether a number's text is past a double's range: "" when it is not (or is no number), else why
+/// ("is past the largest magnitude a double can hold (about 1.8e308)").
+std::string MagnitudeProblem(const std::string& token);
+
+/// Parses TOML text; a syntax error becomes an InputError with its line (a number past a double's
+/// magnitude is named as such).
 toml::table ParseToml(std::string_view text, const std::string& source);
 
 /// A view on one TOML table with its dotted prefix, for error messages.
@@ -51,6 +56,8 @@ class TomlSection {
   /// A required finite number > 0.
   double PositiveNumber(std::string_view key) const;
   std::optional<double> OptionalNumber(std::string_view key) const;
+  /// An optional number within the entry `limit_name` of the limits table (input_limits.h).
+  std::optional<double> OptionalLimitedNumber(std::string_view key, std::string_view limit_name) const;
   std::string String(std::string_view key) const;
   std::optional<std::string> OptionalString(std::string_view key) const;
   std::optional<bool> OptionalBool(std::string_view key) const;

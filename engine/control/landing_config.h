@@ -90,9 +90,10 @@ struct LandingConfig {
   double divergence_pitch_deg = 60.0;
 };
 
-/// Throws InputError(source, <field name>, value, expectation) when a field is out of range. The
-/// aircraft's limits apply: flare, start and design heights above its wheel-contact height, the start
-/// speed above its stall speed.
+/// Throws InputError(source, <field name>, value, expectation) when a field is out of range: first the
+/// limits table (engine/common/input_limits.h; docs/limits.md), then the aircraft's limits (flare,
+/// start and design heights above its wheel-contact height, the start speed above its stall speed),
+/// then the step count: time limit / max_step_s at most kMaximumStepsPerRun.
 void ValidateLandingConfig(const LandingConfig& config, const Aircraft& aircraft, const std::string& source);
 
 /// The flare time constant used: config's, or Ho/(u0·sin γ), s.

@@ -244,7 +244,8 @@ std::string_view ToString(LandingPhase phase) {
   return phase == LandingPhase::kGlideSlope ? "glide_slope" : "flare";
 }
 
-LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config) {
+LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
+                              const std::atomic<bool>* cancel) {
   const Aircraft& aircraft = plant.aircraft();
   ValidateLandingConfig(config, aircraft, "landing config");
 
@@ -290,6 +291,7 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   options.max_step_s = config.max_step_s;
   options.step_s = std::min(0.01, config.max_step_s);
   options.output_interval_s = store_series ? config.output_interval_s : kMonitorInterval_s;
+  options.cancel = cancel;
   const IntegrationResult<kSimDimension> run = Integrate(problem, x0, 0.0, result.time_limit_s, {}, options);
   problem.Finish(run.end_time_s);
 
@@ -304,6 +306,11 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
     case IntegrationStatus::kReachedEnd:
       result.outcome = LandingOutcome::kNoTouchdown;
       result.message = "time limit reached in flight at H = " + Format(xf[kSimH]) + " m";
+      break;
+    case IntegrationStatus::kCancelled:
+      result.cancelled = true;
+      result.outcome = LandingOutcome::kNoTouchdown;
+      result.message = "cancelled" + at;
       break;
     case IntegrationStatus::kNonFinite:
     case IntegrationStatus::kStepSizeUnderflow:

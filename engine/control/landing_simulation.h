@@ -6,6 +6,7 @@
 /// adaptive Dormand–Prince 5(4) of engine/simulation (the paper's ode45, rtol 1e-3); the flare switch
 /// and touchdown are events located in time. docs/landing.md describes every convention.
 
+#include <atomic>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -85,6 +86,9 @@ struct LandingResult {
   long accepted_steps = 0;
   long rejected_steps = 0;
   long rhs_calls = 0;
+  /// The run was stopped by its cancellation flag before it ended: `outcome` means nothing and the
+  /// other fields describe the part flown.
+  bool cancelled = false;
 
   /// Every output_interval_s and at the end (empty when output_interval_s = 0).
   std::vector<LandingSample> series;
@@ -92,6 +96,9 @@ struct LandingResult {
 
 /// Designs the gain (DesignLandingController) and flies the landing on `plant`. Validates `config`
 /// (throws InputError with source "landing config"); numerical outcomes are in the result, never thrown.
-LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config);
+/// `cancel` (may be null) is read before every integration step: once true the run stops there with
+/// result.cancelled.
+LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
+                              const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace gesweep

@@ -1,5 +1,7 @@
 #include "engine/query/expression.h"
 
+#include <re2/re2.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -22,7 +24,9 @@ struct RowFilter::Node {
     kArithmetic,
     kNegate,
     kFunction,
-    kTruth
+    kTruth,
+    kIn,
+    kMatch
   };
   /// kBool: 0/1 values; kText: a text column; kString: a string literal.
   enum class Type { kNumber, kBool, kText, kString };
@@ -31,7 +35,14 @@ struct RowFilter::Node {
   int position = 1;   // 1-based column in the expression
   int column = -1;    // kColumn
   double number = 0;  // kNumber
-  std::string text;   // kString: the literal; kCompare/kArithmetic: the operator; kFunction: its name
+  int height = 1;     // levels of nodes from here down (a leaf is 1)
+  // kString: the literal; kCompare/kArithmetic: the operator; kFunction: its name;
+  // kMatch: "contains" (text is then the substring) or the pattern of "matches".
+  std::string text;
+  bool negated = false;                   // kIn, kMatch: "not in", "not contains", "not matches"
+  std::vector<double> numbers;            // kIn: the listed numbers (level codes), sorted, no NaN
+  std::vector<std::string> strings;       // kIn on a text column: the listed strings, sorted
+  std::shared_ptr<const re2::RE2> regex;  // kMatch with "matches"
   std::unique_ptr<Node> left, right;
 };
 
@@ -53,9 +64,20 @@ struct Token {
 bool NameStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool NameChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
 
+// Nesting of parentheses, function calls, `not` and unary minus: each level is a few stack frames
+// of this recursive-descent parser, so a limit keeps any expression far from the stack's end (the
+// CLI's 8 MB, a sanitizer's larger frames). No condition a person writes nests this deep.
+constexpr int kMaxNesting = 256;
+// Height of the parsed tree, which also grows along a chain (a + b + c ..., a or b or c ...):
+// evaluating and destroying the tree recurse along it. `in (...)` writes long lists of
+// alternatives as one node.
+constexpr int kMaxHeight = 1024;
+// An expression longer than this is echoed in an error message by its start and its length only.
+constexpr std::size_t kEchoedLength = 80;
+
 bool IsKeyword(const std::string& name) {
-  static const char* const kKeywords[] = {"and", "or",  "not", "true",  "false",
-                                          "inf", "nan", "abs", "isnan", "isfinite"};
+  static const char* const kKeywords[] = {"and", "or",    "not",      "true", "false",    "inf",    "nan",
+                                          "abs", "isnan", "isfinite", "in",   "contains", "matches"};
   return std::any_of(std::begin(kKeywords), std::end(kKeywords), [&](const char* k) { return name == k; });
 }
 
@@ -85,8 +107,43 @@ class Parser {
 
  private:
   [[noreturn]] void Fail(int position, const std::string& what) const {
-    throw InputError("command line", flag_, "'" + text_ + "'",
-                     "at column " + std::to_string(position) + ": " + what);
+    const std::string shown =
+        text_.size() <= kEchoedLength
+            ? "'" + text_ + "'"
+            : "'" + text_.substr(0, kEchoedLength) + "...' (" + std::to_string(text_.size()) + " characters)";
+    throw InputError("command line", flag_, shown, "at column " + std::to_string(position) + ": " + what);
+  }
+
+  // One more level of nesting for as long as it lives; refuses the level past kMaxNesting.
+  class Nest {
+   public:
+    Nest(Parser& parser, int position) : parser_(parser) {
+      if (++parser_.depth_ > kMaxNesting) {
+        parser_.Fail(position, "nested deeper than " + std::to_string(kMaxNesting) +
+                                   " levels (parentheses, function calls, not, unary minus); "
+                                   "write a flatter expression");
+      }
+    }
+    ~Nest() { --parser_.depth_; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+
+   private:
+    Parser& parser_;
+  };
+
+  // Sets the height of a node whose children are in place; refuses a tree past kMaxHeight.
+  std::unique_ptr<Node> Grown(std::unique_ptr<Node> node) const {
+    int below = 0;
+    if (node->left) below = std::max(below, node->left->height);
+    if (node->right) below = std::max(below, node->right->height);
+    node->height = below + 1;
+    if (node->height > kMaxHeight) {
+      Fail(node->position, "more than " + std::to_string(kMaxHeight) +
+                               " levels of operators (a very long chain of and, or, +, ...); "
+                               "split the condition, or write a list of alternatives as x in (a, b, c)");
+    }
+    return node;
   }
 
   void Lex() {
@@ -143,8 +200,8 @@ class Parser {
         token.text = name;
         i += name.size();
       } else {
-        static const char* const kOperators[] = {"==", "!=", "<=", ">=", "<", ">",
-                                                 "+",  "-",  "*",  "/",  "(", ")"};
+        static const char* const kOperators[] = {"==", "!=", "<=", ">=", "<", ">", "+",
+                                                 "-",  "*",  "/",  "%",  "(", ")", ","};
         token.kind = TokenKind::kOperator;
         for (const char* op : kOperators) {
           const std::size_t length = std::char_traits<char>::length(op);
@@ -176,7 +233,12 @@ class Parser {
   }
 
   const Token& Peek() const { return tokens_[next_]; }
-  const Token& Take() { return tokens_[next_++]; }
+  // The next token; the end token is never passed.
+  const Token& Take() {
+    const Token& token = tokens_[next_];
+    if (token.kind != TokenKind::kEnd) ++next_;
+    return token;
+  }
   bool TakeName(const char* keyword) {
     if (Peek().kind == TokenKind::kName && Peek().text == keyword) {
       ++next_;
@@ -212,7 +274,7 @@ class Parser {
     if (node->kind == Kind::kColumn && catalog_.column(node->column).boolean()) {
       auto truth = Make(Kind::kTruth, Type::kBool, node->position);
       truth->left = std::move(node);
-      return truth;
+      return Grown(std::move(truth));
     }
     Fail(node->position, "expected a condition (a comparison such as x < 1, or a false/true column), found " +
                              Describe(*node));
@@ -225,7 +287,7 @@ class Parser {
       auto node = Make(Kind::kOr, Type::kBool, position);
       node->left = AsCondition(std::move(left));
       node->right = AsCondition(ParseAnd());
-      left = std::move(node);
+      left = Grown(std::move(node));
     }
     return left;
   }
@@ -237,7 +299,7 @@ class Parser {
       auto node = Make(Kind::kAnd, Type::kBool, position);
       node->left = AsCondition(std::move(left));
       node->right = AsCondition(ParseNot());
-      left = std::move(node);
+      left = Grown(std::move(node));
     }
     return left;
   }
@@ -245,9 +307,10 @@ class Parser {
   std::unique_ptr<Node> ParseNot() {
     if (Peek().kind == TokenKind::kName && Peek().text == "not") {
       const int position = Take().position;
+      const Nest nest(*this, position);
       auto node = Make(Kind::kNot, Type::kBool, position);
       node->left = AsCondition(ParseNot());
-      return node;
+      return Grown(std::move(node));
     }
     return ParseComparison();
   }
@@ -258,32 +321,48 @@ class Parser {
            token.text == ">" || token.text == ">=";
   }
 
-  // A string literal compared with a column that has levels becomes the level's index.
-  void CoerceLevel(std::unique_ptr<Node>& literal, const Node& column_node) {
-    const RunColumn& column = catalog_.column(column_node.column);
-    const auto it = std::find(column.levels.begin(), column.levels.end(), literal->text);
+  // The level index of `literal` in `column`, or a refusal naming the levels.
+  double LevelIndex(const std::string& literal, int position, const RunColumn& column) const {
+    const auto it = std::find(column.levels.begin(), column.levels.end(), literal);
     if (it == column.levels.end()) {
       std::string levels;
       for (const auto& level : column.levels) levels += (levels.empty() ? "" : ", ") + level;
-      Fail(literal->position, "\"" + literal->text + "\" is not a level of " + column.name +
-                                  " (expected one of " + levels + ")");
+      Fail(position,
+           "\"" + literal + "\" is not a level of " + column.name + " (expected one of " + levels + ")");
     }
+    return static_cast<double>(it - column.levels.begin());
+  }
+
+  // A string literal compared with a column that has levels becomes the level's index.
+  void CoerceLevel(std::unique_ptr<Node>& literal, const Node& column_node) {
     auto number = Make(Kind::kNumber, Type::kNumber, literal->position);
-    number->number = static_cast<double>(it - column.levels.begin());
+    number->number = LevelIndex(literal->text, literal->position, catalog_.column(column_node.column));
     literal = std::move(number);
+  }
+
+  bool IsLevelColumn(const Node& node) const {
+    return node.kind == Kind::kColumn && !catalog_.column(node.column).levels.empty();
+  }
+
+  // After an operand: "in", "contains", "matches", or "not" followed by one of them.
+  bool AtMembership() const {
+    auto is_word = [](const Token& t) {
+      return t.kind == TokenKind::kName && (t.text == "in" || t.text == "contains" || t.text == "matches");
+    };
+    if (is_word(Peek())) return true;
+    return Peek().kind == TokenKind::kName && Peek().text == "not" && next_ + 1 < tokens_.size() &&
+           is_word(tokens_[next_ + 1]);
   }
 
   std::unique_ptr<Node> ParseComparison() {
     auto left = ParseSum();
+    if (AtMembership()) return ParseMembership(std::move(left));
     if (!IsComparison(Peek())) return left;
     const Token op = Take();
     auto right = ParseSum();
     if (IsComparison(Peek())) {
       Fail(Peek().position, "comparisons do not chain; write a < b and b < c");
     }
-    auto is_level_column = [&](const Node& n) {
-      return n.kind == Kind::kColumn && !catalog_.column(n.column).levels.empty();
-    };
     if (left->type == Type::kBool || right->type == Type::kBool) {
       const Node& bad = left->type == Type::kBool ? *left : *right;
       Fail(bad.position, "a condition cannot be compared; use and, or, not");
@@ -296,7 +375,7 @@ class Parser {
       const Node& other = left->type == Type::kString ? *right : *left;
       if (other.type == Type::kText) {
         // text == "..." compares strings.
-      } else if (is_level_column(other)) {
+      } else if (IsLevelColumn(other)) {
         CoerceLevel(literal, other);
       } else {
         Fail(literal->position, "\"" + literal->text + "\" is a string but " + Describe(other) +
@@ -311,7 +390,115 @@ class Parser {
     node->text = op.text;
     node->left = std::move(left);
     node->right = std::move(right);
-    return node;
+    return Grown(std::move(node));
+  }
+
+  // One item of an `in` list: a number (optionally signed), true, false, inf, nan, or a string.
+  // Returns true for a string (in `*text`), false for a number (in `*number`).
+  bool ParseListItem(double* number, std::string* text, int* position) {
+    const Token token = Take();
+    *position = token.position;
+    if (token.kind == TokenKind::kString) {
+      *text = token.text;
+      return true;
+    }
+    double sign = 1.0;
+    Token value = token;
+    if (token.kind == TokenKind::kOperator && (token.text == "-" || token.text == "+")) {
+      sign = token.text == "-" ? -1.0 : 1.0;
+      value = Take();
+    }
+    if (value.kind == TokenKind::kNumber) {
+      *number = sign * value.number;
+      return false;
+    }
+    if (value.kind == TokenKind::kName &&
+        (value.text == "true" || value.text == "false" || value.text == "inf" || value.text == "nan")) {
+      *number = sign * (value.text == "true"    ? 1.0
+                        : value.text == "false" ? 0.0
+                        : value.text == "inf"   ? std::numeric_limits<double>::infinity()
+                                                : std::nan(""));
+      return false;
+    }
+    Fail(value.position, "an in (...) list holds numbers or \"strings\", found '" + value.text +
+                             "' (to compare with a column, write x == a or x == b)");
+  }
+
+  // x [not] in (a, b, ...), x [not] contains "text", x [not] matches "regex".
+  std::unique_ptr<Node> ParseMembership(std::unique_ptr<Node> left) {
+    const bool negated = TakeName("not");
+    const Token word = Take();
+    if (left->type == Type::kBool) Fail(left->position, "a condition cannot be compared; use and, or, not");
+    if (left->type == Type::kString) {
+      Fail(left->position,
+           "\"" + left->text + "\" is a string; write the column on the left of " + word.text);
+    }
+    const bool text_column = left->type == Type::kText;
+    const bool level_column = IsLevelColumn(*left);
+    auto node = Make(Kind::kIn, Type::kBool, word.position);
+    node->negated = negated;
+    if (word.text == "in") {
+      if (!TakeOperator("(")) Fail(Peek().position, "expected '(' after in, e.g. speed_mps in (30, 32.0208)");
+      do {
+        double number = 0;
+        std::string text;
+        int position = 0;
+        if (ParseListItem(&number, &text, &position)) {
+          if (level_column) {
+            node->numbers.push_back(LevelIndex(text, position, catalog_.column(left->column)));
+          } else if (text_column) {
+            node->strings.push_back(text);
+          } else {
+            Fail(position, "\"" + text + "\" is a string but " + Describe(*left) +
+                               " is a number (strings are levels of a column with levels, or text)");
+          }
+        } else {
+          if (text_column) Fail(position, Describe(*left) + " is text; list strings, e.g. (\"a\", \"b\")");
+          if (!std::isnan(number)) node->numbers.push_back(number);  // NaN equals nothing
+        }
+      } while (TakeOperator(","));
+      if (!TakeOperator(")")) Fail(Peek().position, "expected ',' or ')' in the in (...) list");
+      std::sort(node->numbers.begin(), node->numbers.end());
+      node->numbers.erase(std::unique(node->numbers.begin(), node->numbers.end()), node->numbers.end());
+      std::sort(node->strings.begin(), node->strings.end());
+      node->strings.erase(std::unique(node->strings.begin(), node->strings.end()), node->strings.end());
+      node->left = std::move(left);
+      return Grown(std::move(node));
+    }
+    // contains / matches: a text column, or a column with levels (then: the levels that match).
+    if (Peek().kind != TokenKind::kString) {
+      Fail(Peek().position, "expected a \"string\" after " + word.text);
+    }
+    const Token pattern = Take();
+    if (!text_column && !level_column) {
+      Fail(left->position, Describe(*left) + " is a number; " + word.text +
+                               " applies to message or a column with levels (status, end_event, ...)");
+    }
+    std::shared_ptr<const re2::RE2> regex;
+    if (word.text == "matches") {
+      re2::RE2::Options options;
+      options.set_log_errors(false);  // the error comes back as data, never printed here
+      auto compiled = std::make_shared<const re2::RE2>(pattern.text, options);
+      if (!compiled->ok())
+        Fail(pattern.position, "not a regular expression (RE2 syntax): " + compiled->error());
+      regex = std::move(compiled);
+    }
+    if (level_column) {
+      const RunColumn& column = catalog_.column(left->column);
+      for (std::size_t level = 0; level < column.levels.size(); ++level) {
+        const std::string& name = column.levels[level];
+        const bool hit =
+            regex ? re2::RE2::PartialMatch(name, *regex) : name.find(pattern.text) != std::string::npos;
+        if (hit) node->numbers.push_back(static_cast<double>(level));
+      }
+      node->left = std::move(left);
+      return Grown(std::move(node));
+    }
+    node->kind = Kind::kMatch;
+    node->text = pattern.text;
+    node->regex = std::move(regex);
+    node->left = std::move(left);
+    return Grown(std::move(node));
   }
 
   void RequireNumber(const Node& node) const {
@@ -330,14 +517,15 @@ class Parser {
       node->left = std::move(left);
       node->right = ParseProduct();
       RequireNumber(*node->right);
-      left = std::move(node);
+      left = Grown(std::move(node));
     }
     return left;
   }
 
   std::unique_ptr<Node> ParseProduct() {
     auto left = ParseUnary();
-    while (Peek().kind == TokenKind::kOperator && (Peek().text == "*" || Peek().text == "/")) {
+    while (Peek().kind == TokenKind::kOperator &&
+           (Peek().text == "*" || Peek().text == "/" || Peek().text == "%")) {
       const Token op = Take();
       auto node = Make(Kind::kArithmetic, Type::kNumber, op.position);
       node->text = op.text;
@@ -345,7 +533,7 @@ class Parser {
       node->left = std::move(left);
       node->right = ParseUnary();
       RequireNumber(*node->right);
-      left = std::move(node);
+      left = Grown(std::move(node));
     }
     return left;
   }
@@ -353,10 +541,11 @@ class Parser {
   std::unique_ptr<Node> ParseUnary() {
     if (Peek().kind == TokenKind::kOperator && Peek().text == "-") {
       const int position = Take().position;
+      const Nest nest(*this, position);
       auto node = Make(Kind::kNegate, Type::kNumber, position);
       node->left = ParseUnary();
       RequireNumber(*node->left);
-      return node;
+      return Grown(std::move(node));
     }
     return ParsePrimary();
   }
@@ -376,6 +565,7 @@ class Parser {
       }
       case TokenKind::kOperator:
         if (token.text == "(") {
+          const Nest nest(*this, token.position);
           auto inner = ParseOr();
           if (!TakeOperator(")"))
             Fail(Peek().position,
@@ -399,15 +589,19 @@ class Parser {
     }
     if (name == "abs" || name == "isnan" || name == "isfinite") {
       if (!TakeOperator("(")) Fail(Peek().position, "expected '(' after " + name);
+      const Nest nest(*this, token.position);
       auto node = Make(Kind::kFunction, name == "abs" ? Type::kNumber : Type::kBool, token.position);
       node->text = name;
       node->left = ParseSum();
       RequireNumber(*node->left);
       if (!TakeOperator(")")) Fail(Peek().position, "expected ')' to close " + name + "(");
-      return node;
+      return Grown(std::move(node));
     }
     if (name == "and" || name == "or" || name == "not") {
       Fail(token.position, "'" + name + "' needs a condition before/after it");
+    }
+    if (name == "in" || name == "contains" || name == "matches") {
+      Fail(token.position, "'" + name + "' needs a column before it, e.g. status in (\"ok\", \"failed\")");
     }
     std::string problem;
     const auto column = catalog_.Resolve(name, &problem);
@@ -425,8 +619,16 @@ class Parser {
   const std::string& flag_;
   std::vector<Token> tokens_;
   std::size_t next_ = 0;
+  int depth_ = 0;
   std::vector<int> columns_;
 };
+
+// a % b with the sign of b, as Python's and NumPy's (numpy.remainder); NaN when b is 0.
+double FlooredRemainder(double a, double b) {
+  double r = std::fmod(a, b);
+  if (r != 0.0 && ((b < 0.0) != (r < 0.0))) r += b;
+  return r;
+}
 
 bool Compare(const std::string& op, double a, double b) {
   if (op == "==") return a == b;
@@ -500,9 +702,42 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
       const std::vector<double> b = Evaluate(*node.right, values, n);
       const char op = node.text[0];
       for (std::size_t i = 0; i < n; ++i) {
-        a[i] = op == '+' ? a[i] + b[i] : op == '-' ? a[i] - b[i] : op == '*' ? a[i] * b[i] : a[i] / b[i];
+        a[i] = op == '+'   ? a[i] + b[i]
+               : op == '-' ? a[i] - b[i]
+               : op == '*' ? a[i] * b[i]
+               : op == '/' ? a[i] / b[i]
+                           : FlooredRemainder(a[i], b[i]);
       }
       return a;
+    }
+    case Kind::kIn: {
+      std::vector<double> out(n);
+      if (node.left->type == Type::kText) {
+        const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
+        for (std::size_t i = 0; i < n; ++i) {
+          const bool hit = std::binary_search(node.strings.begin(), node.strings.end(), texts[i]);
+          out[i] = hit != node.negated ? 1.0 : 0.0;
+        }
+        return out;
+      }
+      const std::vector<double> a = Evaluate(*node.left, values, n);
+      for (std::size_t i = 0; i < n; ++i) {
+        // A missing value (NaN) is in no list, and so "not in" every one, as != holds for it.
+        const bool hit =
+            !std::isnan(a[i]) && std::binary_search(node.numbers.begin(), node.numbers.end(), a[i]);
+        out[i] = hit != node.negated ? 1.0 : 0.0;
+      }
+      return out;
+    }
+    case Kind::kMatch: {
+      std::vector<double> out(n);
+      const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
+      for (std::size_t i = 0; i < n; ++i) {
+        const bool hit = node.regex ? re2::RE2::PartialMatch(texts[i], *node.regex)
+                                    : texts[i].find(node.text) != std::string::npos;
+        out[i] = hit != node.negated ? 1.0 : 0.0;
+      }
+      return out;
     }
     case Kind::kNegate: {
       std::vector<double> a = Evaluate(*node.left, values, n);

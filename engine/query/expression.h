@@ -6,9 +6,12 @@
 ///   or         := and ("or" and)*
 ///   and        := not ("and" not)*
 ///   not        := "not" not | comparison
-///   comparison := sum (("==" | "!=" | "<" | "<=" | ">" | ">=") sum)?
+///   comparison := sum ( ("==" | "!=" | "<" | "<=" | ">" | ">=") sum
+///                     | ["not"] "in" "(" item ("," item)* ")"
+///                     | ["not"] ("contains" | "matches") "string" )?
+///   item       := ["-"] number | "string" | true | false | inf | nan
 ///   sum        := product (("+" | "-") product)*
-///   product    := unary (("*" | "/") unary)*
+///   product    := unary (("*" | "/" | "%") unary)*
 ///   unary      := "-" unary | primary
 ///   primary    := number | "string" | true | false | inf | nan | column
 ///               | ("abs" | "isnan" | "isfinite") "(" sum ")" | "(" condition ")"
@@ -18,8 +21,17 @@
 /// A string compares with the text column runs/message, or with a column that has levels
 /// (`status == "failed"`, `cdh == "zero"`, `end_event != "touchdown"`), by level name. A column whose
 /// levels are false/true (`stable`, `h_derivatives`) is a condition on its own. Missing values
-/// (NaN, e.g. a result of a failed run) fail every comparison except "!=" (IEEE 754).
-/// Errors are InputError naming the flag and the 1-based column of the expression at fault.
+/// (NaN, e.g. a result of a failed run) fail every comparison except "!=" (IEEE 754), and are in no
+/// `in` list. `a % b` is the remainder with the sign of b (Python's and NumPy's), NaN when b is 0.
+/// `x in (...)` lists literals: numbers, or strings (levels of a level column, or texts of
+/// message). `contains` is a substring test, `matches` an RE2 regular expression searched anywhere
+/// in the text (anchor it with ^ and $; `(?i)` ignores case); both apply to message, or to a level
+/// column, where they select the levels whose names match. Strings have no escapes: a string in
+/// "..." may hold ' and one in '...' may hold ".
+/// Limits (InputError when passed): nesting of parentheses, function calls, `not` and unary minus
+/// 256 levels; the parsed tree 1024 levels (a chain of operators counts one level per operator).
+/// Errors are InputError naming the flag and the 1-based column of the expression at fault; an
+/// expression longer than 80 characters is echoed by its start and length.
 
 #include <cstdint>
 #include <memory>

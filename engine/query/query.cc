@@ -5,15 +5,12 @@
 #include <queue>
 
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/column_reader.h"
 #include "engine/common/errors.h"
 #include "engine/query/expression.h"
 
 namespace gesweep {
 namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
 
 // A matching row kept for sorting: its key and its cells.
 struct SortedRow {
@@ -62,26 +59,21 @@ std::string FormatAttributeNumber(double value, bool integer) {
   return FormatValue(value);
 }
 
-std::string ReadAttributeText(hid_t object, const std::string& name) {
-  if (H5Aexists(object, name.c_str()) <= 0) return "";
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
-  Handle type(H5Aget_type(attribute.get()), "type of attribute " + name);
-  Handle space(H5Aget_space(attribute.get()), "space of attribute " + name);
-  const bool scalar = H5Sget_simple_extent_type(space.get()) == H5S_SCALAR;
-  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
-  const H5T_class_t type_class = H5Tget_class(type.get());
+std::string AttributeTextOf(const AttributeValue& attribute) {
   std::vector<std::string> items;
-  if (type_class == H5T_STRING) {
-    if (scalar) return hdf5::ReadStringAttribute(object, name).value_or("");
-    items = hdf5::ReadStringListAttribute(object, name);
-  } else if (type_class == H5T_INTEGER || type_class == H5T_FLOAT) {
-    std::vector<double> numbers(count);
-    if (count > 0)
-      Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, numbers.data()), "read attribute " + name);
-    for (double v : numbers) items.push_back(FormatAttributeNumber(v, type_class == H5T_INTEGER));
-    if (scalar && items.size() == 1) return items[0];
-  } else {
-    return "(unsupported attribute type)";
+  switch (attribute.kind) {
+    case AttributeValue::Kind::kText:
+      if (attribute.scalar && attribute.texts.size() == 1) return attribute.texts[0];
+      items = attribute.texts;
+      break;
+    case AttributeValue::Kind::kInteger:
+    case AttributeValue::Kind::kFloat:
+      for (double v : attribute.numbers)
+        items.push_back(FormatAttributeNumber(v, attribute.kind == AttributeValue::Kind::kInteger));
+      if (attribute.scalar && items.size() == 1) return items[0];
+      break;
+    case AttributeValue::Kind::kOther:
+      return "(unsupported attribute type)";
   }
   std::string text = "[";
   for (std::size_t i = 0; i < items.size(); ++i) text += (i ? ", " : "") + items[i];
@@ -102,7 +94,9 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   // Everything a person typed is checked before the first row is read.
   std::vector<int> output;
   for (const std::string& name : request.columns) {
-    output.push_back(catalog.Require(name, "command line", "--columns"));
+    for (int c : catalog.Expand(name, "command line", "--columns")) {
+      if (std::find(output.begin(), output.end(), c) == output.end()) output.push_back(c);
+    }
   }
   std::optional<RowFilter> filter;
   if (!request.where.empty()) filter.emplace(RowFilter::Parse(request.where, catalog, "--where"));
@@ -233,22 +227,9 @@ StatusCounts CountStatuses(const ArchiveReader& archive, std::int64_t chunk_rows
 }
 
 std::vector<AttributeText> ReadAttributes(const ArchiveReader& archive, const std::string& path) {
-  Handle object(H5Oopen(archive.file(), path.c_str(), H5P_DEFAULT), "open " + path);
-  H5O_info_t info;
-  Check(H5Oget_info2(object.get(), &info, H5O_INFO_NUM_ATTRS), "info of " + path);
-  std::vector<std::string> names;
-  for (hsize_t i = 0; i < info.num_attrs; ++i) {
-    const ssize_t length =
-        H5Aget_name_by_idx(object.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
-    Check(length, "attribute name of " + path);
-    std::string name(static_cast<std::size_t>(length), '\0');
-    Check(H5Aget_name_by_idx(object.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size() + 1,
-                             H5P_DEFAULT),
-          "attribute name of " + path);
-    names.push_back(name);
-  }
   std::vector<AttributeText> attributes;
-  for (const auto& name : names) attributes.push_back({name, ReadAttributeText(object.get(), name)});
+  for (const AttributeValue& attribute : ReadObjectAttributes(archive, path))
+    attributes.push_back({attribute.name, AttributeTextOf(attribute)});
   return attributes;
 }
 

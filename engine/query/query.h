@@ -25,9 +25,10 @@ class ArchiveReader;
 
 /// What to select.
 struct QueryRequest {
-  std::string where;                 ///< condition (expression.h); empty: every complete run
-  std::vector<std::string> columns;  ///< column names; empty: DefaultColumns
-  std::string sort;                  ///< column to sort by; empty: run order
+  std::string where;  ///< condition (expression.h); empty: every complete run
+  std::vector<std::string>
+      columns;       ///< column names or wildcards (ColumnCatalog::Expand); empty: DefaultColumns
+  std::string sort;  ///< column to sort by; empty: run order
   bool descending = false;
   std::int64_t limit = -1;            ///< at most this many rows; < 0: all
   std::int64_t chunk_rows = 1 << 16;  ///< runs read at a time (memory bound)
@@ -46,6 +47,8 @@ struct QuerySummary {
   std::int64_t matched = 0;   ///< complete runs satisfying the condition
   std::int64_t shown = 0;     ///< rows handed to the sink (≤ limit)
   bool snapshot = false;      ///< read while a sweep writes it, or after its writer died
+  std::int64_t groups = -1;   ///< aggregates (aggregate.h): the groups of matching runs; -1: rows
+  int passes = 1;             ///< passes over the archive (aggregates' exact order statistics)
 };
 
 /// Receives a query's result, row by row (formats: query_output.h).

@@ -24,9 +24,16 @@ std::string CellText(const RunColumn& column, const QueryCell& cell, int digits)
 }
 
 std::string SummaryLine(const QuerySummary& s, const std::string& archive) {
-  std::string line = "# " + std::to_string(s.shown) + " shown of " + std::to_string(s.matched) +
-                     " matching runs (" + std::to_string(s.complete) + " complete of " +
-                     std::to_string(s.runs) + ") in " + archive;
+  std::string line;
+  if (s.groups >= 0) {
+    line = "# " + std::to_string(s.shown) + " shown of " + std::to_string(s.groups) + " groups of " +
+           std::to_string(s.matched) + " matching runs (" + std::to_string(s.complete) + " complete of " +
+           std::to_string(s.runs) + ") in " + archive;
+    if (s.passes > 1) line += "; medians and quantiles exact after " + std::to_string(s.passes) + " passes";
+  } else {
+    line = "# " + std::to_string(s.shown) + " shown of " + std::to_string(s.matched) + " matching runs (" +
+           std::to_string(s.complete) + " complete of " + std::to_string(s.runs) + ") in " + archive;
+  }
   if (s.snapshot) {
     line +=
         "\n# snapshot: a sweep is writing this archive (or its writer stopped without closing it); "
@@ -134,6 +141,7 @@ class JsonWriter final : public QueryRowSink {
     for (const RunColumn* column : columns) {
       nlohmann::json entry = {{"name", column->name}, {"path", column->path}, {"units", column->units}};
       if (!column->levels.empty()) entry["levels"] = column->levels;
+      if (!column->statistic.empty()) entry["statistic"] = column->statistic;
       list.push_back(entry);
     }
     out_ << "{\"archive\": " << nlohmann::json(archive_).dump() << ",\n \"columns\": " << list.dump()
@@ -163,8 +171,9 @@ class JsonWriter final : public QueryRowSink {
   }
   void End(const QuerySummary& s) override {
     out_ << (first_ ? "]" : "\n ]") << ",\n \"runs\": " << s.runs << ", \"complete\": " << s.complete
-         << ", \"matched\": " << s.matched << ", \"shown\": " << s.shown
-         << ", \"snapshot\": " << (s.snapshot ? "true" : "false") << "}\n";
+         << ", \"matched\": " << s.matched << ", \"shown\": " << s.shown;
+    if (s.groups >= 0) out_ << ", \"groups\": " << s.groups << ", \"passes\": " << s.passes;
+    out_ << ", \"snapshot\": " << (s.snapshot ? "true" : "false") << "}\n";
   }
 
  private:

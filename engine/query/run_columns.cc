@@ -1,5 +1,7 @@
 #include "engine/query/run_columns.h"
 
+#include <fnmatch.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -8,15 +10,12 @@
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/column_reader.h"
 #include "engine/common/errors.h"
 #include "engine/common/toml_reader.h"
 
 namespace gesweep {
 namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
 
 bool StartsWith(const std::string& text, const std::string& prefix) {
   return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
@@ -48,58 +47,66 @@ std::string Join(const std::vector<std::string>& items, const std::string& separ
 }  // namespace
 
 ColumnCatalog ColumnCatalog::Of(const ArchiveReader& archive) {
-  ColumnCatalog catalog;
   const std::int64_t runs = archive.run_count();
-  const std::vector<std::string> design_order = [&] {
-    Handle design(H5Gopen2(archive.file(), archive::kDesignGroup, H5P_DEFAULT), "open design group");
-    return hdf5::ReadStringListAttribute(design.get(), "parameters");
-  }();
-  for (const std::string& path : archive.Datasets()) {
+  const std::vector<std::string> design_order =
+      ReadStringListAttribute(archive, archive::kDesignGroup, "parameters");
+  std::vector<RunColumn> columns;
+  std::vector<OtherDataset> others;
+  for (const DatasetInfo& dataset : DescribeDatasets(archive)) {
+    const std::string& path = dataset.path;
     const bool per_run_group = StartsWith(path, std::string(archive::kRunsGroup) + "/") ||
                                StartsWith(path, std::string(archive::kDesignGroup) + "/") ||
                                StartsWith(path, std::string(archive::kResultsGroup) + "/");
-    Handle dataset(H5Dopen2(archive.file(), path.c_str(), H5P_DEFAULT), "open " + path);
-    const std::vector<std::int64_t> shape = hdf5::Dimensions(dataset.get());
-    Handle type(H5Dget_type(dataset.get()), "type of " + path);
-    const H5T_class_t type_class = H5Tget_class(type.get());
-    const std::string units = hdf5::ReadStringAttribute(dataset.get(), "units").value_or("");
-    const std::string description = hdf5::ReadStringAttribute(dataset.get(), "description").value_or("");
+    const std::vector<std::int64_t>& shape = dataset.shape;
     std::string why;
     if (!per_run_group) {
       why = "not a per-run dataset (outside runs/, design/, results/)";
     } else if (shape.empty() || shape[0] != runs) {
       why = "not one value per run";
     } else if (shape.size() > 1) {
-      const std::string time_axis = hdf5::ReadStringAttribute(dataset.get(), "time_axis").value_or("");
-      why = time_axis.empty() ? std::to_string(shape[1]) + (type_class == H5T_COMPOUND ? " complex" : "") +
-                                    " values per run"
-                              : "a time series of " + std::to_string(shape[1]) + " samples per run";
-    } else if (type_class == H5T_COMPOUND) {
+      why = dataset.time_axis.empty()
+                ? std::to_string(shape[1]) + (dataset.type == StoredType::kCompound ? " complex" : "") +
+                      " values per run"
+                : "a time series of " + std::to_string(shape[1]) + " samples per run";
+    } else if (dataset.type == StoredType::kCompound) {
       why = "a compound value per run";
-    } else if (type_class != H5T_INTEGER && type_class != H5T_FLOAT && type_class != H5T_STRING) {
+    } else if (dataset.type == StoredType::kOther) {
       why = "of an unsupported type";
     }
     if (!why.empty()) {
-      catalog.others_.push_back(OtherDataset{path, shape, units, description, why});
+      others.push_back(OtherDataset{path, shape, dataset.units, dataset.description, why});
       continue;
     }
     RunColumn column;
     column.path = path;
-    column.units = units;
-    column.description = description;
+    column.units = dataset.units;
+    column.description = dataset.description;
     column.primary = !StartsWith(path, std::string(archive::kResultsGroup) + "/");
-    if (type_class == H5T_STRING) {
+    if (dataset.type == StoredType::kText) {
       column.kind = ColumnKind::kText;
-    } else if (type_class == H5T_INTEGER) {
+    } else if (dataset.type == StoredType::kSignedInteger || dataset.type == StoredType::kUnsignedInteger) {
       column.integer = true;
-      if (H5Tget_sign(type.get()) == H5T_SGN_NONE && H5Tget_size(type.get()) == 8)
+      if (dataset.type == StoredType::kUnsignedInteger && dataset.element_bytes == 8)
         column.kind = ColumnKind::kUnsigned;
+      column.fill = dataset.fill;
     }
-    column.levels = hdf5::ReadStringListAttribute(dataset.get(), "levels");
-    if (column.integer) column.fill = hdf5::ReadIntegerAttribute(dataset.get(), "fill");
-    catalog.columns_.push_back(std::move(column));
+    column.levels = dataset.levels;
+    columns.push_back(std::move(column));
   }
+  ColumnCatalog catalog = FromColumns(std::move(columns), design_order, std::move(others));
+  if (catalog.status_ < 0 || catalog.index_ < 0) {
+    throw ArchiveError(archive.path().string() +
+                       ": no runs/status or runs/index dataset (not a complete archive)");
+  }
+  return catalog;
+}
 
+ColumnCatalog ColumnCatalog::FromColumns(std::vector<RunColumn> columns,
+                                         const std::vector<std::string>& design_order,
+                                         std::vector<OtherDataset> others) {
+  ColumnCatalog catalog;
+  catalog.columns_ = std::move(columns);
+  catalog.others_ = std::move(others);
   // Display names: the shortest tail that resolves back to the column.
   for (auto& column : catalog.columns_) column.name = column.path;
   for (std::size_t i = 0; i < catalog.columns_.size(); ++i) {
@@ -119,10 +126,6 @@ ColumnCatalog ColumnCatalog::Of(const ArchiveReader& archive) {
   for (const std::string& name : design_order) {
     if (const auto index = catalog.FindPath(archive::DesignPath(name)))
       catalog.design_columns_.push_back(*index);
-  }
-  if (catalog.status_ < 0 || catalog.index_ < 0) {
-    throw ArchiveError(archive.path().string() +
-                       ": no runs/status or runs/index dataset (not a complete archive)");
   }
   return catalog;
 }
@@ -192,22 +195,65 @@ int ColumnCatalog::Require(const std::string& name, const std::string& source, c
   return *index;
 }
 
+std::vector<int> ColumnCatalog::NaturalOrder() const {
+  std::vector<int> order;
+  std::vector<char> placed(columns_.size(), 0);
+  auto place = [&](int c) {
+    if (c < 0 || placed[static_cast<std::size_t>(c)]) return;
+    placed[static_cast<std::size_t>(c)] = 1;
+    order.push_back(c);
+  };
+  place(index_);
+  for (int c : design_columns_) place(c);
+  place(status_);
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    if (!StartsWith(columns_[i].path, std::string(archive::kRunsGroup) + "/")) place(static_cast<int>(i));
+  }
+  for (std::size_t i = 0; i < columns_.size(); ++i) place(static_cast<int>(i));
+  return order;
+}
+
+std::vector<int> ColumnCatalog::Expand(const std::string& name, const std::string& source,
+                                       const std::string& key) const {
+  if (name.find_first_of("*?[") == std::string::npos) return {Require(name, source, key)};
+  const bool full_path_only = !name.empty() && name[0] == '/';
+  std::vector<int> matches;
+  for (int c : NaturalOrder()) {
+    const std::string& path = columns_[static_cast<std::size_t>(c)].path;
+    bool hit = false;
+    if (full_path_only) {
+      hit = fnmatch(name.c_str(), ("/" + path).c_str(), 0) == 0;
+    } else {
+      for (const std::string& tail : Tails(path)) {
+        if (fnmatch(name.c_str(), tail.c_str(), 0) == 0) {
+          hit = true;
+          break;
+        }
+      }
+    }
+    if (hit) matches.push_back(c);
+  }
+  if (matches.empty()) {
+    throw InputError(source, key, name,
+                     "the pattern matches no column; gesweep query ARCHIVE --describe lists the columns");
+  }
+  return matches;
+}
+
 void ReadColumn(const ArchiveReader& archive, const RunColumn& column, std::int64_t first, std::int64_t count,
                 ColumnValues& out) {
   const auto n = static_cast<std::size_t>(count);
   switch (column.kind) {
     case ColumnKind::kText:
-      out.texts = archive.ReadMessages(first, count);
+      out.texts = ReadTextRows(archive, column.path, first, count);
       return;
     case ColumnKind::kUnsigned:
-      out.unsigned_values.resize(n);
-      archive.ReadRows(column.path, first, count, H5T_NATIVE_UINT64, out.unsigned_values.data());
+      ReadUnsignedRows(archive, column.path, first, count, out.unsigned_values);
       out.numbers.resize(n);
       for (std::size_t i = 0; i < n; ++i) out.numbers[i] = static_cast<double>(out.unsigned_values[i]);
       return;
     case ColumnKind::kNumber:
-      out.numbers.resize(n);
-      archive.ReadRows(column.path, first, count, H5T_NATIVE_DOUBLE, out.numbers.data());
+      ReadDoubleRows(archive, column.path, first, count, out.numbers);
       if (column.fill) {
         const auto fill = static_cast<double>(*column.fill);
         for (double& v : out.numbers) {

@@ -39,6 +39,9 @@ struct RunColumn {
   std::optional<std::int64_t> fill;  ///< integer value that means "no value" (attribute `fill`)
   /// True for design/ and runs/ columns, whose bare names win over results' (see the file comment).
   bool primary = false;
+  /// For an output column of `gesweep query --aggregate`: the statistic ("count", "mean", "quantile",
+  /// ...), and `path` is the path of the column it summarises ("" for count). "" for a run column.
+  std::string statistic;
   /// Whether `levels` are exactly {"false", "true"}: the column can stand alone as a condition.
   bool boolean() const { return levels.size() == 2 && levels[0] == "false" && levels[1] == "true"; }
 };
@@ -65,6 +68,13 @@ class ColumnCatalog {
   /// Lists the columns of `archive` (every dataset under runs/, design/, results/ whose first
   /// dimension is the run count). Throws ArchiveError when the archive cannot be read.
   static ColumnCatalog Of(const ArchiveReader& archive);
+  /// A catalogue of the given columns (display names, status/index and design columns derived as
+  /// Of does); `design_order` lists the design parameters' names. For tests and the fuzz target,
+  /// which need a catalogue without an archive. status_column()/index_column() are -1 when
+  /// runs/status or runs/index is not among `columns`.
+  static ColumnCatalog FromColumns(std::vector<RunColumn> columns,
+                                   const std::vector<std::string>& design_order,
+                                   std::vector<OtherDataset> others = {});
 
   const std::vector<RunColumn>& columns() const { return columns_; }
   const std::vector<OtherDataset>& others() const { return others_; }
@@ -78,6 +88,17 @@ class ColumnCatalog {
   std::optional<int> Resolve(const std::string& name, std::string* problem) const;
   /// Like Resolve, throwing InputError(source, key, name, problem) when it does not resolve.
   int Require(const std::string& name, const std::string& source, const std::string& key) const;
+
+  /// The columns `name` stands for. A name without wildcard characters gives the one column Resolve
+  /// gives. A pattern with '*', '?' or '[...]' (shell wildcards; '*' also matches '/') gives every
+  /// column of which some tail, the full path included, matches it (a pattern that starts with "/"
+  /// matches full paths only): "phugoid/*" gives every phugoid column, "*" every column, "*_m"
+  /// every column in metres. The columns come in natural order (NaturalOrder). Throws
+  /// InputError(source, key, name, ...) when `name` resolves to nothing.
+  std::vector<int> Expand(const std::string& name, const std::string& source, const std::string& key) const;
+  /// Every column: runs/index, the design columns in design order, runs/status, the results in
+  /// archive order, then the other runs/ columns (id, message).
+  std::vector<int> NaturalOrder() const;
 
   /// Index of the column at `path` (full dataset path), or nullopt.
   std::optional<int> FindPath(const std::string& path) const;

@@ -2,7 +2,7 @@
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/column_reader.h"
 #include "engine/common/errors.h"
 #include "engine/common/toml_reader.h"
 #include "engine/sweep/analysis_adapters.h"
@@ -12,19 +12,6 @@
 
 namespace gesweep {
 namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
-
-std::vector<double> ReadDoubleList(hid_t object, const std::string& name) {
-  if (H5Aexists(object, name.c_str()) <= 0) return {};
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
-  Handle space(H5Aget_space(attribute.get()), "space of attribute " + name);
-  std::vector<double> values(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get())));
-  if (!values.empty())
-    Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()), "read attribute " + name);
-  return values;
-}
 
 ParameterId ParameterOf(const std::string& name, const std::string& source, const std::string& where) {
   const auto id = FindParameter(name);
@@ -65,10 +52,10 @@ ArchiveRunModels ArchiveRunModels::Of(const ArchiveReader& archive) {
   models.workspace_ = std::make_unique<RunWorkspace>(*models.plan_);
   models.base_ = models.plan_->base_parameters();
 
-  Handle design(H5Gopen2(archive.file(), archive::kDesignGroup, H5P_DEFAULT), "open design group");
   const std::vector<std::string> names =
-      hdf5::ReadStringListAttribute(design.get(), "unswept_parameter_names");
-  const std::vector<double> values = ReadDoubleList(design.get(), "unswept_parameter_values");
+      ReadStringListAttribute(archive, archive::kDesignGroup, "unswept_parameter_names");
+  const std::vector<double> values =
+      ReadDoubleListAttribute(archive, archive::kDesignGroup, "unswept_parameter_values");
   if (names.size() != values.size()) {
     throw InputError(
         source, "design/unswept_parameter_values", "",
@@ -78,7 +65,7 @@ ArchiveRunModels ArchiveRunModels::Of(const ArchiveReader& archive) {
     models.base_[static_cast<std::size_t>(ParameterOf(names[i], source, "design/unswept_parameter_names"))] =
         values[i];
   }
-  for (const std::string& name : hdf5::ReadStringListAttribute(design.get(), "parameters")) {
+  for (const std::string& name : ReadStringListAttribute(archive, archive::kDesignGroup, "parameters")) {
     models.design_ids_.push_back(ParameterOf(name, source, "design/parameters"));
   }
   return models;

@@ -1,7 +1,6 @@
 #include "engine/simulation/integrator.h"
 
 #include <cmath>
-#include <sstream>
 
 #include "engine/common/errors.h"
 
@@ -25,18 +24,15 @@ std::string_view ToString(IntegrationStatus status) {
       return "non_finite";
     case IntegrationStatus::kStepSizeUnderflow:
       return "step_size_underflow";
+    case IntegrationStatus::kCancelled:
+      return "cancelled";
   }
   return "unknown";
 }
 
 namespace {
 
-std::string Text(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+std::string Text(double value) { return ShortNumber(value); }
 
 }  // namespace
 

@@ -56,10 +56,15 @@
 ///
 /// Failures are data: a non-finite state or derivative ends the run with kNonFinite and the last
 /// finite state; a dopri5 step that falls below 1e-12·max(1, |t|) s ends it with kStepSizeUnderflow.
+///
+/// Cancellation. When options.cancel is set, Integrate reads it (a relaxed atomic load) before every
+/// step and ends the run with kCancelled at the current point once it is true: a signal handler or
+/// a deadline stops even a run of 1e8 steps within one step.
 /// No heap allocation happens inside Integrate (states are std::array; the problem decides for its
 /// own hooks).
 
 #include <array>
+#include <atomic>
 #include <optional>
 #include <span>
 #include <string>
@@ -113,6 +118,8 @@ struct IntegratorOptions {
   double output_interval_s = 0.0;
   /// Events are located to a time bracket of this width, s. In (0, 1e-6].
   double event_time_tolerance_s = 1e-10;
+  /// Not null: checked before every step; the run ends with kCancelled once it holds true.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 /// Throws InputError(source, <field name>, value, expectation) when an option is out of range.
@@ -131,9 +138,10 @@ enum class IntegrationStatus {
   kStoppedByEvent,      ///< an event returned kStop
   kNonFinite,           ///< a state or derivative became NaN or ±∞ (the final state is the last finite one)
   kStepSizeUnderflow,   ///< dopri5 could not meet its tolerance with a representable step
+  kCancelled,           ///< options.cancel became true; the final state is where the run stopped
 };
 
-/// "reached_end" / "stopped_by_event" / "non_finite" / "step_size_underflow".
+/// "reached_end" / "stopped_by_event" / "non_finite" / "step_size_underflow" / "cancelled".
 std::string_view ToString(IntegrationStatus status);
 
 /// What Integrate returns. Counts include everything: `rhs_calls` counts every Derivative call

@@ -283,7 +283,9 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
     return AllFinite<N>(*f);
   };
 
+  const std::atomic<bool>* cancel = options.cancel;
   while (t < end_time_s) {
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return finish(IntegrationStatus::kCancelled);
     double t_limit = end_time_s;
     if (honour && next_breakpoint < breakpoint_count && breakpoints_s[next_breakpoint] < end_time_s) {
       t_limit = breakpoints_s[next_breakpoint];

@@ -2,9 +2,9 @@
 
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 #include "engine/simulation/derivative_kernel.h"
 
 namespace gesweep {
@@ -64,12 +64,7 @@ ElevatorSchedule MakeElevatorSchedule(const ElevatorInput& input) {
 
 namespace {
 
-std::string Text(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+std::string Text(double value) { return ShortNumber(value); }
 
 double TouchdownHeight(const LongitudinalModel& model, const OpenLoopConfig& config) {
   return config.touchdown_height_m.value_or(model.aircraft().wheel_contact_height_m);
@@ -199,11 +194,13 @@ void Reserve(OpenLoopSeries& series, std::size_t count) {
 }
 
 template <class Source>
-OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoopConfig& config) {
+OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoopConfig& config,
+                   const std::atomic<bool>* cancel) {
   OpenLoopResult result;
   const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
   IntegratorOptions options = config.integrator;
   options.output_interval_s = config.series_interval_s;
+  options.cancel = cancel;
   OpenLoopSeries* series = nullptr;
   if (config.series_interval_s > 0.0) {
     // Every sample and the end point, so that push_back never reallocates during the run.
@@ -244,6 +241,10 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
       summary.end_event = OpenLoopEndEvent::kDiverged;
       summary.message = "the adaptive step fell below its floor at t = " + Text(run.end_time_s) + " s";
       break;
+    case IntegrationStatus::kCancelled:
+      summary.cancelled = true;
+      summary.message = "cancelled at t = " + Text(run.end_time_s) + " s";
+      break;
   }
   return result;
 }
@@ -259,46 +260,63 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
   require(std::isfinite(touchdown_m) && touchdown_m >= 0.0, "touchdown_height_m", touchdown_m,
           "expected a finite height >= 0 m");
   require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps, "expected a finite speed >= 0 m/s");
+  CheckInputLimit("height_m", config.start_height_m, source, "start_height_m");
+  CheckInputLimit("open_loop.initial_delta_h_m", config.initial_offsets.delta_height_m, source,
+                  "initial_offsets.delta_height_m");
   const double start_m = config.start_height_m + config.initial_offsets.delta_height_m;
-  require(std::isfinite(config.start_height_m), "start_height_m", config.start_height_m, "expected a finite height");
   if (!(start_m > touchdown_m)) {  // the message is built only on failure: this runs once per sweep run
     throw InputError(source, "start_height_m", Text(start_m),
                      "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
                          " m; a run cannot start on or below the ground");
   }
-  require(std::isfinite(config.reference_speed_mps) && config.reference_speed_mps > 0.0, "reference_speed_mps",
-          config.reference_speed_mps, "expected a finite speed > 0 m/s");
+  CheckInputLimit("speed_mps", config.reference_speed_mps, source, "reference_speed_mps");
+  CheckInputLimit("open_loop.initial_delta_u_mps", config.initial_offsets.delta_speed_mps, source,
+                  "initial_offsets.delta_speed_mps");
   const double start_speed = config.reference_speed_mps + config.initial_offsets.delta_speed_mps;
   if (!(start_speed > stall_mps)) {
     throw InputError(source, "reference_speed_mps", Text(start_speed),
                      "expected a start speed above the stall speed " + Text(stall_mps) + " m/s");
   }
-  require(std::isfinite(config.duration_s) && config.duration_s > 0.0, "duration_s", config.duration_s,
-          "expected a finite duration > 0 s");
+  CheckInputLimit("open_loop.duration_s", config.duration_s, source, "duration_s");
   require(std::isfinite(config.series_interval_s) && config.series_interval_s >= 0.0, "series_interval_s",
           config.series_interval_s, "expected a finite interval >= 0 s (0: summary only)");
-  require(config.series_interval_s == 0.0 || config.duration_s / config.series_interval_s <= 1e8, "series_interval_s",
-          config.series_interval_s, "expected at most 1e8 samples per run");
+  if (config.series_interval_s > 0.0) {
+    CheckInputLimit("output_dt_s", config.series_interval_s, source, "series_interval_s");
+    require(config.duration_s / config.series_interval_s <= kMaximumStepsPerRun, "series_interval_s",
+            config.series_interval_s, "expected at most 1e8 samples per run");
+  }
   const ElevatorInput& input = config.elevator;
   require(std::isfinite(input.amplitude_rad), "elevator.amplitude_rad", input.amplitude_rad, "expected a finite angle");
-  require(std::isfinite(input.start_s) && input.start_s >= 0.0, "elevator.start_s", input.start_s,
-          "expected a finite start time >= 0 s");
+  CheckInputLimit("open_loop.input_start_s", input.start_s, source, "elevator.start_s");
   if (input.kind == ElevatorInputKind::kPulse || input.kind == ElevatorInputKind::kDoublet) {
     require(std::isfinite(input.duration_s) && input.duration_s > 0.0, "elevator.duration_s", input.duration_s,
             "expected a finite duration > 0 s");
+    CheckInputLimit("pulse_duration_s", input.duration_s, source, "elevator.duration_s");
   }
   const InitialOffsets& o = config.initial_offsets;
-  for (const auto& [key, value] : {std::pair{"initial_offsets.delta_speed_mps", o.delta_speed_mps},
-                                   {"initial_offsets.delta_normal_velocity_mps", o.delta_normal_velocity_mps},
-                                   {"initial_offsets.pitch_rate_radps", o.pitch_rate_radps},
-                                   {"initial_offsets.delta_pitch_rad", o.delta_pitch_rad},
-                                   {"initial_offsets.delta_height_m", o.delta_height_m}}) {
+  CheckInputLimit("open_loop.initial_delta_w_mps", o.delta_normal_velocity_mps, source,
+                  "initial_offsets.delta_normal_velocity_mps");
+  for (const auto& [key, value] : {std::pair{"initial_offsets.pitch_rate_radps", o.pitch_rate_radps},
+                                   {"initial_offsets.delta_pitch_rad", o.delta_pitch_rad}}) {
     require(std::isfinite(value), key, value, "expected a finite number");
   }
   ValidateIntegratorOptions(config.integrator, source);
+  const IntegratorOptions& integrator = config.integrator;
+  CheckInputLimit("open_loop.step_s", integrator.step_s, source, "step_s");
+  if (integrator.kind == IntegratorKind::kDopri5) {
+    CheckInputLimit("relative_tolerance", integrator.relative_tolerance, source, "relative_tolerance");
+    CheckInputLimit("absolute_tolerance", integrator.absolute_tolerance, source, "absolute_tolerance");
+    CheckInputLimit("open_loop.max_step_s", integrator.max_step_s, source, "max_step_s");
+    // An adaptive run without a largest step has no step count known before it runs; its steps are
+    // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
+    CheckStepCount(config.duration_s, integrator.max_step_s, source, "duration_s", "max_step_s");
+  } else {
+    CheckStepCount(config.duration_s, integrator.step_s, source, "duration_s", "step_s");
+  }
 }
 
-OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config) {
+OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config,
+                                const std::atomic<bool>* cancel) {
   ValidateOpenLoopConfig(model, config, "open-loop config");
   const double h0 = config.start_height_m;
   const double u0 = config.reference_speed_mps;
@@ -306,13 +324,14 @@ OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopCo
     // A and B at the start condition H0 + ΔH(0), u0 + Δu(0), through the generic path.
     const double height_m = h0 + config.initial_offsets.delta_height_m;
     const double speed_mps = u0 + config.initial_offsets.delta_speed_mps;
-    return Run(FrozenSource{EntriesFromDerivatives(model.DerivativesAt(height_m, speed_mps), u0)}, model, config);
+    return Run(FrozenSource{EntriesFromDerivatives(model.DerivativesAt(height_m, speed_mps), u0)}, model, config,
+               cancel);
   }
   if (config.generic_derivative_path || model.options().interpolation != Interpolation::kLinear) {
-    return Run(ModelSource{&model}, model, config);
+    return Run(ModelSource{&model}, model, config, cancel);
   }
   const LinearDerivativeTable table(model);
-  return Run(TableSource{&table, table.SegmentOf(h0)}, model, config);
+  return Run(TableSource{&table, table.SegmentOf(h0)}, model, config, cancel);
 }
 
 }  // namespace gesweep

@@ -78,9 +78,11 @@ struct OpenLoopConfig {
   std::optional<double> touchdown_height_m;  ///< default: the aircraft's wheel-contact height, m
 };
 
-/// Throws InputError(source, <field>, value, expectation) when a field is out of range: non-finite
-/// numbers, H0 not above the touchdown height, u0 + Δu(0) not above the stall speed, duration or
-/// pulse length ≤ 0, input start < 0, integrator options (ValidateIntegratorOptions).
+/// Throws InputError(source, <field>, value, expectation) when a field is out of range: the limits
+/// table (engine/common/input_limits.h: height_m, speed_mps, open_loop.*, output_dt_s, the
+/// tolerances), H0 not above the touchdown height, u0 + Δu(0) not above the stall speed, a pulse
+/// length ≤ 0, more than kMaximumStepsPerRun steps (duration_s / step_s for RK4, duration_s /
+/// max_step_s for dopri5 with a largest step), integrator options (ValidateIntegratorOptions).
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source);
 
 /// How a run ended (MODEL.md §7).
@@ -108,6 +110,9 @@ struct OpenLoopSummary {
   long rejected_steps = 0;            ///< rejected dopri5 trials
   long rhs_calls = 0;                 ///< right-hand-side evaluations
   std::string message;                ///< empty, or what went wrong numerically
+  /// The run was stopped by its cancellation flag before it ended: the fields above describe the
+  /// part flown (end_time_s is where it stopped) and end_event means nothing.
+  bool cancelled = false;
 };
 
 /// The time series, one entry per sample (every series_interval_s and at the end), SI units.
@@ -131,7 +136,9 @@ struct OpenLoopResult {
 
 /// Runs MODEL.md §7 once. Validates the config (throws InputError, source "open-loop config");
 /// numerical outcomes (stall, divergence) are in the summary, never thrown. Allocates only the
-/// series (reserved before the run) and the per-run tables; nothing per step.
-OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config);
+/// series (reserved before the run) and the per-run tables; nothing per step. `cancel` (may be
+/// null) is read before every step: once true the run stops there with summary.cancelled.
+OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config,
+                                const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace gesweep

@@ -7,6 +7,7 @@
 /// below it (engine/modal, engine/simulation, engine/control) knows nothing of sweeps; the archive
 /// knows nothing of analyses, only of columns.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -129,6 +130,9 @@ struct RunContext {
   /// The run's model (its aircraft under its model parameters); null when no analysis of the
   /// study needs one.
   const LongitudinalModel* model = nullptr;
+  /// Not null in a sweep: set by SIGINT/SIGTERM or a deadline. An analysis that runs long (a time
+  /// response) passes it to its integrator and returns AnalysisOutcome::Cancelled() once it fired.
+  const std::atomic<bool>* cancel = nullptr;
   double value(ParameterId id) const { return parameters[static_cast<std::size_t>(id)]; }
 };
 
@@ -136,8 +140,11 @@ struct RunContext {
 struct AnalysisOutcome {
   bool ok = true;
   std::string message;  ///< why it failed, or a note on a successful run (e.g. "no boundary: ...")
-  static AnalysisOutcome Ok(std::string note = "") { return {true, std::move(note)}; }
-  static AnalysisOutcome Failed(std::string message) { return {false, std::move(message)}; }
+  /// Stopped by RunContext::cancel before it finished: no result; the run stays pending.
+  bool cancelled = false;
+  static AnalysisOutcome Ok(std::string note = "") { return {true, std::move(note), false}; }
+  static AnalysisOutcome Failed(std::string message) { return {false, std::move(message), false}; }
+  static AnalysisOutcome Cancelled() { return {false, "cancelled", true}; }
 };
 
 /// What a study says about storage that analyses need when declaring their columns.

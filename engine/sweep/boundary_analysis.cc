@@ -15,8 +15,6 @@ namespace {
 // (about 300 eigen-analyses) about 1 ms; the estimate keeps a margin for slower machines.
 constexpr double kHurwitzBoundaryCost_us = 100.0;
 constexpr double kSampledBoundaryCost_us = 5000.0;
-// The default tolerance of BoundaryOptions is 0.1 mm; a study may ask for anything down to this.
-constexpr double kFinestTolerance_m = 1e-9;
 constexpr int kMaximumSamplesPerSegment = 10000;
 
 class BoundaryAnalysis final : public Analysis {
@@ -93,27 +91,23 @@ std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, cons
       settings.Fail("method", method, "expected \"hurwitz\" (certified, the default) or \"sampled\" (the former search)");
     }
   }
-  if (settings.Has("lower_height_m")) options.lower_height_m = settings.PositiveNumber("lower_height_m");
-  if (settings.Has("upper_height_m")) options.upper_height_m = settings.PositiveNumber("upper_height_m");
+  if (const auto lower = settings.OptionalLimitedNumber("lower_height_m", "height_m")) options.lower_height_m = *lower;
+  if (const auto upper = settings.OptionalLimitedNumber("upper_height_m", "height_m")) options.upper_height_m = *upper;
   const double lower =
       std::isnan(options.lower_height_m) ? aircraft->wheel_contact_height_m : options.lower_height_m;
   const double upper =
       std::isnan(options.upper_height_m) ? aircraft->table_heights_m.back() : options.upper_height_m;
   if (lower < aircraft->wheel_contact_height_m) {
-    settings.Fail("lower_height_m", std::to_string(lower),
-                  "expected a height >= the wheel-contact height " +
-                      std::to_string(aircraft->wheel_contact_height_m) + " m of " + aircraft->source_path);
+    settings.Fail("lower_height_m", ShortNumber(lower),
+                  "expected a height >= the wheel-contact height " + ShortNumber(aircraft->wheel_contact_height_m) +
+                      " m of " + aircraft->source_path);
   }
   if (!(upper > lower)) {
-    settings.Fail(settings.Has("upper_height_m") ? "upper_height_m" : "lower_height_m", std::to_string(lower),
-                  "expected lower_height_m < upper_height_m (" + std::to_string(upper) + " m)");
+    settings.Fail(settings.Has("upper_height_m") ? "upper_height_m" : "lower_height_m", ShortNumber(lower),
+                  "expected lower_height_m < upper_height_m (" + ShortNumber(upper) + " m)");
   }
-  if (settings.Has("tolerance_m")) {
-    options.tolerance_m = settings.PositiveNumber("tolerance_m");
-    if (options.tolerance_m < kFinestTolerance_m || options.tolerance_m > 1e-3) {
-      settings.Fail("tolerance_m", std::to_string(options.tolerance_m),
-                    "expected 1e-9 to 1e-3 m (the issue asks for <= 1 mm)");
-    }
+  if (const auto tolerance = settings.OptionalLimitedNumber("tolerance_m", "boundary.tolerance_m")) {
+    options.tolerance_m = *tolerance;
   }
   if (const auto samples = settings.OptionalInteger("samples_per_segment")) {
     if (*samples < 1 || *samples > kMaximumSamplesPerSegment) {

@@ -123,7 +123,8 @@ class LandingAnalysis final : public Analysis {
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
     const LandingConfig config = ConfigFor(context.parameters);
-    const LandingResult r = SimulateLanding(*context.model, config);
+    const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
+    if (r.cancelled) return AnalysisOutcome::Cancelled();
     row.Set(outcome_, static_cast<double>(static_cast<int>(r.outcome)));
     const double values[] = {r.touchdown_time_s,
                              r.touchdown_distance_past_transmitter_m,
@@ -157,7 +158,7 @@ class LandingAnalysis final : public Analysis {
     bool truncated = false;
     if (samples_ > 0) truncated = StoreSeries(r, config, row);
     const std::string note =
-        truncated ? r.message + " (series cut at " + std::to_string(series_duration_s_) + " s)" : r.message;
+        truncated ? r.message + " (series cut at " + ShortNumber(series_duration_s_) + " s)" : r.message;
     if (r.outcome == LandingOutcome::kDiverged || r.outcome == LandingOutcome::kDesignFailed) {
       return AnalysisOutcome::Failed(std::string(ToString(r.outcome)) + ": " + note);
     }
@@ -235,13 +236,19 @@ std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const
        "elevator_max_deg", "plant_height_reference", "plant_fixed_reference_height_m", "relative_tolerance",
        "absolute_tolerance", "max_step_s", "time_limit_s", "divergence_pitch_deg", "series_duration_s"});
   LandingConfig config;
+  // Every number against the limits table (docs/limits.md), with the study's file and line; what
+  // depends on the run's parameters is checked on the design's extreme runs (CheckRun).
   auto number = [&](const char* key, double& field) {
-    if (const auto value = settings.OptionalNumber(key)) field = *value;
+    if (const auto value = settings.OptionalLimitedNumber(key, "landing." + std::string(key))) field = *value;
   };
   number("start_pitch_deg", config.start_pitch_deg);
   number("start_glide_path_offset_m", config.start_glide_path_offset_m);
-  if (const auto value = settings.OptionalNumber("design_height_m")) config.design_height_m = *value;
-  if (const auto value = settings.OptionalNumber("design_speed_mps")) config.design_speed_mps = *value;
+  if (const auto value = settings.OptionalLimitedNumber("design_height_m", "landing.design_height_m")) {
+    config.design_height_m = *value;
+  }
+  if (const auto value = settings.OptionalLimitedNumber("design_speed_mps", "speed_mps")) {
+    config.design_speed_mps = *value;
+  }
   config.design_h_derivatives = settings.OptionalBool("design_h_derivatives").value_or(true);
   number("actuator_pole_per_s", config.actuator_pole_per_s);
   number("compensator_pole_per_s", config.compensator_pole_per_s);
@@ -252,16 +259,23 @@ std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const
     if (!parsed) settings.Fail("plant_height_reference", "\"" + *reference + "\"", "expected path or fixed");
     config.plant_height_reference = *parsed;
   }
-  if (const auto value = settings.OptionalNumber("plant_fixed_reference_height_m")) {
+  if (const auto value =
+          settings.OptionalLimitedNumber("plant_fixed_reference_height_m", "landing.plant_fixed_reference_height_m")) {
     config.plant_fixed_reference_height_m = *value;
   }
-  number("relative_tolerance", config.relative_tolerance);
-  number("absolute_tolerance", config.absolute_tolerance);
+  if (const auto value = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
+    config.relative_tolerance = *value;
+  }
+  if (const auto value = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
+    config.absolute_tolerance = *value;
+  }
   number("max_step_s", config.max_step_s);
-  if (const auto value = settings.OptionalNumber("time_limit_s")) config.time_limit_s = *value;
+  if (const auto value = settings.OptionalLimitedNumber("time_limit_s", "landing.time_limit_s")) {
+    config.time_limit_s = *value;
+  }
   number("divergence_pitch_deg", config.divergence_pitch_deg);
   double series_duration_s = kDefaultSeriesDuration_s;
-  if (settings.Has("series_duration_s")) series_duration_s = settings.PositiveNumber("series_duration_s");
+  number("series_duration_s", series_duration_s);
   return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
 }
 

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "engine/common/input_limits.h"
 #include "engine/simulation/open_loop.h"
 #include "engine/sweep/analysis_adapters.h"
 
@@ -14,7 +15,6 @@ namespace {
 // Measured (docs/sweep.md): RK4 at 0.015 s for 30 s, derivatives re-evaluated per stage, about 300 µs.
 constexpr double kOpenLoopCost_us = 300.0;
 constexpr double kDefaultDuration_s = 30.0;
-constexpr double kMaximumDuration_s = 1e5;
 // A sample lands on the series grid when within this of a grid time (the integrator's output times
 // are t0 + j·dt, computed in floating point).
 constexpr double kGridTolerance_s = 1e-9;
@@ -107,8 +107,9 @@ class OpenLoopAnalysis final : public Analysis {
     config.reference_speed_mps = context.value(speed_);
     config.elevator.amplitude_rad = context.value(amplitude_) * std::numbers::pi / 180.0;
     config.elevator.duration_s = context.value(duration_);
-    const OpenLoopResult result = SimulateOpenLoop(*context.model, config);
+    const OpenLoopResult result = SimulateOpenLoop(*context.model, config, context.cancel);
     const OpenLoopSummary& s = result.summary;
+    if (s.cancelled) return AnalysisOutcome::Cancelled();
     row.Set(end_event_, static_cast<double>(static_cast<int>(s.end_event)));
     row.Set(end_time_, s.end_time_s);
     row.Set(min_height_, s.min_height_m);
@@ -173,35 +174,36 @@ std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, cons
     if (!kind) settings.Fail("input", "\"" + *input + "\"", "expected pulse, step, doublet or none");
     config.elevator.kind = *kind;
   }
-  if (const auto start = settings.OptionalNumber("input_start_s")) {
-    if (*start < 0) settings.Fail("input_start_s", std::to_string(*start), "expected a time >= 0 s");
+  // Every number against the limits table (docs/limits.md), with the study's file and line.
+  if (const auto start = settings.OptionalLimitedNumber("input_start_s", "open_loop.input_start_s")) {
     config.elevator.start_s = *start;
   }
-  if (settings.Has("duration_s")) {
-    config.duration_s = settings.PositiveNumber("duration_s");
-    if (config.duration_s > kMaximumDuration_s) {
-      settings.Fail("duration_s", std::to_string(config.duration_s), "expected at most 1e5 s");
-    }
+  if (const auto duration = settings.OptionalLimitedNumber("duration_s", "open_loop.duration_s")) {
+    config.duration_s = *duration;
   }
   if (const auto integrator = settings.OptionalString("integrator")) {
     const auto kind = ParseIntegratorKind(*integrator);
     if (!kind) settings.Fail("integrator", "\"" + *integrator + "\"", "expected rk4 or dopri5");
     config.integrator.kind = *kind;
   }
-  if (settings.Has("step_s")) config.integrator.step_s = settings.PositiveNumber("step_s");
-  if (settings.Has("relative_tolerance"))
-    config.integrator.relative_tolerance = settings.PositiveNumber("relative_tolerance");
-  if (settings.Has("absolute_tolerance"))
-    config.integrator.absolute_tolerance = settings.PositiveNumber("absolute_tolerance");
-  if (const auto max_step = settings.OptionalNumber("max_step_s")) {
-    if (*max_step < 0)
-      settings.Fail("max_step_s", std::to_string(*max_step), "expected >= 0 s (0: no limit)");
+  if (const auto step = settings.OptionalLimitedNumber("step_s", "open_loop.step_s")) config.integrator.step_s = *step;
+  if (const auto rtol = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
+    config.integrator.relative_tolerance = *rtol;
+  }
+  if (const auto atol = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
+    config.integrator.absolute_tolerance = *atol;
+  }
+  if (const auto max_step = settings.OptionalLimitedNumber("max_step_s", "open_loop.max_step_s")) {
     config.integrator.max_step_s = *max_step;
   }
   config.integrator.honour_breakpoints = settings.OptionalBool("honour_breakpoints").value_or(true);
   config.freeze_derivatives = settings.OptionalBool("freeze_derivatives").value_or(false);
   try {
     ValidateIntegratorOptions(config.integrator, settings.source());
+    // Bounded work: refused here, before the first run, not as a failed run later.
+    const bool rk4 = config.integrator.kind == IntegratorKind::kRk4;
+    CheckStepCount(config.duration_s, rk4 ? config.integrator.step_s : config.integrator.max_step_s,
+                   settings.source(), "duration_s", rk4 ? "step_s" : "max_step_s");
   } catch (const InputError& e) {
     settings.Fail(e.key(), e.value(), e.expected());
   }

@@ -41,8 +41,12 @@ struct ParameterInfo {
   /// Value when a study neither fixes nor sweeps it; nullopt: it must be given when used.
   /// Mass and pitch inertia default to the aircraft's own (see DefaultValue).
   std::optional<double> default_value;
-  double minimum = -1e300;  ///< allowed range of a real value, inclusive unless *_exclusive
-  double maximum = 1e300;
+  /// The entry of the limits table (engine/common/input_limits.h) that holds a real value's range;
+  /// empty for a choice or a boolean. The table is the one source of every range: the fields below
+  /// are copied from it.
+  std::string limit;
+  double minimum = 0;  ///< allowed range of a real value, inclusive unless *_exclusive
+  double maximum = 0;
   bool minimum_exclusive = false;
   bool maximum_exclusive = false;
 };
@@ -71,7 +75,8 @@ std::vector<std::string> ParameterNames();
 std::optional<double> DefaultValue(ParameterId id, const Aircraft* aircraft);
 
 /// Checks one value of a parameter. Returns an empty string when it is valid, else what was
-/// expected ("expected a number > 0", "expected a height >= the wheel-contact height 0.788 m ...").
+/// expected ("expected a number in (0, 1e+06] kg (...)", "expected a height >= the wheel-contact
+/// height 0.788 m ..."): the limits table's range and reason, then the aircraft's own limits.
 /// `aircraft` (may be null) adds the aircraft-dependent limits (height above wheel contact).
 std::string CheckParameterValue(ParameterId id, double value, const Aircraft* aircraft);
 
@@ -81,7 +86,7 @@ std::string FormatParameterValue(ParameterId id, double value);
 /// Parses a level name of a choice or boolean parameter ("polar", "true"); nullopt when unknown.
 std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text);
 
-/// A short description of the allowed values ("one of linear, pchip", "a number > 0 (kg)").
+/// A short description of the allowed values ("one of linear, pchip", "a number in (0, 1e+06] kg").
 std::string DescribeAllowedValues(ParameterId id);
 
 }  // namespace gesweep

@@ -7,6 +7,7 @@
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -123,7 +124,7 @@ const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
 }
 
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row) {
+                int row, const std::atomic<bool>* cancel) {
   const auto r = static_cast<std::size_t>(row);
   const Design& design = plan.design();
   design.Row(design_index, workspace.design_row.data());
@@ -151,7 +152,7 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
       return;
     }
   }
-  const RunContext context{workspace.parameters, model};
+  const RunContext context{workspace.parameters, model, cancel};
   OutputRow output(&block.results, &plan.schema(), row);
   for (const auto& analysis : plan.study().analyses) {
     AnalysisOutcome outcome;
@@ -161,6 +162,11 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
       outcome = AnalysisOutcome::Failed(std::string("exception: ") + e.what());
     } catch (...) {
       outcome = AnalysisOutcome::Failed("unknown exception");
+    }
+    if (outcome.cancelled) {  // not a result: the run stays pending
+      message = "cancelled";
+      block.status[r] = static_cast<std::int8_t>(RunStatus::kPending);
+      return;
     }
     ok = ok && outcome.ok;
     AppendMessage(message, analysis->name(), outcome.message);
@@ -210,6 +216,7 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
   tbb::enumerable_thread_specific<RunWorkspace> workspaces([&plan] { return RunWorkspace(plan); });
   std::size_t next = 0;
   std::size_t started = 0;
+  std::size_t dropped = 0;
   std::exception_ptr worker_error;
   try {
     tbb::task_arena arena(threads);
@@ -237,10 +244,12 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
                                       [&](const tbb::blocked_range<int>& range) {
                                         RunWorkspace& workspace = workspaces.local();
                                         for (int row = range.begin(); row != range.end(); ++row) {
+                                          if (options.cancel != nullptr && options.cancel->load()) return;
                                           ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)],
-                                                     workspace, *block, row);
-                                          if (block->status[static_cast<std::size_t>(row)] ==
-                                              static_cast<std::int8_t>(RunStatus::kFailed)) {
+                                                     workspace, *block, row, options.cancel);
+                                          const auto status = block->status[static_cast<std::size_t>(row)];
+                                          if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
+                                          if (status == static_cast<std::int8_t>(RunStatus::kFailed)) {
                                             counters.runs_failed.fetch_add(1, std::memory_order_relaxed);
                                           }
                                           counters.runs_done.fetch_add(1, std::memory_order_relaxed);
@@ -248,8 +257,18 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
                                       });
                     return block;
                   }) &
-              tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
-                                                   [&](ResultBlock* block) { write_queue.push(block); }));
+              tbb::make_filter<ResultBlock*, void>(
+                  tbb::filter_mode::serial_out_of_order, [&](ResultBlock* block) {
+                    // A batch a cancellation left unfinished is not written: its runs stay pending.
+                    const auto begin = block->status.begin();
+                    if (std::find(begin, begin + block->rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
+                        begin + block->rows) {
+                      ++dropped;
+                      free_blocks.push(block);
+                      return;
+                    }
+                    write_queue.push(block);
+                  }));
     });
   } catch (...) {
     worker_error = std::current_exception();
@@ -263,34 +282,8 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
   outcome.runs_failed = counters.runs_failed.load();
   outcome.runs_ok = counters.runs_done.load() - outcome.runs_failed;
   outcome.runs_skipped = counters.runs_skipped;
-  outcome.cancelled = started < pending_blocks.size();
+  outcome.cancelled = started < pending_blocks.size() || dropped > 0;
   return outcome;
-}
-
-double MeasureRunCost(const SweepPlan& plan, int max_samples, double budget_s, int* samples_used) {
-  GESWEEP_DEMAND(max_samples >= 1);
-  ResultBlock block;
-  block.Allocate(plan);
-  block.Reset(plan, 0);
-  RunWorkspace workspace(plan);
-  const auto samples = static_cast<int>(std::min<std::int64_t>(max_samples, plan.run_count()));
-  const auto start = std::chrono::steady_clock::now();
-  double elapsed = 0;
-  int done = 0;
-  for (int k = 0; k < samples; ++k) {
-    // Spread by the golden-ratio (Weyl) sequence, not an even stride: a stride that divides a grid
-    // axis's length samples one value of that axis only (e.g. every sample at the lowest height).
-    const double where = std::fmod((k + 0.5) * 0.6180339887498949, 1.0);
-    const std::int64_t index =
-        plan.first_run() + std::min<std::int64_t>(plan.run_count() - 1,
-                                                  static_cast<std::int64_t>(where * plan.run_count()));
-    ExecuteRun(plan, index, workspace, block, 0);
-    ++done;
-    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (elapsed > budget_s) break;
-  }
-  if (samples_used) *samples_used = done;
-  return elapsed / done;
 }
 
 }  // namespace gesweep

@@ -67,9 +67,10 @@ class RunWorkspace {
 
 /// Runs design run `design_index` (row `row` of `block`): fills its design values, id, status,
 /// message and results. Never throws for a numerical problem or an exception of an analysis: the
-/// run is marked failed with the message.
+/// run is marked failed with the message. `cancel` (may be null) reaches inside the analyses (time
+/// responses check it between integration steps): a run it stops keeps status kPending.
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row);
+                int row, const std::atomic<bool>* cancel = nullptr);
 
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {
@@ -83,8 +84,9 @@ struct SweepProgress {
 /// Options of RunSweep.
 struct RunnerOptions {
   int threads = 0;  ///< worker threads; 0: all cores
-  /// Set (e.g. by a signal handler) to stop taking new batches; batches in flight are finished and
-  /// written, so the archive stays resumable.
+  /// Set (e.g. by a signal handler) to stop: no new batch is taken, the runs in flight stop between
+  /// two integration steps, and a batch with a run left unfinished is not written (its runs stay
+  /// pending for --resume). Batches finished before are written, so the archive stays resumable.
   const std::atomic<bool>* cancel = nullptr;
   int queue_batches = 4;  ///< capacity of the queue to the writer
 };
@@ -94,16 +96,12 @@ struct SweepOutcome {
   std::int64_t runs_ok = 0;
   std::int64_t runs_failed = 0;
   std::int64_t runs_skipped = 0;
-  bool cancelled = false;  ///< stopped by `cancel` before every batch was run
+  bool cancelled = false;  ///< stopped by `cancel` before every batch was run and written
 };
 
 /// Runs the batches `pending_blocks` (ascending batch numbers of the plan's shard) and writes them
 /// through `sink`. Rethrows the first exception of the sink after stopping cleanly.
 SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
                       ResultSink& sink, const RunnerOptions& options, SweepProgress* progress);
-
-/// Mean wall time of one run on one thread, seconds, from up to `max_samples` runs spread over the
-/// shard, stopping early after `budget_s` (dry-run time estimates). Nothing is written.
-double MeasureRunCost(const SweepPlan& plan, int max_samples, double budget_s, int* samples_used);
 
 }  // namespace gesweep

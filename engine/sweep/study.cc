@@ -23,12 +23,7 @@ constexpr int kMaximumChunkRuns = 1 << 16;
 
 std::string Quote(const std::string& text) { return "\"" + text + "\""; }
 
-std::string FormatNumber(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
-}
+std::string FormatNumber(double value) { return ShortNumber(value); }
 
 int NodeLine(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
 
@@ -38,6 +33,7 @@ class StudyParser {
       : path_(std::move(path)), source_(path_.string()), root_(ParseToml(text, source_)) {
     study_.path = source_;
     study_.text = text;
+    study_.inputs.push_back({path_, "study file"});
   }
 
   Study Parse() {
@@ -110,6 +106,7 @@ class StudyParser {
     if (!ec_study && !ec_aircraft && study_canonical == aircraft_canonical) {
       root.Fail("aircraft", Quote(*aircraft), "expected an aircraft file, not this study file itself");
     }
+    study_.inputs.push_back({aircraft_path, "aircraft file"});
     try {
       study_.aircraft = LoadAircraftFile(aircraft_path);
     } catch (const InputError& e) {
@@ -143,7 +140,7 @@ class StudyParser {
     output->RejectUnknownKeys(
         {"time_series", "output_dt_s", "chunk_runs", "compression_level", "max_archive_gb"});
     study_.storage.time_series = output->OptionalBool("time_series").value_or(false);
-    if (output->Has("output_dt_s")) study_.storage.output_dt_s = output->PositiveNumber("output_dt_s");
+    if (const auto dt = output->OptionalLimitedNumber("output_dt_s", "output_dt_s")) study_.storage.output_dt_s = *dt;
     if (const auto chunk = output->OptionalInteger("chunk_runs")) {
       if (*chunk < 1 || *chunk > kMaximumChunkRuns || (*chunk & (*chunk - 1)) != 0) {
         output->Fail("chunk_runs", std::to_string(*chunk),
@@ -475,6 +472,7 @@ class StudyParser {
     const std::string csv = design.String("csv");
     std::filesystem::path csv_path(csv);
     if (csv_path.is_relative()) csv_path = path_.parent_path() / csv_path;
+    study_.inputs.push_back({csv_path, "design CSV file"});
     const std::string text = ReadTextFile(csv_path, "design CSV file");
     csv_text_ = text;
     const std::string csv_source = csv_path.string();
@@ -529,6 +527,10 @@ class StudyParser {
         double value = 0;
         bool parsed = false;
         if (info.kind == ParameterKind::kReal) {
+          const std::string magnitude = MagnitudeProblem(cells[c]);
+          if (!magnitude.empty()) {
+            throw InputError(csv_source, header[c], Quote(cells[c]), "the number " + magnitude, line_number);
+          }
           char* end = nullptr;
           value = std::strtod(cells[c].c_str(), &end);
           parsed = !cells[c].empty() && end == cells[c].c_str() + cells[c].size();

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/common/output_guard.h"
 #include "engine/sweep/analysis.h"
 #include "engine/sweep/design.h"
 
@@ -53,6 +54,10 @@ struct Study {
   /// A hash of the parsed study and aircraft (not of comments or layout): shards and resumed
   /// archives must carry the same fingerprint.
   std::uint64_t fingerprint = 0;
+
+  /// Every file the study was read from: the study file, its aircraft file, its design CSV. A
+  /// command that writes never replaces one of them (engine/common/output_guard.h).
+  std::vector<NamedInput> inputs;
 
   bool needs_model() const;
   /// The line of the [design] table in the study file, for errors raised after parsing.

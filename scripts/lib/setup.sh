@@ -9,7 +9,7 @@ GESWEEP_PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libboost-dev libboost-math-dev libhdf5-dev hdf5-tools libtbb-dev
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
-  libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5
+  libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5 libre2-dev
   libopenmpi-dev openmpi-bin
   python3 python3-numpy python3-scipy python3-h5py python3-matplotlib python3-jsonschema
   chromium  # headless, for tests/report: the report page loads and shows every figure

@@ -11,6 +11,7 @@ opens from disk. Exit codes: 0 ok, 2 bad input (one line on stderr), 1 anything 
 import argparse
 import html
 import os
+import shutil
 import sys
 import time
 
@@ -178,9 +179,23 @@ def main(argv):
     try:
         archives = open_archives(args.archives)
     except (OSError, ValueError) as error:
-        print(f"gesweep: error: {error}", file=sys.stderr)
+        print(f"gesweep: error: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
+    created = not os.path.exists(args.output)
     os.makedirs(args.output, exist_ok=True)
+    try:
+        return write_report(args, archives, progress)
+    except Exception as error:  # a defect of the report: one line, and nothing half-made left behind
+        if created:
+            shutil.rmtree(args.output, ignore_errors=True)
+        print(f"gesweep: error: the report failed ({type(error).__name__}: {' '.join(str(error).split())}); "
+              f"rerun with GESWEEP_REPORT_TRACEBACK=1 for the traceback", file=sys.stderr)
+        if os.environ.get("GESWEEP_REPORT_TRACEBACK"):
+            raise
+        return 1
+
+
+def write_report(args, archives, progress):
     # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
     for name in os.listdir(args.output):
         if name.endswith(".png") and name.split("_")[0] in ("stability", "root", "open", "landing", "sensitivity"):

@@ -44,6 +44,46 @@ class Aircraft:
                       if name != "height_m" and isinstance(values, list) and len(values) == len(self.table_heights_m)}
 
 
+REQUIRED_ATTRIBUTES = ("run_count", "design_runs", "first_run", "chunk_runs")
+REQUIRED_DATASETS = ("runs/index", "runs/id", "runs/status", "runs/message")
+PER_RUN_GROUPS = ("runs/", "design/", "results/", "series/")
+
+
+def validate_layout(file, path):
+    """The checks of the engine's ArchiveReader::Open (engine/archive/archive_reader.cc), so that the
+    report refuses what `gesweep query` and `gesweep boundary` refuse, with the same one line: the
+    root attributes the readers use, runs/ and design/, and every per-run dataset (the series' time
+    axes excepted) with one row per run. Raises ValueError."""
+    for name in REQUIRED_ATTRIBUTES:
+        if name not in file.attrs:
+            raise ValueError(f"{path}: {name}: missing root attribute (a damaged archive, or one not written "
+                             f"by gesweep)")
+    runs = int(file.attrs["run_count"])
+    for group in ("runs", "design"):
+        if not isinstance(file.get(group), h5py.Group):
+            raise ValueError(f"{path}: {group}: missing group /{group} (a damaged archive, or one not written "
+                             f"by gesweep)")
+    for name in REQUIRED_DATASETS:
+        if not isinstance(file.get(name), h5py.Dataset):
+            raise ValueError(f"{path}: {name}: missing dataset /{name} (a damaged archive, or one not written "
+                             f"by gesweep)")
+    problems = []
+
+    def visit(name, obj):
+        if not isinstance(obj, h5py.Dataset) or not name.startswith(PER_RUN_GROUPS):
+            return
+        if name.startswith("series/") and "time_axis" not in obj.attrs:
+            return  # a shared time axis
+        if obj.ndim not in (1, 2) or obj.shape[0] != runs:
+            problems.append(f"{path}: {name} = {obj.shape[0] if obj.ndim else 0} rows: expected one row per run: "
+                            f"run_count = {runs} (runs/status has {runs}) (a damaged archive, or one not "
+                            f"written by gesweep)")
+
+    file.visititems(visit)
+    if problems:
+        raise ValueError(problems[0])
+
+
 class Archive:
     """One archive: attributes, parameters per run, result columns, series."""
 
@@ -59,6 +99,7 @@ class Archive:
         self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
         if self.attrs.get("format") != "gesweep-archive":
             raise ValueError(f"{path}: not a gesweep archive")
+        validate_layout(self.file, path)
         self.run_count = int(self.attrs.get("run_count", 0))
         self.status = self.file["runs/status"][...]  # before any value (snapshot safety)
         self.complete = self.status != STATUS_PENDING
@@ -179,7 +220,17 @@ class Archive:
 
 
 def open_archives(paths):
+    """Opens and validates every archive before anything is drawn; ValueError (one line) for a bad one."""
     archives = []
-    for path in paths:
-        archives.append(Archive(path))
+    try:
+        for path in paths:
+            archives.append(Archive(path))
+    except (KeyError, TypeError) as error:  # a layout h5py cannot read as the report expects
+        for archive in archives:
+            archive.close()
+        raise ValueError(f"{path}: cannot read it as a gesweep archive ({error})") from None
+    except (OSError, ValueError):
+        for archive in archives:
+            archive.close()
+        raise
     return archives

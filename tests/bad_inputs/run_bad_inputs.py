@@ -5,20 +5,27 @@ tests/bad_inputs/aircraft/NAME.toml   aircraft files, loaded by `gesweep modes -
 tests/bad_inputs/study/NAME.toml      study files, run by `gesweep run NAME.toml -o <tmp>/out.h5`
 NAME.expect                           a fragment the one-line error message must contain
 
-Every case must exit 2, print exactly one line on stderr containing the fragment, and leave no file
-in the output directory (but the ones a case put there on purpose, unchanged). Cases that need setup
-(unreadable paths, symlink loops, FIFOs, archives, shards of different studies, ...) are in the
-special_*_cases functions below."""
+Every case must exit with its code (2, bad input, unless the case says otherwise), print exactly one
+line on stderr containing the fragment (and none of its forbidden fragments), that line printable:
+valid UTF-8 without control characters (a person's text in it escaped), and leave nothing behind:
+no file in the output directory but the ones a case put there on purpose; a protected copy of every
+input -- every file named on its command line, the files the case names as protected, the shipped
+aircraft -- byte-identical afterwards (compared as cmp does); nothing new beside any of them. Cases
+that need setup (unreadable paths, symlink loops, FIFOs, archives, shards of different studies, an
+output that is an input, ...) are in the special_*_cases functions below."""
+import filecmp
 import os
 import pathlib
 import resource
 import shutil
+import stat
 import subprocess
 import sys
 import tempfile
 
 GESWEEP = os.path.abspath(sys.argv[1])
 ROOT = pathlib.Path(__file__).resolve().parent
+ANCE = (ROOT.parent.parent / "studies" / "aircraft" / "ance.toml").resolve()
 # An AddressSanitizer build (./scripts/test --sanitize) cannot run under an address-space limit.
 # GCC links the runtime dynamically (libasan.so): the binary names its entry point, not the runtime's text.
 SANITIZED = b"__asan_init" in pathlib.Path(GESWEEP).read_bytes()
@@ -26,39 +33,112 @@ failures = []
 count = 0
 
 
-def check(name, args, fragment, out_dir, keep=(), timeout=120, memory_bytes=None):
+def snapshot(paths, copies):
+    """Protected copies: for each path, what it is (lstat mode, symlink target, device) and, for a
+    regular file, a copy of its bytes in `copies`."""
+    taken = {}
+    for index, path in enumerate(paths):
+        path = pathlib.Path(path)
+        if not os.path.lexists(path):
+            continue
+        info = os.lstat(path)
+        entry = {"mode": stat.S_IFMT(info.st_mode), "rdev": info.st_rdev, "copy": None, "link": None}
+        if stat.S_ISLNK(info.st_mode):
+            entry["link"] = os.readlink(path)
+        elif stat.S_ISREG(info.st_mode):
+            entry["copy"] = pathlib.Path(copies) / f"{index}"
+            shutil.copyfile(path, entry["copy"])
+        taken[str(path)] = entry
+    return taken
+
+
+def changed_inputs(taken):
+    """Names of protected paths that are not as they were (missing, another kind of file, another
+    symlink target, other bytes)."""
+    changed = []
+    for path, entry in taken.items():
+        if not os.path.lexists(path):
+            changed.append(f"{path} (gone)")
+            continue
+        info = os.lstat(path)
+        if stat.S_IFMT(info.st_mode) != entry["mode"] or info.st_rdev != entry["rdev"]:
+            changed.append(f"{path} (now another kind of file)")
+        elif entry["link"] is not None and os.readlink(path) != entry["link"]:
+            changed.append(f"{path} (the symlink points elsewhere)")
+        elif entry["copy"] is not None and not filecmp.cmp(path, entry["copy"], shallow=False):
+            changed.append(f"{path} (other bytes)")
+    return changed
+
+
+def printable_problem(raw):
+    """Why the stderr bytes are not printable one-line text, or None."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        return f"stderr is not valid UTF-8 ({error})"
+    bad = [c for c in text.rstrip("\n") if (ord(c) < 0x20 and c != "\n") or 0x7F <= ord(c) <= 0x9F]
+    return f"stderr holds control characters {bad!r}" if bad else None
+
+
+def watched_directories(paths, out_dir):
+    """Directories whose listing must not grow: the output directory and the folders of the protected
+    inputs (not system folders)."""
+    folders = {str(pathlib.Path(out_dir))}
+    for path in paths:
+        parent = str(pathlib.Path(os.path.abspath(path)).parent)
+        if not parent.startswith(("/dev", "/proc", "/sys")):
+            folders.add(parent)
+    return {folder: set(os.listdir(folder)) for folder in folders if os.path.isdir(folder)}
+
+
+def check(name, args, fragment, out_dir, keep=(), timeout=120, memory_bytes=None, exit_code=2, protect=(),
+          forbid=(), after=None):
     """Runs one case. `keep`: files the case put in out_dir on purpose (they must be left unchanged);
     `timeout`: seconds before a hang counts as a failure; `memory_bytes`: an address-space limit, so a
     case that would eat the machine's memory fails fast instead (not under AddressSanitizer, whose
-    shadow memory needs terabytes of address space)."""
+    shadow memory needs terabytes of address space); `exit_code`: the code expected; `protect`: more
+    inputs that must be byte-identical afterwards; `forbid`: fragments the line must not contain;
+    `after`: a function returning a list of further problems."""
     global count
     count += 1
-    before = {n: (pathlib.Path(out_dir) / n).read_bytes() for n in keep if (pathlib.Path(out_dir) / n).is_file()}
-    limit = None
-    if memory_bytes is not None and not SANITIZED:
-        limit = lambda: resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))  # noqa: E731
-    try:
-        result = subprocess.run([GESWEEP, *args], capture_output=True, text=True, timeout=timeout, preexec_fn=limit)
-    except subprocess.TimeoutExpired:
-        failures.append(f"{name}: still running after {timeout} s (killed): a hostile input must be refused at once")
-        return
-    lines = result.stderr.strip().splitlines()
-    problems = []
-    if result.returncode != 2:
-        problems.append(f"exit {result.returncode}, expected 2")
-    if len(lines) != 1:
-        problems.append(f"{len(lines)} stderr lines, expected 1")
-    if not any(fragment in line for line in lines):
-        problems.append(f"no line contains {fragment!r}")
-    left = sorted(p.name for p in pathlib.Path(out_dir).iterdir() if p.name not in keep)
-    if left:
-        problems.append(f"left files behind: {left}")
-    changed = [n for n, data in before.items()
-               if not (pathlib.Path(out_dir) / n).is_file() or (pathlib.Path(out_dir) / n).read_bytes() != data]
-    if changed:
-        problems.append(f"changed files it must not touch: {changed}")
-    if problems:
-        failures.append(f"{name}: {'; '.join(problems)}\n    stderr: {result.stderr.strip()[:400]}")
+    out_dir = pathlib.Path(out_dir)
+    inputs = [a for a in args if os.path.lexists(a) and not os.path.isdir(a)]
+    inputs += [str(out_dir / n) for n in keep] + [str(p) for p in protect] + [str(ANCE)]
+    with tempfile.TemporaryDirectory() as copies:
+        taken = snapshot(inputs, copies)
+        listings = watched_directories(list(taken) + [str(p) for p in protect if os.path.isdir(p)], out_dir)
+        limit = None
+        if memory_bytes is not None and not SANITIZED:
+            limit = lambda: resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))  # noqa: E731
+        try:
+            result = subprocess.run([GESWEEP, *args], capture_output=True, timeout=timeout, preexec_fn=limit)
+        except subprocess.TimeoutExpired:
+            failures.append(f"{name}: still running after {timeout} s (killed): a hostile input must be refused at once")
+            return
+        stderr = result.stderr.decode("utf-8", "replace")
+        lines = stderr.strip().splitlines()
+        problems = []
+        if result.returncode != exit_code:
+            problems.append(f"exit {result.returncode}, expected {exit_code}")
+        if len(lines) != 1:
+            problems.append(f"{len(lines)} stderr lines, expected 1")
+        if not any(fragment in line for line in lines):
+            problems.append(f"no line contains {fragment!r}")
+        problems += [f"the line contains {f!r}" for f in forbid if any(f in line for line in lines)]
+        unprintable = printable_problem(result.stderr)
+        if unprintable:
+            problems.append(unprintable)
+        for folder, before in listings.items():
+            new = sorted(set(os.listdir(folder)) - before - set(keep)) if os.path.isdir(folder) else []
+            if new:
+                problems.append(f"left files behind in {folder}: {new}")
+        changed = changed_inputs(taken)
+        if changed:
+            problems.append(f"changed inputs it must not touch: {changed}")
+        if after is not None:
+            problems += after()
+        if problems:
+            failures.append(f"{name}: {'; '.join(problems)}\n    stderr: {stderr.strip()[:400]}")
 
 
 def corpus(kind, make_args):
@@ -232,6 +312,249 @@ def special_study_cases():
 
 
 special_study_cases()
+
+
+def make_archive(study, archive, shard="0/1"):
+    result = subprocess.run([GESWEEP, "run", str(study), "-o", str(archive), "--shard", shard, "-q"],
+                            capture_output=True, text=True, timeout=120)
+    if result.returncode != 0:
+        failures.append(f"could not make {archive}: {result.stderr.strip()[:300]}")
+    return result.returncode == 0
+
+
+def damaged_archives(good, folder):
+    """Archives broken the ways of issue 13 (h5py, as another program would): a results dataset
+    shorter than runs/status, a gesweep format attribute without the root attributes, the file cut
+    short, random bytes behind the HDF5 signature, a file of arbitrary groups."""
+    import h5py  # Debian's python3-h5py
+    import numpy as np
+    made = {}
+    short = folder / "short_result.h5"
+    shutil.copyfile(good, short)
+    with h5py.File(short, "r+") as f:
+        path = "results/modes/stability_margin_per_s"
+        values = f[path][...]
+        attrs = dict(f[path].attrs)
+        del f[path]
+        f[path] = values[:-1]
+        for key, value in attrs.items():
+            f[path].attrs[key] = value
+    made["short"] = short
+    no_attrs = folder / "no_root_attributes.h5"
+    shutil.copyfile(good, no_attrs)
+    with h5py.File(no_attrs, "r+") as f:
+        for key in ("run_count", "design_runs", "first_run", "chunk_runs"):
+            del f.attrs[key]
+    made["no_attrs"] = no_attrs
+    data = pathlib.Path(good).read_bytes()
+    cut = folder / "cut.h5"
+    cut.write_bytes(data[:len(data) // 2])
+    made["cut"] = cut
+    noise = folder / "noise.h5"
+    noise.write_bytes(b"\x89HDF\r\n\x1a\n" + bytes((i * 97 + 13) % 256 for i in range(4000)))
+    made["noise"] = noise
+    foreign = folder / "foreign.h5"
+    with h5py.File(foreign, "w") as f:
+        f.create_group("a/b")
+        f["a/values"] = np.arange(10.0)
+        f.attrs["title"] = "written by another program"
+    made["foreign"] = foreign
+    return made
+
+
+def hardening_cases():
+    """Issue 13: an output never replaces an input; all work is bounded; one table of limits for
+    flags and study files; archives that cannot crash a reader; one printable line for every failure."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        aircraft = tmp / "aircraft.toml"
+        shutil.copyfile(ANCE, aircraft)
+        study = tmp / "study.toml"
+        study.write_text(study_text("aircraft.toml", "height_m = 2.0\n"))
+        csv = tmp / "rows.csv"
+        csv.write_text("height_m\n2.0\n3.0\n")
+        list_study = tmp / "list.toml"
+        list_study.write_text(study_text("aircraft.toml", '[design]\nkind = "list"\ncsv = "rows.csv"\n'))
+        grid = tmp / "grid.toml"
+        grid.write_text(grid_study("aircraft.toml", 32.0))
+        (tmp / "hard.h5").unlink(missing_ok=True)
+        os.link(study, tmp / "hard.h5")
+        (tmp / "soft.h5").symlink_to(aircraft)
+        fifo = tmp / "fifo.h5"
+        os.mkfifo(fifo)
+        # A character device of our own (a copy of /dev/null's node): a gesweep that wrongly writes to
+        # it replaces this node, never the system's /dev/null. Making one needs root.
+        device = tmp / "null_device"
+        try:
+            os.mknod(device, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+        except PermissionError:
+            device = None
+            print("SKIP the cases that write onto a character device: making one needs root")
+        partial_study = tmp / "out.h5.partial"
+        partial_study.write_text(study.read_text())
+
+        def run(name, args, fragment, **kwargs):
+            with tempfile.TemporaryDirectory() as out:
+                check(name, [a.replace("{out}", out) for a in args], fragment, out, **kwargs)
+
+        # 1. An output never replaces an input (one check: engine/common/output_guard.h).
+        run("run -o the study --force", ["run", str(study), "-o", str(study), "--force"], "is the study file")
+        run("run -o the study (no --force)", ["run", str(study), "-o", str(study)], "is the study file")
+        run("run -o the study --resume", ["run", str(study), "-o", str(study), "--resume"], "is the study file")
+        run("run --dry-run -o the study", ["run", str(study), "-o", str(study), "--dry-run"], "is the study file")
+        run("run -o the aircraft file --force", ["run", str(study), "-o", str(aircraft), "--force"],
+            "is the aircraft file")
+        run("run -o the design CSV --force", ["run", str(list_study), "-o", str(csv), "--force"],
+            "is the design CSV file")
+        run("run -o a hard link to the study --force", ["run", str(study), "-o", str(tmp / "hard.h5"), "--force"],
+            "a hard link or a symlink to it")
+        run("run -o a symlink to the aircraft --force", ["run", str(study), "-o", str(tmp / "soft.h5"), "--force"],
+            "is the aircraft file")
+        run("run -o X whose X.partial is the study --force",
+            ["run", str(partial_study), "-o", str(tmp / "out.h5"), "--force"], "writing it would replace")
+        if device:
+            run("run --force onto a character device", ["run", str(study), "-o", str(device), "--force"],
+                "is a character device, not a regular file")
+        run("run --force onto a FIFO", ["run", str(study), "-o", str(fifo), "--force"], "is a FIFO, not a regular file",
+            timeout=20)
+
+        # 2. Bounded work: flags (the study files are in study/).
+        run("simulate --dt-s 1e-300", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps", "32",
+                                       "--dt-s", "1e-300"], "--dt-s = 1e-300: expected a number in [1e-06, 10] s")
+        run("simulate --duration-s 1e308", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps",
+                                            "32", "--duration-s", "1e308"],
+            "--duration-s = 1e308: expected a number in (0, 100000] s")
+        run("simulate: 1e9 RK4 steps", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps", "32",
+                                        "--duration-s", "1e5", "--dt-s", "1e-4", "--summary-only"],
+            "--duration-s = 100000 s / --dt-s = 0.0001 s = 1000000000 steps")
+        run("simulate: dopri5 with a tiny largest step", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
+                                                          "--speed-mps", "32", "--integrator", "dopri5",
+                                                          "--max-step-s", "1e-6", "--duration-s", "1000"],
+            "--max-step-s = 1e-06: expected at most 100000000 integration steps per run")
+        run("land --max-step-s 1e-6", ["land", "--aircraft", str(ANCE), "--max-step-s", "1e-6"],
+            "--max-step-s = 1e-06: expected at most 100000000 integration steps per run, but --time-limit-s (automatic)")
+        run("land --time-limit-s 1e308", ["land", "--aircraft", str(ANCE), "--time-limit-s", "1e308"],
+            "--time-limit-s = 1e308: expected a number in (0, 100000] s")
+        run("run --dry-run of a study of 3e10 steps per run",
+            ["run", str(ROOT / "study" / "step_count_rk4.toml"), "--dry-run"], "expected a number in [1e-06, 10] s",
+            timeout=20)
+        run("run --dry-run-budget-s 0", ["run", str(study), "--dry-run", "--dry-run-budget-s", "0"],
+            "--dry-run-budget-s = 0: expected a time in (0, 600] s")
+
+        # 3. One table of limits: every flag says flag, value and range.
+        run("modes --speed-mps 1e308", ["modes", "--aircraft", str(ANCE), "--speed-mps", "1e308", "--heights-m", "2"],
+            "--speed-mps = 1e308: expected a number in [1, 300] m/s")
+        run("modes --speed-mps 1e-300", ["modes", "--aircraft", str(ANCE), "--speed-mps", "1e-300", "--heights-m", "2"],
+            "--speed-mps = 1e-300: expected a number in [1, 300] m/s")
+        run("modes --speed-mps 1e400 (past a double)", ["modes", "--aircraft", str(ANCE), "--speed-mps", "1e400",
+                                                        "--heights-m", "2"],
+            "--speed-mps = 1e400: is past the largest magnitude a double can hold", forbid=["expected a number"])
+        run("modes --speed-mps nan", ["modes", "--aircraft", str(ANCE), "--speed-mps", "nan", "--heights-m", "2"],
+            "--speed-mps = nan: expected a number in [1, 300] m/s")
+        run("modes --heights-m 1e308", ["modes", "--aircraft", str(ANCE), "--speed-mps", "32", "--heights-m", "2,1e308"],
+            "--heights-m = 1e+308: expected a number in (0, 11000] m")
+        run("modes --heights-m 1e-400 (below a double)", ["modes", "--aircraft", str(ANCE), "--speed-mps", "32",
+                                                          "--heights-m", "1e-400"],
+            "closer to 0 than a double can hold")
+        run("simulate --height-m 1e308", ["simulate", "--aircraft", str(ANCE), "--height-m", "1e308", "--speed-mps",
+                                          "32"], "--height-m = 1e308: expected a number in (0, 11000] m")
+        run("simulate --elevator-deg 1e308", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps",
+                                              "32", "--elevator-deg", "1e308"],
+            "--elevator-deg = 1e308: expected a number in [-30, 30] deg")
+        run("boundary --speeds-mps 30,1e308", ["boundary", "--aircraft", str(ANCE), "--speeds-mps", "30,1e308"],
+            "--speeds-mps = 1e+308: expected a number in [1, 300] m/s")
+        run("land --glide-slope-deg 45", ["land", "--aircraft", str(ANCE), "--glide-slope-deg", "45"],
+            "--glide-slope-deg = 45: expected a number in (0, 10] deg")
+        run("run --threads 0", ["run", str(study), "-o", "{out}/out.h5", "--threads", "0"],
+            "--threads = 0: expected 1 to 4096 worker threads")
+        (tmp / "past.csv").write_text("height_m\n2.0\n1e999\n")
+        (tmp / "past.toml").write_text(study_text("aircraft.toml", '[design]\nkind = "list"\ncsv = "past.csv"\n'))
+        run("design CSV value past a double", ["run", str(tmp / "past.toml"), "-o", "{out}/out.h5"],
+            "the number is past the largest magnitude a double can hold")
+
+        # 5. One printable line: a person's text escaped; no doubled words.
+        run("a study file name with an ESC sequence and broken UTF-8",
+            ["run", str(tmp / "no_such_\x1b[2J_\udcce.toml"), "-o", "{out}/out.h5"], "no_such_\\x1b[2J_\\xce.toml")
+        (tmp / "missing_aircraft.toml").write_text(study_text("no_such_aircraft.toml", "height_m = 2.0\n"))
+        run("missing aircraft says what is missing once", ["run", str(tmp / "missing_aircraft.toml"), "-o",
+                                                           "{out}/out.h5"],
+            "cannot read the aircraft file: no such file", forbid=["file file"])
+        (tmp / "csvdir").mkdir()
+        (tmp / "csvdir.toml").write_text(study_text("aircraft.toml", '[design]\nkind = "list"\ncsv = "csvdir"\n'))
+        run("design CSV is a directory", ["run", str(tmp / "csvdir.toml"), "-o", "{out}/out.h5"],
+            "expected a design CSV file, found a directory", forbid=["file file"])
+
+        # Archives: made once, then broken.
+        archives = tmp / "archives"
+        archives.mkdir()
+        a0, s0, a1 = archives / "a0.h5", archives / "s0.h5", archives / "a1.h5"
+        if not (make_archive(grid, a0) and make_archive(grid, s0, "0/2") and make_archive(grid, a1, "1/2")):
+            return
+        os.link(s0, archives / "s0_hard.h5")
+        (archives / "s1_soft.h5").symlink_to(a1)
+        run("merge -o one of its shards --force", ["merge", str(s0), str(a1), "-o", str(s0), "--force"],
+            "is the shard archive")
+        run("merge -o a hard link to a shard --force", ["merge", str(s0), str(a1), "-o", str(archives / "s0_hard.h5"),
+                                                        "--force"], "a hard link or a symlink to it")
+        run("merge -o a symlink to a shard --force", ["merge", str(s0), str(a1), "-o", str(archives / "s1_soft.h5"),
+                                                      "--force"], "is the shard archive")
+        if device:
+            run("merge --force onto a character device", ["merge", str(s0), str(a1), "-o", str(device), "--force"],
+                "is a character device, not a regular file")
+            run("report -o a character device", ["report", str(a0), "-o", str(device)],
+                "is a character device; expected a directory")
+            run("boundary --archive of a character device", ["boundary", "--archive", str(device)],
+                "is a character device, not a regular file",
+                after=lambda: [f"created {device}.lock"] if os.path.exists(f"{device}.lock") else [])
+        run("report -o an input archive", ["report", str(a0), "-o", str(a0)], "is the input archive")
+        report_dir = tmp / "report_dir"
+        report_dir.mkdir()
+        shutil.copyfile(a0, report_dir / "index.html")
+        run("report into a directory whose index.html is an input", ["report", str(report_dir / "index.html"), "-o",
+                                                                     str(report_dir)],
+            "the report would replace", protect=[report_dir])
+        run("report of a FIFO", ["report", str(fifo), "-o", "{out}/r"], "is a FIFO, not a regular file", timeout=20)
+        run("query of a FIFO", ["query", str(fifo)], "is a FIFO, not a regular file", timeout=20)
+        run("query of a character device", ["query", "/dev/zero"], "is a character device, not a regular file",
+            timeout=20)
+        run("sensitivity of a FIFO", ["sensitivity", str(fifo), "--output", "x"], "is a FIFO, not a regular file",
+            timeout=20)
+
+        # 4. Archives cannot crash a reader; a damaged one is bad input (exit 2), everywhere alike.
+        try:
+            broken = damaged_archives(a0, archives)
+        except ImportError as error:
+            print(f"SKIP damaged-archive cases: {error} (python3-h5py is needed)")
+            return
+        for reader, args in (("query", ["query", "{a}"]), ("query --describe", ["query", "{a}", "--describe"]),
+                             ("boundary --archive", ["boundary", "--archive", "{a}", "--no-write"]),
+                             ("merge", ["merge", "{a}", "-o", "{out}/all.h5"]),
+                             ("report", ["report", "{a}", "-o", "{out}/report"]),
+                             ("sensitivity", ["sensitivity", "{a}", "--output", "stability_margin_per_s",
+                                              "--no-write"])):
+            for kind, fragment in (("short", "results/modes/stability_margin_per_s = 7 rows: expected one row per run"),
+                                   ("no_attrs", "run_count: missing root attribute")):
+                run(f"{reader} of an archive with {kind}", [a.replace("{a}", str(broken[kind])) for a in args],
+                    fragment)
+        run("query of an archive cut in half", ["query", str(broken["cut"])], "cut.h5")
+        run("query of random bytes behind the HDF5 signature", ["query", str(broken["noise"])], "noise.h5")
+        run("query of an HDF5 file of arbitrary groups", ["query", str(broken["foreign"])], "not a gesweep archive")
+        run("report of an HDF5 file of arbitrary groups", ["report", str(broken["foreign"]), "-o", "{out}/r"],
+            "not a gesweep archive")
+        # The report script itself (run directly) validates the same way and leaves no directory.
+        with tempfile.TemporaryDirectory() as out:
+            result = subprocess.run(["/usr/bin/python3", str(ROOT.parent.parent / "scripts/report/report.py"), "-o",
+                                     f"{out}/r", "--", str(broken["short"])], capture_output=True, text=True, timeout=120)
+            global count
+            count += 1
+            lines = result.stderr.strip().splitlines()
+            if result.returncode != 2 or len(lines) != 1 or "expected one row per run" not in lines[0] or \
+                    os.path.exists(f"{out}/r"):
+                failures.append(f"report.py of an archive with a short result: exit {result.returncode}, "
+                                f"{len(lines)} lines, left {os.listdir(out)}: {result.stderr.strip()[:300]}")
+
+
+hardening_cases()
 
 for failure in failures:
     print("FAIL", failure)

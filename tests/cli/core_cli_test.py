@@ -73,7 +73,8 @@ class BadInput(unittest.TestCase):
     CASES = [
         (("modes", "--aircraft", "no/such/file.toml", "--speed-mps", "30", "--table-heights"), "no/such/file.toml"),
         (("modes", "--aircraft", ANCE, "--speed-mps", "-3", "--table-heights"), "--speed-mps"),
-        (("modes", "--aircraft", ANCE, "--speed-mps", "0", "--table-heights"), "speed > 0"),
+        (("modes", "--aircraft", ANCE, "--speed-mps", "0", "--table-heights"),
+         "--speed-mps = 0: expected a number in [1, 300] m/s"),
         (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "1,abc"), "'abc'"),
         (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "0.5"), "wheel-contact"),
         (("modes", "--aircraft", ANCE, "--speed-mps", "30", "--heights-m", "1", "--cdh", "cubic"), "--cdh"),

@@ -335,7 +335,9 @@ class Report(unittest.TestCase):
             ([os.path.join(WORK, "missing.h5"), "-o", os.path.join(WORK, "r1")], "no such archive"),
             ([os.path.join(ROOT, "tests/report/open_loop_small.toml"), "-o", os.path.join(WORK, "r2")],
              "not an HDF5 file"),
-            ([LANDING, "-o", LANDING], "is a file"),
+            ([LANDING, "-o", LANDING], "is the input archive"),
+            ([LANDING, "-o", os.path.join(ROOT, "tests/report/open_loop_small.toml")],
+             "is a regular file; expected a directory"),
             ([LANDING, "-o", os.path.join(WORK, "no", "such", "dir")], "does not exist"),
         ]
         for args, says in cases:

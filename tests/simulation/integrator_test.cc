@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -320,6 +321,63 @@ TEST(OptionsTest, ValidationNamesTheField) {
   EXPECT_NO_THROW(ValidateIntegratorOptions(IntegratorOptions{}, "test"));
   EXPECT_EQ(ParseIntegratorKind("dopri5"), IntegratorKind::kDopri5);
   EXPECT_EQ(ParseIntegratorKind("rk45"), std::nullopt);
+}
+
+// Sets the cancellation flag from inside the run, after a given number of accepted steps.
+struct CancellingDecay : Decay {
+  std::atomic<bool>* cancel = nullptr;
+  int cancel_after_steps = 0;
+  void OnStep(double t, const OdeState<1>& x, int segment) {
+    Decay::OnStep(t, x, segment);
+    // OnStep runs at the initial point too: steps_seen - 1 steps are accepted.
+    if (steps_seen - 1 == cancel_after_steps) cancel->store(true);
+  }
+};
+
+TEST(CancellationTest, AFlagSetBeforeTheRunStopsItBeforeTheFirstStep) {
+  for (IntegratorKind kind : {IntegratorKind::kRk4, IntegratorKind::kDopri5}) {
+    std::atomic<bool> cancel{true};
+    Decay problem;
+    IntegratorOptions options;
+    options.kind = kind;
+    options.cancel = &cancel;
+    const auto result = Integrate(problem, OdeState<1>{1.0}, 0.0, 10.0, {}, options);
+    EXPECT_EQ(result.status, IntegrationStatus::kCancelled) << ToString(kind);
+    EXPECT_EQ(result.accepted_steps, 0);
+    EXPECT_EQ(result.end_time_s, 0.0);
+    EXPECT_EQ(result.final_state[0], 1.0);
+  }
+}
+
+TEST(CancellationTest, AFlagSetDuringTheRunStopsItAtTheNextStep) {
+  for (IntegratorKind kind : {IntegratorKind::kRk4, IntegratorKind::kDopri5}) {
+    std::atomic<bool> cancel{false};
+    CancellingDecay problem;
+    problem.cancel = &cancel;
+    problem.cancel_after_steps = 10;
+    IntegratorOptions options;
+    options.kind = kind;
+    options.step_s = 0.01;
+    options.max_step_s = 0.01;  // dopri5: at least 1000 steps to the end
+    options.cancel = &cancel;
+    const auto result = Integrate(problem, OdeState<1>{1.0}, 0.0, 10.0, {}, options);
+    EXPECT_EQ(result.status, IntegrationStatus::kCancelled) << ToString(kind);
+    EXPECT_EQ(result.accepted_steps, 10) << ToString(kind);
+    EXPECT_LT(result.end_time_s, 10.0);
+    // The final state is the state where it stopped: e^{λt} there (RK4's error at h = 0.01 is far
+    // below 1e-8 over 0.1 s).
+    EXPECT_NEAR(result.final_state[0], std::exp(problem.lambda * result.end_time_s), 1e-8) << ToString(kind);
+  }
+}
+
+TEST(CancellationTest, NoFlagRunsToTheEnd) {
+  std::atomic<bool> cancel{false};
+  Decay problem;
+  IntegratorOptions options;
+  options.cancel = &cancel;
+  const auto result = Integrate(problem, OdeState<1>{1.0}, 0.0, 1.0, {}, options);
+  EXPECT_EQ(result.status, IntegrationStatus::kReachedEnd);
+  EXPECT_EQ(ToString(IntegrationStatus::kCancelled), "cancelled");
 }
 
 }  // namespace

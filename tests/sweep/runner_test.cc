@@ -5,10 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <thread>
 
 #include "engine/modal/modal_analysis.h"
 #include "engine/sweep/analysis_adapters.h"
@@ -283,6 +286,50 @@ TEST(Runner, OpenLoopRunsEqualDirectSimulationSummaryAndSeries) {
       EXPECT_TRUE(std::isnan(series[samples - 1])) << "samples after touchdown are NaN";
     }
   }
+}
+
+// A study of open-loop runs of 1e8 RK4 steps each (1e5 s at 1 ms, seconds of work per run): steps at
+// trim with no input, so that nothing ends a run early.
+SweepPlan LongOpenLoopPlan(int chunk_runs) {
+  static const Aircraft aircraft = LoadAircraftFile(kAircraft);
+  toml::table settings;
+  settings.insert("duration_s", 1e5);
+  settings.insert("step_s", 1e-3);
+  settings.insert("input", "none");
+  std::vector<std::unique_ptr<Analysis>> analyses;
+  analyses.push_back(MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+  Study study = GridStudy(std::move(analyses), {Axis("height_m", {100.0, 200.0, 300.0, 400.0})}, chunk_runs);
+  study.fixed = {{RequireParameter("speed_mps"), 32.0208}};
+  return SweepPlan(std::move(study), ShardSpec{});
+}
+
+TEST(Runner, CancelReachesInsideALongRunAndItsBatchIsNotWritten) {
+  const SweepPlan plan = LongOpenLoopPlan(2);
+  std::atomic<bool> cancel{false};
+  // Cancels once the runs are under way (as SIGINT would); each needs seconds, so none can finish.
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancel.store(true);
+  });
+  MemorySink sink;
+  SweepProgress progress;
+  const SweepOutcome outcome = RunSweep(plan, {0, 1}, sink, RunnerOptions{2, &cancel, 1}, &progress);
+  canceller.join();
+  EXPECT_TRUE(outcome.cancelled);
+  EXPECT_EQ(sink.writes_, 0) << "a batch whose runs were stopped half-way must not be written";
+  EXPECT_EQ(progress.runs_done.load(), 0) << "a stopped run is not a completed one";
+}
+
+TEST(Runner, ExecuteRunLeavesACancelledRunPending) {
+  const SweepPlan plan = LongOpenLoopPlan(1);
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  const std::atomic<bool> cancel{true};
+  ExecuteRun(plan, 0, workspace, block, 0, &cancel);
+  EXPECT_EQ(block.status[0], static_cast<std::int8_t>(RunStatus::kPending));
+  EXPECT_EQ(block.message[0], "cancelled");
 }
 
 }  // namespace

@@ -4,7 +4,10 @@
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
+
+#include "engine/common/input_limits.h"
 
 #include "engine/sweep/analysis.h"
 #include "engine/sweep/parameter_catalog.h"
@@ -53,6 +56,84 @@ TEST(StudySchema, ListsEveryAnalysis) {
   for (const auto& [name, entry] : schema["properties"]["analyses"]["properties"].items())
     documented.insert(name);
   EXPECT_EQ(documented, registry);
+}
+
+// The bounds a schema entry states, as the limits table would write them.
+struct SchemaBounds {
+  std::optional<double> minimum, maximum;
+  bool minimum_exclusive = false, maximum_exclusive = false;
+};
+
+SchemaBounds BoundsOf(const nlohmann::json& entry) {
+  SchemaBounds b;
+  if (entry.contains("minimum")) b.minimum = entry["minimum"].get<double>();
+  if (entry.contains("exclusiveMinimum")) {
+    b.minimum = entry["exclusiveMinimum"].get<double>();
+    b.minimum_exclusive = true;
+  }
+  if (entry.contains("maximum")) b.maximum = entry["maximum"].get<double>();
+  if (entry.contains("exclusiveMaximum")) {
+    b.maximum = entry["exclusiveMaximum"].get<double>();
+    b.maximum_exclusive = true;
+  }
+  return b;
+}
+
+void ExpectSameBounds(const nlohmann::json& entry, const InputLimit& limit, const std::string& where) {
+  const SchemaBounds b = BoundsOf(entry);
+  if (limit.allows_infinity) {  // JSON has no inf: the schema states the lower bound only
+    ASSERT_TRUE(b.minimum && !b.maximum) << where;
+    EXPECT_EQ(*b.minimum, limit.minimum) << where;
+    EXPECT_EQ(b.minimum_exclusive, limit.minimum_exclusive) << where;
+    return;
+  }
+  ASSERT_TRUE(b.minimum && b.maximum) << where << ": the schema states no range; the table says "
+                                      << DescribeLimit(limit);
+  EXPECT_EQ(*b.minimum, limit.minimum) << where;
+  EXPECT_EQ(*b.maximum, limit.maximum) << where;
+  EXPECT_EQ(b.minimum_exclusive, limit.minimum_exclusive) << where;
+  EXPECT_EQ(b.maximum_exclusive, limit.maximum_exclusive) << where;
+}
+
+// One table of limits (engine/common/input_limits.h): the schema states the same range for every
+// catalogue parameter and every analysis setting the table covers.
+TEST(StudySchema, StatesTheLimitsTableRanges) {
+  const nlohmann::json schema = Schema();
+  const auto& fixed = schema["properties"]["parameters"]["properties"];
+  int checked = 0;
+  for (const auto& info : ParameterCatalog()) {
+    if (info.kind != ParameterKind::kReal) continue;
+    ExpectSameBounds(fixed[info.name], RequireInputLimit(info.limit), "parameters." + info.name);
+    ++checked;
+  }
+  const auto& analyses = schema["properties"]["analyses"]["properties"];
+  // Settings named "<analysis>.<key>", the shared ones by their key, and two that reuse a parameter's.
+  const std::vector<std::pair<std::string, std::string>> shared = {
+      {"open_loop", "relative_tolerance"}, {"open_loop", "absolute_tolerance"},
+      {"landing", "relative_tolerance"},   {"landing", "absolute_tolerance"}};
+  for (const InputLimit& limit : InputLimits()) {
+    const std::string name(limit.name);
+    const auto dot = name.find('.');
+    if (dot == std::string::npos || !analyses.contains(name.substr(0, dot))) continue;
+    const auto& settings = analyses[name.substr(0, dot)]["properties"];
+    const std::string key = name.substr(dot + 1);
+    if (!settings.contains(key)) continue;  // a flag of simulate or land only
+    ExpectSameBounds(settings[key], limit, "analyses." + name);
+    ++checked;
+  }
+  for (const auto& [analysis, key] : shared) {
+    ExpectSameBounds(analyses[analysis]["properties"][key], RequireInputLimit(key), "analyses." + analysis + "." + key);
+    ++checked;
+  }
+  ExpectSameBounds(analyses["landing"]["properties"]["design_speed_mps"], RequireInputLimit("speed_mps"),
+                   "analyses.landing.design_speed_mps");
+  ExpectSameBounds(analyses["boundary"]["properties"]["lower_height_m"], RequireInputLimit("height_m"),
+                   "analyses.boundary.lower_height_m");
+  ExpectSameBounds(analyses["boundary"]["properties"]["upper_height_m"], RequireInputLimit("height_m"),
+                   "analyses.boundary.upper_height_m");
+  ExpectSameBounds(schema["properties"]["output"]["properties"]["output_dt_s"], RequireInputLimit("output_dt_s"),
+                   "output.output_dt_s");
+  EXPECT_GT(checked, 40);
 }
 
 }  // namespace

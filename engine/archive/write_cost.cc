@@ -1,0 +1,83 @@
+#include "engine/archive/write_cost.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/archive/archive_writer.h"
+#include "engine/sweep/runner.h"
+
+namespace gesweep {
+
+WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compute, double compute_budget_s,
+                                   double write_budget_s) {
+  using Clock = std::chrono::steady_clock;
+  WriteCostEstimate estimate;
+  if (plan.block_count() < 1 || seconds_per_run_compute * plan.chunk_runs() > compute_budget_s) return estimate;
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  for (int row = 0; row < block.rows; ++row) {
+    ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row);
+  }
+  std::string pattern = (std::filesystem::temp_directory_path() / "gesweep_write_cost.XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) return estimate;
+  const std::filesystem::path directory(pattern);
+  double seconds = 0;
+  std::vector<double> per_run;  // each batch's seconds per run
+  {
+    std::unique_ptr<ArchiveWriter> writer;
+    try {
+      writer = ArchiveWriter::Open(directory / "scratch.h5", plan, RunProvenance{"gesweep run --dry-run", 1},
+                                   ArchiveOpenMode::kCreate, nullptr);
+      const auto start = Clock::now();
+      // Each batch of the scratch archive once (each chunk is written exactly once), the same data.
+      for (std::int64_t b = 0; b < plan.block_count(); ++b) {
+        block.block_index = b;
+        block.first_row = b * plan.chunk_runs();
+        if (b > 0 && block.first_row + block.rows > plan.run_count()) break;  // a short last batch
+        const auto write_start = Clock::now();
+        writer->Write(block);
+        const double batch_s = std::chrono::duration<double>(Clock::now() - write_start).count();
+        seconds += batch_s;
+        per_run.push_back(batch_s / block.rows);
+        estimate.runs_written += block.rows;
+        if (std::chrono::duration<double>(Clock::now() - start).count() > write_budget_s) break;
+      }
+    } catch (...) {
+      writer.reset();
+      std::error_code ec;
+      std::filesystem::remove_all(directory, ec);
+      throw;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(directory, ec);
+  if (estimate.runs_written > 0) {
+    estimate.seconds_per_run = seconds / static_cast<double>(estimate.runs_written);
+    estimate.seconds_per_run_low = estimate.seconds_per_run_high = estimate.seconds_per_run;
+    estimate.measured = true;
+  }
+  if (per_run.size() >= 3) {
+    // z of a two-sided 95 % normal interval, on the batches' scatter.
+    constexpr double kZ95 = 1.959963984540054;
+    double mean = 0, variance = 0;
+    for (double y : per_run) mean += y;
+    mean /= static_cast<double>(per_run.size());
+    for (double y : per_run) variance += (y - mean) * (y - mean);
+    variance /= static_cast<double>(per_run.size() - 1);
+    const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
+    estimate.seconds_per_run_low = std::max(0.0, estimate.seconds_per_run - half_width);
+    estimate.seconds_per_run_high = estimate.seconds_per_run + half_width;
+  }
+  return estimate;
+}
+
+}  // namespace gesweep

@@ -1,0 +1,88 @@
+// gesweep limits: the one table of limits of every physical input (engine/common/input_limits.h),
+// as text, Markdown (docs/limits.md is its output) or JSON.
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "engine/cli/command.h"
+#include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
+
+namespace gesweep::cli {
+namespace {
+
+std::string Bound(const InputLimit& limit, bool upper) {
+  return ShortNumber(upper ? limit.maximum : limit.minimum);
+}
+
+std::string Interval(const InputLimit& limit) {
+  std::string text = std::string(limit.minimum_exclusive ? "(" : "[") + Bound(limit, false) + ", " +
+                     Bound(limit, true) + (limit.maximum_exclusive ? ")" : "]");
+  if (limit.allows_infinity) text += " or inf";
+  return text;
+}
+
+int RunLimits(const std::string& format) {
+  if (format == "json") {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const InputLimit& limit : InputLimits()) {
+      rows.push_back({{"name", limit.name},
+                      {"units", limit.units},
+                      {"minimum", limit.minimum},
+                      {"maximum", limit.maximum},
+                      {"minimum_exclusive", limit.minimum_exclusive},
+                      {"maximum_exclusive", limit.maximum_exclusive},
+                      {"allows_infinity", limit.allows_infinity},
+                      {"reason", limit.reason}});
+    }
+    std::cout << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", rows}}.dump(2)
+              << "\n";
+    return 0;
+  }
+  if (format == "markdown") {
+    // "<" and ">" would be taken for HTML tags (scale.<coefficient>), "|" for a column.
+    auto escape = [](std::string_view text) {
+      std::string out;
+      for (char c : text) {
+        out += c == '<' ? "&lt;" : (c == '>' ? "&gt;" : (c == '|' ? "\\|" : std::string(1, c)));
+      }
+      return out;
+    };
+    std::cout << "| Input | Range | Units | Why |\n|---|---|---|---|\n";
+    for (const InputLimit& limit : InputLimits()) {
+      std::cout << "| `" << limit.name << "` | " << Interval(limit) << " | " << limit.units << " | "
+                << escape(limit.reason) << " |\n";
+    }
+    std::cout << "\nAt most " << ShortNumber(kMaximumStepsPerRun)
+              << " integration steps per run: duration_s / step_s (RK4), duration_s / max_step_s (dopri5 "
+                 "with a largest step), a landing's time limit / max_step_s.\n";
+    return 0;
+  }
+  if (format != "text") {
+    throw InputError("command line", "--format", "'" + format + "'", "expected text, markdown or json");
+  }
+  std::size_t name_width = 5, range_width = 5;
+  for (const InputLimit& limit : InputLimits()) {
+    name_width = std::max(name_width, limit.name.size());
+    range_width = std::max(range_width, Interval(limit).size() + limit.units.size() + 1);
+  }
+  for (const InputLimit& limit : InputLimits()) {
+    const std::string range = Interval(limit) + " " + std::string(limit.units);
+    std::cout << std::string(limit.name) << std::string(name_width + 2 - limit.name.size(), ' ') << range
+              << std::string(range_width + 2 - range.size(), ' ') << limit.reason << "\n";
+  }
+  std::cout << "# at most " << ShortNumber(kMaximumStepsPerRun)
+            << " integration steps per run (duration / step, or a landing's time limit / max_step_s)\n";
+  return 0;
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "limits",
+    "Print the allowed range of every number a flag or a study file takes, with its reason (docs/limits.md)",
+    [](CLI::App& app) -> std::function<int()> {
+      auto format = std::make_shared<std::string>("text");
+      app.add_option("--format", *format, "text (default), markdown or json");
+      return [format] { return RunLimits(*format); };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli

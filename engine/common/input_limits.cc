@@ -1,0 +1,205 @@
+#include "engine/common/input_limits.h"
+
+#include <cmath>
+#include <limits>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+// Bounds shared by several entries, so that they cannot drift apart.
+constexpr double kMaximumHeight_m = 11000.0;   // top of the ISA troposphere the density model uses
+constexpr double kMinimumSpeed_mps = 1.0;
+constexpr double kMaximumSpeed_mps = 300.0;
+constexpr double kMaximumRunDuration_s = 1e5;  // a day of flight: longer is a typo
+constexpr double kMaximumStep_s = 10.0;
+constexpr double kMinimumStep_s = 1e-6;
+constexpr double kMaximumWeight = 1e12;
+
+InputLimit Closed(std::string_view name, std::string_view units, double minimum, double maximum,
+                  std::string_view reason) {
+  InputLimit limit;
+  limit.name = name;
+  limit.units = units;
+  limit.minimum = minimum;
+  limit.maximum = maximum;
+  limit.reason = reason;
+  return limit;
+}
+
+// (minimum, maximum]: a quantity that must be positive.
+InputLimit Positive(std::string_view name, std::string_view units, double maximum, std::string_view reason) {
+  InputLimit limit = Closed(name, units, 0.0, maximum, reason);
+  limit.minimum_exclusive = true;
+  return limit;
+}
+
+InputLimit WithInfinity(InputLimit limit) {
+  limit.allows_infinity = true;
+  return limit;
+}
+
+std::vector<InputLimit> BuildTable() {
+  constexpr std::string_view kHeightReason =
+      "the ISA troposphere the density model uses (MODEL.md section 1); the aircraft's wheel-contact "
+      "height is a further lower bound";
+  constexpr std::string_view kSpeedReason =
+      "the model is incompressible (MODEL.md section 2), so well below Mach 1; below 1 m/s the "
+      "dimensional derivatives, which scale with u0 and 1/u0, mean nothing";
+  constexpr std::string_view kDurationReason = "a day of flight; the paper's runs last 300 s";
+  constexpr std::string_view kStepReason =
+      "a step beyond 10 s steps over every mode of Eq. (1); below 1 us it resolves nothing the model "
+      "has and the step count limit (1e8 per run) is reached within 100 s";
+  constexpr std::string_view kToleranceReason =
+      "below 1e-14 the error control asks for more digits than double precision holds";
+  std::vector<InputLimit> t;
+
+  // The flight condition and the model (study parameters, CLI flags of modes, boundary, simulate).
+  t.push_back(Positive("height_m", "m", kMaximumHeight_m, kHeightReason));
+  t.push_back(Closed("speed_mps", "m/s", kMinimumSpeed_mps, kMaximumSpeed_mps, kSpeedReason));
+  t.push_back(Closed("scale_factor", "1", -100.0, 100.0,
+                     "every scale.<coefficient> and scale.CDo: a factor beyond 100 leaves every table's "
+                     "meaning; a negative one flips a sign on purpose"));
+  t.push_back(Positive("mass_kg", "kg", 1e6, "from a model airplane to the heaviest airliner (6.4e5 kg)"));
+  t.push_back(Positive("pitch_inertia_kgm2", "kg m^2", 1e9, "a Boeing 747's Iy is about 4.4e7 kg m^2"));
+  t.push_back(Closed("cg_shift_over_chord", "1", -1.0, 1.0, "beyond one mean chord the CG is off the wing"));
+
+  // The open-loop perturbation (parameters; simulate --elevator-deg, --pulse-s).
+  t.push_back(Closed("pulse_amplitude_deg", "deg", -30.0, 30.0,
+                     "elevators deflect at most about 30 deg; the linear model means nothing far beyond"));
+  t.push_back(Closed("pulse_duration_s", "s", 0.0, kMaximumRunDuration_s, "at most the longest run"));
+
+  // The landing controller (parameters; land flags).
+  InputLimit glide = Positive("glide_slope_deg", "deg", 10.0,
+                              "the glide path's small-angle kinematics (MODEL.md section 8); steep "
+                              "approaches are 5.5 to 7 deg");
+  t.push_back(glide);
+  t.push_back(Positive("flare_height_m", "m", 1000.0, "a flare starts within tens of metres of the ground"));
+  t.push_back(Positive("flare_tau_s", "s", 1e4, "the flare's time constant is seconds to minutes"));
+  t.push_back(Closed("lqr.q", "1", 0.0, kMaximumWeight,
+                     "every lqr.q_<state>: beyond 1e12 the Riccati equation is ill-conditioned in double "
+                     "precision"));
+  t.push_back(Closed("lqr.r", "1", 1e-12, kMaximumWeight,
+                     "as lqr.q; R must be positive for the LQR problem to have a solution"));
+
+  // The verification models' inputs.
+  t.push_back(Closed("verification_input", "1", -1e9, 1e9,
+                     "x1..x8 of the test functions: dimensionless, bounded so that their sums and powers "
+                     "stay finite"));
+
+  // Settings of the open_loop analysis and flags of gesweep simulate.
+  t.push_back(Positive("open_loop.duration_s", "s", kMaximumRunDuration_s, kDurationReason));
+  t.push_back(Closed("open_loop.step_s", "s", kMinimumStep_s, kMaximumStep_s, kStepReason));
+  t.push_back(Closed("open_loop.max_step_s", "s", 0.0, kMaximumStep_s,
+                     "dopri5's largest step (0: no limit); as open_loop.step_s"));
+  t.push_back(Closed("open_loop.input_start_s", "s", 0.0, kMaximumRunDuration_s, "within the longest run"));
+  t.push_back(Closed("open_loop.initial_delta_u_mps", "m/s", -kMaximumSpeed_mps, kMaximumSpeed_mps,
+                     "an offset within the speed range"));
+  t.push_back(Closed("open_loop.initial_delta_w_mps", "m/s", -kMaximumSpeed_mps, kMaximumSpeed_mps,
+                     "an offset within the speed range"));
+  t.push_back(Closed("open_loop.initial_pitch_rate_degps", "deg/s", -360.0, 360.0,
+                     "a turn a second is far outside the small-perturbation model"));
+  t.push_back(Closed("open_loop.initial_pitch_deg", "deg", -90.0, 90.0, "the pitch angle of a flying airplane"));
+  t.push_back(Closed("open_loop.initial_delta_h_m", "m", -kMaximumHeight_m, kMaximumHeight_m,
+                     "an offset within the height range"));
+
+  // Shared by open_loop and landing (and their flags).
+  t.push_back(Closed("relative_tolerance", "1", 1e-14, 1.0, kToleranceReason));
+  t.back().maximum_exclusive = true;
+  t.push_back(Closed("absolute_tolerance", "1", 1e-15, 1e3,
+                     "below 1e-15 the error control asks for more digits than double precision holds on "
+                     "states of order 1"));
+  t.push_back(Closed("output_dt_s", "s", kMinimumStep_s, 1e4,
+                     "the sampling interval of stored series; as open_loop.step_s"));
+
+  // Settings of the landing analysis and flags of gesweep land.
+  t.push_back(Closed("landing.max_step_s", "s", kMinimumStep_s, kMaximumStep_s, kStepReason));
+  t.push_back(Positive("landing.time_limit_s", "s", kMaximumRunDuration_s, kDurationReason));
+  t.push_back(Closed("landing.start_pitch_deg", "deg", -90.0, 90.0,
+                     "and below divergence_pitch_deg, which ends the run"));
+  t.push_back(Closed("landing.start_glide_path_offset_m", "m", -1000.0, 1000.0,
+                     "a glide-slope receiver captures the beam within a few hundred metres"));
+  t.push_back(WithInfinity(Positive("landing.design_height_m", "m", kMaximumHeight_m,
+                                    "as height_m; inf designs on the free-flight row")));
+  t.push_back(Positive("landing.actuator_pole_per_s", "1/s", 1e4,
+                       "an actuator faster than 1e4 1/s makes the closed loop stiff beyond dopri5's reach"));
+  t.push_back(Positive("landing.compensator_pole_per_s", "1/s", 1e4, "as landing.actuator_pole_per_s"));
+  InputLimit elevator_min = Closed("landing.elevator_min_deg", "deg", -90.0, 0.0,
+                                   "a lower limit below neutral; beyond 90 deg is not an elevator");
+  elevator_min.maximum_exclusive = true;
+  t.push_back(elevator_min);
+  t.push_back(Positive("landing.elevator_max_deg", "deg", 90.0,
+                       "an upper limit above neutral; beyond 90 deg is not an elevator"));
+  t.push_back(Closed("landing.plant_fixed_reference_height_m", "m", 0.0, kMaximumHeight_m, kHeightReason));
+  t.push_back(Positive("landing.divergence_pitch_deg", "deg", 90.0,
+                       "|pitch| beyond it ends the run as diverged: the small-angle model means nothing"));
+  t.push_back(Positive("landing.series_duration_s", "s", kMaximumRunDuration_s, kDurationReason));
+
+  // Settings of the boundary analysis.
+  t.push_back(Closed("boundary.tolerance_m", "m", 1e-9, 1e-3,
+                     "the boundary is refined to at most 1 mm; below 1 nm bisection resolves nothing"));
+  return t;
+}
+
+std::string Bound(double value) { return ShortNumber(value); }
+
+}  // namespace
+
+const std::vector<InputLimit>& InputLimits() {
+  static const std::vector<InputLimit> table = BuildTable();
+  return table;
+}
+
+const InputLimit* FindInputLimit(std::string_view name) {
+  for (const InputLimit& limit : InputLimits()) {
+    if (limit.name == name) return &limit;
+  }
+  return nullptr;
+}
+
+const InputLimit& RequireInputLimit(std::string_view name) {
+  const InputLimit* limit = FindInputLimit(name);
+  GESWEEP_DEMAND(limit != nullptr);
+  return *limit;
+}
+
+bool WithinLimit(const InputLimit& limit, double value) {
+  if (limit.allows_infinity && value == std::numeric_limits<double>::infinity()) return true;
+  if (!std::isfinite(value)) return false;
+  const bool above_minimum = limit.minimum_exclusive ? value > limit.minimum : value >= limit.minimum;
+  const bool below_maximum = limit.maximum_exclusive ? value < limit.maximum : value <= limit.maximum;
+  return above_minimum && below_maximum;
+}
+
+std::string DescribeLimit(const InputLimit& limit) {
+  std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") + Bound(limit.minimum) +
+                     ", " + Bound(limit.maximum) + (limit.maximum_exclusive ? ")" : "]");
+  if (limit.units != "1") text += " " + std::string(limit.units);
+  if (limit.allows_infinity) text += ", or inf";
+  return text;
+}
+
+std::string LimitProblem(const InputLimit& limit, double value) {
+  if (WithinLimit(limit, value)) return "";
+  return "expected " + DescribeLimit(limit) + " (" + std::string(limit.reason) + ")";
+}
+
+void CheckInputLimit(std::string_view limit_name, double value, const std::string& source, const std::string& key) {
+  const std::string problem = LimitProblem(RequireInputLimit(limit_name), value);
+  if (!problem.empty()) throw InputError(source, key, ShortNumber(value), problem);
+}
+
+void CheckStepCount(double duration_s, double step_s, const std::string& source, const std::string& duration_key,
+                    const std::string& step_key) {
+  if (!(step_s > 0.0) || !std::isfinite(step_s) || !std::isfinite(duration_s)) return;
+  const double steps = duration_s / step_s;
+  if (steps <= kMaximumStepsPerRun) return;
+  throw InputError(source, step_key, ShortNumber(step_s),
+                   "expected at most " + ShortNumber(kMaximumStepsPerRun) + " integration steps per run, but " +
+                       duration_key + " = " + ShortNumber(duration_s) + " s / " + step_key + " = " +
+                       ShortNumber(step_s) + " s = " + ShortNumber(steps) +
+                       " steps; take a larger step or a shorter run (docs/limits.md)");
+}
+
+}  // namespace gesweep

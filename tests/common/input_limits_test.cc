@@ -1,0 +1,97 @@
+// The one table of limits (engine/common/input_limits.h): every entry well formed, and the checks.
+#include "engine/common/input_limits.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+TEST(InputLimits, EveryEntryHasAUniqueNameUnitsAnIntervalAndAReason) {
+  std::set<std::string_view> names;
+  for (const InputLimit& limit : InputLimits()) {
+    EXPECT_TRUE(names.insert(limit.name).second) << limit.name << " twice";
+    EXPECT_FALSE(limit.units.empty()) << limit.name;
+    EXPECT_FALSE(limit.reason.empty()) << limit.name;
+    EXPECT_EQ(limit.reason.find('\n'), std::string_view::npos) << limit.name << ": the reason is one line";
+    EXPECT_TRUE(std::isfinite(limit.minimum) && std::isfinite(limit.maximum)) << limit.name;
+    EXPECT_LT(limit.minimum, limit.maximum) << limit.name;
+    // Every bound is far inside a double's range, so no value near it overflows in arithmetic.
+    EXPECT_LT(std::abs(limit.maximum), 1e100) << limit.name;
+  }
+}
+
+TEST(InputLimits, BoundsAreInclusiveOrExclusiveAsWritten) {
+  const InputLimit& speed = RequireInputLimit("speed_mps");  // [1, 300]
+  EXPECT_TRUE(WithinLimit(speed, 1.0));
+  EXPECT_TRUE(WithinLimit(speed, 300.0));
+  EXPECT_FALSE(WithinLimit(speed, std::nextafter(1.0, 0.0)));
+  EXPECT_FALSE(WithinLimit(speed, std::nextafter(300.0, 1e9)));
+  const InputLimit& height = RequireInputLimit("height_m");  // (0, 11000]
+  EXPECT_FALSE(WithinLimit(height, 0.0));
+  EXPECT_TRUE(WithinLimit(height, 1e-300));  // positive: the wheel-contact height is a further bound
+  EXPECT_TRUE(WithinLimit(height, 11000.0));
+}
+
+TEST(InputLimits, RefusesTheValuesOfTheIssue) {
+  // modes --speed-mps 1e308 and 1e-300 printed sigma = nan and -inf; simulate --height-m 1e308.
+  for (double bad : {1e308, 1e-300, 0.0, -5.0}) {
+    EXPECT_FALSE(WithinLimit(RequireInputLimit("speed_mps"), bad)) << bad;
+  }
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("height_m"), 1e308));
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("pulse_amplitude_deg"), 1e308));
+}
+
+TEST(InputLimits, NonFiniteValuesAreRefusedUnlessInfinityIsAllowed) {
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("height_m"), inf));
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("height_m"), std::nan("")));
+  EXPECT_TRUE(WithinLimit(RequireInputLimit("landing.design_height_m"), inf));
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("landing.design_height_m"), -inf));
+  EXPECT_FALSE(WithinLimit(RequireInputLimit("landing.design_height_m"), std::nan("")));
+}
+
+TEST(InputLimits, ProblemNamesTheRangeTheUnitsAndTheReason) {
+  const InputLimit& speed = RequireInputLimit("speed_mps");
+  EXPECT_EQ(LimitProblem(speed, 32.0), "");
+  const std::string problem = LimitProblem(speed, 1e308);
+  EXPECT_NE(problem.find("expected a number in [1, 300] m/s ("), std::string::npos) << problem;
+  EXPECT_NE(problem.find(speed.reason), std::string::npos) << problem;
+  EXPECT_EQ(DescribeLimit(RequireInputLimit("landing.design_height_m")), "a number in (0, 11000] m, or inf");
+}
+
+TEST(InputLimits, CheckThrowsOneLineNamingKeyAndValue) {
+  try {
+    CheckInputLimit("speed_mps", 1e-300, "command line", "--speed-mps");
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    const std::string text = e.what();
+    EXPECT_EQ(text.rfind("command line: --speed-mps = 1e-300: expected a number in [1, 300] m/s", 0), 0u) << text;
+  }
+  EXPECT_NO_THROW(CheckInputLimit("speed_mps", 32.0, "command line", "--speed-mps"));
+}
+
+TEST(StepCount, RefusesMoreThanTheLimitNamingBothValues) {
+  EXPECT_NO_THROW(CheckStepCount(300.0, 0.015, "s.toml", "duration_s", "step_s"));  // 20,000 steps
+  EXPECT_NO_THROW(CheckStepCount(1e5, 1e-3, "s.toml", "duration_s", "step_s"));     // exactly 1e8
+  try {
+    CheckStepCount(30.0, 1e-9, "s.toml", "duration_s", "step_s");  // the issue's step_s = 1e-9
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("step_s = 1e-09"), std::string::npos) << text;
+    EXPECT_NE(text.find("duration_s = 30 s"), std::string::npos) << text;
+    EXPECT_NE(text.find("3e+10 steps"), std::string::npos) << text;
+    EXPECT_NE(text.find("at most 100000000 integration steps"), std::string::npos) << text;
+  }
+  // Nothing to bound: an adaptive method without a largest step.
+  EXPECT_NO_THROW(CheckStepCount(1e5, 0.0, "s.toml", "duration_s", "max_step_s"));
+}
+
+}  // namespace
+}  // namespace gesweep
