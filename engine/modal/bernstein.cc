@@ -315,6 +315,8 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
   const int n = p.degree();
   result.sign_at_lower = SignOf(p.coefficient(0), allowance);
   result.sign_at_upper = SignOf(p.coefficient(n), allowance);
+  // No sign variation (the usual case of a segment far from any root): no root, nothing to subdivide.
+  if (MaxSignVariations(p, allowance) == 0) return result;
   struct Piece {
     BernsteinPolynomial poly;
     double lower, upper;

@@ -629,6 +629,7 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
   const bool h_derivatives = model.options().h_derivatives;
   *density_bound = 0;
   std::vector<MatrixSegment> segments;
+  segments.reserve(knots.size() - 1);
   for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
     MatrixSegment segment;
     const double lo = knots[i], hi = knots[i + 1];
