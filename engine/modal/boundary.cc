@@ -669,17 +669,17 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
     auto density = [=](double t) {
       return rho_lo * (2 * t - 1) * (t - 1) + rho_mid * 4 * t * (1 - t) + rho_hi * t * (2 * t - 1);
     };
+    // Every derivative of Table 1 is ρ times a function of the coefficients that is affine in them.
+    auto unit_derivatives = [&](double h) {
+      DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, 1.0, speed_mps);
+      if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
+      return d;
+    };
+    const DimensionalDerivatives d_lo = unit_derivatives(lo), d_hi = unit_derivatives(hi);
     if (coefficient_degree <= 1) {
-      // Every derivative of Table 1 is ρ times a linear function of the coefficients, and the
-      // coefficients are affine in H here: the derivatives per unit density at the two ends, linearly
-      // interpolated and times ρ̂, are the same derivatives up to rounding (which the fit's
+      // The coefficients are affine in H here: the derivatives per unit density at the two ends,
+      // linearly interpolated and times ρ̂, are the same derivatives up to rounding (which the fit's
       // faithfulness check against the exact model covers), without a table lookup per node.
-      auto unit_derivatives = [&](double h) {
-        DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, 1.0, speed_mps);
-        if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
-        return d;
-      };
-      const DimensionalDerivatives d_lo = unit_derivatives(lo), d_hi = unit_derivatives(hi);
       segment.polynomial_matrix = [=](double h) {
         const double t = (h - lo) / (hi - lo);
         return AssembleStateMatrix(InterpolatedDerivatives(d_lo, d_hi, t, density(t)), speed_mps);
@@ -693,10 +693,12 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
       const double density = h == lo ? rho_lo : (h == hi ? rho_hi : m->DensityAt(h));
       return matrix(h, density);
     };
-    // Column 4 (ΔH) of A is zero at both ends, hence throughout (entries affine in the coefficients).
-    const Matrix5d A_lo = segment.exact_matrix(lo), A_hi = segment.exact_matrix(hi);
-    const bool zero_lo = A_lo.col(kDeltaH).cwiseAbs().maxCoeff() == 0.0;
-    const bool zero_hi = A_hi.col(kDeltaH).cwiseAbs().maxCoeff() == 0.0;
+    // Column 4 (ΔH) of A, ρ·(Xh, Zh, Mh + ρ·Mẇ·Zh, 0, 0) per unit density, is zero at an end exactly
+    // where Xh = Zh = Mh = 0 there (ρ > 0); zero at both ends, it is zero throughout (entries affine
+    // in the coefficients).
+    auto column_zero = [](const DimensionalDerivatives& d) { return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0; };
+    const bool zero_lo = column_zero(d_lo);
+    const bool zero_hi = column_zero(d_hi);
     segment.real_root_at_lower = zero_lo;
     segment.real_root_at_upper = zero_hi;
     segment.deflated = zero_lo && zero_hi &&
