@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 #include "engine/common/errors.h"
@@ -15,11 +16,13 @@ constexpr int kMax = BernsteinPolynomial::kMaxDegree;
 constexpr int kMaxConversionDegree = 24;
 
 struct Binomials {
-  double c[2 * kMax + 2][2 * kMax + 2] = {};
+  double c[kMax + 1][kMax + 1] = {};
+  double inverse[kMax + 1][kMax + 1] = {};  // 1/C(n, k): products divide by them
   Binomials() {
-    for (int n = 0; n < 2 * kMax + 2; ++n) {
+    for (int n = 0; n <= kMax; ++n) {
       c[n][0] = c[n][n] = 1.0;
       for (int k = 1; k < n; ++k) c[n][k] = c[n - 1][k - 1] + c[n - 1][k];
+      for (int k = 0; k <= n; ++k) inverse[n][k] = 1.0 / c[n][k];
     }
   }
 };
@@ -69,6 +72,48 @@ struct CosineTables {
 const CosineTables& Cosines() {
   static const CosineTables tables;
   return tables;
+}
+
+// The linear map from the values at m Chebyshev nodes to the Bernstein coefficients (degree d) of
+// the Chebyshev interpolant truncated to degree d — the discrete cosine transform and the
+// Chebyshev-to-Bernstein conversion in one (d+1)×m matrix — and the row that gives the Chebyshev
+// coefficient d + 1 (the first one dropped; empty when d + 1 = m). Built once per (m, d), on first use.
+struct FitMatrix {
+  std::vector<double> bernstein;  // row j: coefficient b_j
+  std::vector<double> tail;
+};
+
+constexpr int kMaxNodes = kMaxConversionDegree + 2;
+
+const FitMatrix& Fit(int m, int d) {
+  struct Slot {
+    std::once_flag built;
+    FitMatrix matrix;
+  };
+  static Slot slots[kMaxNodes + 1][kMaxConversionDegree + 1];
+  Slot& slot = slots[m][d];
+  std::call_once(slot.built, [&] {
+    static const ChebyshevToBernstein table;
+    const double* cosines = Cosines().table[static_cast<std::size_t>(m)].data();
+    // Node i is x_i = −cos θ_i, θ_i = π(i + ½)/m, so T_k(x_i) = (−1)^k cos(k θ_i), and the
+    // interpolant's Chebyshev coefficient is c_k = w_k Σ_i v_i (−1)^k cos(k θ_i), w_k = 2/m (1/m for k = 0).
+    auto weight = [m](int k) { return (k % 2 == 0 ? 2.0 : -2.0) / m * (k == 0 ? 0.5 : 1.0); };
+    const auto& conversion = table.conversion[static_cast<std::size_t>(d)];
+    slot.matrix.bernstein.assign(static_cast<std::size_t>((d + 1) * m), 0.0);
+    for (int k = 0; k <= d; ++k) {
+      const auto& row = conversion[static_cast<std::size_t>(k)];
+      for (int j = 0; j <= d; ++j) {
+        for (int i = 0; i < m; ++i) {
+          slot.matrix.bernstein[static_cast<std::size_t>(j * m + i)] +=
+              row[static_cast<std::size_t>(j)] * weight(k) * cosines[k * m + i];
+        }
+      }
+    }
+    if (d + 1 < m) {
+      for (int i = 0; i < m; ++i) slot.matrix.tail.push_back(weight(d + 1) * cosines[(d + 1) * m + i]);
+    }
+  });
+  return slot.matrix;
 }
 
 int SignOf(double value, double allowance) {
@@ -133,35 +178,20 @@ BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const std::vector<
 }
 
 BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* values, int m, int degree, double* tail) {
-  static const ChebyshevToBernstein table;
-  GESWEEP_DEMAND(m >= 1 && degree >= 0 && degree < m && degree <= kMaxConversionDegree);
-  // Node i is x_i = −cos θ_i, θ_i = π(i + ½)/m, so T_k(x_i) = (−1)^k cos(k θ_i).
-  double largest_dropped = 0;
-  std::array<double, kMax + 1> c{};
-  GESWEEP_DEMAND(m <= kMaxConversionDegree + 2);
-  const double* cosines = Cosines().table[static_cast<std::size_t>(m)].data();
-  // Coefficients beyond degree + 1 are not needed: the first dropped one shows a wrong bound.
-  const int computed = std::min(m, degree + 2);
-  for (int k = 0; k < computed; ++k) {
-    double sum = 0;
-    for (int i = 0; i < m; ++i) sum += values[i] * cosines[k * m + i];
-    double ck = (k % 2 == 0 ? 2.0 : -2.0) * sum / m;
-    if (k == 0) ck *= 0.5;
-    if (k <= degree) {
-      c[static_cast<std::size_t>(k)] = ck;
-    } else {
-      largest_dropped = std::max(largest_dropped, std::abs(ck));
-    }
-  }
-  if (tail) *tail = largest_dropped;
+  GESWEEP_DEMAND(m >= 1 && degree >= 0 && degree < m && degree <= kMaxConversionDegree && m <= kMaxNodes);
+  const FitMatrix& fit = Fit(m, degree);
   BernsteinPolynomial p;
   p.degree_ = degree;
-  const auto& conversion = table.conversion[static_cast<std::size_t>(degree)];
-  for (int mm = 0; mm <= degree; ++mm) {
-    const double ck = c[static_cast<std::size_t>(mm)];
-    if (ck == 0.0) continue;
-    const auto& row = conversion[static_cast<std::size_t>(mm)];
-    for (int k = 0; k <= degree; ++k) p.b_[static_cast<std::size_t>(k)] += ck * row[static_cast<std::size_t>(k)];
+  for (int j = 0; j <= degree; ++j) {
+    const double* row = fit.bernstein.data() + j * m;
+    double sum = 0;
+    for (int i = 0; i < m; ++i) sum += row[i] * values[i];
+    p.b_[static_cast<std::size_t>(j)] = sum;
+  }
+  if (tail) {
+    double dropped = 0;
+    for (std::size_t i = 0; i < fit.tail.size(); ++i) dropped += fit.tail[i] * values[i];
+    *tail = std::abs(dropped);
   }
   return p;
 }
@@ -173,15 +203,25 @@ double BernsteinPolynomial::MaxAbsCoefficient() const {
 }
 
 double BernsteinPolynomial::operator()(double t) const {
-  std::array<double, kMax + 1> work;
-  std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
-  for (int r = 1; r <= degree_; ++r) {
-    for (int k = 0; k <= degree_ - r; ++k) {
-      work[static_cast<std::size_t>(k)] =
-          (1.0 - t) * work[static_cast<std::size_t>(k)] + t * work[static_cast<std::size_t>(k + 1)];
-    }
+  const int n = degree_;
+  if (n == 0) return b_[0];
+  const auto& C = Binomial().c[n];
+  if (t <= 0.5) {
+    // (1 − t)ⁿ Σ bₖ C(n,k) sᵏ, s = t/(1 − t) ≤ 1
+    const double s = t / (1.0 - t);
+    double value = b_[static_cast<std::size_t>(n)];
+    for (int k = n - 1; k >= 0; --k) value = value * s + b_[static_cast<std::size_t>(k)] * C[k];
+    double power = 1.0;
+    for (int k = 0; k < n; ++k) power *= 1.0 - t;
+    return value * power;
   }
-  return work[0];
+  // tⁿ Σ bₖ C(n,k) rⁿ⁻ᵏ, r = (1 − t)/t < 1
+  const double r = (1.0 - t) / t;
+  double value = b_[0];
+  for (int k = 1; k <= n; ++k) value = value * r + b_[static_cast<std::size_t>(k)] * C[k];
+  double power = 1.0;
+  for (int k = 0; k < n; ++k) power *= t;
+  return value * power;
 }
 
 BernsteinPolynomial BernsteinPolynomial::Derivative() const {
@@ -241,15 +281,17 @@ BernsteinPolynomial operator*(const BernsteinPolynomial& p, const BernsteinPolyn
   const int m = p.degree_, n = q.degree_;
   GESWEEP_DEMAND(m + n <= BernsteinPolynomial::kMaxDegree);
   const auto& C = Binomial().c;
-  std::array<double, kMax + 1> ps{}, qs{};
+  std::array<double, kMax + 1> ps, qs;
   for (int i = 0; i <= m; ++i) ps[static_cast<std::size_t>(i)] = p.b_[static_cast<std::size_t>(i)] * C[m][i];
   for (int j = 0; j <= n; ++j) qs[static_cast<std::size_t>(j)] = q.b_[static_cast<std::size_t>(j)] * C[n][j];
   BernsteinPolynomial r;
   r.degree_ = m + n;
+  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] = 0.0;
   for (int i = 0; i <= m; ++i) {
     for (int j = 0; j <= n; ++j) r.b_[static_cast<std::size_t>(i + j)] += ps[static_cast<std::size_t>(i)] * qs[static_cast<std::size_t>(j)];
   }
-  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] /= C[m + n][k];
+  const auto& inverse = Binomial().inverse[m + n];
+  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] *= inverse[k];
   return r;
 }
 
@@ -273,6 +315,8 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
   const int n = p.degree();
   result.sign_at_lower = SignOf(p.coefficient(0), allowance);
   result.sign_at_upper = SignOf(p.coefficient(n), allowance);
+  // No sign variation (the usual case of a segment far from any root): no root, nothing to subdivide.
+  if (MaxSignVariations(p, allowance) == 0) return result;
   struct Piece {
     BernsteinPolynomial poly;
     double lower, upper;

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <boost/math/tools/toms748_solve.hpp>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include "engine/aircraft/atmosphere.h"
@@ -31,7 +33,6 @@ constexpr double kTailTolerance = 1e-9;
 // Where the criteria vanish at a table row, the signs just inside the two segments are taken this
 // fraction of each segment's length away from it.
 constexpr double kKnotOffset = 0x1p-24;
-
 std::string FormatMetres(double value) {
   std::ostringstream out;
   out.precision(7);
@@ -50,7 +51,8 @@ void SampledSearch(const LongitudinalModel& model, double speed_mps, const Bound
   }
   knots.push_back(result.upper_height_m);
   SampledSearchResult search = SampledCrossingSearch([&](double h) { return model.StateMatrix(h, speed_mps); },
-                                                     knots, options.samples_per_segment, options.tolerance_m);
+                                                     knots, options.samples_per_segment, options.tolerance_m,
+                                                     options.eigenvalue_solver);
   result.margin_evaluations = search.margin_evaluations;
   if (!search.finite) {
     result.reason = search.non_finite_reason;
@@ -70,6 +72,7 @@ struct SegmentPolynomials {
   std::array<BernsteinPolynomial, 6> a;  // a[1..5]
   BernsteinPolynomial hopf, real;        // Δ₄ and a₅, or Δ₃ and a₄ when deflated
   double hopf_scale = 0, real_scale = 0;
+  std::array<double, 6> scale{};  // of each aₖ: its largest Bernstein coefficient, floored at rounding
   bool hopf_excluded = false;  // interval arithmetic showed Δ has no root here
   bool hopf_built = false;
 };
@@ -116,8 +119,8 @@ struct Candidate {
 
 class Search {
  public:
-  Search(const std::vector<MatrixSegment>& segments, double wingspan_m)
-      : segments_(segments), wingspan_m_(wingspan_m) {}
+  Search(const std::vector<MatrixSegment>& segments, double wingspan_m, EigenvalueSolver solver)
+      : segments_(segments), wingspan_m_(wingspan_m), solver_(solver) {}
 
   CrossingSearchResult Run() {
     polynomials_.resize(segments_.size());
@@ -175,9 +178,11 @@ class Search {
       }
     }
     for (std::size_t s = 0; s + 1 < segments_.size(); ++s) {
-      if (!Continuous(s)) continue;
+      int continuous = -1;  // Continuous(s), evaluated where needed (two exact matrices)
       for (int c = 0; c < 2; ++c) {
         if (upper_zone[s][c] < 0 && lower_zone[s + 1][c] < 0) continue;
+        if (continuous < 0) continuous = Continuous(s) ? 1 : 0;
+        if (continuous == 0) break;
         const bool hopf = c == 0;
         // Where a₅ becomes identically 0 at the row, the neutral root arrives there and stays (the
         // stability comparison reports it); Δ₄ = a₄Δ₃ continues Δ₃ across the row.
@@ -244,12 +249,14 @@ class Search {
       const double h = HeightAt(s, nodes[static_cast<std::size_t>(i)]);
       const Matrix5d A = segment.polynomial_matrix(h);
       ++result_.polynomial_evaluations;
-      if (!A.allFinite()) {
+      // One pass for both: the largest |entry| is NaN or ∞ exactly when some entry is not finite.
+      const double largest = A.cwiseAbs().maxCoeff<Eigen::PropagateNaN>();
+      if (!std::isfinite(largest)) {
         result_.finite = false;
         result_.non_finite_reason = "the state matrix is not finite at H = " + FormatMetres(h);
         return false;
       }
-      entry_scale = std::max(entry_scale, A.cwiseAbs().maxCoeff());
+      entry_scale = std::max(entry_scale, largest);
       const CharacteristicCoefficients a = CharacteristicPolynomial(A);
       for (int k = 1; k <= 5; ++k) values[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] = a[static_cast<std::size_t>(k)];
     }
@@ -272,6 +279,7 @@ class Search {
       }
       scale[static_cast<std::size_t>(k)] = std::max(scale[static_cast<std::size_t>(k)], floor);
     }
+    p.scale = scale;
     const auto& a = p.a;
     const auto& S = scale;
     // Faithfulness: each fitted coefficient against the exact one (true ρ) at a point that is no node.
@@ -287,9 +295,6 @@ class Search {
                 ": the fitted coefficients do not reproduce the exact model (relative error " +
                 std::to_string(worst) + ")");
     }
-    // Interval bounds of each aₖ over the segment (the range of its Bernstein coefficients).
-    std::array<Range, 6> r;
-    for (int k = 1; k <= 5; ++k) r[static_cast<std::size_t>(k)] = Range::Of(a[static_cast<std::size_t>(k)]);
     if (!segment.deflated) {
       p.hopf_scale = (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
       p.real_scale = S[5];
@@ -298,35 +303,73 @@ class Search {
       p.real = a[5];
       if (segment.real_root_at_lower) p.real = p.real.DividedByT();
       if (segment.real_root_at_upper) p.real = p.real.DividedByOneMinusT();
-      // Δ₄ by interval arithmetic first: most segments are far from any root, and then the degree-27
-      // products are not needed.
-      const Range e = r[1] * r[4] - r[5];
-      const Range bound = (r[1] * r[2] - r[3]) * (r[3] * r[4] - r[2] * r[5]) - e.Squared();
-      p.hopf_excluded = bound.ExcludesZero(kRoundingAllowance * p.hopf_scale);
     } else {
       p.hopf_scale = S[1] * S[2] * S[3] + S[3] * S[3] + S[1] * S[1] * S[4];
       p.real_scale = S[4];
       p.real = a[4];
-      const Range bound = r[1] * r[2] * r[3] - r[3].Squared() - r[1].Squared() * r[4];
-      p.hopf_excluded = bound.ExcludesZero(kRoundingAllowance * p.hopf_scale);
     }
-    if (!p.hopf_excluded) BuildHopf(s);
+    // Δ by interval arithmetic first: most segments are far from any root, and then the degree-27
+    // products are not needed. Where Δ has opposite signs at the two ends (the end coefficients are
+    // the values there) a root is certain and no exclusion is tried.
+    const double margin = kRoundingAllowance * p.hopf_scale;
+    CharacteristicCoefficients lower_end{}, upper_end{};
+    for (int k = 1; k <= 5; ++k) {
+      lower_end[static_cast<std::size_t>(k)] = a[static_cast<std::size_t>(k)].coefficient(0);
+      upper_end[static_cast<std::size_t>(k)] = a[static_cast<std::size_t>(k)].coefficient(a[static_cast<std::size_t>(k)].degree());
+    }
+    const double hopf_lower = HopfCriterion(lower_end, segment.deflated);
+    const double hopf_upper = HopfCriterion(upper_end, segment.deflated);
+    const bool root_certain = (hopf_lower > margin && hopf_upper < -margin) || (hopf_lower < -margin && hopf_upper > margin);
+    if (root_certain) {
+      BuildHopf(s, -1.0);
+      return true;
+    }
+    // Interval bounds of each aₖ over the segment (the range of its Bernstein coefficients, which the
+    // basis, a partition of unity, keeps the polynomial in) and Δ's formula in them.
+    std::array<Range, 6> r;
+    for (int k = 1; k <= 5; ++k) r[static_cast<std::size_t>(k)] = Range::Of(a[static_cast<std::size_t>(k)]);
+    Range bound;
+    if (!segment.deflated) {
+      const Range e = r[1] * r[4] - r[5];
+      bound = (r[1] * r[2] - r[3]) * (r[3] * r[4] - r[2] * r[5]) - e.Squared();
+    } else {
+      bound = r[1] * r[2] * r[3] - r[3].Squared() - r[1].Squared() * r[4];
+    }
+    // Then, where that does not exclude a root, the tighter ranges of Δ's factors (BuildHopf).
+    p.hopf_excluded = bound.ExcludesZero(margin) || !BuildHopf(s, margin);
     return true;
   }
 
-  // The Bernstein form of Δ₄ (Δ₃ when deflated) of segment s.
-  const BernsteinPolynomial& BuildHopf(std::size_t s) {
+  // Builds the Bernstein form of Δ₄ (Δ₃ when deflated) of segment s, unless `exclusion_margin` ≥ 0
+  // and the ranges of its factors' Bernstein forms (f = a₁a₂ − a₃, g = a₃a₄ − a₂a₅, e = a₁a₄ − a₅
+  // of Δ₄ = fg − e²; f, a₃, a₁², a₄ of Δ₃ = f·a₃ − a₁²a₄), which the products need anyway, show that
+  // it stays farther than that from 0: then false (excluded), nothing built.
+  bool BuildHopf(std::size_t s, double exclusion_margin) {
     SegmentPolynomials& p = polynomials_[s];
-    if (p.hopf_built) return p.hopf;
     const auto& a = p.a;
+    const BernsteinPolynomial f = a[1] * a[2] - a[3];
     if (!segments_[s].deflated) {
+      const BernsteinPolynomial g = a[3] * a[4] - a[2] * a[5];
       const BernsteinPolynomial e = a[1] * a[4] - a[5];
-      p.hopf = (a[1] * a[2] - a[3]) * (a[3] * a[4] - a[2] * a[5]) - e * e;
+      if (exclusion_margin >= 0 &&
+          (Range::Of(f) * Range::Of(g) - Range::Of(e).Squared()).ExcludesZero(exclusion_margin)) {
+        return false;
+      }
+      p.hopf = f * g - e * e;
     } else {
-      p.hopf = a[1] * a[2] * a[3] - a[3] * a[3] - a[1] * a[1] * a[4];
+      const BernsteinPolynomial a1_squared = a[1] * a[1];
+      if (exclusion_margin >= 0 &&
+          (Range::Of(f) * Range::Of(a[3]) - Range::Of(a1_squared) * Range::Of(a[4])).ExcludesZero(exclusion_margin)) {
+        return false;
+      }
+      p.hopf = f * a[3] - a1_squared * a[4];
     }
     p.hopf_built = true;
-    return p.hopf;
+    return true;
+  }
+  const BernsteinPolynomial& Hopf(std::size_t s) {
+    if (!polynomials_[s].hopf_built) BuildHopf(s, -1.0);
+    return polynomials_[s].hopf;
   }
 
   // Refines a candidate on the exact model, checks it is a crossing, classifies it.
@@ -354,7 +397,7 @@ class Search {
     } else {
       // The exact model does not change sign where the polynomial does: ρ̂ moved a root out of a
       // bracket narrower than the interpolation error. Keep the polynomial's root and say so.
-      const BernsteinPolynomial& poly = c.hopf ? BuildHopf(c.segment) : polynomials_[c.segment].real;
+      const BernsteinPolynomial& poly = c.hopf ? Hopf(c.segment) : polynomials_[c.segment].real;
       double tl = (lower - segment.lower_height_m) / Length(c.segment);
       double tu = (upper - segment.lower_height_m) / Length(c.segment);
       const bool rising = poly(tu) > poly(tl);
@@ -376,7 +419,7 @@ class Search {
     crossing.bracket_width_m = width;
     crossing.deflated = deflated;
     const double dt_dH = 1.0 / Length(s);
-    const BernsteinPolynomial& criterion = c.hopf ? BuildHopf(s) : p.a[deflated ? 4 : 5];
+    const BernsteinPolynomial& criterion = c.hopf ? Hopf(s) : p.a[deflated ? 4 : 5];
     crossing.criterion_height_derivative = criterion.Derivative()(t) * dt_dH;
     // dλ/dH = −(∂p/∂H)(λ) / p'(λ) with p(s, H) = det(sI − A(H)) (the quartic factor when deflated).
     const int n = deflated ? 4 : 5;
@@ -408,7 +451,7 @@ class Search {
     crossing.mode_stable_above = crossing.eigenvalue_height_derivative.real() < 0.0;
     // One eigen-analysis at the root names the mode.
     ++result_.eigen_analyses;
-    const ModalAnalysis modal = AnalyzeModes(segments_[s].exact_matrix(root));
+    const ModalAnalysis modal = AnalyzeModes(segments_[s].exact_matrix(root), solver_);
     int slot = -1;
     double best = std::numeric_limits<double>::infinity();
     for (int i = 0; i < 5; ++i) {
@@ -431,6 +474,39 @@ class Search {
     result_.crossings.push_back(crossing);
   }
 
+  // The stability of the airplane at an end of segment s from the end coefficients of its fitted
+  // aₖ (their values there), when every Liénard–Chipart quantity (aₖ, Δ₂ and Δ₄; a₁…a₄ and Δ₃ when
+  // deflated) is farther from 0 than its rounding allowance, or some aₖ is certainly negative;
+  // nullopt when that is undecided (e.g. a crossing at the end).
+  std::optional<bool> StableAtEnd(std::size_t s, bool upper) const {
+    const SegmentPolynomials& p = polynomials_[s];
+    const bool deflated = segments_[s].deflated;
+    const int n = deflated ? 4 : 5;
+    CharacteristicCoefficients a{};
+    a[0] = 1.0;
+    for (int k = 1; k <= 5; ++k) {
+      const BernsteinPolynomial& ak = p.a[static_cast<std::size_t>(k)];
+      a[static_cast<std::size_t>(k)] = ak.coefficient(upper ? ak.degree() : 0);
+    }
+    const auto& S = p.scale;
+    bool all_positive = true;
+    for (int k = 1; k <= n; ++k) {
+      const double allowance = kRoundingAllowance * S[static_cast<std::size_t>(k)];
+      if (a[static_cast<std::size_t>(k)] < -allowance) return false;
+      if (!(a[static_cast<std::size_t>(k)] > allowance)) all_positive = false;
+    }
+    if (!all_positive) return std::nullopt;
+    auto certain = [](double value, double allowance) { return std::abs(value) > allowance; };
+    if (deflated) {
+      if (!certain(HurwitzDelta3(a), kRoundingAllowance * p.hopf_scale)) return std::nullopt;
+      return DeflatedHurwitzStable(a);
+    }
+    const double delta2 = a[1] * a[2] - a[3];
+    if (!certain(delta2, kRoundingAllowance * (S[1] * S[2] + S[3]))) return std::nullopt;
+    if (!certain(HurwitzDelta4(a), kRoundingAllowance * p.hopf_scale)) return std::nullopt;
+    return HurwitzStable(a);
+  }
+
   // Stability just inside each end, between crossings and across every table row; a change of
   // stability at a table row without a crossing there is a crossing of kind kDiscontinuity.
   void AssignStability() {
@@ -445,7 +521,13 @@ class Search {
       const double mid = 0.5 * (breaks[i] + breaks[i + 1]);
       std::size_t s = 0;
       while (s + 1 < segments_.size() && mid > segments_[s].upper_height_m) ++s;
-      stable[i] = StableBy(Exact(s, mid), segments_[s].deflated);
+      // No eigenvalue reaches the axis inside the interval, so the stability of any point of it, or
+      // of an end where none is on the axis either, is the interval's: from the fitted coefficients
+      // at a segment end when their signs are certain there, else from the exact model at the middle.
+      std::optional<bool> decided;
+      if (breaks[i] == segments_[s].lower_height_m) decided = StableAtEnd(s, /*upper=*/false);
+      if (!decided && breaks[i + 1] == segments_[s].upper_height_m) decided = StableAtEnd(s, /*upper=*/true);
+      stable[i] = decided ? *decided : StableBy(Exact(s, mid), segments_[s].deflated);
     }
     auto interval_below = [&](double h) {
       const auto it = std::lower_bound(breaks.begin(), breaks.end(), h);
@@ -492,6 +574,7 @@ class Search {
 
   const std::vector<MatrixSegment>& segments_;
   double wingspan_m_;
+  EigenvalueSolver solver_;
   std::vector<SegmentPolynomials> polynomials_;
   CrossingSearchResult result_;
 };
@@ -508,6 +591,28 @@ double QuadraticDensityErrorBound(double lower_altitude_m, double length_m) {
   return third * delta * delta * delta / (9.0 * std::sqrt(3.0));
 }
 
+// ρ·((1 − t)·a + t·b), derivative by derivative.
+DimensionalDerivatives InterpolatedDerivatives(const DimensionalDerivatives& a, const DimensionalDerivatives& b,
+                                               double t, double density) {
+  auto lerp = [&](double x, double y) { return density * (x + t * (y - x)); };
+  DimensionalDerivatives d;
+  d.Xu = lerp(a.Xu, b.Xu);
+  d.Xw = lerp(a.Xw, b.Xw);
+  d.Xh = lerp(a.Xh, b.Xh);
+  d.Xde = lerp(a.Xde, b.Xde);
+  d.Zu = lerp(a.Zu, b.Zu);
+  d.Zw = lerp(a.Zw, b.Zw);
+  d.Zh = lerp(a.Zh, b.Zh);
+  d.Zde = lerp(a.Zde, b.Zde);
+  d.Mu = lerp(a.Mu, b.Mu);
+  d.Mw = lerp(a.Mw, b.Mw);
+  d.Mw_dot = lerp(a.Mw_dot, b.Mw_dot);
+  d.Mq = lerp(a.Mq, b.Mq);
+  d.Mh = lerp(a.Mh, b.Mh);
+  d.Mde = lerp(a.Mde, b.Mde);
+  return d;
+}
+
 // The segments of an aircraft's model between lower and upper at speed u.
 std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, double speed_mps, double lower,
                                             double upper, double* density_bound) {
@@ -518,10 +623,13 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
     if (h > lower && h < upper) knots.push_back(h);
   }
   knots.push_back(upper);
+  std::vector<double> knot_density(knots.size());
+  for (std::size_t i = 0; i < knots.size(); ++i) knot_density[i] = model.DensityAt(knots[i]);
   const int interpolation_degree = table.interpolation() == Interpolation::kPchip ? 3 : 1;
   const bool h_derivatives = model.options().h_derivatives;
   *density_bound = 0;
   std::vector<MatrixSegment> segments;
+  segments.reserve(knots.size() - 1);
   for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
     MatrixSegment segment;
     const double lo = knots[i], hi = knots[i + 1];
@@ -548,7 +656,7 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
       return table.At(h);
     };
     const double altitude = model.aircraft().field_elevation_m;
-    const double rho_lo = model.DensityAt(lo), rho_mid = model.DensityAt(0.5 * (lo + hi)), rho_hi = model.DensityAt(hi);
+    const double rho_lo = knot_density[i], rho_mid = model.DensityAt(0.5 * (lo + hi)), rho_hi = knot_density[i + 1];
     const double bound = QuadraticDensityErrorBound(altitude + lo, hi - lo) / std::min(rho_lo, rho_hi);
     *density_bound = std::max(*density_bound, bound);
     const MassGeometry mg = model.mass_geometry();
@@ -557,18 +665,40 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
       if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
       return AssembleStateMatrix(d, speed_mps);
     };
-    segment.polynomial_matrix = [=](double h) {
-      const double t = (h - lo) / (hi - lo);
-      // Lagrange form on t = 0, ½, 1.
-      const double rho = rho_lo * (2 * t - 1) * (t - 1) + rho_mid * 4 * t * (1 - t) + rho_hi * t * (2 * t - 1);
-      return matrix(h, rho);
+    // ρ̂: the Lagrange form on t = 0, ½, 1.
+    auto density = [=](double t) {
+      return rho_lo * (2 * t - 1) * (t - 1) + rho_mid * 4 * t * (1 - t) + rho_hi * t * (2 * t - 1);
     };
+    // Every derivative of Table 1 is ρ times a function of the coefficients that is affine in them.
+    auto unit_derivatives = [&](double h) {
+      DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, 1.0, speed_mps);
+      if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
+      return d;
+    };
+    const DimensionalDerivatives d_lo = unit_derivatives(lo), d_hi = unit_derivatives(hi);
+    if (coefficient_degree <= 1) {
+      // The coefficients are affine in H here: the derivatives per unit density at the two ends,
+      // linearly interpolated and times ρ̂, are the same derivatives up to rounding (which the fit's
+      // faithfulness check against the exact model covers), without a table lookup per node.
+      segment.polynomial_matrix = [=](double h) {
+        const double t = (h - lo) / (hi - lo);
+        return AssembleStateMatrix(InterpolatedDerivatives(d_lo, d_hi, t, density(t)), speed_mps);
+      };
+    } else {
+      segment.polynomial_matrix = [=](double h) { return matrix(h, density((h - lo) / (hi - lo))); };
+    }
     const LongitudinalModel* m = &model;
-    segment.exact_matrix = [=](double h) { return matrix(h, m->DensityAt(h)); };
-    // Column 4 (ΔH) of A is zero at both ends, hence throughout (entries affine in the coefficients).
-    const Matrix5d A_lo = segment.exact_matrix(lo), A_hi = segment.exact_matrix(hi);
-    const bool zero_lo = A_lo.col(kDeltaH).cwiseAbs().maxCoeff() == 0.0;
-    const bool zero_hi = A_hi.col(kDeltaH).cwiseAbs().maxCoeff() == 0.0;
+    // The density at the ends is the knots' (the ISA's pow is most of an exact evaluation).
+    segment.exact_matrix = [=](double h) {
+      const double density = h == lo ? rho_lo : (h == hi ? rho_hi : m->DensityAt(h));
+      return matrix(h, density);
+    };
+    // Column 4 (ΔH) of A, ρ·(Xh, Zh, Mh + ρ·Mẇ·Zh, 0, 0) per unit density, is zero at an end exactly
+    // where Xh = Zh = Mh = 0 there (ρ > 0); zero at both ends, it is zero throughout (entries affine
+    // in the coefficients).
+    auto column_zero = [](const DimensionalDerivatives& d) { return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0; };
+    const bool zero_lo = column_zero(d_lo);
+    const bool zero_hi = column_zero(d_hi);
     segment.real_root_at_lower = zero_lo;
     segment.real_root_at_upper = zero_hi;
     segment.deflated = zero_lo && zero_hi &&
@@ -584,12 +714,12 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
 
 SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>& matrix,
                                           const std::vector<double>& knots, int samples_per_segment,
-                                          double tolerance_m) {
+                                          double tolerance_m, EigenvalueSolver solver) {
   GESWEEP_DEMAND(knots.size() >= 2 && samples_per_segment >= 0);
   SampledSearchResult result;
   auto sigma = [&](double height_m) {
     ++result.margin_evaluations;
-    return AnalyzeModes(matrix(height_m)).stability_margin_per_s;
+    return AnalyzeModes(matrix(height_m), solver).stability_margin_per_s;
   };
   std::vector<double> heights;
   for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
@@ -643,9 +773,10 @@ std::string_view ToString(CrossingKind kind) {
   GESWEEP_UNREACHABLE();
 }
 
-CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m) {
+CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m,
+                                    EigenvalueSolver solver) {
   GESWEEP_DEMAND(!segments.empty());
-  return Search(segments, wingspan_m).Run();
+  return Search(segments, wingspan_m, solver).Run();
 }
 
 BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, const BoundaryOptions& options) {
@@ -668,7 +799,7 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
     const std::vector<MatrixSegment> segments = AircraftSegments(
         model, speed_mps, result.lower_height_m, result.upper_height_m, &result.density_interpolation_bound);
     result.segments = static_cast<int>(segments.size());
-    CrossingSearchResult search = CrossingSearch(segments, aircraft.wingspan_m);
+    CrossingSearchResult search = CrossingSearch(segments, aircraft.wingspan_m, options.eigenvalue_solver);
     result.polynomial_evaluations = search.polynomial_evaluations;
     result.margin_evaluations = search.eigen_analyses;
     if (!search.finite) {
@@ -678,13 +809,17 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
     }
     result.certified = search.certified;
     if (search.certified) {
-      char text[320];
-      std::snprintf(text, sizeof text,
-                    "every root of Delta4 and a5 in %.7g m to %.7g m isolated on %zu segments (Descartes' rule on "
-                    "the Bernstein basis); rho(H) by its quadratic interpolant per segment, relative error <= %.2g",
-                    result.lower_height_m, result.upper_height_m, segments.size(),
-                    result.density_interpolation_bound);
-      result.certificate = text;
+      // std::to_chars, not printf: the formatting was 3 % of a search.
+      auto general = [](double value, int precision) {
+        char text[32];
+        const auto end = std::to_chars(text, text + sizeof text, value, std::chars_format::general, precision).ptr;
+        return std::string(text, end);
+      };
+      result.certificate = "every root of Delta4 and a5 in " + general(result.lower_height_m, 7) + " m to " +
+                           general(result.upper_height_m, 7) + " m isolated on " + std::to_string(segments.size()) +
+                           " segments (Descartes' rule on the Bernstein basis); rho(H) by its quadratic "
+                           "interpolant per segment, relative error <= " +
+                           general(result.density_interpolation_bound, 2);
     } else {
       result.certificate = "not certified: " + search.uncertified_reason;
     }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "engine/dynamics/longitudinal_model.h"
+#include "engine/modal/modal_analysis.h"
 
 namespace gesweep {
 
@@ -41,6 +42,10 @@ struct BoundaryOptions {
   /// Width of the final bracket, m. kSampled stops there; kHurwitz refines each root to rounding
   /// (about 1e-12 m) and reports the bracket it reached, never wider than this.
   double tolerance_m = 1e-4;
+  /// The eigen-solver of every eigen-analysis (kSampled: σ at each sample; kHurwitz: the one that
+  /// names the crossing mode). kEigen reproduces the searches as they were before the fixed-size
+  /// kernel, for comparison (docs/performance.md).
+  EigenvalueSolver eigenvalue_solver = EigenvalueSolver::kFixedSize;
 };
 
 /// What crosses the imaginary axis.
@@ -143,7 +148,8 @@ struct CrossingSearchResult {
 /// Every crossing of the imaginary axis by an eigenvalue of A(H) over consecutive segments (ascending,
 /// each starting where the previous one ends; A may jump at a segment boundary). `wingspan_m` only
 /// scales height_over_span.
-CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m);
+CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m,
+                                    EigenvalueSolver solver = EigenvalueSolver::kFixedSize);
 
 /// The result of SampledCrossingSearch.
 struct SampledSearchResult {
@@ -159,6 +165,7 @@ struct SampledSearchResult {
 /// `tolerance_m` at each sign change. A pair of sign changes between two samples is not seen.
 SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>& matrix,
                                           const std::vector<double>& knots, int samples_per_segment,
-                                          double tolerance_m);
+                                          double tolerance_m,
+                                          EigenvalueSolver solver = EigenvalueSolver::kFixedSize);
 
 }  // namespace gesweep

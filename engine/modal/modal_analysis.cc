@@ -3,10 +3,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <vector>
+#include <span>
 
 // LAPACK (reference or OpenBLAS), Fortran calling convention.
 extern "C" void dgebal_(const char* job, const int* n, double* a, const int* lda, int* ilo, int* ihi,
@@ -39,8 +40,13 @@ Matrix5d Balanced(Matrix5d a) {
 // smallest physical |Im λ| works; this one guards against a pair that has just split.
 constexpr double kRealRootRelativeTolerance = 1e-12;
 
+// |Im z| ≤ tolerance·max(1, |z|), compared in squares (no hypot: this runs ~10 times per analysis).
 bool IsReal(std::complex<double> z) {
-  return std::abs(z.imag()) <= kRealRootRelativeTolerance * std::max(1.0, std::abs(z));
+  const double im2 = z.imag() * z.imag();
+  if (im2 == 0.0) return true;
+  const double modulus2 = z.real() * z.real() + im2;
+  if (!std::isfinite(modulus2)) return std::abs(z.imag()) <= kRealRootRelativeTolerance * std::abs(z);
+  return im2 <= kRealRootRelativeTolerance * kRealRootRelativeTolerance * std::max(1.0, modulus2);
 }
 
 // The eigenvalues of a balanced 5×5 by LAPACK: dgehd2 then dlahqr (eigenvalues only). false when the
@@ -58,15 +64,44 @@ bool LapackEigenvalues(Matrix5d a, std::array<std::complex<double>, 5>& values) 
   return true;
 }
 
-}  // namespace
-
-std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver) {
+// Eigen's EigenSolver on dgebal's balanced A: the solver before issue 16, and the fallback.
+std::array<std::complex<double>, 5> EigenSolverEigenvalues(const Matrix5d& A) {
   std::array<std::complex<double>, 5> values;
-  const Matrix5d balanced = Balanced(A);
-  if (solver == EigenvalueSolver::kLapack && LapackEigenvalues(balanced, values)) return values;
-  const Eigen::EigenSolver<Matrix5d> eigen(balanced, /*computeEigenvectors=*/false);
+  const Eigen::EigenSolver<Matrix5d> eigen(Balanced(A), /*computeEigenvectors=*/false);
   for (int i = 0; i < 5; ++i) values[static_cast<std::size_t>(i)] = eigen.eigenvalues()[i];
   return values;
+}
+
+std::atomic<std::uint64_t> fixed_size_fallbacks{0};
+
+}  // namespace
+
+std::uint64_t FixedSizeSolverFallbacks() { return fixed_size_fallbacks.load(std::memory_order_relaxed); }
+
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver, EigenvalueReport* report,
+                                                 int max_iterations) {
+  EigenvalueReport local;
+  EigenvalueReport& r = report ? *report : local;
+  r = EigenvalueReport{};
+  switch (solver) {
+    case EigenvalueSolver::kFixedSize: {
+      const FrancisResult francis = BalancedFrancisEigenvalues5(A, max_iterations);
+      r.iterations = francis.iterations;
+      if (francis.converged) return francis.values;
+      fixed_size_fallbacks.fetch_add(1, std::memory_order_relaxed);
+      r.solver_fallback = true;
+      return EigenSolverEigenvalues(A);
+    }
+    case EigenvalueSolver::kLapack: {
+      std::array<std::complex<double>, 5> values;
+      if (LapackEigenvalues(Balanced(A), values)) return values;
+      r.solver_fallback = true;
+      return EigenSolverEigenvalues(A);
+    }
+    case EigenvalueSolver::kEigen: return EigenSolverEigenvalues(A);
+  }
+  GESWEEP_DEMAND(false && "unknown EigenvalueSolver");
+  return {};
 }
 
 std::string_view ToString(ModeClassification classification) {
@@ -106,22 +141,33 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
     result.stability_margin_per_s = nan;
     return result;
   }
-  const std::array<std::complex<double>, 5> values = Eigenvalues5(A, solver);
+  EigenvalueReport report;
+  const std::array<std::complex<double>, 5> values = Eigenvalues5(A, solver, &report);
+  result.solver_fallback = report.solver_fallback;
 
-  std::vector<std::complex<double>> pairs;  // one representative (Im > 0) per complex pair
-  std::vector<double> reals;
-  for (int i = 0; i < 5; ++i) {
-    const std::complex<double> z = values[i];
+  // One representative (Im > 0) per complex pair, and the real roots (fixed storage: no allocation).
+  std::array<std::complex<double>, 2> pair_storage;
+  std::array<double, 5> real_storage;
+  std::size_t pair_count = 0, real_count = 0;
+  for (const std::complex<double>& z : values) {
     if (IsReal(z)) {
-      reals.push_back(z.real());
-    } else if (z.imag() > 0) {
-      pairs.push_back(z);
+      real_storage[real_count++] = z.real();
+    } else if (z.imag() > 0 && pair_count < pair_storage.size()) {
+      pair_storage[pair_count++] = z;
     }
   }
-  // Real roots by descending magnitude; pairs by descending |Im λ|.
-  std::sort(reals.begin(), reals.end(), [](double a, double b) { return std::abs(a) > std::abs(b); });
-  std::sort(pairs.begin(), pairs.end(),
-            [](auto a, auto b) { return std::abs(a.imag()) > std::abs(b.imag()); });
+  // Real roots by descending magnitude; pairs by descending |Im λ| (insertion sorts of ≤ 5 entries,
+  // stable as std::stable_sort would be).
+  for (std::size_t i = 1; i < real_count; ++i) {
+    for (std::size_t j = i; j > 0 && std::abs(real_storage[j]) > std::abs(real_storage[j - 1]); --j) {
+      std::swap(real_storage[j], real_storage[j - 1]);
+    }
+  }
+  if (pair_count == 2 && std::abs(pair_storage[1].imag()) > std::abs(pair_storage[0].imag())) {
+    std::swap(pair_storage[0], pair_storage[1]);
+  }
+  const std::span<const double> reals(real_storage.data(), real_count);
+  const std::span<const std::complex<double>> pairs(pair_storage.data(), pair_count);
 
   auto put_pair = [&](int slot, std::complex<double> z) {
     result.eigenvalues[slot] = z;
@@ -160,7 +206,8 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
 
   double sigma = -std::numeric_limits<double>::infinity();
   for (const auto& z : result.eigenvalues) {
-    const bool neutral = IsReal(z) && std::abs(z) <= kNeutralEigenvalueTolerance_per_s;
+    const bool neutral = IsReal(z) && std::abs(z.real()) <= kNeutralEigenvalueTolerance_per_s &&
+                         std::abs(z) <= kNeutralEigenvalueTolerance_per_s;
     if (!neutral) sigma = std::max(sigma, z.real());
   }
   result.stability_margin_per_s = sigma;

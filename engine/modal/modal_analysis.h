@@ -4,9 +4,11 @@
 
 #include <array>
 #include <complex>
+#include <cstdint>
 #include <string_view>
 
 #include "engine/dynamics/longitudinal_model.h"
+#include "engine/modal/eigenvalues5.h"
 
 namespace gesweep {
 
@@ -45,24 +47,46 @@ struct ModalAnalysis {
   double stability_margin_per_s = 0;
   bool stable = false;  ///< σ < 0
   bool finite = true;   ///< false when A had a non-finite entry (then nothing else is meaningful)
+  /// The fixed-size QR did not converge; Eigen's EigenSolver computed the eigenvalues (counted by
+  /// FixedSizeSolverFallbacks()).
+  bool solver_fallback = false;
 };
 
-/// Which QR computes the eigenvalues (after LAPACK's dgebal balancing in both cases).
+/// Which QR computes the eigenvalues.
 enum class EigenvalueSolver {
-  kEigen,   ///< Eigen's EigenSolver (default)
-  /// LAPACK dgehd2 + dlahqr, the double-shift QR that dhseqr uses at this size: the same spectrum,
-  /// but measured 1.4 times slower than Eigen's at 5×5 (docs/performance.md, "Modes"), so not the default.
+  /// The fixed-size 5×5 kernel (engine/modal/eigenvalues5.h): dgebal's balancing, Hessenberg
+  /// reduction and dlahqr's Francis double-shift QR for n = 5 (default). Where it does not converge
+  /// within kFrancisMaxIterations sweeps per block, kEigen computes the eigenvalues instead, and the
+  /// result says so (ModalAnalysis::solver_fallback, FixedSizeSolverFallbacks()).
+  kFixedSize,
+  /// LAPACK's dgebal, then Eigen's EigenSolver: the solver before issue 16, kept for comparison.
+  kEigen,
+  /// dgebal, then LAPACK dgehd2 + dlahqr, the double-shift QR that dhseqr uses at this size: the same
+  /// spectrum, measured 1.9 times slower than kEigen at 5×5 (docs/performance.md, "Modes").
   kLapack,
 };
 
+/// How Eigenvalues5 went.
+struct EigenvalueReport {
+  /// kFixedSize did not converge and kEigen computed the eigenvalues (kLapack: dlahqr failed, ditto).
+  bool solver_fallback = false;
+  int iterations = 0;  ///< kFixedSize: double-shift sweeps
+};
+
 /// The five eigenvalues of A (balanced first), in the solver's order. A must be finite.
-std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
+/// `max_iterations` bounds kFixedSize's sweeps per block (tests of the fallback set it low).
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kFixedSize,
+                                                 EigenvalueReport* report = nullptr,
+                                                 int max_iterations = kFrancisMaxIterations);
+
+/// How many times, in this process, kFixedSize fell back to kEigen (all threads; never reset).
+std::uint64_t FixedSizeSolverFallbacks();
 
 /// Eigenvalues of A (any real 5×5), modes identified by docs/model.md §6. When a pair has split, the
 /// remaining complex pair is the short period if its |λ| exceeds every real root's, otherwise the
 /// phugoid; the split mode takes the two real roots of largest magnitude and the height mode the
 /// remaining one. With no pair left, roots are assigned by magnitude.
-ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
+ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kFixedSize);
 
 /// Properties of one eigenvalue (docs/model.md §6).
 ModeProperties DescribeMode(std::complex<double> eigenvalue);

@@ -25,6 +25,9 @@
 #include "engine/simulation/derivative_kernel.h"
 #include "engine/simulation/open_loop.h"
 
+extern "C" void dgebal_(const char* job, const int* n, double* a, const int* lda, int* ilo, int* ihi,
+                        double* scale, int* info, std::size_t job_length);
+
 namespace gesweep {
 namespace {
 
@@ -78,18 +81,70 @@ void BM_Modes(benchmark::State& state) {
 }
 BENCHMARK(BM_Modes)->Threads(1)->Threads(2)->UseRealTime();
 
-// The same with LAPACK's small-matrix QR (dgehd2 + dlahqr) instead of Eigen's EigenSolver.
-void BM_ModesLapack(benchmark::State& state) {
+// The same with another eigenvalue solver: Eigen's EigenSolver after dgebal (the path before the
+// fixed-size kernel, issue 16), and LAPACK's small-matrix QR (dgebal + dgehd2 + dlahqr).
+void RunModesWith(benchmark::State& state, EigenvalueSolver solver) {
   const LongitudinalModel& model = Model();
   const std::vector<double>& heights = SweepHeights();
   std::size_t i = 0;
   for (auto _ : state) {
-    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(heights[i++ & 1023], kSpeed_mps), EigenvalueSolver::kLapack);
+    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(heights[i++ & 1023], kSpeed_mps), solver);
     benchmark::DoNotOptimize(modal.stability_margin_per_s);
   }
   state.SetItemsProcessed(state.iterations());
 }
+void BM_ModesEigen(benchmark::State& state) { RunModesWith(state, EigenvalueSolver::kEigen); }
+BENCHMARK(BM_ModesEigen);
+void BM_ModesLapack(benchmark::State& state) { RunModesWith(state, EigenvalueSolver::kLapack); }
 BENCHMARK(BM_ModesLapack);
+
+// The eigenvalues alone of the sweep heights' matrices (built beforehand), by each solver. Counter
+// `sweeps`: the fixed-size kernel's mean double-shift sweeps per matrix.
+void RunEigenvaluesOnly(benchmark::State& state, EigenvalueSolver solver) {
+  std::vector<Matrix5d> matrices;
+  double sweeps = 0;
+  for (double h : SweepHeights()) {
+    matrices.push_back(Model().StateMatrix(h, kSpeed_mps));
+    EigenvalueReport report;
+    Eigenvalues5(matrices.back(), solver, &report);
+    sweeps += report.iterations;
+  }
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const auto values = Eigenvalues5(matrices[i++ & 1023], solver);
+    benchmark::DoNotOptimize(values.data());
+  }
+  state.counters["sweeps"] = sweeps / static_cast<double>(matrices.size());
+}
+void BM_EigenvaluesFixedSize(benchmark::State& state) { RunEigenvaluesOnly(state, EigenvalueSolver::kFixedSize); }
+BENCHMARK(BM_EigenvaluesFixedSize);
+void BM_EigenvaluesEigen(benchmark::State& state) { RunEigenvaluesOnly(state, EigenvalueSolver::kEigen); }
+BENCHMARK(BM_EigenvaluesEigen);
+
+// The kernel's balancing (a port of dgebal job 'S', the same D) against LAPACK's dgebal itself.
+void BM_Balance5(benchmark::State& state) {
+  const Matrix5d a0 = Model().StateMatrix(kModesHeight_m, kSpeed_mps);
+  for (auto _ : state) {
+    Matrix5d a = a0;
+    benchmark::DoNotOptimize(a.data());
+    const BalancedMatrix5 balanced = Balance5(a);
+    benchmark::DoNotOptimize(balanced.matrix.data());
+  }
+}
+BENCHMARK(BM_Balance5);
+void BM_Dgebal(benchmark::State& state) {
+  const Matrix5d a0 = Model().StateMatrix(kModesHeight_m, kSpeed_mps);
+  for (auto _ : state) {
+    Matrix5d a = a0;
+    benchmark::DoNotOptimize(a.data());
+    const int n = 5;
+    int ilo = 0, ihi = 0, info = 0;
+    double scale[5];
+    dgebal_("S", &n, a.data(), &n, &ilo, &ihi, scale, &info, 1);
+    benchmark::DoNotOptimize(a.data());
+  }
+}
+BENCHMARK(BM_Dgebal);
 
 // The parts: building A(H, u0), and the eigen-analysis of a fixed A.
 void BM_StateMatrix(benchmark::State& state) {
@@ -209,9 +264,11 @@ BENCHMARK(BM_Balance);
 // --- One boundary search (docs/model.md §6) at 32.0208 m/s: the certified Hurwitz finder (default) and
 // the former sampled search (σ at ~280 heights, TOMS 748 at the sign change), side by side ---
 
-void RunBoundary(benchmark::State& state, BoundaryMethod method) {
+void RunBoundary(benchmark::State& state, BoundaryMethod method,
+                 EigenvalueSolver solver = EigenvalueSolver::kFixedSize) {
   BoundaryOptions options;
   options.method = method;
+  options.eigenvalue_solver = solver;
   BoundaryResult result;
   for (auto _ : state) {
     result = FindBoundary(Model(), kSpeed_mps, options);
@@ -226,6 +283,12 @@ void BM_Boundary(benchmark::State& state) { RunBoundary(state, BoundaryMethod::k
 BENCHMARK(BM_Boundary)->Unit(benchmark::kMicrosecond);
 void BM_BoundarySampled(benchmark::State& state) { RunBoundary(state, BoundaryMethod::kSampled); }
 BENCHMARK(BM_BoundarySampled)->Unit(benchmark::kMicrosecond);
+// The sampled search exactly as it was before issue 16 (Eigen's EigenSolver for every σ): the
+// reference of the issue's target (1/20 of it).
+void BM_BoundarySampledEigen(benchmark::State& state) {
+  RunBoundary(state, BoundaryMethod::kSampled, EigenvalueSolver::kEigen);
+}
+BENCHMARK(BM_BoundarySampledEigen)->Unit(benchmark::kMicrosecond);
 
 // The Hurwitz finder's unit of work: one characteristic polynomial of A (Hessenberg + recurrence).
 void BM_CharacteristicPolynomial(benchmark::State& state) {

@@ -1,7 +1,8 @@
 // Property test of the certified boundary finder (issue 16): on aircraft made by random scale factors
 // of ±50 % on every coefficient of the ANCE (fixed seed, linear interpolation), every change of the
 // number of unstable eigenvalues that a dense scan of 20,000 heights sees is a crossing the finder
-// reports (to 1e-6 m), and every crossing it reports has an eigenvalue on the imaginary axis. The
+// reports (to 1e-6 m), every crossing it reports has an eigenvalue on the imaginary axis, and the
+// stability it states between its crossings is the scan's at every scanned height. The
 // oracle is Eigen's EigenSolver on A(H), nothing of the finder.
 //
 // GESWEEP_PROPERTY_AIRCRAFT sets the number of aircraft (default 100, a few seconds; the `long`
@@ -9,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cstdlib>
 #include <random>
 
@@ -53,7 +55,7 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
   std::mt19937_64 random(20240616);
   std::uniform_real_distribution<double> factor(0.5, 1.5);
   const int count = AircraftCount();
-  int with_crossings = 0, scanned_changes = 0, uncertified = 0;
+  int with_crossings = 0, scanned_changes = 0, uncertified = 0, wrong_stability = 0;
   for (int n = 0; n < count; ++n) {
     ModelOptions options;
     for (int c = 0; c < kCoefficientCount; ++c) options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
@@ -77,8 +79,29 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
       EXPECT_LT(closest, kOnAxis) << "aircraft " << n << ": crossing at " << c.height_m << " m";
     }
 
+    // The stability the finder states at h (away from its crossings): the side of the nearest
+    // crossing, or with none, its reason. `result.crossings` is highest first.
+    auto stated_stable = [&](double h) {
+      const BoundaryCrossing* above = nullptr;
+      const BoundaryCrossing* below = nullptr;
+      for (const BoundaryCrossing& c : result.crossings) {
+        if (c.height_m > h) {
+          above = &c;
+        } else if (!below) {
+          below = &c;
+        }
+      }
+      if (above) return above->stable_below;
+      if (below) return below->stable_above;
+      return result.reason.rfind("stable at every height", 0) == 0;
+    };
+    auto near_a_crossing = [&](double h) {
+      return std::any_of(result.crossings.begin(), result.crossings.end(),
+                         [&](const auto& c) { return std::abs(c.height_m - h) <= kLocation_m; });
+    };
+
     // Every change of the unstable count between neighbouring scan heights has a crossing in
-    // [h_i − 1e-6, h_{i+1} + 1e-6].
+    // [h_i − 1e-6, h_{i+1} + 1e-6], and the stability stated between crossings is the scan's.
     const double lower = result.lower_height_m, upper = result.upper_height_m;
     const double step = (upper - lower) / kScanHeights;
     Scan previous;
@@ -87,6 +110,11 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
       const double h = lower + (i + 0.5) * step;
       const Scan scan = Count(model.StateMatrix(h, kSpeed_mps));
       if (!scan.decided) continue;
+      if (!near_a_crossing(h) && stated_stable(h) != (scan.unstable == 0)) {
+        ++wrong_stability;
+        ADD_FAILURE() << "aircraft " << n << ": at " << h << " m the scan has " << scan.unstable
+                      << " unstable eigenvalues, the finder says " << (stated_stable(h) ? "stable" : "unstable");
+      }
       if (!std::isnan(previous_h) && scan.unstable != previous.unstable) {
         ++scanned_changes;
         const bool found = std::any_of(result.crossings.begin(), result.crossings.end(), [&](const auto& c) {
@@ -103,6 +131,7 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
   // The sample must exercise the finder: most aircraft have crossings.
   EXPECT_GT(with_crossings, count / 2);
   EXPECT_GT(scanned_changes, count / 2);
+  EXPECT_EQ(wrong_stability, 0);
   RecordProperty("uncertified", uncertified);
   std::printf("%d aircraft, %d with crossings, %d scanned changes, %d uncertified\n", count, with_crossings,
               scanned_changes, uncertified);
