@@ -320,7 +320,8 @@ def _flying_qualities_map(archive, key, rows, outdir, number):
             handles[mode] = Line2D([], [], color="k", ls=style, lw=width,
                                    label=f"{mode}: where it loses a level (between the colours)")
         lost.append(_levels_lost_text(archive, rows, heights, column, mode, names))
-    for handle in _map_overlays(ax, archive, key, heights, speeds, np.full_like(level, np.nan), ""):
+    # A grid with no sign change: the overlays without a zero contour.
+    for handle in _map_overlays(ax, archive, key, heights, speeds, np.zeros_like(level), ""):
         handles.setdefault(handle.get_label(), handle)
     _map_axes(ax, archive, heights, speeds)
     ax.set_title("the airplane's level: the worse of short period (3.2.2.1.2) and phugoid (3.2.1.2)")
