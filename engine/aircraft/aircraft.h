@@ -1,7 +1,7 @@
 #pragma once
 /// An aircraft as described by an aircraft file (studies/aircraft/*.toml; schemas/aircraft.schema.json):
 /// geometry, mass properties, the speed-independent coefficients, the limits, and the coefficient
-/// table against height with its free-flight row (docs/MODEL.md §1–§2).
+/// table against height with its free-flight row (docs/model.md §1–§2).
 
 #include <filesystem>
 #include <string>
@@ -28,7 +28,7 @@ struct Aircraft {
   double cg_over_chord = 0;  ///< CG position as a fraction of the mean chord (Table A1: 0.25)
 
   double CDo = 0;   ///< parasite drag coefficient
-  double CDu = 0;   ///< speed derivatives: zero for a low-speed, incompressible aircraft (MODEL.md §2)
+  double CDu = 0;   ///< speed derivatives: zero for a low-speed, incompressible aircraft (docs/model.md §2)
   double CLu = 0;
   double CMu = 0;
   double CDde = 0;  ///< elevator drag derivative (not tabulated; zero by default)

@@ -1,5 +1,5 @@
 #pragma once
-/// The International Standard Atmosphere, troposphere (ISO 2533:1975), used for ρ(H) (docs/MODEL.md §1).
+/// The International Standard Atmosphere, troposphere (ISO 2533:1975), used for ρ(H) (docs/model.md §1).
 
 namespace gesweep {
 

@@ -1,5 +1,5 @@
 #pragma once
-/// The height-dependent aerodynamic coefficients of an aircraft file's table (docs/MODEL.md §2).
+/// The height-dependent aerodynamic coefficients of an aircraft file's table (docs/model.md §2).
 
 #include <array>
 #include <optional>
@@ -8,7 +8,7 @@
 namespace gesweep {
 
 /// One column of the coefficient table. All are per radian and dimensionless; CLh, CMh and CDh are
-/// derivatives with respect to h = H/c. CDh is not in aircraft files: it is derived (MODEL.md §3).
+/// derivatives with respect to h = H/c. CDh is not in aircraft files: it is derived (docs/model.md §3).
 enum class Coefficient : int {
   k,           ///< induced-drag factor of the polar CD = CDo + k CL²
   CLo,         ///< lift coefficient at α = 0

@@ -1,6 +1,6 @@
 #pragma once
 /// Local, analytic sensitivities of the eigenvalues of Eq. (1), of the stability margin σ, and of the
-/// boundary height H* (docs/sensitivity.md, "Local sensitivities"; MODEL.md §5–§6):
+/// boundary height H* (docs/sensitivity.md, "Local sensitivities"; docs/model.md §5–§6):
 ///   ∂λ/∂p = yᴴ (∂A/∂p) x / (yᴴ x),   ∂σ/∂p = Re ∂λ_σ/∂p,   ∂H*/∂p = −(∂σ/∂p) / (∂σ/∂H) at H*,
 /// where λ_σ is the eigenvalue that sets σ (the implicit-function theorem on σ(H*(p), p) = 0).
 

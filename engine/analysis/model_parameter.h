@@ -1,6 +1,6 @@
 #pragma once
 /// The parameters of the longitudinal model that local sensitivities are taken with respect to, and
-/// the derivative ∂A/∂p of the state matrix of Eq. (1) (docs/MODEL.md §4–§5; docs/sensitivity.md).
+/// the derivative ∂A/∂p of the state matrix of Eq. (1) (docs/model.md §4–§5; docs/sensitivity.md).
 ///
 /// A tabulated coefficient enters as its scale factor s_c of ModelOptions::coefficient_scale: the
 /// whole column (every finite row and the free-flight row) is multiplied by s_c, and derivatives are
@@ -72,7 +72,7 @@ inline constexpr double kExactRelativeStep = 1e-3;
 /// Relative step of a true central difference: ≈ ε^(1/3), balancing truncation O(δ²) and rounding ε/δ.
 inline constexpr double kCentralDifferenceRelativeStep = 6e-6;
 
-/// ∂A/∂p of Eq. (1) at height H (finite, ≥ 0, or +∞) and speed u, per unit of p (MODEL.md §4–§5).
+/// ∂A/∂p of Eq. (1) at height H (finite, ≥ 0, or +∞) and speed u, per unit of p (docs/model.md §4–§5).
 /// Obtained from A at p ± δ with δ = relative_step·max(|p|, 1) for scale factors and relative_step·p
 /// for u0; for m and Iy the difference is taken in 1/m and 1/Iy, in which A is affine, and converted.
 /// relative_step ≤ 0 picks kExactRelativeStep or kCentralDifferenceRelativeStep by

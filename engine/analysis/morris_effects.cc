@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/analysis/sensitivity_design.h"
 #include "engine/common/errors.h"
 
 namespace gesweep {

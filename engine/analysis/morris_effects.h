@@ -51,7 +51,7 @@ struct MorrisIndices {
 /// Elementary-effect statistics from a design of r trajectories (rows t(D+1) … t(D+1)+D for
 /// trajectory t) and its outputs. Which parameter changes between consecutive rows, and by how much,
 /// is read from the design and scaled by each parameter's range, so any one-at-a-time trajectory
-/// design works (MorrisDesign's, SALib's, a radial one). `succeeded` as for AnalyzeSobol.
+/// design works (the sweep's `morris` design, SALib's, a radial one). `succeeded` as for AnalyzeSobol.
 /// Throws InputError naming options.source when: the design has a column count ≠ ranges.size() or a
 /// row count not a multiple of D+1, outputs/succeeded have the wrong length, a step changes no
 /// parameter or more than one, or the ranges or bootstrap options are invalid.

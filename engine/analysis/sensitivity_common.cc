@@ -3,19 +3,45 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include "engine/common/errors.h"
 
 namespace gesweep {
 
-double ParameterRange::FromUnit(double u) const {
-  if (log_uniform) return std::exp(std::log(lower) + u * (std::log(upper) - std::log(lower)));
+double ValueAtUnit(double lower, double upper, bool log_uniform, double u) {
+  if (log_uniform) {
+    const double log_lower = std::log(lower);
+    return std::exp(log_lower + u * (std::log(upper) - log_lower));
+  }
   return lower + u * (upper - lower);
 }
 
-double ParameterRange::ToUnit(double value) const {
-  if (log_uniform) return (std::log(value) - std::log(lower)) / (std::log(upper) - std::log(lower));
+double UnitOfValue(double lower, double upper, bool log_uniform, double value) {
+  if (log_uniform) {
+    const double log_lower = std::log(lower);
+    return (std::log(value) - log_lower) / (std::log(upper) - log_lower);
+  }
   return (value - lower) / (upper - lower);
+}
+
+void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string& source) {
+  if (ranges.empty()) throw InputError(source, "parameters", "", "expected at least one sampled parameter");
+  std::set<std::string> names;
+  for (const auto& range : ranges) {
+    if (range.name.empty()) throw InputError(source, "parameters", "''", "expected a non-empty parameter name");
+    if (!names.insert(range.name).second) {
+      throw InputError(source, range.name, "", "parameter listed twice; expected distinct names");
+    }
+    if (!std::isfinite(range.lower) || !std::isfinite(range.upper) || !(range.lower < range.upper)) {
+      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
+                       "expected finite bounds with lower < upper");
+    }
+    if (range.log_uniform && !(range.lower > 0.0)) {
+      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
+                       "expected 0 < lower for a log-uniform parameter");
+    }
+  }
 }
 
 std::string_view ToString(FailedRunPolicy policy) {
@@ -35,7 +61,7 @@ std::string_view ToString(SensitivityStatus status) {
     case SensitivityStatus::kTooFewBlocks: return "too_few_blocks";
     case SensitivityStatus::kZeroVariance: return "zero_variance";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 ConfidenceInterval PercentileInterval(std::vector<double> statistics, double confidence_level) {

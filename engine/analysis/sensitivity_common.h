@@ -10,19 +10,29 @@
 
 namespace gesweep {
 
-/// One sampled parameter: its name and the interval it is sampled on, in its own unit; uniform in the
-/// value, or in its logarithm (as the sweep's `distribution = "loguniform"`).
+/// The value at unit coordinate u ∈ [0, 1] of the interval [lower, upper]: lower + u·(upper − lower),
+/// or, when `log_uniform`, exp(log lower + u·(log upper − log lower)). This is the one map from the unit
+/// cube to the parameters' units: every sampled design of the sweep applies it (engine/sweep/design.h,
+/// MapUnit), and the estimators invert it with UnitOfValue.
+double ValueAtUnit(double lower, double upper, bool log_uniform, double u);
+/// The unit coordinate of a value: the inverse of ValueAtUnit.
+double UnitOfValue(double lower, double upper, bool log_uniform, double value);
+
+/// One sampled parameter as the estimators see it: its name and the interval it is sampled on, in its
+/// own unit; uniform in the value, or in its logarithm (the sweep's `distribution = "loguniform"`).
 struct ParameterRange {
   std::string name;
   double lower = 0;
   double upper = 1;
   bool log_uniform = false;  ///< uniform in log(value); needs 0 < lower
 
-  /// The value at unit coordinate u ∈ [0, 1]: lower + u·(upper − lower), or its log-space analogue.
-  double FromUnit(double u) const;
-  /// The unit coordinate of a value (the inverse of FromUnit).
-  double ToUnit(double value) const;
+  /// The unit coordinate of a value (UnitOfValue).
+  double ToUnit(double value) const { return UnitOfValue(lower, upper, log_uniform, value); }
 };
+
+/// Throws InputError naming `source` unless there is at least one range, every bound is finite,
+/// lower < upper (and 0 < lower when log-uniform), and the names are non-empty and distinct.
+void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string& source);
 
 /// What an estimator does when the output of a run is missing (docs/sensitivity.md, "Failed runs").
 enum class FailedRunPolicy {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/analysis/saltelli_layout.h"
 #include "engine/analysis/sensitivity_common.h"
-#include "engine/analysis/sensitivity_design.h"
 
 namespace gesweep {
 

@@ -1,5 +1,5 @@
 // gesweep boundary: H*(u0), the largest height at which the stability margin changes sign
-// (docs/MODEL.md §6), by bracketing root finding on the continuous model. With --sensitivities, also
+// (docs/model.md §6), by bracketing root finding on the continuous model. With --sensitivities, also
 // the local sensitivities ∂H*/∂p of each boundary (docs/sensitivity.md), ranked.
 // With --archive, the boundary of a sweep's results instead: the sign change of the archived stability
 // margin along height for each value of the other axes, refined on each run's model and written to

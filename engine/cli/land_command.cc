@@ -1,4 +1,4 @@
-// gesweep land: the closed-loop automatic landing of docs/MODEL.md §8 (glide-slope coupler, flare, one
+// gesweep land: the closed-loop automatic landing of docs/model.md §8 (glide-slope coupler, flare, one
 // LQR gain), flown on the re-evaluated model with or without h-derivatives (docs/landing.md; the paper's
 // Fig. 6–9).
 #include <cmath>
@@ -295,7 +295,7 @@ int RunLand(const LandFlags& flags) {
 const CommandRegistrar kRegistrar{Command{
     "land",
     "Closed-loop automatic landing: LQR glide-slope coupler and exponential flare with one gain, on the "
-    "re-evaluated model (MODEL.md section 8; the paper's Fig. 6-9)",
+    "re-evaluated model (docs/model.md section 8; the paper's Fig. 6-9)",
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<LandFlags>();
       LandingConfig& c = flags->config;

@@ -1,6 +1,6 @@
 #pragma once
 /// Flags shared by every subcommand that builds a model: --aircraft and the model options of
-/// docs/MODEL.md (--cdh, --no-h-derivatives, --interpolation).
+/// docs/model.md (--cdh, --no-h-derivatives, --interpolation).
 
 #include <CLI/CLI.hpp>
 

@@ -1,4 +1,4 @@
-// gesweep modes: the eigen-analysis of Eq. (1) at a list of heights (docs/MODEL.md §6).
+// gesweep modes: the eigen-analysis of Eq. (1) at a list of heights (docs/model.md §6).
 #include <iomanip>
 #include <iostream>
 

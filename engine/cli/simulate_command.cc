@@ -1,5 +1,5 @@
 // gesweep simulate: one open-loop time response of Eq. (1) with the derivatives re-evaluated at the
-// current height and speed (docs/MODEL.md §7, docs/simulation.md): the paper's Fig. 4 runs.
+// current height and speed (docs/model.md §7, docs/simulation.md): the paper's Fig. 4 runs.
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -243,7 +243,7 @@ int RunSimulate(const SimulateFlags& flags) {
 const CommandRegistrar kRegistrar{Command{
     "simulate",
     "Open-loop time response of Eq. (1) after an elevator input, derivatives re-evaluated at the current "
-    "height and speed (MODEL.md section 7; the paper's Fig. 4)",
+    "height and speed (docs/model.md section 7; the paper's Fig. 4)",
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<SimulateFlags>();
       flags->model.AddTo(app);

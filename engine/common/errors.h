@@ -1,5 +1,5 @@
 #pragma once
-/// Error kinds of the engine (see ../shared/docs/STYLE.md, "Errors"):
+/// Error kinds of the engine (docs/architecture.md, "Rules that hold throughout"):
 ///  1. InputError: bad input from a person. Names the file, the key, the value and what was expected.
 ///     The CLI prints what() as one line and exits with code 2.
 ///  2. Numerical outcomes are data (a status and a message in each run's result), never exceptions.
@@ -55,6 +55,16 @@ std::string EscapeForMessage(std::string_view text);
                    #condition);                                                                \
       std::abort();                                                                            \
     }                                                                                          \
+  } while (false)
+
+/// Marks a point the code cannot reach, such as the end of a switch that covers every value of an
+/// enum: aborts with file and line instead of returning a made-up value. A value outside the enum
+/// (a cast from a corrupt integer) is a broken invariant, not bad input.
+#define GESWEEP_UNREACHABLE()                                                                 \
+  do {                                                                                        \
+    std::fprintf(stderr, "gesweep: internal error at %s:%d: reached unreachable code\n", __FILE__, \
+                 __LINE__);                                                                   \
+    std::abort();                                                                             \
   } while (false)
 
 }  // namespace gesweep

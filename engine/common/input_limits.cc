@@ -42,10 +42,10 @@ InputLimit WithInfinity(InputLimit limit) {
 
 std::vector<InputLimit> BuildTable() {
   constexpr std::string_view kHeightReason =
-      "the ISA troposphere the density model uses (MODEL.md section 1); the aircraft's wheel-contact "
+      "the ISA troposphere the density model uses (docs/model.md section 1); the aircraft's wheel-contact "
       "height is a further lower bound";
   constexpr std::string_view kSpeedReason =
-      "the model is incompressible (MODEL.md section 2), so well below Mach 1; below 1 m/s the "
+      "the model is incompressible (docs/model.md section 2), so well below Mach 1; below 1 m/s the "
       "dimensional derivatives, which scale with u0 and 1/u0, mean nothing";
   constexpr std::string_view kDurationReason = "a day of flight; the paper's runs last 300 s";
   constexpr std::string_view kStepReason =
@@ -72,7 +72,7 @@ std::vector<InputLimit> BuildTable() {
 
   // The landing controller (parameters; land flags).
   InputLimit glide = Positive("glide_slope_deg", "deg", 10.0,
-                              "the glide path's small-angle kinematics (MODEL.md section 8); steep "
+                              "the glide path's small-angle kinematics (docs/model.md section 8); steep "
                               "approaches are 5.5 to 7 deg");
   t.push_back(glide);
   t.push_back(Positive("flare_height_m", "m", 1000.0, "a flare starts within tens of metres of the ground"));

@@ -1,5 +1,5 @@
 #pragma once
-/// Parameters of the automatic landing of docs/MODEL.md §8 (the paper's Section III, after Stevens &
+/// Parameters of the automatic landing of docs/model.md §8 (the paper's Section III, after Stevens &
 /// Lewis): start state, glide path, LQR design, flare, elevator limits, plant convention and
 /// integration. Every field has a documented default; docs/landing.md explains each choice.
 

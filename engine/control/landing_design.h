@@ -1,5 +1,5 @@
 #pragma once
-/// The LQR design of the landing controller (docs/MODEL.md §8; paper Eq. (14)–(21), (29)).
+/// The LQR design of the landing controller (docs/model.md §8; paper Eq. (14)–(21), (29)).
 ///
 /// The paper's augmented glide-slope state is z = [Δu, Δw, q, Δθ, ΔH, δe, d, x_d, ε_d] (Eq. (14)). Its
 /// system (Eq. (16)) is not stabilisable: ΔH and d both integrate u0·Δθ − Δw, so ΔH − d is a zero

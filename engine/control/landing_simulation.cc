@@ -237,7 +237,7 @@ std::string_view ToString(LandingOutcome outcome) {
     case LandingOutcome::kDiverged: return "diverged";
     case LandingOutcome::kDesignFailed: return "design_failed";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 std::string_view ToString(LandingPhase phase) {

@@ -1,7 +1,7 @@
 #pragma once
-/// The closed-loop automatic landing of docs/MODEL.md §8 (paper Section III, Fig. 6–9): glide-slope
+/// The closed-loop automatic landing of docs/model.md §8 (paper Section III, Fig. 6–9): glide-slope
 /// coupler, then the exponential flare, one constant LQR gain for both, flown on the same re-evaluated
-/// plant as the open-loop run (MODEL.md §7: derivatives at the current H and u with ρ(H), kinematic
+/// plant as the open-loop run (docs/model.md §7: derivatives at the current H and u with ρ(H), kinematic
 /// entries at u0), with or without h-derivatives as the plant model's options say. Integrated by the
 /// adaptive Dormand–Prince 5(4) of engine/simulation (the paper's ode45, rtol 1e-3); the flare switch
 /// and touchdown are events located in time. docs/landing.md describes every convention.

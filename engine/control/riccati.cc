@@ -105,7 +105,7 @@ std::string_view ToString(RiccatiStatus status) {
     case RiccatiStatus::kNotDetectable: return "not_detectable";
     case RiccatiStatus::kSolverFailed: return "solver_failed";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 PbhTest CheckStabilizable(const MatrixXd& A, const MatrixXd& B, const RiccatiTolerances& tolerances) {

@@ -71,7 +71,7 @@ CoefficientTable::CoefficientTable(const Aircraft& aircraft, const ModelOptions&
   };
   for (auto& row : rows_) apply_scale(row);
   apply_scale(free_flight_);
-  // CDh (MODEL.md §3): derived from the scaled k and CLo, zero in free flight.
+  // CDh (docs/model.md §3): derived from the scaled k and CLo, zero in free flight.
   std::vector<double> k, CLo;
   for (const auto& row : rows_) {
     k.push_back(row[Index(Coefficient::k)]);

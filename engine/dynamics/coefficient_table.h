@@ -1,6 +1,6 @@
 #pragma once
 /// The coefficient table of one aircraft under one set of model options, interpolated in height
-/// (docs/MODEL.md §2–§3): piecewise linear or PCHIP between finite rows, the first row held below
+/// (docs/model.md §2–§3): piecewise linear or PCHIP between finite rows, the first row held below
 /// it, the free-flight row above the last finite row. CDh is derived here.
 
 #include <memory>
@@ -13,7 +13,7 @@ namespace gesweep {
 
 class CoefficientTable {
  public:
-  /// Builds the table: scale factors, CDh (MODEL.md §3), CG transfer. Throws InputError when the
+  /// Builds the table: scale factors, CDh (docs/model.md §3), CG transfer. Throws InputError when the
   /// options cannot apply to this aircraft (PCHIP with fewer than 4 rows).
   CoefficientTable(const Aircraft& aircraft, const ModelOptions& options);
   ~CoefficientTable();
@@ -40,7 +40,7 @@ class CoefficientTable {
   std::unique_ptr<Pchip> pchip_;
 };
 
-/// CDh at each finite row by MODEL.md §3: the gradient of k·CLo² on the non-uniform grid h = H/c,
+/// CDh at each finite row by docs/model.md §3: the gradient of k·CLo² on the non-uniform grid h = H/c,
 /// second-order central inside, first-order one-sided at the ends (numpy.gradient, edge_order=1).
 std::vector<double> PolarCdh(const std::vector<double>& heights_m, const std::vector<double>& k,
                              const std::vector<double>& CLo, double mean_chord_m);

@@ -1,5 +1,5 @@
 #pragma once
-/// The linear longitudinal model of docs/MODEL.md §4–§5: the dimensional derivatives of the paper's
+/// The linear longitudinal model of docs/model.md §4–§5: the dimensional derivatives of the paper's
 /// Table 1 and the 5-state matrices A, B of its Eq. (1), at any height and speed.
 
 #include <Eigen/Core>
@@ -13,11 +13,11 @@ namespace gesweep {
 using Matrix5d = Eigen::Matrix<double, 5, 5>;
 using Vector5d = Eigen::Matrix<double, 5, 1>;
 
-/// State indices of x = [Δu, Δw, q, Δθ, ΔH] (MODEL.md §1).
+/// State indices of x = [Δu, Δw, q, Δθ, ΔH] (docs/model.md §1).
 enum StateIndex : int { kDeltaU = 0, kDeltaW = 1, kPitchRate = 2, kDeltaTheta = 3, kDeltaH = 4 };
 inline constexpr int kStateCount = 5;
 
-/// Dimensional stability derivatives (paper's Table 1; MODEL.md §4). X and Z in m/s² per unit of
+/// Dimensional stability derivatives (paper's Table 1; docs/model.md §4). X and Z in m/s² per unit of
 /// the state they multiply, M in rad/s² per unit; Xh, Zh, Mh per metre of ΔH.
 struct DimensionalDerivatives {
   double Xu = 0, Xw = 0, Xh = 0, Xde = 0;
@@ -55,7 +55,7 @@ class LongitudinalModel {
   const CoefficientTable& table() const { return table_; }
   const MassGeometry& mass_geometry() const { return mass_geometry_; }
 
-  /// Coefficients at height H, m (MODEL.md §2).
+  /// Coefficients at height H, m (docs/model.md §2).
   CoefficientRow CoefficientsAt(double height_m) const { return table_.At(height_m); }
   /// ISA density at field elevation + H, kg/m³ (sea-level density for H = ∞).
   double DensityAt(double height_m) const;

@@ -1,5 +1,5 @@
 #pragma once
-/// The model options of docs/MODEL.md: every **choice** there is an option here, MODEL.md's choice the
+/// The model options of docs/model.md: every **choice** there is an option here, docs/model.md's choice the
 /// default. Also the per-run modifications a sweep can make to an aircraft (scale factors, mass, CG).
 
 #include <optional>
@@ -10,21 +10,21 @@
 
 namespace gesweep {
 
-/// How CDh is obtained (MODEL.md §3).
+/// How CDh is obtained (docs/model.md §3).
 enum class CdhMode {
   kPolar,  ///< d(k·CLo²)/dh by finite differences on the table rows (default)
   kZero,   ///< CDh = 0
 };
 
-/// How the table is interpolated between finite rows (MODEL.md §2).
+/// How the table is interpolated between finite rows (docs/model.md §2).
 enum class Interpolation {
   kLinear,  ///< piecewise linear in H (default)
   kPchip,   ///< monotone piecewise-cubic Hermite (Fritsch–Carlson, Boost.Math pchip)
 };
 
-/// Options of the model; a default-constructed value is MODEL.md's model.
+/// Options of the model; a default-constructed value is docs/model.md's model.
 struct ModelOptions {
-  /// false: Xh = Zh = Mh = 0 and nothing else changes (MODEL.md §4).
+  /// false: Xh = Zh = Mh = 0 and nothing else changes (docs/model.md §4).
   bool h_derivatives = true;
   CdhMode cdh = CdhMode::kPolar;
   Interpolation interpolation = Interpolation::kLinear;

@@ -640,7 +640,7 @@ std::string_view ToString(CrossingKind kind) {
     case CrossingKind::kDiscontinuity: return "table_row";
     case CrossingKind::kSigma: return "sigma";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m) {

@@ -1,5 +1,5 @@
 #pragma once
-/// The stability boundary H*(u0) of docs/MODEL.md §6: the largest height at which the airplane
+/// The stability boundary H*(u0) of docs/model.md §6: the largest height at which the airplane
 /// changes from unstable (just below) to stable (just above).
 ///
 /// The default finder (BoundaryMethod::kHurwitz) enumerates every crossing of the imaginary axis by an

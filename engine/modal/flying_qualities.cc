@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <numbers>
 
@@ -53,8 +52,7 @@ std::string_view ToString(FlyingQualitiesLevel level) {
     case FlyingQualitiesLevel::kWorseThanLevel3:
       return "worse than level 3";
   }
-  GESWEEP_DEMAND(false);  // every enumerator is listed above
-  std::abort();
+  GESWEEP_UNREACHABLE();
 }
 
 FlyingQualitiesLevel Worst(FlyingQualitiesLevel a, FlyingQualitiesLevel b) {

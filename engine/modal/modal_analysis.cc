@@ -76,7 +76,7 @@ std::string_view ToString(ModeClassification classification) {
     case ModeClassification::kShortPeriodSplit: return "short_period_split";
     case ModeClassification::kAllReal: return "all_real";
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
 ModeProperties DescribeMode(std::complex<double> lambda) {

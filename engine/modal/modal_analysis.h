@@ -1,6 +1,6 @@
 #pragma once
 /// Eigen-analysis of the 5-state model with mode identification and the stability margin
-/// (docs/MODEL.md §6).
+/// (docs/model.md §6).
 
 #include <array>
 #include <complex>
@@ -10,7 +10,7 @@
 
 namespace gesweep {
 
-/// A real eigenvalue of magnitude at most this is the neutral free-flight height mode (MODEL.md §6).
+/// A real eigenvalue of magnitude at most this is the neutral free-flight height mode (docs/model.md §6).
 inline constexpr double kNeutralEigenvalueTolerance_per_s = 1e-9;
 
 /// Properties of one mode, from its representative eigenvalue λ (Im λ ≥ 0 for a pair).
@@ -41,7 +41,7 @@ struct ModalAnalysis {
   std::array<std::complex<double>, 5> eigenvalues;
   ModeProperties short_period, phugoid, height;
   ModeClassification classification = ModeClassification::kStandard;
-  /// σ = the largest Re λ, the neutral height root left out (MODEL.md §6).
+  /// σ = the largest Re λ, the neutral height root left out (docs/model.md §6).
   double stability_margin_per_s = 0;
   bool stable = false;  ///< σ < 0
   bool finite = true;   ///< false when A had a non-finite entry (then nothing else is meaningful)
@@ -58,13 +58,13 @@ enum class EigenvalueSolver {
 /// The five eigenvalues of A (balanced first), in the solver's order. A must be finite.
 std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
 
-/// Eigenvalues of A (any real 5×5), modes identified by MODEL.md §6. When a pair has split, the
+/// Eigenvalues of A (any real 5×5), modes identified by docs/model.md §6. When a pair has split, the
 /// remaining complex pair is the short period if its |λ| exceeds every real root's, otherwise the
 /// phugoid; the split mode takes the two real roots of largest magnitude and the height mode the
 /// remaining one. With no pair left, roots are assigned by magnitude.
 ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kEigen);
 
-/// Properties of one eigenvalue (MODEL.md §6).
+/// Properties of one eigenvalue (docs/model.md §6).
 ModeProperties DescribeMode(std::complex<double> eigenvalue);
 
 /// σ(H, u) of a model: AnalyzeModes(model.StateMatrix(H, u)).stability_margin_per_s.

@@ -2,7 +2,7 @@
 /// The stability boundary H* of a sweep's results (docs/report.md, "gesweep boundary --archive"):
 /// for each combination of the design's other axes (speed, model switches, scale factors, ...), the
 /// sign change of results/modes/stability_margin_per_s along design/height_m, unstable below and
-/// stable above (the highest such change, as FindBoundary defines H*, docs/MODEL.md §6), refined on
+/// stable above (the highest such change, as FindBoundary defines H*, docs/model.md §6), refined on
 /// the continuous model of that run (ArchiveRunModels) by FindBoundary's TOMS 748 inside the grid
 /// bracket, to BoundaryExtractionOptions::tolerance_m. Written to /analysis/boundary.
 ///

@@ -153,23 +153,21 @@ void CheckSaltelliRows(const ArchiveReader& archive, const ArchiveSensitivity& r
       const int j = static_cast<int>(first_block + b);
       const auto local = [&](std::size_t row) { return row - static_cast<std::size_t>(first_row); };
       const std::size_t a = local(layout.RowA(j)), bb = local(layout.RowB(j));
-      auto check = [&](std::size_t row, int swapped, std::size_t base, std::size_t other) {
-        for (int k = 0; k < D; ++k) {
-          const auto& column = columns[static_cast<std::size_t>(k)];
-          const double expected = k == swapped ? column[other] : column[base];
+      // The A and B rows define the block; every row between takes each column from one of them.
+      for (std::int64_t k = 1; k + 1 < block_rows; ++k) {
+        const std::size_t row = a + static_cast<std::size_t>(k);
+        for (int d = 0; d < D; ++d) {
+          const auto& column = columns[static_cast<std::size_t>(d)];
+          const double expected = column[SaltelliTakesB(D, layout.second_order, k, d) ? bb : a];
           if (!(column[row] == expected)) {
             throw InputError(
-                source, archive::DesignPath(result.parameters[static_cast<std::size_t>(k)]),
+                source, archive::DesignPath(result.parameters[static_cast<std::size_t>(d)]),
                 "row " + std::to_string(row + static_cast<std::size_t>(first_row)),
                 "the design's rows do not follow the Saltelli layout its attributes declare (N = " +
                     std::to_string(layout.base_samples) + ", D = " + std::to_string(D) + ", second order " +
                     (layout.second_order ? "yes" : "no") + ")");
           }
         }
-      };
-      for (int i = 0; i < D; ++i) {
-        check(local(layout.RowAB(j, i)), i, a, bb);
-        if (layout.second_order) check(local(layout.RowBA(j, i)), i, bb, a);
       }
     }
   }

@@ -1,6 +1,6 @@
 #pragma once
 /// The hot path of every time response: Eq. (1) of the paper with its derivatives re-evaluated at
-/// the current height and speed (docs/MODEL.md §4, §5, §7). Three pieces, each replaceable by the
+/// the current height and speed (docs/model.md §4, §5, §7). Three pieces, each replaceable by the
 /// generic path of LongitudinalModel and tested against it:
 ///  - Equation1Entries / Equation1Derivative: the 13 non-kinematic entries of A and B and ẋ = A x + B δe
 ///    written out (A is sparse; the kinematic entries are constants); the frozen-A floor.
@@ -25,7 +25,7 @@
 
 namespace gesweep {
 
-/// The entries of Eq. (1) that depend on the flight condition (MODEL.md §5). Row q holds the
+/// The entries of Eq. (1) that depend on the flight condition (docs/model.md §5). Row q holds the
 /// composite entries: m_u = Mu + Mẇ·Zu, m_w = Mw + Mẇ·Zw, m_q = Mq + Mẇ·u0, m_h = Mh + Mẇ·Zh,
 /// m_de = Mδe + Mẇ·Zδe. Units as in DimensionalDerivatives (per second, per metre, per radian).
 struct Equation1Entries {
@@ -35,7 +35,7 @@ struct Equation1Entries {
 };
 
 /// The entries of Eq. (1) from the derivatives; the Mẇ·u0 term uses the kinematic reference speed
-/// u0 (m/s), as the kinematic entries do (MODEL.md §7).
+/// u0 (m/s), as the kinematic entries do (docs/model.md §7).
 inline Equation1Entries EntriesFromDerivatives(const DimensionalDerivatives& d, double reference_speed_mps) {
   Equation1Entries e;
   e.x_u = d.Xu;
@@ -98,7 +98,7 @@ class DensityPolynomial {
   std::array<double, kDegree + 1> coefficients_{};
 };
 
-/// Derivatives of MODEL.md §4 for a model with linear interpolation, arranged per table segment.
+/// Derivatives of docs/model.md §4 for a model with linear interpolation, arranged per table segment.
 /// Each derivative is D = ρ·u^p·R(H) with p = 1 (Xu, Xw, Zu, Zw, Mu, Mw, Mq), p = 2 (Xh, Xδe, Zh,
 /// Zδe, Mh, Mδe) or p = 0 (Mẇ), and R(H) = ComputeDerivatives(C(H), mg, ρ = 1, u = 1) is affine in
 /// the coefficient row C(H), which is linear in H between two table rows: so R is exactly linear

@@ -1,5 +1,5 @@
 #pragma once
-/// Generic time integration for the engine's time responses (docs/MODEL.md §7, docs/simulation.md):
+/// Generic time integration for the engine's time responses (docs/model.md §7, docs/simulation.md):
 /// fixed-step classical RK4 and adaptive Dormand–Prince 5(4), input breakpoints that no step
 /// straddles, event functions located inside the step, output sampled on a regular grid, and step
 /// and right-hand-side counts. The open-loop run (open_loop.h) and the closed-loop landing

@@ -1,5 +1,5 @@
 #pragma once
-/// The open-loop time response of docs/MODEL.md §7 (the paper's Section IV and Fig. 4): Eq. (1)
+/// The open-loop time response of docs/model.md §7 (the paper's Section IV and Fig. 4): Eq. (1)
 /// integrated from a start height and speed after an elevator input, with the dimensional
 /// derivatives re-evaluated at every right-hand-side evaluation at the current height
 /// H = H0 + ΔH and speed u = u0 + Δu, with ρ(H); the kinematic u0 entries of Eq. (1) (row Δw
@@ -16,7 +16,7 @@
 
 namespace gesweep {
 
-/// The shape of the elevator input δe(t) (positive trailing edge down, MODEL.md §1).
+/// The shape of the elevator input δe(t) (positive trailing edge down, docs/model.md §1).
 enum class ElevatorInputKind {
   kNone,     ///< δe = 0
   kPulse,    ///< amplitude on [start, start + duration), 0 elsewhere (the paper: +5° for 0.2 s)
@@ -68,7 +68,7 @@ struct OpenLoopConfig {
   /// > 0: record the time series every series_interval_s seconds (and at the end); 0: summary only.
   double series_interval_s = 0.0;
   /// true: A and B frozen at (H0, u0) for the whole run (the classical linear response; the floor
-  /// of the performance target). false (MODEL.md §7): re-evaluated at every stage.
+  /// of the performance target). false (docs/model.md §7): re-evaluated at every stage.
   bool freeze_derivatives = false;
   /// true: always evaluate the derivatives through LongitudinalModel::DerivativesAt (IsaDensity
   /// and the coefficient table), as PCHIP interpolation does anyway; false: the per-segment fast
@@ -85,7 +85,7 @@ struct OpenLoopConfig {
 /// max_step_s for dopri5 with a largest step), integrator options (ValidateIntegratorOptions).
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source);
 
-/// How a run ended (MODEL.md §7).
+/// How a run ended (docs/model.md §7).
 enum class OpenLoopEndEvent {
   kTouchdown,  ///< H fell to the touchdown (wheel-contact) height
   kStall,      ///< u fell to the stall speed
@@ -96,7 +96,7 @@ enum class OpenLoopEndEvent {
 /// "touchdown" / "stall" / "time_limit" / "diverged".
 std::string_view ToString(OpenLoopEndEvent event);
 
-/// The summary of one run. The state is x = [Δu m/s, Δw m/s, q rad/s, Δθ rad, ΔH m] (MODEL.md §1).
+/// The summary of one run. The state is x = [Δu m/s, Δw m/s, q rad/s, Δθ rad, ΔH m] (docs/model.md §1).
 struct OpenLoopSummary {
   OpenLoopEndEvent end_event = OpenLoopEndEvent::kTimeLimit;
   double end_time_s = 0;              ///< time of the end event (touchdown and stall located inside the step)
@@ -134,7 +134,7 @@ struct OpenLoopResult {
   OpenLoopSeries series;
 };
 
-/// Runs MODEL.md §7 once. Validates the config (throws InputError, source "open-loop config");
+/// Runs docs/model.md §7 once. Validates the config (throws InputError, source "open-loop config");
 /// numerical outcomes (stall, divergence) are in the summary, never thrown. Allocates only the
 /// series (reserved before the run) and the per-run tables; nothing per step. `cancel` (may be
 /// null) is read before every step: once true the run stops there with summary.cancelled.

@@ -17,7 +17,7 @@ int OutputColumn::stored_bytes_per_run() const {
     case ColumnType::kComplex:
       return 16 * width;
   }
-  return 0;
+  GESWEEP_UNREACHABLE();
 }
 
 int OutputSchema::Add(OutputColumn column) {

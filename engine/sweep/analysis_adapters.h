@@ -9,23 +9,19 @@
 
 namespace gesweep {
 
-/// `modes`: AnalyzeModes(model.StateMatrix(H, u0)) per run (MODEL.md §6).
+/// `modes`: AnalyzeModes(model.StateMatrix(H, u0)) per run (docs/model.md §6).
 std::unique_ptr<Analysis> MakeModesAnalysis(const TomlSection& settings, const Aircraft* aircraft);
 /// `flying_qualities`: MIL-F-8785C levels of AnalyzeModes(model.StateMatrix(H, u0)) (docs/model.md §11).
 std::unique_ptr<Analysis> MakeFlyingQualitiesAnalysis(const TomlSection& settings, const Aircraft* aircraft);
-/// `boundary`: FindBoundary(model, u0) per run (MODEL.md §6).
+/// `boundary`: FindBoundary(model, u0) per run (docs/model.md §6).
 std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, const Aircraft* aircraft);
 /// `ishigami`: the Ishigami function of x1..x3 (verification).
 std::unique_ptr<Analysis> MakeIshigamiAnalysis(const TomlSection& settings, const Aircraft* aircraft);
 /// `linear`: intercept + Σ cᵢ xᵢ (verification).
 std::unique_ptr<Analysis> MakeLinearAnalysis(const TomlSection& settings, const Aircraft* aircraft);
-#ifdef GESWEEP_HAVE_SIMULATION
-/// `open_loop`: the time response to an elevator pulse (MODEL.md §7).
+/// `open_loop`: the time response to an elevator pulse (docs/model.md §7).
 std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, const Aircraft* aircraft);
-#endif
-#ifdef GESWEEP_HAVE_CONTROL
-/// `landing`: the closed-loop glide slope and flare (MODEL.md §8).
+/// `landing`: the closed-loop glide slope and flare (docs/model.md §8).
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft* aircraft);
-#endif
 
 }  // namespace gesweep

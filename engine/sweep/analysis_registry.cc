@@ -11,18 +11,8 @@ const std::vector<AnalysisEntry>& AnalysisRegistry() {
        &MakeFlyingQualitiesAnalysis, ""},
       {"boundary", "the stability boundary H* of the run's model at its speed", true, &MakeBoundaryAnalysis,
        ""},
-#ifdef GESWEEP_HAVE_SIMULATION
       {"open_loop", "the time response to an elevator pulse", true, &MakeOpenLoopAnalysis, ""},
-#else
-      {"open_loop", "the time response to an elevator pulse", true, nullptr,
-       "engine/simulation was not built (its adapter engine/sweep/open_loop_analysis.cc needs it)"},
-#endif
-#ifdef GESWEEP_HAVE_CONTROL
       {"landing", "the closed-loop landing: glide slope and flare", true, &MakeLandingAnalysis, ""},
-#else
-      {"landing", "the closed-loop landing: glide slope and flare", true, nullptr,
-       "engine/control was not built (its adapter engine/sweep/landing_analysis.cc needs it)"},
-#endif
       {"ishigami", "verification model: the Ishigami function of x1..x3", false, &MakeIshigamiAnalysis, ""},
       {"linear", "verification model: a linear function of x1..x8", false, &MakeLinearAnalysis, ""},
   };

@@ -1,5 +1,5 @@
 // Adapter: the `boundary` analysis. The stability boundary H*(u0) of the run's own model at the
-// run's speed (docs/MODEL.md §6), by FindBoundary: the certified Hurwitz finder by default (every
+// run's speed (docs/model.md §6), by FindBoundary: the certified Hurwitz finder by default (every
 // crossing of the imaginary axis, issue 16), or the former sampled search with method = "sampled".
 // Makes H* a sweepable scalar (issue 7: Sobol indices of H*).
 #include <cmath>
@@ -32,7 +32,7 @@ class BoundaryAnalysis final : public Analysis {
     height_ = schema.Add(OutputColumn::Real(
         "results/boundary/height_m", "m",
         "Boundary height H*: the highest height where sigma changes sign, unstable below and "
-        "stable above (MODEL.md §6); NaN when there is none in the scanned range"));
+        "stable above (docs/model.md §6); NaN when there is none in the scanned range"));
     height_over_span_ = schema.Add(
         OutputColumn::Real("results/boundary/height_over_span", "1", "H*/b; NaN when there is no boundary"));
     found_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/boundary/found", "1",

@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "engine/analysis/sensitivity_common.h"
 #include "engine/common/errors.h"
 #include "engine/sweep/hashing.h"
 
@@ -17,6 +18,8 @@ constexpr std::uint64_t kLatinJitterTag = 0x4c48535f6a697474ULL;       // "LHS_j
 constexpr std::uint64_t kMorrisTag = 0x4d4f52524953ULL;                // "MORRIS"
 constexpr int kFeistelRounds = 4;  // four rounds make a keyed Feistel network a good permutation
 constexpr std::int64_t kMaximumRuns = std::int64_t{1} << 62;
+static_assert(2 * kMaximumSobolParameters <= static_cast<int>(boost::random::detail::qrng_tables::sobol::max_dimension),
+              "a sobol design of kMaximumSobolParameters needs 2D dimensions of Boost's Sobol' tables");
 // Largest double below 1: a unit coordinate never reaches the upper bound by rounding.
 constexpr double kBelowOne = 1.0 - 0x1.0p-53;
 
@@ -94,16 +97,7 @@ class SaltelliDesign final : public Design {
     const double* a = point.data();
     const double* b = point.data() + D;
     for (int d = 0; d < D; ++d) {
-      double u;
-      if (k == 0) {
-        u = a[d];  // A_j
-      } else if (k <= D) {
-        u = (d == k - 1) ? b[d] : a[d];  // AB_j^(k)
-      } else if (spec_.second_order && k <= 2 * D) {
-        u = (d == k - D - 1) ? a[d] : b[d];  // BA_j^(k−D)
-      } else {
-        u = b[d];  // B_j
-      }
+      const double u = SaltelliTakesB(D, spec_.second_order, k, d) ? b[d] : a[d];
       values[d] = MapUnit(spec_.parameters[static_cast<std::size_t>(d)], u);
     }
   }
@@ -180,16 +174,11 @@ std::string_view ToString(DesignKind kind) {
     case DesignKind::kMorris:
       return "morris";
   }
-  return "?";
+  GESWEEP_UNREACHABLE();
 }
 
 std::string_view ToString(Distribution distribution) {
   return distribution == Distribution::kUniform ? "uniform" : "loguniform";
-}
-
-std::int64_t SaltelliBlockRows(int dimension, bool second_order) {
-  return second_order ? 2 * static_cast<std::int64_t>(dimension) + 2
-                      : static_cast<std::int64_t>(dimension) + 2;
 }
 
 std::int64_t CountRuns(const DesignSpec& spec) {
@@ -232,11 +221,7 @@ void SobolPoint(int dimension, std::int64_t j, double* coordinates) {
 }
 
 double MapUnit(const DesignParameter& parameter, double u) {
-  if (parameter.distribution == Distribution::kLogUniform) {
-    const double log_lower = std::log(parameter.lower);
-    return std::exp(log_lower + u * (std::log(parameter.upper) - log_lower));
-  }
-  return parameter.lower + u * (parameter.upper - parameter.lower);
+  return ValueAtUnit(parameter.lower, parameter.upper, parameter.distribution == Distribution::kLogUniform, u);
 }
 
 std::int64_t LatinStratum(std::uint64_t seed, int dimension, std::int64_t n, std::int64_t i) {

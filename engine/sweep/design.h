@@ -6,20 +6,21 @@
 ///  - grid:   the cartesian product of its axes, the last axis varying fastest (C order);
 ///  - list:   explicit rows (inline or from CSV);
 ///  - lhs:    Latin hypercube, seeded (a keyed Feistel permutation per dimension, cycle-walked);
-///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (layout below);
+///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (row layout: see below);
 ///  - morris: r trajectories of D+1 rows, p levels, seeded (Morris 1991).
 ///
-/// Saltelli layout (SALib's): for each base sample j = 0..N−1 a block of rows
-///   A_j, AB_j^(1..D), [BA_j^(1..D) when second order], B_j,
-/// i.e. N·(2D+2) rows, or N·(D+2) without second order. A_j and B_j are the first D and last D
-/// coordinates of point j+1 of the 2D-dimensional Sobol' sequence (Boost's engine skips the
-/// origin); AB_j^(i) is A_j with column i taken from B_j, BA_j^(i) is B_j with column i from A_j.
+/// These are the only designs of the project: the sensitivity estimators of engine/analysis are fed,
+/// and unit-tested, with the rows these classes make. The sobol design's rows follow the Saltelli
+/// layout of engine/analysis/saltelli_layout.h; A_j and B_j are the first D and last D coordinates of
+/// point j+1 of the 2D-dimensional Sobol' sequence (Boost's engine skips the origin). Every sampled
+/// design maps its unit coordinates by ValueAtUnit (engine/analysis/sensitivity_common.h).
 
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "engine/analysis/saltelli_layout.h"
 #include "engine/sweep/parameter_catalog.h"
 
 namespace gesweep {
@@ -81,8 +82,13 @@ std::unique_ptr<Design> MakeDesign(DesignSpec spec);
 /// Number of runs a spec gives, or −1 when it would exceed 2⁶² (refused by the study parser).
 std::int64_t CountRuns(const DesignSpec& spec);
 
-/// Rows per Saltelli block: 2D+2 with second order, D+2 without.
-std::int64_t SaltelliBlockRows(int dimension, bool second_order);
+/// The most parameters a sobol design may sample (the study parser refuses more). Boost.Random's
+/// Sobol' tables hold 3667 dimensions and the design draws 2D of them; 1000 keeps a margin (checked
+/// at compile time in design.cc).
+inline constexpr int kMaximumSobolParameters = 1000;
+
+/// The most levels p of a morris design (the study parser refuses more).
+inline constexpr int kMaximumMorrisLevels = 1000;
 
 /// The points of the Sobol' sequence used by the sobol design: coordinate d of point j (j ≥ 0
 /// gives Boost's point j+1, the origin skipped), for a sequence of `dimension` coordinates.

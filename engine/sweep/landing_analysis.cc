@@ -1,4 +1,4 @@
-// Adapter: the `landing` analysis. The closed-loop automatic landing of docs/MODEL.md §8 (the
+// Adapter: the `landing` analysis. The closed-loop automatic landing of docs/model.md §8 (the
 // paper's Fig. 6-9): SimulateLanding from the run's start height and speed, glide slope, flare and
 // LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
 // the gain always; time series when the study stores them.

@@ -1,5 +1,5 @@
 // Adapter: the `modes` analysis. Eigenvalues, modes and stability margin of Eq. (1) at the run's
-// height and speed (docs/MODEL.md §5-§6), by AnalyzeModes(model.StateMatrix(H, u0)).
+// height and speed (docs/model.md §5-§6), by AnalyzeModes(model.StateMatrix(H, u0)).
 #include <array>
 #include <cmath>
 #include <sstream>
@@ -25,14 +25,14 @@ class ModesAnalysis final : public Analysis {
     OutputColumn eigenvalues = OutputColumn::Complex(
         "results/modes/eigenvalues", "1/s",
         "Eigenvalues of A (Eq. 1): short period (2), phugoid (2), height (1); a pair with "
-        "Im > 0 first (MODEL.md §6)",
+        "Im > 0 first (docs/model.md §6)",
         5);
     eigenvalues.component_names = {"short_period", "short_period", "phugoid", "phugoid", "height"};
     eigenvalues_ = schema.Add(eigenvalues);
     margin_ = schema.Add(OutputColumn::Real(
         "results/modes/stability_margin_per_s", "1/s",
         "Stability margin sigma = the largest Re(lambda), the neutral height root left out "
-        "(MODEL.md §6); stable when < 0"));
+        "(docs/model.md §6); stable when < 0"));
     stable_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/modes/stable", "1",
                                                "1 when sigma < 0, else 0", {"false", "true"}));
     std::vector<std::string> classes;

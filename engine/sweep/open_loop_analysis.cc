@@ -1,4 +1,4 @@
-// Adapter: the `open_loop` analysis. The time response of docs/MODEL.md §7 (the paper's Fig. 4):
+// Adapter: the `open_loop` analysis. The time response of docs/model.md §7 (the paper's Fig. 4):
 // SimulateOpenLoop from the run's height and speed after an elevator input of the run's amplitude
 // and duration; summary scalars always, time series when the study stores them.
 #include <cmath>
@@ -40,7 +40,7 @@ class OpenLoopAnalysis final : public Analysis {
     }
     end_event_ =
         schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "end_event", "1",
-                                         "How the run ended (levels attribute, MODEL.md §7)", events));
+                                         "How the run ended (levels attribute, docs/model.md §7)", events));
     end_time_ = schema.Add(OutputColumn::Real(base + "end_time_s", "s", "Time of the end event"));
     min_height_ = schema.Add(OutputColumn::Real(base + "min_height_m", "m", "Lowest height H reached"));
     min_height_time_ =

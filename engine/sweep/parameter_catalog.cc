@@ -55,12 +55,12 @@ std::vector<ParameterInfo> BuildCatalog() {
                    G::kFlight, std::nullopt, "height_m"));
   c.push_back(Real("speed_mps", "m/s", "Reference forward speed u0", G::kFlight, std::nullopt, "speed_mps"));
 
-  // Model switches (docs/MODEL.md §2-§4).
-  c.push_back(Levels("h_derivatives", "Whether Xh, Zh and Mh are in the model (MODEL.md §4)",
+  // Model switches (docs/model.md §2-§4).
+  c.push_back(Levels("h_derivatives", "Whether Xh, Zh and Mh are in the model (docs/model.md §4)",
                      ParameterKind::kBoolean, 1.0, {"false", "true"}));
-  c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (MODEL.md §3)", ParameterKind::kChoice,
+  c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)", ParameterKind::kChoice,
                      0.0, {"polar", "zero"}));
-  c.push_back(Levels("interpolation", "Table interpolation in height: linear or pchip (MODEL.md §2)",
+  c.push_back(Levels("interpolation", "Table interpolation in height: linear or pchip (docs/model.md §2)",
                      ParameterKind::kChoice, 0.0, {"linear", "pchip"}));
 
   // Multiplicative scale factors on every coefficient column and on CDo.
@@ -80,14 +80,14 @@ std::vector<ParameterInfo> BuildCatalog() {
   c.push_back(Real("cg_shift_over_chord", "1", "CG moved aft by this fraction of the mean chord (negative: forward)",
                    G::kModel, 0.0, "cg_shift_over_chord"));
 
-  // Open-loop perturbation (MODEL.md §7).
+  // Open-loop perturbation (docs/model.md §7).
   c.push_back(Real("pulse_amplitude_deg", "deg",
                    "Elevator pulse amplitude, positive trailing edge down (paper: 5 deg)", G::kOpenLoop, 5.0,
                    "pulse_amplitude_deg"));
   c.push_back(Real("pulse_duration_s", "s", "Elevator pulse duration (paper: 0.2 s)", G::kOpenLoop, 0.2,
                    "pulse_duration_s"));
 
-  // Landing controller (MODEL.md §8; engine/control/landing_config.h, docs/landing.md). A NaN
+  // Landing controller (docs/model.md §8; engine/control/landing_config.h, docs/landing.md). A NaN
   // default means "automatic": the controller's own rule.
   {
     c.push_back(Real("glide_slope_deg", "deg",

@@ -1,6 +1,6 @@
 #pragma once
 /// The catalogue of every parameter a study can fix or sweep (docs/sweep.md, schemas/study.schema.json):
-/// the flight condition, the model switches of docs/MODEL.md, scale factors on every coefficient,
+/// the flight condition, the model switches of docs/model.md, scale factors on every coefficient,
 /// mass properties, the open-loop perturbation, the landing controller, and the inputs of the
 /// verification models. The unit is in each name; degrees only where the name says `_deg`.
 

@@ -17,8 +17,6 @@ namespace {
 // past them is almost certainly a typo (docs/sweep.md, "Refusing absurd designs").
 constexpr std::int64_t kMaximumAxisPoints = 100'000'000;
 constexpr std::int64_t kMaximumListRows = 100'000'000;
-constexpr int kMaximumSobolDimension = 1000;  // Boost's Sobol' tables hold 3667 dimensions; 2D ≤ that
-constexpr int kMaximumMorrisLevels = 1000;
 constexpr int kMaximumChunkRuns = 1 << 16;
 
 std::string Quote(const std::string& text) { return "\"" + text + "\""; }
@@ -584,9 +582,9 @@ class StudyParser {
       spec.base_samples = PositiveCount(*design, "base_samples", std::int64_t{1} << 40);
       spec.second_order = design->OptionalBool("second_order").value_or(false);
       ParseDesignParameters(*design, /*grid=*/false);
-      if (static_cast<int>(spec.parameters.size()) > kMaximumSobolDimension) {
+      if (static_cast<int>(spec.parameters.size()) > kMaximumSobolParameters) {
         design->Fail("parameter", std::to_string(spec.parameters.size()) + " parameters",
-                     "expected at most " + std::to_string(kMaximumSobolDimension));
+                     "expected at most " + std::to_string(kMaximumSobolParameters));
       }
     } else if (kind == "morris") {
       spec.kind = DesignKind::kMorris;

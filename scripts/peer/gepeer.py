@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """gepeer: the NumPy/SciPy script a user would otherwise write for the gesweep model.
 
-An independent implementation of ../shared/docs/MODEL.md (the engine's C++ was not consulted):
+An independent implementation of docs/model.md (the engine's C++ was not consulted):
 the aircraft file (TOML), table interpolation (§2), CDh from the drag polar (§3), the dimensional
 derivatives of the paper's Table 1 (§4), A and B of Eq. (1) (§5), the modes and the stability
 margin σ (§6), the open-loop response with derivatives re-evaluated at every right-hand-side call
@@ -30,13 +30,13 @@ import scipy.optimize
 GRAVITY_MPS2 = 9.80665
 
 # ISA troposphere (ISO 2533): sea-level temperature, lapse rate, specific gas constant of dry air.
-# MODEL.md §1 fixes g and rho0 = 1.225 kg/m^3; the rest are the standard's values.
+# docs/model.md §1 fixes g and rho0 = 1.225 kg/m^3; the rest are the standard's values.
 ISA_SEA_LEVEL_DENSITY_KGPM3 = 1.225
 ISA_SEA_LEVEL_TEMPERATURE_K = 288.15
 ISA_LAPSE_RATE_KPM = 0.0065
 ISA_GAS_CONSTANT_JPKGK = 287.05287
 
-# MODEL.md §6: a real eigenvalue this small is the neutral free-flight height mode.
+# docs/model.md §6: a real eigenvalue this small is the neutral free-flight height mode.
 NEUTRAL_EIGENVALUE_PER_S = 1e-9
 
 # The columns of the aircraft table that the model uses, in a fixed order; CDh is derived (§3).
@@ -49,7 +49,7 @@ STATE_NAMES = ("du_mps", "dw_mps", "q_radps", "dtheta_rad", "dH_m")
 
 
 # ----------------------------------------------------------------------------------------------
-# Aircraft file and the interpolated coefficient table (MODEL.md §2, §3)
+# Aircraft file and the interpolated coefficient table (docs/model.md §2, §3)
 # ----------------------------------------------------------------------------------------------
 
 def load_aircraft(path):
@@ -85,14 +85,14 @@ def load_aircraft(path):
 
 
 def isa_density(altitude_m):
-    """ISA troposphere density, kg/m^3, at an altitude above sea level taken as geopotential (MODEL.md §1)."""
+    """ISA troposphere density, kg/m^3, at an altitude above sea level taken as geopotential (docs/model.md §1)."""
     exponent = GRAVITY_MPS2 / (ISA_GAS_CONSTANT_JPKGK * ISA_LAPSE_RATE_KPM) - 1.0
     ratio = 1.0 - ISA_LAPSE_RATE_KPM * altitude_m / ISA_SEA_LEVEL_TEMPERATURE_K
     return ISA_SEA_LEVEL_DENSITY_KGPM3 * ratio ** exponent
 
 
 class Model:
-    """The interpolated model of one aircraft with the options of MODEL.md (§2-§5)."""
+    """The interpolated model of one aircraft with the options of docs/model.md (§2-§5)."""
 
     def __init__(self, aircraft, interpolation="linear", h_derivatives=True, cdh="polar"):
         if interpolation not in ("linear", "pchip"):
@@ -139,7 +139,7 @@ class Model:
         return isa_density(self.ac["field_elevation_m"] + height_m)
 
     def derivatives(self, height_m, speed_mps):
-        """The dimensional derivatives of the paper's Table 1 (MODEL.md §4) at H and u, as a dict."""
+        """The dimensional derivatives of the paper's Table 1 (docs/model.md §4) at H and u, as a dict."""
         ac = self.ac
         c = self.coefficients(height_m)
         u = speed_mps
@@ -166,7 +166,7 @@ class Model:
         return d
 
     def matrices(self, height_m, speed_mps, reference_speed_mps=None):
-        """A and B of Eq. (1) (MODEL.md §5) with the derivatives at H and u.
+        """A and B of Eq. (1) (docs/model.md §5) with the derivatives at H and u.
 
         The kinematic u0 entries (row dw, column q; row dH, column dtheta) use reference_speed_mps
         (default: speed_mps), as in the open-loop response of §7. The pitch row is the moment
@@ -192,7 +192,7 @@ class Model:
 
 
 # ----------------------------------------------------------------------------------------------
-# Modes and stability margin (MODEL.md §6)
+# Modes and stability margin (docs/model.md §6)
 # ----------------------------------------------------------------------------------------------
 
 def mode_properties(lam):
@@ -212,7 +212,7 @@ def mode_properties(lam):
 
 
 def analyze_modes(a):
-    """Eigenvalues of A, the short-period / phugoid / height modes and sigma (MODEL.md §6)."""
+    """Eigenvalues of A, the short-period / phugoid / height modes and sigma (docs/model.md §6)."""
     lam = np.linalg.eigvals(a)
     pairs = lam[lam.imag > 0]                       # one member (Im > 0) of each complex pair
     reals = np.sort_complex(lam[lam.imag == 0])
@@ -251,7 +251,7 @@ def analyze_modes(a):
 
 
 # ----------------------------------------------------------------------------------------------
-# Open-loop response (MODEL.md §7)
+# Open-loop response (docs/model.md §7)
 # ----------------------------------------------------------------------------------------------
 
 class OpenLoop:
@@ -415,7 +415,7 @@ def simulate_solve_ivp(problem, duration_s=30.0, rtol=1e-6, atol=1e-9, method="R
 
 
 # ----------------------------------------------------------------------------------------------
-# LQR (MODEL.md §8; issue 4's Lqr and Lqry)
+# LQR (docs/model.md §8; issue 4's Lqr and Lqry)
 # ----------------------------------------------------------------------------------------------
 
 def lqr(a, b, q, r, n=None):
@@ -521,7 +521,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("modes", help="eigenvalues, modes and sigma of Eq. (1) (MODEL.md §6)")
+    p = sub.add_parser("modes", help="eigenvalues, modes and sigma of Eq. (1) (docs/model.md §6)")
     _add_model_flags(p)
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--heights-m", help="comma-separated heights, m (inf: free flight)")
@@ -529,7 +529,7 @@ def main(argv=None):
     p.add_argument("--format", default="table", choices=("table", "json"))
     p.set_defaults(func=_cmd_modes)
 
-    p = sub.add_parser("simulate", help="open-loop response to an elevator pulse (MODEL.md §7)")
+    p = sub.add_parser("simulate", help="open-loop response to an elevator pulse (docs/model.md §7)")
     _add_model_flags(p)
     p.add_argument("--height-m", type=float, required=True, help="starting height H0, m")
     p.add_argument("--elevator-deg", type=float, default=5.0)

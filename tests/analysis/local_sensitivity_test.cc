@@ -52,7 +52,7 @@ class AnceLocal : public ::testing::Test {
   LongitudinalModel model_{ance_, ModelOptions{}};
 };
 
-// --- ∂A/∂p against hand-derived forms of Table 1 and Eq. (1) (MODEL.md §4–§5) ----------------------
+// --- ∂A/∂p against hand-derived forms of Table 1 and Eq. (1) (docs/model.md §4–§5) ----------------------
 
 // ∂A/∂p is exact to rounding for these parameters; entries of A are ≲ 1e3 in size.
 constexpr double kExactMatrixTolerance = 1e-9;
@@ -135,7 +135,7 @@ TEST_F(AnceLocal, ParametersOutsideEquationOneHaveNoEffect) {
   const EigenSensitivities s = ComputeEigenSensitivities(model_, 2.0, kPaperSpeed_mps);
   for (const auto& row : s.parameters) {
     const std::string name = row.parameter.Name();
-    // Not in Eq. (1) (MODEL.md §4–§5): CMo, the neglected CLα̇ and CLq, the elevator (B only), h0/c.
+    // Not in Eq. (1) (docs/model.md §4–§5): CMo, the neglected CLα̇ and CLq, the elevator (B only), h0/c.
     const bool outside = name == "scale.CMo" || name == "scale.CLalphadot" || name == "scale.CLq" ||
                          name == "scale.CLde" || name == "scale.CMde" || name == "scale.ho_over_c";
     EXPECT_EQ(row.enters_state_matrix, !outside) << name;
@@ -227,7 +227,7 @@ TEST_F(AnceLocal, BoundaryHeightDerivativesMatchRerunningFindBoundary) {
   ASSERT_TRUE(boundary.height_m.has_value());
   const BoundarySensitivities s = ComputeBoundarySensitivities(model_, boundary);
   ASSERT_TRUE(s.valid) << s.reason;
-  EXPECT_EQ(s.mode, "phugoid");  // MODEL.md §6 / the modes table: the phugoid pair crosses at H*
+  EXPECT_EQ(s.mode, "phugoid");  // docs/model.md §6 / the modes table: the phugoid pair crosses at H*
   EXPECT_LT(s.margin_height_derivative_per_s_per_m, 0.0);  // unstable below, stable above
   EXPECT_NEAR(s.height_m, *boundary.height_m, 0.0);
 
@@ -307,7 +307,7 @@ TEST_F(AnceLocal, RankingIsByRelativeEffectAndLeavesOutParametersOutsideEquation
   for (std::size_t i = 1; i < ranked.size(); ++i) {
     EXPECT_GE(std::abs(ranked[i - 1].relative_height_derivative_m), std::abs(ranked[i].relative_height_derivative_m));
   }
-  // The boundary exists because of the h-derivatives (MODEL.md §6: none without them); a stronger CLh
+  // The boundary exists because of the h-derivatives (docs/model.md §6: none without them); a stronger CLh
   // raises it (tests/modal/boundary_test.cc), so ∂H*/∂s_CLh > 0.
   for (const auto& row : ranked) {
     if (row.parameter.Name() == "scale.CLh") {

@@ -4,21 +4,35 @@
 
 #include <cmath>
 
-#include "engine/analysis/sensitivity_design.h"
 #include "engine/common/errors.h"
+#include "tests/analysis/production_designs.h"
 
 namespace gesweep {
 namespace {
 
-// Elementary effects of a linear function are exact up to the rounding of the design's affine map.
-constexpr double kLinearTolerance = 1e-9;
+using production_designs::DesignRows;
+using production_designs::MorrisSpec;
+using production_designs::RangesOf;
+using production_designs::Sampled;
+
+// Elementary effects of a linear function are exact but for rounding. The design values (|x| ≤ 14) and
+// the outputs (|y| ≤ 20 after four products and sums) each carry a few ulps, ≤ 2e-14 on y; an effect
+// divides a difference of two outputs by the unit step Δ = 2/3 (p = 4), so it is off by ≤ 6e-14, and
+// so are μ, μ*, their bootstrap percentiles and σ (a spread of values all that close). 1e-12 leaves
+// a factor > 10 for the log-uniform case's exp/log round trip.
+constexpr double kLinearTolerance = 1e-12;
+// The hand-computed trajectories hold values like 2/3 and 1/9: a few ulps of numbers below 2.
+constexpr double kHandTolerance = 1e-12;
 
 TEST(Morris, LinearFunctionRecoversAbsoluteCoefficientsAsMuStar) {
   // y = 3 a − 2 b + 0.5 c + 0·d + 7. An elementary effect is per full range of the parameter, so the
   // oracle is |coefficient| × (upper − lower): on the unit interval, |coefficient| itself.
-  const std::vector<ParameterRange> ranges = {{"a", 0.0, 1.0}, {"b", 0.0, 1.0}, {"c", 10.0, 14.0}, {"d", -1.0, 1.0}};
+  const DesignSpec spec = MorrisSpec(
+      {Sampled("x1", 0.0, 1.0), Sampled("x2", 0.0, 1.0), Sampled("x3", 10.0, 14.0), Sampled("x4", -1.0, 1.0)}, 12, 4,
+      11);
+  const std::vector<ParameterRange> ranges = RangesOf(spec);
   const double coefficients[] = {3.0, -2.0, 0.5, 0.0};
-  const Eigen::MatrixXd X = MorrisDesign(ranges, 12, 4, 11);
+  const Eigen::MatrixXd X = DesignRows(spec);
   std::vector<double> y(X.rows());
   for (Eigen::Index r = 0; r < X.rows(); ++r) {
     y[r] = 7.0;
@@ -42,8 +56,10 @@ TEST(Morris, LinearFunctionRecoversAbsoluteCoefficientsAsMuStar) {
 TEST(Morris, LogUniformParameterStepsInLogSpace) {
   // y = 2 ln x + b with x log-uniform on [1, e³]: linear in the unit coordinate u = ln(x)/3, so every
   // elementary effect is 2 × 3 = 6 per full (log-)range; b on [0, 1] contributes 1.
-  const std::vector<ParameterRange> ranges = {{"x", 1.0, std::exp(3.0), true}, {"b", 0.0, 1.0}};
-  const Eigen::MatrixXd X = MorrisDesign(ranges, 6, 4, 5);
+  const DesignSpec spec =
+      MorrisSpec({Sampled("x1", 1.0, std::exp(3.0), Distribution::kLogUniform), Sampled("x2", 0.0, 1.0)}, 6, 4, 5);
+  const std::vector<ParameterRange> ranges = RangesOf(spec);
+  const Eigen::MatrixXd X = DesignRows(spec);
   std::vector<double> y(X.rows());
   for (Eigen::Index r = 0; r < X.rows(); ++r) y[r] = 2.0 * std::log(X(r, 0)) + X(r, 1);
   const MorrisIndices m = AnalyzeMorris(X, y, {}, ranges);
@@ -51,7 +67,11 @@ TEST(Morris, LogUniformParameterStepsInLogSpace) {
   EXPECT_NEAR(m.mu_star[0], 6.0, kLinearTolerance);
   EXPECT_NEAR(m.sigma[0], 0.0, kLinearTolerance);
   EXPECT_NEAR(m.mu_star[1], 1.0, kLinearTolerance);
-  EXPECT_THROW(MorrisDesign({{"x", 0.0, 1.0, true}}, 2, 4, 1), InputError);
+  // A log-uniform range must have 0 < lower: the estimator refuses ranges (e.g. read from a damaged
+  // archive) that no design could have sampled.
+  std::vector<ParameterRange> bad = ranges;
+  bad[0].lower = 0.0;
+  EXPECT_THROW(AnalyzeMorris(X, y, {}, bad), InputError);
 }
 
 TEST(Morris, HandComputedTrajectories) {
@@ -67,17 +87,18 @@ TEST(Morris, HandComputedTrajectories) {
   options.bootstrap.resamples = 0;
   const MorrisIndices m = AnalyzeMorris(X, y, {}, {{"x1", 0, 1}, {"x2", 0, 1}}, options);
   ASSERT_EQ(m.status, SensitivityStatus::kOk);
-  EXPECT_NEAR(m.mu[0], 1.0, 1e-12);
-  EXPECT_NEAR(m.mu_star[0], 1.0, 1e-12);
-  EXPECT_NEAR(m.sigma[0], std::sqrt(2.0) / 3.0, 1e-12);
-  EXPECT_NEAR(m.mu[1], 1.0, 1e-12);
-  EXPECT_NEAR(m.sigma[1], 0.0, 1e-12);
+  EXPECT_NEAR(m.mu[0], 1.0, kHandTolerance);
+  EXPECT_NEAR(m.mu_star[0], 1.0, kHandTolerance);
+  EXPECT_NEAR(m.sigma[0], std::sqrt(2.0) / 3.0, kHandTolerance);
+  EXPECT_NEAR(m.mu[1], 1.0, kHandTolerance);
+  EXPECT_NEAR(m.sigma[1], 0.0, kHandTolerance);
   EXPECT_TRUE(std::isnan(m.mu_star_ci[0].lower));  // no bootstrap asked for
 }
 
 TEST(Morris, FailedRowsDropTheirTrajectoryOrStop) {
-  const std::vector<ParameterRange> ranges = {{"a", 0.0, 1.0}, {"b", 0.0, 2.0}};
-  const Eigen::MatrixXd X = MorrisDesign(ranges, 5, 4, 3);
+  const DesignSpec spec = MorrisSpec({Sampled("x1", 0.0, 1.0), Sampled("x2", 0.0, 2.0)}, 5, 4, 3);
+  const std::vector<ParameterRange> ranges = RangesOf(spec);
+  const Eigen::MatrixXd X = DesignRows(spec);
   std::vector<double> y(X.rows());
   for (Eigen::Index r = 0; r < X.rows(); ++r) y[r] = 4.0 * X(r, 0) - X(r, 1);
   std::vector<bool> succeeded(y.size(), true);

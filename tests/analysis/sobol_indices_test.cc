@@ -7,16 +7,25 @@
 #include <set>
 
 #include "engine/analysis/ishigami.h"
-#include "engine/analysis/sensitivity_design.h"
 #include "engine/common/errors.h"
+#include "tests/analysis/production_designs.h"
 
 namespace gesweep {
 namespace {
 
-constexpr int kIshigamiBaseSamples = 1 << 13;  // N = 2^13, the test size
+using production_designs::DesignRows;
+using production_designs::LayoutOf;
+
+constexpr int kIshigamiBaseSamples = 1 << 13;  // N = 2^13, as studies/verification/ishigami_sobol.toml
 // Slack on the interval test for the indices whose true value is 0 (S3, S12, S23): their bootstrap
 // interval may be a few 1e-3 wide and centred slightly off 0; 0.005 is ~2 % of the smallest non-zero index.
 constexpr double kZeroIndexSlack = 5e-3;
+// The bootstrap intervals at N = 2^13 must be narrow enough to separate the indices (0.24 to 0.56
+// apart from the zeros): the Saltelli and Jansen estimators' standard errors there are 0.005 to 0.015,
+// so a 95 % interval is 0.02 to 0.06 wide; one of 0.1 or more would no longer separate S2 from S_T3.
+constexpr double kMaximumIntervalWidth = 0.1;
+// Closed-form values of magnitude ≤ 10 from sin and a fourth power: a few ulps.
+constexpr double kClosedFormTolerance = 1e-12;
 
 /// Closed-form Sobol' indices of the Ishigami function on [−π, π]³ (Ishigami & Homma 1990; Sobol' &
 /// Levitan 1999), written out here so the test does not depend on the code under test.
@@ -30,6 +39,16 @@ IshigamiTruth IshigamiAnalytic(double a, double b) {
   const double V13 = b * b * pi8 * (1.0 / 18.0 - 1.0 / 50.0);
   const double V = V1 + V2 + V13;
   return {{V1 / V, V2 / V, 0.0}, {(V1 + V13) / V, V2 / V, V13 / V}, V13 / V};
+}
+
+/// The sweep's sobol design on the Ishigami inputs x1, x2, x3 (catalogue parameters, each uniform on
+/// [−π, π]), as studies/verification/ishigami_sobol.toml declares it.
+DesignSpec IshigamiSpec(int base_samples, bool second_order) {
+  std::vector<DesignParameter> parameters;
+  for (const auto& range : IshigamiRanges()) {
+    parameters.push_back(production_designs::Sampled(range.name, range.lower, range.upper));
+  }
+  return production_designs::SobolSpec(std::move(parameters), base_samples, second_order);
 }
 
 std::vector<double> EvaluateIshigami(const Eigen::MatrixXd& design) {
@@ -46,7 +65,7 @@ void ExpectInsideInterval(double truth, const ConfidenceInterval& ci, double sla
 TEST(IshigamiTruth, MatchesThePublishedValues) {
   // The values (and SALib's documentation): S = (0.3139, 0.4424, 0), ST = (0.5576, 0.4424, 0.2437).
   const IshigamiTruth t = IshigamiAnalytic(7.0, 0.1);
-  constexpr double kFourDigits = 5e-5;
+  constexpr double kFourDigits = 5e-5;  // the published values are rounded to four decimals
   EXPECT_NEAR(t.first[0], 0.3139, kFourDigits);
   EXPECT_NEAR(t.first[1], 0.4424, kFourDigits);
   EXPECT_NEAR(t.total[0], 0.5576, kFourDigits);
@@ -55,8 +74,8 @@ TEST(IshigamiTruth, MatchesThePublishedValues) {
 
 TEST(Ishigami, IsTheClosedForm) {
   // sin(π/2) + 7 sin²(π/2) + 0.1·2⁴·sin(π/2) = 1 + 7 + 1.6.
-  EXPECT_NEAR(Ishigami({std::numbers::pi / 2, std::numbers::pi / 2, 2.0}), 9.6, 1e-12);
-  EXPECT_NEAR(Ishigami({0.0, 0.0, 3.0}), 0.0, 1e-12);
+  EXPECT_NEAR(Ishigami({std::numbers::pi / 2, std::numbers::pi / 2, 2.0}), 9.6, kClosedFormTolerance);
+  EXPECT_NEAR(Ishigami({0.0, 0.0, 3.0}), 0.0, kClosedFormTolerance);
   EXPECT_EQ(kIshigamiOutputName, "ishigami");
   for (const auto& range : IshigamiRanges()) {
     EXPECT_DOUBLE_EQ(range.lower, -std::numbers::pi);
@@ -68,9 +87,9 @@ class IshigamiSobol : public ::testing::TestWithParam<bool> {};
 
 TEST_P(IshigamiSobol, AnalyticIndicesLieInsideTheBootstrapIntervals) {
   const bool second_order = GetParam();
-  const Eigen::MatrixXd design = SaltelliDesign(IshigamiRanges(), kIshigamiBaseSamples, second_order);
-  const std::vector<double> y = EvaluateIshigami(design);
-  const SaltelliLayout layout{3, kIshigamiBaseSamples, second_order};
+  const DesignSpec spec = IshigamiSpec(kIshigamiBaseSamples, second_order);
+  const std::vector<double> y = EvaluateIshigami(DesignRows(spec));
+  const SaltelliLayout layout = LayoutOf(spec);
   const SobolIndices s = AnalyzeSobol(y, {}, layout);
   ASSERT_EQ(s.status, SensitivityStatus::kOk) << s.message;
   EXPECT_EQ(s.blocks_used, kIshigamiBaseSamples);
@@ -86,8 +105,8 @@ TEST_P(IshigamiSobol, AnalyticIndicesLieInsideTheBootstrapIntervals) {
     // The interval is about the estimate, and narrow enough to mean something at N = 2^13.
     EXPECT_TRUE(s.first_order_ci[i].Contains(s.first_order[i]));
     EXPECT_TRUE(s.total_ci[i].Contains(s.total[i]));
-    EXPECT_LT(s.first_order_ci[i].upper - s.first_order_ci[i].lower, 0.1);
-    EXPECT_LT(s.total_ci[i].upper - s.total_ci[i].lower, 0.1);
+    EXPECT_LT(s.first_order_ci[i].upper - s.first_order_ci[i].lower, kMaximumIntervalWidth);
+    EXPECT_LT(s.total_ci[i].upper - s.total_ci[i].lower, kMaximumIntervalWidth);
   }
   if (!second_order) {
     EXPECT_TRUE(std::isnan(s.second_order(0, 2)));
@@ -108,8 +127,9 @@ INSTANTIATE_TEST_SUITE_P(WithAndWithoutSecondOrder, IshigamiSobol, ::testing::Bo
 
 TEST(SobolBootstrap, IsReproducibleForASeedAndChangesWithIt) {
   const int N = 256;
-  const SaltelliLayout layout{3, N, false};
-  const std::vector<double> y = EvaluateIshigami(SaltelliDesign(IshigamiRanges(), N, false));
+  const DesignSpec spec = IshigamiSpec(N, false);
+  const SaltelliLayout layout = LayoutOf(spec);
+  const std::vector<double> y = EvaluateIshigami(DesignRows(spec));
   SobolOptions options;
   const SobolIndices a = AnalyzeSobol(y, {}, layout, options);
   const SobolIndices b = AnalyzeSobol(y, {}, layout, options);
@@ -133,8 +153,9 @@ struct FailedRowsCase {
 
 FailedRowsCase MakeFailedRowsCase(bool second_order) {
   FailedRowsCase c;
-  c.layout = {3, 512, second_order};
-  c.outputs = EvaluateIshigami(SaltelliDesign(IshigamiRanges(), c.layout.base_samples, second_order));
+  const DesignSpec spec = IshigamiSpec(512, second_order);
+  c.layout = LayoutOf(spec);
+  c.outputs = EvaluateIshigami(DesignRows(spec));
   c.succeeded.assign(c.outputs.size(), true);
   // Failures in different row kinds: an A row, an AB row, a B row, two rows of one block, and a
   // non-finite output flagged as a success.
@@ -231,8 +252,10 @@ TEST(PercentileInterval, IsTheType7QuantilePair) {
   for (int v = 101; v >= 1; --v) values.push_back(v);
   values.push_back(std::numeric_limits<double>::quiet_NaN());  // left out
   const ConfidenceInterval ci = PercentileInterval(values, 0.95);
-  EXPECT_NEAR(ci.lower, 3.5, 1e-12);  // q·(n−1) = 0.025·100 rounds to 2.5 ± 1 ulp
-  EXPECT_NEAR(ci.upper, 98.5, 1e-12);
+  // q·(n−1) = 0.025·100 rounds to 2.5 ± 1 ulp: an error of ~1e-15 on values below 100.
+  constexpr double kQuantileTolerance = 1e-12;
+  EXPECT_NEAR(ci.lower, 3.5, kQuantileTolerance);
+  EXPECT_NEAR(ci.upper, 98.5, kQuantileTolerance);
   EXPECT_TRUE(std::isnan(PercentileInterval({1.0}, 0.95).lower));
 }
 

@@ -64,7 +64,7 @@ const std::vector<double>& SweepHeights() {
 
 // --- Eigen-analysis with mode identification (the per-run work of a `modes` sweep) ---
 
-// A(H, u0) from the table (MODEL.md §4-§5), then eigenvalues, modes and σ (§6), at heights across the
+// A(H, u0) from the table (docs/model.md §4-§5), then eigenvalues, modes and σ (§6), at heights across the
 // range. Runs on 1 and 2 threads; items_per_second is the rate over all threads (wall clock).
 void BM_Modes(benchmark::State& state) {
   const LongitudinalModel& model = Model();
@@ -206,7 +206,7 @@ void BM_Balance(benchmark::State& state) {
 }
 BENCHMARK(BM_Balance);
 
-// --- One boundary search (MODEL.md §6) at 32.0208 m/s: the certified Hurwitz finder (default) and
+// --- One boundary search (docs/model.md §6) at 32.0208 m/s: the certified Hurwitz finder (default) and
 // the former sampled search (σ at ~280 heights, TOMS 748 at the sign change), side by side ---
 
 void RunBoundary(benchmark::State& state, BoundaryMethod method) {
@@ -238,7 +238,7 @@ void BM_CharacteristicPolynomial(benchmark::State& state) {
 }
 BENCHMARK(BM_CharacteristicPolynomial);
 
-// --- One right-hand-side evaluation of the open loop (MODEL.md §7), in the integrator's pattern:
+// --- One right-hand-side evaluation of the open loop (docs/model.md §7), in the integrator's pattern:
 // consecutive calls at nearby heights, so the segment hint usually hits (the worst case, a new
 // segment each call, is BM_Equation1Kernel in simulation_bench.cc) ---
 
@@ -269,7 +269,7 @@ void BM_RhsGeneric(benchmark::State& state) {
 }
 BENCHMARK(BM_RhsGeneric);
 
-// --- One landing (MODEL.md §8): LQR design (SLICOT) + dopri5 flight from 500 m to touchdown ---
+// --- One landing (docs/model.md §8): LQR design (SLICOT) + dopri5 flight from 500 m to touchdown ---
 
 void RunLanding(benchmark::State& state, bool h_derivatives) {
   ModelOptions options;

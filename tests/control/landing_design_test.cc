@@ -67,7 +67,7 @@ TEST(LandingDesign, DefaultGainStabilisesTheDesignModel) {
   const Eigen::VectorXcd eigenvalues = Eigen::EigenSolver<DesignMatrix>(closed).eigenvalues();
   for (Eigen::Index i = 0; i < eigenvalues.size(); ++i) EXPECT_LT(eigenvalues(i).real(), 0.0) << eigenvalues(i);
   // The open-loop design model is unstable at the wheel-contact height (the ground-effect phugoid,
-  // MODEL.md §6), so this is a real stabilisation, not a formality.
+  // docs/model.md §6), so this is a real stabilisation, not a formality.
   const Eigen::VectorXcd open = Eigen::EigenSolver<DesignMatrix>(design.model.A).eigenvalues();
   EXPECT_GT(open.real().maxCoeff(), 0.0);
   // The gain is the LQR gain of lqry's weights: check the CARE residual with Q̄ = CᵀQC written out.

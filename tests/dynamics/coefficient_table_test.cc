@@ -56,7 +56,7 @@ TEST(CoefficientTable, HoldsFirstRowBelowAndFreeFlightAbove) {
   EXPECT_EQ(table.At(9.0001)[Index(Coefficient::CLo)], -42.0 - Index(Coefficient::CLo));
   EXPECT_EQ(table.At(std::numeric_limits<double>::infinity())[Index(Coefficient::CMq)],
             -42.0 - Index(Coefficient::CMq));
-  EXPECT_EQ(table.At(1e6)[Index(Coefficient::CDh)], 0.0);  // CDh is zero in free flight (MODEL.md §3)
+  EXPECT_EQ(table.At(1e6)[Index(Coefficient::CDh)], 0.0);  // CDh is zero in free flight (docs/model.md §3)
 }
 
 TEST(CoefficientTable, PchipIsMonotoneOnMonotoneData) {
@@ -83,7 +83,7 @@ TEST(CoefficientTable, PchipIsMonotoneOnMonotoneData) {
 }
 
 TEST(CoefficientTable, PolarCdhMatchesHandComputation) {
-  // MODEL.md §3 at the ANCE rows, by hand from Table A2 (c = 0.604 m):
+  // docs/model.md §3 at the ANCE rows, by hand from Table A2 (c = 0.604 m):
   //  first row (one-sided): f = k·CLo² = 0.0366·0.3392² = 0.004211073 and 0.0403·0.3366² = 0.004565972;
   //   Δh = (1.0374 − 0.7882)/0.604 = 0.4125828; CDh = 0.000354899/0.4125828 = 8.601892e-4.
   //  row H = 2.5935 (central, non-uniform): f0 = 0.0461·0.3305² = 0.005035515 (h0 = 3.435099),

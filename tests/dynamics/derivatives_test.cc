@@ -14,12 +14,12 @@ void ExpectRelNear(double actual, double expected, const char* name) {
 }
 
 TEST(Derivatives, MatchHandComputationAtOneTableRow) {
-  // ANCE at the table row H = 2.5935 m, u = 32.0208 m/s, worked by hand from MODEL.md §1, §4:
+  // ANCE at the table row H = 2.5935 m, u = 32.0208 m/s, worked by hand from docs/model.md §1, §4:
   //  ISA: T/T0 = 1 − 0.0065·2.5935/288.15, exponent g/(R·L) − 1 = 4.255879813,
   //       ρ = 1.225·(T/T0)^4.255879813 = 1.224695024 kg/m³
   //  Q = ½ρu² = 627.8592744 Pa;  Q·S = 1967.020321 N  (S = 3.1329 m²)
   //  Row: CLo 0.3293, CDα 0.1699, CLα 5.4775, CLδe 0.6417, CMα −3.885, CMα̇ −11.03, CMq −18.66,
-  //       CMδe −2.699, CLh −0.0007, CMh 0, CDh (MODEL.md §3) 5.995829e-5; m 182.055, Iy 400, c 0.604
+  //       CMδe −2.699, CLh −0.0007, CMh 0, CDh (docs/model.md §3) 5.995829e-5; m 182.055, Iy 400, c 0.604
   //  Xu  = −2·0.0266·QS/(m·u)              = −0.01795087777
   //  Xw  = −(0.1699 − 0.3293)·QS/(m·u)     =  0.05378514881
   //  Xh  = −CDh·QS/(m·c)                   = −0.001072552519
@@ -64,7 +64,7 @@ TEST(StateMatrix, HasTheStructureOfEquationOne) {
   EXPECT_DOUBLE_EQ(A(2, 4), d.Mh + d.Mw_dot * d.Zh);
   const Vector5d B = model.InputMatrix(1.3, u0);
   EXPECT_DOUBLE_EQ(B(2), d.Mde + d.Mw_dot * d.Zde);
-  EXPECT_LT(B(2), 0.0);  // positive δe (trailing edge down) pitches the nose down (MODEL.md §1)
+  EXPECT_LT(B(2), 0.0);  // positive δe (trailing edge down) pitches the nose down (docs/model.md §1)
 }
 
 TEST(StateMatrix, WithoutHDerivativesOnlyTheHeightColumnChanges) {

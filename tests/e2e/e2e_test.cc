@@ -129,7 +129,7 @@ linspace = [1.0, 5.0, 9]
   ArchiveReader reader = ArchiveReader::Open(archive);
   EXPECT_EQ(reader.run_count(), 9);
   EXPECT_EQ(reader.IntegerAttribute("runs_ok"), 9);
-  // Boundary of MODEL.md §6: unstable below H* = 2.7008 m at this speed, stable above (the
+  // Boundary of docs/model.md §6: unstable below H* = 2.7008 m at this speed, stable above (the
   // engine core's published value; the 0.5 m grid brackets it between 2.5 m and 3.0 m).
   const auto margins = reader.ReadDoubles("results/modes/stability_margin_per_s", 0, 9);
   EXPECT_GT(margins[3], 0.0);  // H = 2.5 m

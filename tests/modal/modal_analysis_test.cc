@@ -52,7 +52,7 @@ TEST(AnalyzeModes, ReproducesCompanionMatrixRootsAndIdentifiesModes) {
   ExpectRoot(modal.eigenvalues[2], ph);
   ExpectRoot(modal.eigenvalues[3], std::conj(ph));
   ExpectRoot(modal.eigenvalues[4], height);
-  // Mode properties from their definitions (MODEL.md §6).
+  // Mode properties from their definitions (docs/model.md §6).
   EXPECT_NEAR(modal.short_period.natural_frequency_radps, std::abs(sp), 1e-9);
   EXPECT_NEAR(modal.short_period.damping_ratio, 1.3 / std::abs(sp), 1e-9);
   EXPECT_NEAR(modal.phugoid.period_s, 2 * M_PI / 0.25, 1e-6);

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The engine's open-loop response (`gesweep simulate`, MODEL.md §7) against the NumPy peer.
+"""The engine's open-loop response (`gesweep simulate`, docs/model.md §7) against the NumPy peer.
 
 The paper's experiment: u0 = 32.0208 m/s, elevator +5° for 0.2 s, classical RK4 at 0.015 s, 30 s,
 from 5.5922 m (stays airborne) and from 2.0748 m (touches down at about 22.3 s). The end event, its

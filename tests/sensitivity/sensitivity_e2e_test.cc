@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/hdf5_util.h"
 
@@ -490,6 +491,18 @@ linspace = [-1.0, 1.0, 3]
   const auto shard =
       RunStudy(kSource / "studies/verification/ishigami_sobol.toml", "shard.h5", {"--shard", "0/2"});
   expect_refused({"sensitivity", shard.string(), "--output", "ishigami"}, "gesweep merge");
+
+  // Design rows that contradict the Saltelli layout their attributes declare: refused before any index
+  // is computed from mispaired rows. Row 2 of block 0 is AB_0^(2) (x2 from B_0), so its x1 must be
+  // A_0's (the midpoint 0 of [−π, π]); 0.125 is not.
+  const std::filesystem::path tampered = directory_ / "tampered.h5";
+  std::filesystem::copy_file(archive, tampered);
+  {
+    hdf5::Handle file = OpenFile(tampered, H5F_ACC_RDWR);
+    Overwrite<double>(file.get(), archive::DesignPath("x1"), 2, 0.125, H5T_NATIVE_DOUBLE);
+  }
+  expect_refused({"sensitivity", tampered.string(), "--output", "ishigami"},
+                 "row 2: the design's rows do not follow the Saltelli layout");
 
   // Runs still pending (a sweep stopped before its end): finish it first.
   {

@@ -1,4 +1,4 @@
-// The open-loop run of docs/MODEL.md §7 and its fast kernel, against independent oracles: the
+// The open-loop run of docs/model.md §7 and its fast kernel, against independent oracles: the
 // generic LongitudinalModel path, IsaDensity, the matrix exponential, kinematic closed forms on an
 // aircraft without aerodynamics, and a fine-step reference for the breakpoint behaviour.
 #include "engine/simulation/open_loop.h"
@@ -49,7 +49,7 @@ OpenLoopConfig PaperConfig(double start_height_m) {
   OpenLoopConfig config;
   config.start_height_m = start_height_m;
   config.reference_speed_mps = kPaperSpeed_mps;
-  return config;  // +5° for 0.2 s, RK4 at 0.015 s, 300 s: MODEL.md §7's defaults
+  return config;  // +5° for 0.2 s, RK4 at 0.015 s, 300 s: docs/model.md §7's defaults
 }
 
 // ---------------------------------------------------------------- the kernel
@@ -111,7 +111,7 @@ TEST(LinearDerivativeTableTest, EqualsTheGenericModelPath) {
 }
 
 TEST(LinearDerivativeTableTest, Equation1EqualsTheAssembledMatrices) {
-  // ẋ = A(H, u) x + B(H, u) δe with A's kinematic entries at the reference u0 (MODEL.md §7).
+  // ẋ = A(H, u) x + B(H, u) δe with A's kinematic entries at the reference u0 (docs/model.md §7).
   constexpr double kRelativeTolerance = 1e-12;
   const LongitudinalModel model(Ance(), ModelOptions{});
   const LinearDerivativeTable table(model);
@@ -205,7 +205,7 @@ TEST(OpenLoopKinematicsTest, ConstantSinkTouchesDownAtTheAnalyticTime) {
 
 TEST(OpenLoopKinematicsTest, ConstantDecelerationStallsAtTheAnalyticTime) {
   // Δθ(0) = 0.1 rad: u = u0 − g·0.1·t reaches the stall speed at (u0 − u_stall)/(0.1 g), while
-  // ΔH' = u0·Δθ with the REFERENCE u0 (MODEL.md §7) however fast the airplane flies: with
+  // ΔH' = u0·Δθ with the REFERENCE u0 (docs/model.md §7) however fast the airplane flies: with
   // Δu(0) = +3 m/s the climb rate stays 0.1·u0.
   const LongitudinalModel model(Inert(), ModelOptions{});
   OpenLoopConfig config = PaperConfig(2.0);

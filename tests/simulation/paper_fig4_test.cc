@@ -1,4 +1,4 @@
-// The paper's open-loop experiment (Section IV, Fig. 4; docs/MODEL.md §7) against the paper's own
+// The paper's open-loop experiment (Section IV, Fig. 4; docs/model.md §7) against the paper's own
 // claims. The 2.9987 m case, where this engine disagrees with the paper, is documented in
 // docs/simulation.md rather than tested (its numbers would come from the code under test).
 #include <gtest/gtest.h>
@@ -22,7 +22,7 @@ OpenLoopConfig PaperConfig(double start_height_m) {
   OpenLoopConfig config;
   config.start_height_m = start_height_m;
   config.reference_speed_mps = kPaperSpeed_mps;
-  return config;  // +5° for 0.2 s, RK4 at 0.015 s, 300 s: MODEL.md §7's defaults
+  return config;  // +5° for 0.2 s, RK4 at 0.015 s, 300 s: docs/model.md §7's defaults
 }
 
 class PaperFigure4Test : public ::testing::TestWithParam<double> {};

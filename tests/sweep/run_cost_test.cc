@@ -55,7 +55,6 @@ TEST(RunCost, EstimateIsTheMeanCostTimesRunsOverThreadsWithAnIntervalAroundIt) {
   EXPECT_NEAR(e.estimated_seconds_high, e.seconds_per_run_high * 200 / 2, kRounding * e.estimated_seconds_high);
 }
 
-#ifdef GESWEEP_HAVE_SIMULATION
 TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
   static const Aircraft aircraft = LoadAircraftFile(kAircraft);
   toml::table settings;
@@ -78,7 +77,6 @@ TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
   EXPECT_GT(e.seconds_per_run, 0.0);
   EXPECT_TRUE(std::isinf(e.estimated_seconds_high));
 }
-#endif
 
 TEST(RunCost, AStopFlagEndsTheMeasurement) {
   const SweepPlan plan = ModesPlan();

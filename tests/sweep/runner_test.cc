@@ -15,12 +15,8 @@
 
 #include "engine/modal/modal_analysis.h"
 #include "engine/sweep/analysis_adapters.h"
-#ifdef GESWEEP_HAVE_SIMULATION
 #include "engine/simulation/open_loop.h"
-#endif
-#ifdef GESWEEP_HAVE_CONTROL
 #include "engine/control/landing_simulation.h"
-#endif
 
 namespace gesweep {
 namespace {
@@ -243,7 +239,6 @@ TEST(Runner, IshigamiRunsGiveTheFunctionValues) {
 }  // namespace
 }  // namespace gesweep
 
-#ifdef GESWEEP_HAVE_SIMULATION
 namespace gesweep {
 namespace {
 
@@ -334,9 +329,7 @@ TEST(Runner, ExecuteRunLeavesACancelledRunPending) {
 
 }  // namespace
 }  // namespace gesweep
-#endif
 
-#ifdef GESWEEP_HAVE_CONTROL
 namespace gesweep {
 namespace {
 
@@ -372,4 +365,3 @@ TEST(Runner, LandingRunsEqualDirectSimulationWithAndWithoutHDerivatives) {
 
 }  // namespace
 }  // namespace gesweep
-#endif

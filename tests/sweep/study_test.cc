@@ -293,7 +293,6 @@ uniform = [-3.141592653589793, 3.141592653589793]
   EXPECT_EQ(plan.design_runs(), 8 * (2 * 3 + 2));
 }
 
-#ifdef GESWEEP_HAVE_SIMULATION
 TEST_F(StudyTest, OpenLoopRefusesADesignThatStartsAtStall) {
   const InputError e = ErrorOf(Header("[analyses.open_loop]\n") + R"([parameters]
 height_m = 3.0
@@ -309,7 +308,6 @@ linspace = [24.6314, 40.0, 5]
       << e.what();
   EXPECT_NE(e.value().find("speed_mps = 24.6314"), std::string::npos) << e.what();
 }
-#endif
 
 TEST(ShardSpec, ParsesAndSplitsContiguously) {
   EXPECT_THROW(ParseShard("3/3", "--shard"), InputError);

@@ -1,0 +1,85 @@
+#!/usr/bin/python3
+"""The layout is the architecture (docs/architecture.md), and the product stands alone.
+
+  layout_test.py REPO_ROOT
+
+1. The folder table of docs/architecture.md lists exactly the folders under engine/.
+2. Every `#include "engine/<folder>/..."` of an engine file names its own folder or one its folder
+   reaches through the table's "depends on" column (direct dependencies, followed transitively):
+   nothing includes a folder above it.
+3. No tracked file of the product cites or reads ../shared, or cites MODEL.md / STYLE.md (the
+   project's model is docs/model.md).
+Lists every offender; exit 1 when there is one.
+"""
+import pathlib
+import re
+import subprocess
+import sys
+
+root = pathlib.Path(sys.argv[1]).resolve()
+problems = []
+
+# 1. The table.
+table = {}
+for line in (root / "docs" / "architecture.md").read_text().splitlines():
+    m = re.match(r"\|\s*`engine/(\w+)`\s*\|[^|]*\|([^|]*)\|", line)
+    if m:
+        words = re.findall(r"[a-z]+", m.group(2).lower())
+        table[m.group(1)] = set(words)
+folders = {p.name for p in (root / "engine").iterdir() if p.is_dir()}
+for f in sorted(folders - table.keys()):
+    problems.append(f"engine/{f} exists but docs/architecture.md's table does not list it")
+for f in sorted(table.keys() - folders):
+    problems.append(f"docs/architecture.md lists engine/{f}, which does not exist")
+for f, words in table.items():
+    table[f] = folders if "everything" in words else {w for w in words if w in folders}
+
+
+def reach(folder, seen=None):
+    seen = set() if seen is None else seen
+    for d in table.get(folder, ()):
+        if d not in seen:
+            seen.add(d)
+            reach(d, seen)
+    return seen
+
+
+# 2. The includes.
+include = re.compile(r'^\s*#\s*include\s*"engine/(\w+)/')
+for folder in sorted(folders & table.keys()):
+    allowed = reach(folder) | {folder}
+    for path in sorted((root / "engine" / folder).rglob("*")):
+        if path.suffix not in (".cc", ".h"):
+            continue
+        for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            m = include.match(line)
+            if m and m.group(1) not in allowed:
+                problems.append(f"{path.relative_to(root)}:{number}: engine/{folder} includes engine/{m.group(1)}, "
+                                f"which it does not depend on (docs/architecture.md): {line.strip()}")
+
+# 3. Standing alone: every tracked file (this test names the patterns, so it is left out).
+tracked = subprocess.run(["git", "-C", str(root), "ls-files"], capture_output=True, text=True)
+files = tracked.stdout.split() if tracked.returncode == 0 else [
+    str(p.relative_to(root)) for p in root.rglob("*") if p.is_file() and ".git" not in p.parts
+    and not p.parts[len(root.parts)].startswith("build")]
+foreign = re.compile(r"\.\./shared\b|\bMODEL\.md\b|\bSTYLE\.md\b")
+this = pathlib.Path(__file__).resolve()
+for name in files:
+    path = root / name
+    if path.resolve() == this or not path.is_file():
+        continue
+    try:
+        text = path.read_text()
+    except (UnicodeDecodeError, OSError):
+        continue
+    for number, line in enumerate(text.splitlines(), 1):
+        if foreign.search(line):
+            problems.append(f"{name}:{number}: cites a file outside the repository: {line.strip()[:120]}")
+
+if problems:
+    print(f"{len(problems)} layout problems:")
+    for p in problems:
+        print("  " + p)
+    sys.exit(1)
+print(f"layout: {len(folders)} engine folders as docs/architecture.md lists them; includes point down; "
+      f"{len(files)} tracked files cite nothing outside the repository")
