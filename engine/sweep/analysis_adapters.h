@@ -11,6 +11,8 @@ namespace gesweep {
 
 /// `modes`: AnalyzeModes(model.StateMatrix(H, u0)) per run (docs/model.md §6).
 std::unique_ptr<Analysis> MakeModesAnalysis(const TomlSection& settings, const Aircraft* aircraft);
+/// `flying_qualities`: MIL-F-8785C levels of AnalyzeModes(model.StateMatrix(H, u0)) (docs/model.md §11).
+std::unique_ptr<Analysis> MakeFlyingQualitiesAnalysis(const TomlSection& settings, const Aircraft* aircraft);
 /// `boundary`: FindBoundary(model, u0) per run (docs/model.md §6).
 std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, const Aircraft* aircraft);
 /// `ishigami`: the Ishigami function of x1..x3 (verification).

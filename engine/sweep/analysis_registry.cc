@@ -7,6 +7,8 @@ const std::vector<AnalysisEntry>& AnalysisRegistry() {
   static const std::vector<AnalysisEntry> registry = {
       {"modes", "eigenvalues, modes and stability margin at the run's height and speed", true,
        &MakeModesAnalysis, ""},
+      {"flying_qualities", "MIL-F-8785C Category C levels of the short period and phugoid", true,
+       &MakeFlyingQualitiesAnalysis, ""},
       {"boundary", "the stability boundary H* of the run's model at its speed", true, &MakeBoundaryAnalysis,
        ""},
       {"open_loop", "the time response to an elevator pulse", true, &MakeOpenLoopAnalysis, ""},

@@ -198,12 +198,14 @@ def main(argv):
 def write_report(args, archives, progress):
     # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
     for name in os.listdir(args.output):
-        if name.endswith(".png") and name.split("_")[0] in ("stability", "root", "open", "landing", "sensitivity"):
+        if name.endswith(".png") and name.split("_")[0] in ("stability", "flying", "root", "open", "landing", "sensitivity"):
             os.remove(os.path.join(args.output, name))
 
     sections = []
     drawn = []
     for title, anchor, draw in (("Stability map", "map", report_figures.stability_maps),
+                                ("Flying qualities (MIL-F-8785C, Category C)", "flying_qualities",
+                                 report_figures.flying_qualities),
                                 ("Root locus against height", "locus", report_figures.root_locus),
                                 ("Open-loop responses", "open_loop", report_figures.open_loop),
                                 ("Landing", "landing", report_figures.landing),

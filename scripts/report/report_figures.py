@@ -275,6 +275,90 @@ def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
     return text
 
 
+# The MIL-F-8785C levels (docs/model.md §11), best to worst, and their colours on the flying-qualities map.
+FQ_LEVEL_COLOURS = ("#1a9850", "#fee08b", "#f46d43", "#7f0000")
+FQ_MODES = (("phugoid_level", "phugoid", "-", 2.2), ("short_period_level", "short period", (0, (4, 2)), 1.6))
+
+
+def flying_qualities(archives, outdir):
+    """One figure per group of an archive's runs over height x speed with the flying_qualities
+    analysis: the airplane's MIL-F-8785C Category C level (the worse of its two modes) and, drawn
+    over it, where each mode loses each level."""
+    figures = []
+    for archive in archives:
+        if not (archive.has("results/flying_qualities/level") and "height_m" in archive.design_names
+                and "speed_mps" in archive.design_names):
+            continue
+        for number, (key, rows) in enumerate(archive.groups(("height_m", "speed_mps"))[:MAX_MAP_PANELS]):
+            figure = _flying_qualities_map(archive, key, rows[archive.ok[rows]], outdir, number)
+            if figure is not None:
+                figures.append(figure)
+    return figures
+
+
+def _flying_qualities_map(archive, key, rows, outdir, number):
+    heights, speeds = np.unique(archive.param("height_m")[rows]), np.unique(archive.param("speed_mps")[rows])
+    if len(heights) < 2 or len(speeds) < 2:
+        return None
+    names = archive.levels("results/flying_qualities/level")
+    level = _height_speed_grid(archive, rows, heights, speeds, "results/flying_qualities/level")
+    colours = matplotlib.colors.ListedColormap(FQ_LEVEL_COLOURS[:len(names)])
+    colours.set_bad(MISSING_COLOUR)
+    norm = matplotlib.colors.BoundaryNorm(np.arange(len(names) + 1) - 0.5, len(names))
+    fig, (ax, legend_axis) = plt.subplots(2, 1, figsize=(8.8, 6.6), layout="constrained",
+                                          gridspec_kw={"height_ratios": [1, 0.2]})
+    mesh = ax.pcolormesh(speeds, heights, np.ma.masked_invalid(level), cmap=colours, norm=norm, shading="nearest",
+                         rasterized=True)
+    handles = {}
+    lost = []
+    for column, mode, style, width in FQ_MODES:
+        grid = _height_speed_grid(archive, rows, heights, speeds, f"results/flying_qualities/{column}")
+        present = [code for code in range(len(names) - 1) if np.nanmin(grid) <= code < np.nanmax(grid)]
+        if present:
+            ax.contour(speeds, heights, grid, levels=[code + 0.5 for code in present], colors="k",
+                       linestyles=[style], linewidths=width)
+            handles[mode] = Line2D([], [], color="k", ls=style, lw=width,
+                                   label=f"{mode}: where it loses a level (between the colours)")
+        lost.append(_levels_lost_text(archive, rows, heights, column, mode, names))
+    # A grid with no sign change: the overlays without a zero contour.
+    for handle in _map_overlays(ax, archive, key, heights, speeds, np.zeros_like(level), ""):
+        handles.setdefault(handle.get_label(), handle)
+    _map_axes(ax, archive, heights, speeds)
+    ax.set_title("the airplane's level: the worse of short period (3.2.2.1.2) and phugoid (3.2.1.2)")
+    bar = fig.colorbar(mesh, ax=ax, pad=0.02, aspect=30, ticks=range(len(names)))
+    bar.ax.set_yticklabels(names)
+    legend_axis.axis("off")
+    legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
+    suffix = f" ({_h_derivatives_label(archive, key)})" if key else ""
+    fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: MIL-F-8785C Category C flying qualities{suffix}")
+    name = _save(fig, outdir, f"flying_qualities_{_slug(archive.study_name)}_{number}.png")
+    caption = (f"Levels of the bare airframe's short period and phugoid over {len(speeds)} speeds × {len(heights)} "
+               f"heights ({len(rows)} runs of {os.path.basename(archive.path)}), rated against MIL-F-8785C for "
+               f"Category C (approach and landing) as docs/model.md §11 states it; the ground-effect height mode "
+               f"has no requirement. Black lines mark where a mode changes level. " + " ".join(t for t in lost if t))
+    return Figure(name, f"Flying qualities ({archive.study_name}){suffix}", caption)
+
+
+def _levels_lost_text(archive, rows, heights, column, mode, names):
+    """Where `mode` loses each level along height at the paper's speed (or the speed nearest to it)."""
+    speed = archive.param("speed_mps")[rows]
+    nearest = speed[np.argmin(np.abs(speed - PAPER_SPEED_MPS))]
+    along = rows[speed == nearest]
+    along = along[np.argsort(archive.param("height_m")[along])]
+    height = archive.param("height_m")[along]
+    code = archive.column(f"results/flying_qualities/{column}")[along]
+    if not np.all(np.isfinite(code)):
+        return ""
+    # From the top down: each change of level, between the two grid heights that bracket it.
+    changes = np.nonzero(np.diff(code) != 0)[0][::-1]
+    if len(changes) == 0:
+        return f"At u0 = {nearest:g} m/s the {mode} is {names[int(code[0])]} at every height of the grid."
+    parts = [f"{names[int(code[-1])]} from {height[-1]:.4g} m down to {height[changes[0] + 1]:.4g} m"]
+    for i in changes:
+        parts.append(f"{names[int(code[i])]} from {height[i]:.4g} m")
+    return f"At u0 = {nearest:g} m/s the {mode} is " + ", ".join(parts) + "."
+
+
 def _locus_groups(archives):
     """Every group of runs along height with the modes: (archive, key, rows sorted by height, speed,
     h-derivatives on)."""

@@ -111,8 +111,9 @@ def modes_study(name, speeds, heights):
 
 def setUpModule():
     os.makedirs(ARCHIVES)
-    global GRID, OPEN_LOOP, LANDING, MORRIS
+    global GRID, OPEN_LOOP, LANDING, MORRIS, FLYING
     GRID = sweep("tests/query/boundary_grid.toml", "grid.h5")
+    FLYING = sweep("tests/report/flying_qualities_small.toml", "flying_qualities.h5")
     out = run("boundary", "--archive", GRID)
     assert out.returncode == 0, out.stderr
     OPEN_LOOP = sweep("tests/report/open_loop_small.toml", "open_loop.h5")
@@ -217,6 +218,26 @@ class Figures(unittest.TestCase):
         figures, _ = draw(report_figures.root_locus, [near])
         self.assertIn("at u0 = 31.5 m/s, the nearest of its speeds to the paper's 32.0208 m/s", figures[0].caption)
 
+    def test_flying_qualities_say_where_each_level_is_lost(self):
+        figures, described = draw(report_figures.flying_qualities, [FLYING])
+        self.assertEqual(len(figures), 1)
+        self.assertEqual(len(described[figures[0].file]["maps"]), 1)
+        # The caption's heights are the archive's: from the top down at the paper's speed, the first
+        # height of each new level of the phugoid (codes: level n is n - 1), as h5py reads them.
+        with h5py.File(FLYING, "r") as f:
+            at = f["design/speed_mps"][...] == PAPER_SPEED_MPS
+            height = f["design/height_m"][...][at]
+            code = f["results/flying_qualities/phugoid_level"][...][at]
+            names = [v.decode() if isinstance(v, bytes) else v
+                     for v in f["results/flying_qualities/phugoid_level"].attrs["levels"]]
+        order = np.argsort(height)[::-1]
+        height, code = height[order], code[order]
+        changes = [i for i in range(1, len(code)) if code[i] != code[i - 1]]
+        self.assertGreaterEqual(len(changes), 2)  # level 2 -> level 3 -> worse, docs/model.md section 11
+        for i in changes:
+            self.assertIn(f"{names[code[i]]} from {height[i]:.4g} m", figures[0].caption)
+        self.assertIn(f"At u0 = {PAPER_SPEED_MPS:g} m/s the phugoid is", figures[0].caption)
+
     def test_open_loop_lines_are_told_apart(self):
         styles = report_figures._distinct_styles(report_figures.MAX_OPEN_LOOP_LINES)
         for (a, style_a), (b, style_b) in itertools.combinations(styles, 2):
@@ -270,7 +291,7 @@ class Report(unittest.TestCase):
             if link.startswith("#"):
                 self.assertIn(link[1:], page.ids)
         names = [i["src"] for i in page.images]
-        for prefix in ("stability_map_", "root_locus", "open_loop_", "landing_"):
+        for prefix in ("stability_map_", "flying_qualities_", "root_locus", "open_loop_", "landing_"):
             self.assertTrue(any(n.startswith(prefix) for n in names), f"no {prefix} figure in {names}")
         sensitivity_written = False
         with h5py.File(MORRIS, "r") as f:
