@@ -146,10 +146,12 @@ def modes_json(speed, heights):
 
 class Fast(Checks):
     def test_copied_output_blocks(self):
-        for command in ("--speed-mps 32.0208 --table-heights", "--speed-mps 32.0208 --no-h-derivatives"):
+        for command in ("--speed-mps 32.0208 --table-heights", "--speed-mps 32.0208 --no-h-derivatives",
+                        "--group-by phugoid_level"):
             with self.subTest(block=command):
                 commands, expected = output_block_after(command)
-                printed = "".join(gesweep(*readme_command(c)) for c in commands).splitlines()
+                printed = "".join(gesweep(*readme_command(c)) for c in commands).replace(WORK + "/", "results/")
+                printed = printed.splitlines()
                 self.assertEqual(len(expected), len(printed), "\n".join(printed))
                 for readme_line, engine_line in zip(expected, printed):
                     self.same_lines(readme_line, engine_line)
