@@ -9,6 +9,7 @@
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
+#include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
 namespace {
@@ -43,10 +44,148 @@ void CopyGroupAttributes(hid_t from_file, hid_t to_file, const std::string& grou
   hdf5::CopyAttributes(from.get(), to.get());
 }
 
+// The chunk rows of a chunked dataset (1 when it is not chunked).
+std::int64_t ChunkRows(hid_t dataset) {
+  Handle dcpl(H5Dget_create_plist(dataset), "creation properties");
+  if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED) return 1;
+  hsize_t chunk[2] = {1, 1};
+  Check(H5Pget_chunk(dcpl.get(), 2, chunk), "chunk dimensions");
+  return static_cast<std::int64_t>(chunk[0]);
+}
+
+// Where a shard is, as the merged file records it: relative to the merged file's directory (HDF5
+// resolves a relative source of a virtual dataset from the directory of the file that holds it),
+// absolute when there is no relative path.
+std::string SourceName(const std::filesystem::path& shard, const std::filesystem::path& output) {
+  std::error_code ec;
+  const auto shard_path = std::filesystem::weakly_canonical(std::filesystem::absolute(shard), ec);
+  const auto directory = std::filesystem::weakly_canonical(std::filesystem::absolute(output), ec).parent_path();
+  const auto relative = shard_path.lexically_relative(directory);
+  if (relative.empty()) return shard_path.string();
+  return relative.string();
+}
+
+// A virtual dataset mapping rows [first, first + count) of the merged dataset to every row of
+// each shard's dataset `path`.
+void WriteVirtual(hid_t file, const std::string& path, const std::vector<Shard>& shards,
+                  const std::vector<std::string>& sources, std::int64_t design_runs) {
+  Handle source(H5Dopen2(shards.front().reader->file(), path.c_str(), H5P_DEFAULT), "open " + path);
+  Handle type(H5Dget_type(source.get()), "type of " + path);
+  const auto dims = hdf5::Dimensions(source.get());
+  std::vector<hsize_t> out_dims{static_cast<hsize_t>(design_runs)};
+  if (dims.size() == 2) out_dims.push_back(static_cast<hsize_t>(dims[1]));
+  const int rank = static_cast<int>(out_dims.size());
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "creation properties of " + path);
+  {
+    Handle source_dcpl(H5Dget_create_plist(source.get()), "creation properties of " + path);
+    H5D_fill_value_t defined = H5D_FILL_VALUE_UNDEFINED;
+    Check(H5Pfill_value_defined(source_dcpl.get(), &defined), "fill value of " + path);
+    if (defined == H5D_FILL_VALUE_USER_DEFINED) {
+      std::vector<unsigned char> fill(H5Tget_size(type.get()));
+      Check(H5Pget_fill_value(source_dcpl.get(), type.get(), fill.data()), "fill value of " + path);
+      Check(H5Pset_fill_value(dcpl.get(), type.get(), fill.data()), "fill value of " + path);
+    }
+  }
+  for (std::size_t i = 0; i < shards.size(); ++i) {
+    const Shard& shard = shards[i];
+    Handle virtual_space(H5Screate_simple(rank, out_dims.data(), nullptr), "virtual space");
+    hsize_t start[2] = {static_cast<hsize_t>(shard.first), 0};
+    hsize_t count[2] = {static_cast<hsize_t>(shard.count), rank == 2 ? out_dims[1] : 1};
+    Check(H5Sselect_hyperslab(virtual_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr),
+          "select rows of " + path);
+    std::vector<hsize_t> shard_dims{static_cast<hsize_t>(shard.count)};
+    if (rank == 2) shard_dims.push_back(out_dims[1]);
+    Handle source_space(H5Screate_simple(rank, shard_dims.data(), nullptr), "source space");
+    Check(H5Pset_virtual(dcpl.get(), virtual_space.get(), sources[i].c_str(), path.c_str(), source_space.get()),
+          "map " + path + " of " + shard.path.string());
+  }
+  Handle space(H5Screate_simple(rank, out_dims.data(), nullptr), "dataspace");
+  Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                "create " + path);
+  hdf5::CopyAttributes(source.get(), target.get());
+}
+
+// The merged dataset `path` by raw chunk copy where the shards' chunks coincide with the merged
+// file's, through HDF5 (decoded, written, filtered again) elsewhere.
+void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& shards, std::int64_t design_runs,
+               MergeReport& report) {
+  std::vector<Handle> sources;
+  std::vector<std::int64_t> chunk_rows;
+  std::size_t widest = 0;
+  for (std::size_t i = 0; i < shards.size(); ++i) {
+    sources.emplace_back(H5Dopen2(shards[i].reader->file(), path.c_str(), H5P_DEFAULT),
+                         "open " + path + " of " + shards[i].path.string());
+    chunk_rows.push_back(ChunkRows(sources.back().get()));
+    if (chunk_rows[i] > chunk_rows[widest]) widest = i;
+  }
+  const hid_t reference = sources[widest].get();
+  Handle type(H5Dget_type(reference), "type of " + path);
+  Handle dcpl(H5Dget_create_plist(reference), "creation properties of " + path);
+  const auto dims = hdf5::Dimensions(reference);
+  std::vector<hsize_t> out_dims{static_cast<hsize_t>(design_runs)};
+  if (dims.size() == 2) out_dims.push_back(static_cast<hsize_t>(dims[1]));
+  // One chunk in all: an unlimited row dimension, as the writer does (HDF5 1.10's single-chunk index
+  // mishandles direct chunk writes).
+  std::vector<hsize_t> max_dims = out_dims;
+  if (out_dims[0] <= static_cast<hsize_t>(chunk_rows[widest])) max_dims[0] = H5S_UNLIMITED;
+  Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), max_dims.data()), "dataspace");
+  Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                "create " + path);
+  hdf5::CopyAttributes(reference, target.get());
+  const std::int64_t rows = chunk_rows[widest];
+  const std::size_t row_bytes =
+      static_cast<std::size_t>(dims.size() == 2 ? dims[1] : 1) * H5Tget_size(type.get());
+  std::vector<unsigned char> buffer, piece;
+  std::size_t s = 0;  // the shard holding the chunk's first row (shards are sorted and contiguous)
+  for (std::int64_t first = 0; first < design_runs; first += rows) {
+    const std::int64_t end = std::min(first + rows, design_runs);
+    while (shards[s].first + shards[s].count <= first) ++s;
+    const Shard& shard = shards[s];
+    const std::int64_t local = first - shard.first;
+    // Raw copy: the shard's chunk starts here, has the merged chunk's size, and the shard holds
+    // every row of the merged chunk (a shard's partial last chunk is copied only at the design's end,
+    // where the merged chunk is partial in the same way).
+    if (chunk_rows[s] == rows && local % rows == 0 && shard.first + shard.count >= end) {
+      const hsize_t source_offset[2] = {static_cast<hsize_t>(local), 0};
+      const hsize_t target_offset[2] = {static_cast<hsize_t>(first), 0};
+      unsigned mask = 0;
+      haddr_t address = HADDR_UNDEF;
+      hsize_t size = 0;
+      Check(H5Dget_chunk_info_by_coord(sources[s].get(), source_offset, &mask, &address, &size),
+            "chunk of " + path + " in " + shard.path.string());
+      if (address == HADDR_UNDEF || size == 0) continue;  // never written (a message chunk without a message)
+      buffer.resize(static_cast<std::size_t>(size));
+      std::uint32_t filters = 0;
+      Check(H5Dread_chunk(sources[s].get(), H5P_DEFAULT, source_offset, &filters, buffer.data()),
+            "read a chunk of " + path + " of " + shard.path.string());
+      Check(H5Dwrite_chunk(target.get(), H5P_DEFAULT, filters, target_offset, buffer.size(), buffer.data()),
+            "write a chunk of " + path);
+      ++report.chunks_copied;
+      report.bytes_copied += static_cast<std::int64_t>(size);
+      continue;
+    }
+    // Gathered from the shards that cover it, then written through HDF5's own filters.
+    buffer.resize(static_cast<std::size_t>(end - first) * row_bytes);
+    for (std::size_t i = s; i < shards.size() && shards[i].first < end; ++i) {
+      const std::int64_t a = std::max(first, shards[i].first);
+      const std::int64_t b = std::min(end, shards[i].first + shards[i].count);
+      if (a >= b) continue;
+      piece.resize(static_cast<std::size_t>(b - a) * row_bytes);
+      shards[i].reader->ReadRows(path, a - shards[i].first, b - a, type.get(), piece.data());
+      std::copy(piece.begin(), piece.end(), buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
+    }
+    Handle memory;
+    Handle file_space = hdf5::SelectRows(target.get(), first, end - first, &memory);
+    Check(H5Dwrite(target.get(), type.get(), memory.get(), file_space.get(), H5P_DEFAULT, buffer.data()),
+          "write " + path);
+    ++report.chunks_rewritten;
+  }
+}
+
 }  // namespace
 
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
-                          const std::filesystem::path& output, bool force, const std::string& command_line) {
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
+                          bool force, const std::string& command_line, MergeKind kind, const MergeScope& scope) {
   hdf5::Quiet();
   const std::string shown = output.string();
   if (inputs.empty()) throw InputError("command line", "ARCHIVES", "", "expected one or more shard archives");
@@ -107,21 +246,29 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
   // Coverage: exactly once.
   std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
   const std::int64_t shard_count = reference.IntegerAttribute("shard_count");
+  std::int64_t batch_runs = 1;
+  for (const auto& shard : shards) batch_runs = std::max(batch_runs, shard.reader->IntegerAttribute("chunk_runs"));
+  const bool node_files = hdf5::ReadIntegerAttribute(reference.file(), "node_count").has_value();
   auto missing = [&](std::int64_t from, std::int64_t to) {
-    // Name the shards of an N-way split that would cover the gap.
+    // Name the shards of an N-way split that would cover the gap (the split of ShardRange, whose
+    // batch size every full shard records as chunk_runs).
     std::string names;
-    for (std::int64_t i = 0; i < shard_count; ++i) {
-      const std::int64_t a = i * (design_runs / shard_count) + i * (design_runs % shard_count) / shard_count;
-      const std::int64_t b =
-          (i + 1) * (design_runs / shard_count) + (i + 1) * (design_runs % shard_count) / shard_count;
-      if (a < to && b > from)
+    for (std::int64_t i = 0; i < shard_count && !node_files; ++i) {
+      std::int64_t a = 0, n = 0;
+      ShardRange(design_runs, static_cast<int>(batch_runs), ShardSpec{static_cast<int>(i), static_cast<int>(shard_count)},
+                 &a, &n);
+      if (a < to && a + n > from)
         names += (names.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shard_count);
     }
     throw InputError("command line", "ARCHIVES", "",
-                     "runs " + Range(from, to - from) + " of the design are missing (shard " +
-                         (names.empty() ? "?" : names) + " not given)");
+                     "runs " + Range(from, to - from) + " of the design are missing (" +
+                         (node_files ? std::string("a node's shard file of the MPI run not given")
+                                     : "shard " + (names.empty() ? std::string("?") : names) + " not given") +
+                         ")");
   };
-  std::int64_t covered = 0;
+  const std::int64_t origin = scope.first_run;
+  const std::int64_t total = scope.run_count >= 0 ? scope.run_count : design_runs - origin;
+  std::int64_t covered = origin;
   for (std::size_t i = 0; i < shards.size(); ++i) {
     if (shards[i].first > covered) missing(covered, shards[i].first);
     if (shards[i].first < covered) {
@@ -133,12 +280,17 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
     }
     covered = shards[i].first + shards[i].count;
   }
-  if (covered < design_runs) missing(covered, design_runs);
+  if (covered < origin + total) missing(covered, origin + total);
+  if (covered > origin + total) {
+    throw InputError(shards.back().path.string(), "shard", shards.back().shard,
+                     "reaches past run " + std::to_string(origin + total - 1) + ", the end of what is merged");
+  }
 
   // Complete: no pending run in any shard.
   MergeReport report;
+  report.kind = kind;
   report.shards = static_cast<int>(shards.size());
-  report.runs = design_runs;
+  report.runs = total;
   constexpr std::int64_t kStatusStep = 1 << 16;
   for (const auto& shard : shards) {
     std::int64_t pending = 0;
@@ -174,6 +326,9 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
     Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                 "create " + temporary.string());
     hdf5::CopyAttributes(reference.file(), file.get());
+    for (const char* node_attribute : {"node_index", "node_count"}) {
+      if (H5Aexists(file.get(), node_attribute) > 0) Check(H5Adelete(file.get(), node_attribute), "drop the node attribute");
+    }
     std::vector<std::string> merged_from, shard_notes;
     std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");
     for (const auto& shard : shards) {
@@ -191,11 +346,12 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
     hdf5::WriteAttribute(file.get(), "merge_command_line", command_line);
     hdf5::WriteAttribute(file.get(), "start_time", start);
     hdf5::WriteAttribute(file.get(), "end_time", end);
-    hdf5::WriteAttribute(file.get(), "shard", "0/1");
-    hdf5::WriteAttribute(file.get(), "shard_index", std::int64_t{0});
-    hdf5::WriteAttribute(file.get(), "shard_count", std::int64_t{1});
-    hdf5::WriteAttribute(file.get(), "first_run", std::int64_t{0});
-    hdf5::WriteAttribute(file.get(), "run_count", design_runs);
+    hdf5::WriteAttribute(file.get(), "shard",
+                         std::to_string(scope.shard_index) + "/" + std::to_string(scope.shard_count));
+    hdf5::WriteAttribute(file.get(), "shard_index", static_cast<std::int64_t>(scope.shard_index));
+    hdf5::WriteAttribute(file.get(), "shard_count", static_cast<std::int64_t>(scope.shard_count));
+    hdf5::WriteAttribute(file.get(), "first_run", origin);
+    hdf5::WriteAttribute(file.get(), "run_count", total);
     hdf5::WriteAttribute(file.get(), "complete", std::int64_t{1});
     hdf5::WriteAttribute(file.get(), "runs_ok", report.runs_ok);
     hdf5::WriteAttribute(file.get(), "runs_failed", report.runs_failed);
@@ -205,7 +361,19 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
       CopyGroupAttributes(reference.file(), file.get(), group);
     }
 
-    std::vector<unsigned char> buffer, piece;
+    if (kind == MergeKind::kVirtual) {
+      for (const auto& shard : shards) report.sources.push_back(SourceName(shard.path, output));
+      hdf5::WriteAttribute(file.get(), "merge_kind", "virtual");
+      hdf5::WriteAttribute(file.get(), "virtual_sources", report.sources);
+      hdf5::WriteAttribute(
+          file.get(), "virtual_note",
+          "The per-run datasets of this archive are HDF5 virtual datasets over the shard files listed in "
+          "virtual_sources (paths relative to this file's directory): keep them where they are; "
+          "`gesweep merge --copy` makes a self-contained archive");
+    } else {
+      hdf5::WriteAttribute(file.get(), "merge_kind", "copy");
+    }
+    for (auto& shard : shards) shard.first -= origin;  // rows of the merged archive from here on
     for (const std::string& path : reference.Datasets()) {
       if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
         continue;  // derived: recompute after merge
@@ -217,39 +385,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
               "copy " + path);
         continue;
       }
-      Handle type(H5Dget_type(source.get()), "type of " + path);
-      Handle dcpl(H5Dget_create_plist(source.get()), "creation properties of " + path);
-      hsize_t chunk[2] = {1, 1};
-      const int rank = H5Pget_chunk(dcpl.get(), 2, chunk);
-      Check(rank, "chunk of " + path);
-      std::vector<hsize_t> out_dims{static_cast<hsize_t>(design_runs)};
-      if (dims.size() == 2) out_dims.push_back(static_cast<hsize_t>(dims[1]));
-      Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), nullptr),
-                   "dataspace");
-      Handle target(
-          H5Dcreate2(file.get(), path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-          "create " + path);
-      hdf5::CopyAttributes(source.get(), target.get());
-      const std::int64_t width = dims.size() == 2 ? dims[1] : 1;
-      const std::size_t row_bytes = static_cast<std::size_t>(width) * H5Tget_size(type.get());
-      const auto chunk_rows = static_cast<std::int64_t>(chunk[0]);
-      // One write per output chunk, gathered from the shards that cover it.
-      for (std::int64_t first = 0; first < design_runs; first += chunk_rows) {
-        const std::int64_t count = std::min(chunk_rows, design_runs - first);
-        buffer.resize(static_cast<std::size_t>(count) * row_bytes);
-        for (const auto& shard : shards) {
-          const std::int64_t a = std::max(first, shard.first);
-          const std::int64_t b = std::min(first + count, shard.first + shard.count);
-          if (a >= b) continue;
-          piece.resize(static_cast<std::size_t>(b - a) * row_bytes);
-          shard.reader->ReadRows(path, a - shard.first, b - a, type.get(), piece.data());
-          std::copy(piece.begin(), piece.end(),
-                    buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
-        }
-        Handle memory;
-        Handle file_space = hdf5::SelectRows(target.get(), first, count, &memory);
-        Check(H5Dwrite(target.get(), type.get(), memory.get(), file_space.get(), H5P_DEFAULT, buffer.data()),
-              "write " + path);
+      if (kind == MergeKind::kVirtual) {
+        WriteVirtual(file.get(), path, shards, report.sources, total);
+      } else {
+        WriteCopy(file.get(), path, shards, total, report);
       }
     }
     file.Close("close " + temporary.string());

@@ -229,7 +229,37 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
                          " (this engine is older than the archive)");
   }
   ValidateLayout(id, shown, &reader.run_count_);
+  if (reader.StringAttribute("merge_kind") == "virtual") reader.CheckVirtualSources();
   return reader;
+}
+
+void ArchiveReader::CheckVirtualSources() const {
+  // A virtual archive reads its shards in place, and HDF5 silently gives fill values for a shard
+  // it cannot find: refuse instead, naming it.
+  const std::string shown = path_.string();
+  const std::filesystem::path directory = path_.parent_path();
+  const std::string fingerprint = StringAttribute("study_fingerprint");
+  for (const std::string& source : StringListAttribute("virtual_sources")) {
+    const std::filesystem::path shard = std::filesystem::path(source).is_absolute() ? std::filesystem::path(source)
+                                                                                    : directory / source;
+    std::error_code ec;
+    auto refuse = [&](const std::string& why) {
+      throw InputError(shown, "virtual_sources", source,
+                       why + ": a virtual archive (gesweep merge) reads its shard files in place, so they must "
+                             "stay where they were merged (relative to this file); put it back, or merge again "
+                             "(gesweep merge --copy makes a self-contained archive)");
+    };
+    if (!std::filesystem::is_regular_file(shard, ec)) refuse("shard file " + shard.string() + " is missing");
+    Handle fapl = hdf5::FileAccess();
+    const hid_t id = H5Fopen(shard.c_str(), H5F_ACC_RDONLY, fapl.get());
+    H5Eclear2(H5E_DEFAULT);
+    if (id < 0) refuse("shard file " + shard.string() + " cannot be opened (in use by a writer, or damaged)");
+    Handle file(id);
+    if (hdf5::ReadStringAttribute(id, "study_fingerprint").value_or("") != fingerprint ||
+        hdf5::ReadIntegerAttribute(id, "complete").value_or(0) != 1) {
+      refuse("shard file " + shard.string() + " has changed since the merge (another study, or not complete)");
+    }
+  }
 }
 
 void ArchiveReader::Close() { file_.Reset(); }
@@ -246,6 +276,82 @@ std::int64_t ArchiveReader::IntegerAttribute(const std::string& name) const {
 
 std::vector<std::string> ArchiveReader::StringListAttribute(const std::string& name) const {
   return hdf5::ReadStringListAttribute(file_.get(), name);
+}
+
+namespace {
+
+// The object at `path`, or an invalid handle when there is none.
+Handle OpenObject(hid_t file, const std::string& path) {
+  if (!hdf5::Exists(file, path)) return Handle();
+  return Handle(H5Oopen(file, path.c_str(), H5P_DEFAULT), "open " + path);
+}
+
+}  // namespace
+
+std::optional<std::string> ArchiveReader::StringAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadStringAttribute(o.get(), name);
+}
+
+std::optional<std::int64_t> ArchiveReader::IntegerAttributeOf(const std::string& object,
+                                                              const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadIntegerAttribute(o.get(), name);
+}
+
+std::optional<double> ArchiveReader::DoubleAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return std::nullopt;
+  return hdf5::ReadDoubleAttribute(o.get(), name);
+}
+
+std::vector<std::string> ArchiveReader::StringListAttributeOf(const std::string& object,
+                                                              const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o) return {};
+  return hdf5::ReadStringListAttribute(o.get(), name);
+}
+
+std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& object, const std::string& name) const {
+  Handle o = OpenObject(file_.get(), object);
+  if (!o || H5Aexists(o.get(), name.c_str()) <= 0) return {};
+  Handle attribute(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle type(H5Aget_type(attribute.get()), "type of attribute " + name);
+  const H5T_class_t type_class = H5Tget_class(type.get());
+  if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) {
+    throw ArchiveError(path_.string() + ": attribute " + name + " of " + object + " is not numeric");
+  }
+  Handle space(H5Aget_space(attribute.get()), "space of attribute " + name);
+  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
+  std::vector<double> values(count);
+  if (count > 0) Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()), "read attribute " + name);
+  return values;
+}
+
+bool ArchiveReader::Exists(const std::string& path) const { return hdf5::Exists(file_.get(), path); }
+
+ArchiveReader::DatasetInfo ArchiveReader::Describe(const std::string& path) const {
+  Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path + " of " + path_.string());
+  Handle type(H5Dget_type(dataset.get()), "type of " + path);
+  DatasetInfo info;
+  switch (H5Tget_class(type.get())) {
+    case H5T_FLOAT: info.kind = DatasetInfo::Kind::kFloat; break;
+    case H5T_INTEGER: info.kind = DatasetInfo::Kind::kInteger; break;
+    case H5T_COMPOUND: info.kind = DatasetInfo::Kind::kCompound; break;
+    case H5T_STRING: info.kind = DatasetInfo::Kind::kString; break;
+    default: info.kind = DatasetInfo::Kind::kOther; break;
+  }
+  info.dims = hdf5::Dimensions(dataset.get());
+  return info;
+}
+
+std::vector<std::int64_t> ArchiveReader::ReadIntegers(const std::string& path, std::int64_t first,
+                                                      std::int64_t count) const {
+  std::vector<std::int64_t> values(static_cast<std::size_t>(count));
+  ReadRows(path, first, count, H5T_NATIVE_INT64, values.data());
+  return values;
 }
 
 std::vector<std::string> ArchiveReader::Datasets() const {
@@ -368,51 +474,41 @@ void ArchiveReader::VerifyRunIds(const SweepPlan& plan, const std::vector<std::i
 
 void ArchiveReader::CopyBlocks(ArchiveWriter& writer, const std::vector<std::int64_t>& blocks,
                                int chunk_runs) const {
-  // Consecutive blocks are copied together, a bounded number of chunks per piece; every piece
-  // covers whole chunks of the target, so each chunk is still written exactly once.
-  constexpr std::int64_t kChunksPerPiece = 64;
-  std::vector<std::pair<std::int64_t, std::int64_t>> ranges;  // [first block, last block]
-  for (std::int64_t block : blocks) {
-    if (!ranges.empty() && ranges.back().second + 1 == block &&
-        block - ranges.back().first < kChunksPerPiece) {
-      ranges.back().second = block;
-    } else {
-      ranges.emplace_back(block, block);
-    }
-  }
+  // Raw chunk copy (H5Dread_chunk / H5Dwrite_chunk): the complete batches of the crashed file are
+  // taken as they are stored, nothing is inflated or deflated again, each target chunk written
+  // once. runs/status last, after a flush, as when the batches were first written.
+  const archive::ArchiveLayout& layout = writer.layout();
   std::vector<unsigned char> buffer;
-  auto copy = [&](const std::string& path, hid_t target) {
-    Handle source(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open " + path);
-    Handle type(H5Dget_type(source.get()), "type of " + path);
-    const auto dims = hdf5::Dimensions(source.get());
-    const std::size_t row_bytes =
-        static_cast<std::size_t>(dims.size() == 2 ? dims[1] : 1) * H5Tget_size(type.get());
-    for (const auto& [first_block, last_block] : ranges) {
-      const std::int64_t first = first_block * chunk_runs;
-      const std::int64_t count = std::min<std::int64_t>((last_block + 1) * chunk_runs, run_count_) - first;
-      buffer.resize(static_cast<std::size_t>(count) * row_bytes);
-      Handle memory;
-      Handle space = hdf5::SelectRows(source.get(), first, count, &memory);
-      Check(H5Dread(source.get(), type.get(), memory.get(), space.get(), H5P_DEFAULT, buffer.data()),
-            "read " + path + " of " + path_.string());
-      Handle target_memory;
-      Handle target_space = hdf5::SelectRows(target, first, count, &target_memory);
-      Check(H5Dwrite(target, type.get(), target_memory.get(), target_space.get(), H5P_DEFAULT, buffer.data()),
-            "copy " + path);
+  auto copy = [&](int index) {
+    const archive::StoredDataset& stored = layout.datasets()[static_cast<std::size_t>(index)];
+    Handle source(H5Dopen2(file_.get(), stored.path.c_str(), H5P_DEFAULT), "open " + stored.path);
+    const hid_t target = writer.datasets_[static_cast<std::size_t>(index)].get();
+    for (std::int64_t block : blocks) {
+      const std::int64_t first = block * chunk_runs;
+      const std::int64_t end = std::min<std::int64_t>(first + chunk_runs, run_count_);
+      for (std::int64_t row = first; row < end; row += stored.chunk_rows) {
+        const hsize_t offset[2] = {static_cast<hsize_t>(row), 0};
+        unsigned mask = 0;
+        haddr_t address = HADDR_UNDEF;
+        hsize_t size = 0;
+        Check(H5Dget_chunk_info_by_coord(source.get(), offset, &mask, &address, &size),
+              "chunk of " + stored.path + " in " + path_.string());
+        if (address == HADDR_UNDEF || size == 0) continue;  // never written (e.g. a batch without messages)
+        buffer.resize(static_cast<std::size_t>(size));
+        std::uint32_t filters = 0;
+        Check(H5Dread_chunk(source.get(), H5P_DEFAULT, offset, &filters, buffer.data()),
+              "read a chunk of " + stored.path + " of " + path_.string());
+        Check(H5Dwrite_chunk(target, H5P_DEFAULT, filters, offset, buffer.size(), buffer.data()),
+              "copy a chunk of " + stored.path);
+      }
     }
   };
-  const SweepPlan& plan = writer.plan_;
-  for (std::size_t c = 0; c < writer.design_.size(); ++c) {
-    copy(archive::DesignPath(
-             ParameterCatalog()[static_cast<std::size_t>(plan.design().spec().parameters[c].id)].name),
-         writer.design_[c].get());
+  const int status = layout.status_dataset();
+  for (int d = 0; d < static_cast<int>(layout.datasets().size()); ++d) {
+    if (d != status) copy(d);
   }
-  for (std::size_t c = 0; c < writer.results_.size(); ++c)
-    copy(plan.schema().columns[c].path, writer.results_[c].get());
-  copy(archive::kRunIndex, writer.index_.get());
-  copy(archive::kRunId, writer.id_.get());
-  copy(archive::kRunMessage, writer.message_.get());
-  copy(archive::kRunStatus, writer.status_.get());
+  Check(H5Fflush(writer.file_.get(), H5F_SCOPE_LOCAL), "flush " + writer.path_.string());
+  copy(status);
 }
 
 }  // namespace gesweep

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,8 @@ class ArchiveReader {
   /// "archive in use"), or breaks the layout its readers rely on: a root attribute they use missing
   /// (run_count, design_runs, first_run, chunk_runs), runs/ or design/ missing, a per-run dataset
   /// (runs/, design/, results/, the series) without one row per run or of a type its readers cannot
-  /// convert. Every reader (query, boundary, report, sensitivity, merge, resume) goes through it.
+  /// convert; and when it is a virtual merged archive one of whose shard files is
+  /// missing, unreadable or changed. Every reader (query, boundary, report, sensitivity, merge, resume) goes through it.
   /// A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size limit)
   /// is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
   /// with zeros to its recorded size and opened as a snapshot, whose complete batches the resume
@@ -45,6 +47,28 @@ class ArchiveReader {
   std::string StringAttribute(const std::string& name) const;
   std::int64_t IntegerAttribute(const std::string& name) const;
   std::vector<std::string> StringListAttribute(const std::string& name) const;
+
+  /// Attributes of any group or dataset (`object`, e.g. "design" or "design/height_m"); nullopt
+  /// (or empty) when the object or the attribute is absent, ArchiveError when it is of another kind.
+  std::optional<std::string> StringAttributeOf(const std::string& object, const std::string& name) const;
+  std::optional<std::int64_t> IntegerAttributeOf(const std::string& object, const std::string& name) const;
+  std::optional<double> DoubleAttributeOf(const std::string& object, const std::string& name) const;
+  std::vector<std::string> StringListAttributeOf(const std::string& object, const std::string& name) const;
+  /// A numeric (float or integer) attribute as doubles; empty when absent.
+  std::vector<double> DoubleListAttributeOf(const std::string& object, const std::string& name) const;
+
+  /// Whether a group or dataset exists (every intermediate group included).
+  bool Exists(const std::string& path) const;
+
+  /// What a dataset holds: its dimensions and the class of its elements.
+  struct DatasetInfo {
+    enum class Kind { kFloat, kInteger, kCompound, kString, kOther } kind = Kind::kOther;
+    std::vector<std::int64_t> dims;
+  };
+  DatasetInfo Describe(const std::string& path) const;
+
+  /// Rows [first, first + count) of an integer per-run dataset (e.g. runs/index) as int64.
+  std::vector<std::int64_t> ReadIntegers(const std::string& path, std::int64_t first, std::int64_t count) const;
 
   /// Runs in this archive (the length of every per-run dataset).
   std::int64_t run_count() const { return run_count_; }
@@ -82,6 +106,7 @@ class ArchiveReader {
 
  private:
   ArchiveReader(std::filesystem::path path, hdf5::Handle file, bool snapshot);
+  void CheckVirtualSources() const;
   std::filesystem::path path_;
   hdf5::Handle file_;
   bool snapshot_ = false;

@@ -21,10 +21,6 @@ namespace {
 using hdf5::Check;
 using hdf5::Handle;
 
-// Series chunks stay within this size: big enough to compress well, small enough for HDF5's
-// default 1 MiB chunk cache.
-constexpr std::int64_t kMaximumSeriesChunkBytes = 1 << 20;
-
 std::string Hex(std::uint64_t value) {
   std::ostringstream out;
   out << std::hex;
@@ -34,25 +30,31 @@ std::string Hex(std::uint64_t value) {
   return out.str();
 }
 
-// A dataset creation property list: chunked, shuffle + deflate (+ Fletcher-32 so a damaged chunk
-// is detected on read rather than returned), with a fill value that means "not written".
-Handle ChunkedCreation(const std::vector<hsize_t>& chunk, int compression_level, hid_t fill_type,
-                       const void* fill) {
+// A dataset creation property list from the layout: chunked, the layout's filters in the layout's
+// order (shuffle, deflate, Fletcher-32 -- the checksum covers the stored bytes, so a damaged chunk is
+// detected before it is inflated), a fill value that means "not written".
+Handle Creation(const archive::StoredDataset& d, hid_t fill_type) {
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "dataset creation property list");
+  std::vector<hsize_t> chunk{static_cast<hsize_t>(d.chunk_rows)};
+  if (d.width > 1) chunk.push_back(static_cast<hsize_t>(d.width));
   Check(H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()), "set chunk");
-  Check(H5Pset_fletcher32(dcpl.get()), "set fletcher32");
-  if (compression_level > 0) {
-    Check(H5Pset_shuffle(dcpl.get()), "set shuffle");
-    Check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(compression_level)), "set deflate");
-  }
-  if (fill != nullptr) Check(H5Pset_fill_value(dcpl.get(), fill_type, fill), "set fill value");
+  if (d.filters.shuffle) Check(H5Pset_shuffle(dcpl.get()), "set shuffle");
+  if (d.filters.deflate_level > 0)
+    Check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(d.filters.deflate_level)), "set deflate");
+  if (d.filters.fletcher32) Check(H5Pset_fletcher32(dcpl.get()), "set fletcher32");
+  if (!d.fill.empty()) Check(H5Pset_fill_value(dcpl.get(), fill_type, d.fill.data()), "set fill value");
   Check(H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_IFSET), "set fill time");
   return dcpl;
 }
 
 Handle CreateDataset(hid_t file, const std::string& path, hid_t type, const std::vector<hsize_t>& dims,
-                     hid_t dcpl) {
-  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), "dataspace");
+                     hid_t dcpl, hsize_t chunk_rows) {
+  // A dataset of exactly one chunk gets an unlimited row dimension: with fixed dimensions HDF5
+  // 1.10 gives it its "single chunk" index, after whose direct chunk write H5Dread in the same
+  // session returns the stored (filtered) bytes instead of the values.
+  std::vector<hsize_t> maxdims = dims;
+  if (dims[0] <= chunk_rows) maxdims[0] = H5S_UNLIMITED;
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), "dataspace");
   return Handle(H5Dcreate2(file, path.c_str(), type, space.get(), H5P_DEFAULT, dcpl, H5P_DEFAULT),
                 "create dataset " + path);
 }
@@ -62,29 +64,8 @@ void Describe(hid_t object, const std::string& units, const std::string& descrip
   hdf5::WriteAttribute(object, "description", description);
 }
 
-hid_t StoredType(ColumnType type, hid_t complex_type) {
-  switch (type) {
-    case ColumnType::kFloat64:
-      return H5T_IEEE_F64LE;
-    case ColumnType::kInt32:
-      return H5T_STD_I32LE;
-    case ColumnType::kInt8:
-      return H5T_STD_I8LE;
-    case ColumnType::kComplex:
-      return complex_type;
-  }
-  return H5T_IEEE_F64LE;
-}
-
 std::string ParameterNameOf(const DesignParameter& parameter) {
   return ParameterCatalog()[static_cast<std::size_t>(parameter.id)].name;
-}
-
-void WriteRows(hid_t dataset, std::int64_t first, std::int64_t count, hid_t memory_type, const void* data,
-               const std::string& what) {
-  Handle memory;
-  Handle file_space = hdf5::SelectRows(dataset, first, count, &memory);
-  Check(H5Dwrite(dataset, memory_type, memory.get(), file_space.get(), H5P_DEFAULT, data), "write " + what);
 }
 
 void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
@@ -158,22 +139,8 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
 
 }  // namespace
 
-int SeriesChunkRows(int chunk_runs, int samples) {
-  int best = 1;
-  for (int d = 1; d <= chunk_runs; ++d) {
-    if (chunk_runs % d == 0 && static_cast<std::int64_t>(d) * samples * 8 <= kMaximumSeriesChunkBytes)
-      best = d;
-  }
-  return best;
-}
-
 ArchiveWriter::ArchiveWriter(std::filesystem::path path, const SweepPlan& plan)
-    : path_(std::move(path)), plan_(plan) {
-  complex_memory_type_ = Handle(H5Tcreate(H5T_COMPOUND, 2 * sizeof(double)), "complex memory type");
-  Check(H5Tinsert(complex_memory_type_.get(), "re", 0, H5T_NATIVE_DOUBLE), "complex re");
-  Check(H5Tinsert(complex_memory_type_.get(), "im", sizeof(double), H5T_NATIVE_DOUBLE), "complex im");
-  message_type_ = hdf5::FixedStringType(kMessageLength);
-}
+    : path_(std::move(path)), plan_(plan), layout_(plan) {}
 
 ArchiveWriter::~ArchiveWriter() {
   // A sweep that stopped on an error still closes the file cleanly: the statuses tell which runs
@@ -190,8 +157,6 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   const Study& study = plan_.study();
   const std::int64_t n = plan_.run_count();
   const auto rows = static_cast<hsize_t>(n);
-  const auto chunk = static_cast<hsize_t>(plan_.chunk_runs());
-  const int level = study.compression_level;
 
   // Provenance (schemas/archive.md, "Root attributes").
   hdf5::WriteAttribute(file, "format", archive::kFormatName);
@@ -234,6 +199,12 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   hdf5::WriteAttribute(file, "runs_failed", std::int64_t{0});
   hdf5::WriteAttribute(file, "runs_pending", n);
   hdf5::WriteAttribute(file, "merged_from", std::vector<std::string>{});
+  hdf5::WriteAttribute(file, "mpi_ranks", static_cast<std::int64_t>(provenance.ranks));
+  if (provenance.node_index >= 0) {
+    // A node's shard of an MPI sweep (docs/cluster.md): merged like any shard.
+    hdf5::WriteAttribute(file, "node_index", static_cast<std::int64_t>(provenance.node_index));
+    hdf5::WriteAttribute(file, "node_count", static_cast<std::int64_t>(provenance.node_count));
+  }
 
   for (const char* group :
        {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup, archive::kAnalysisGroup}) {
@@ -246,51 +217,6 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
                          "--archive) and sensitivity indices (gesweep sensitivity)");
   }
 
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  {
-    const std::int64_t fill = -1;
-    Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_INT64, &fill);
-    Handle d = CreateDataset(file, archive::kRunIndex, H5T_STD_I64LE, {rows}, dcpl.get());
-    Describe(d.get(), "1", "Index of the run in the design (0-based); -1 where not written yet");
-  }
-  {
-    const std::uint64_t fill = 0;
-    Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_UINT64, &fill);
-    Handle d = CreateDataset(file, archive::kRunId, H5T_STD_U64LE, {rows}, dcpl.get());
-    Describe(d.get(), "1",
-             "Stable id of the run: FNV-1a hash of its design parameters' names and values "
-             "(with runs/index, identifies the run across shards and resumes)");
-  }
-  {
-    const std::int8_t fill = 0;
-    Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_INT8, &fill);
-    Handle d = CreateDataset(file, archive::kRunStatus, H5T_STD_I8LE, {rows}, dcpl.get());
-    Describe(d.get(), "1",
-             "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
-             "results, so a nonzero status marks a complete run");
-    hdf5::WriteAttribute(d.get(), "levels", std::vector<std::string>{"pending", "ok", "failed"});
-  }
-  {
-    Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_INT8, nullptr);
-    Handle d = CreateDataset(file, archive::kRunMessage, message_type_.get(), {rows}, dcpl.get());
-    Describe(d.get(), "1",
-             "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, at most " +
-                 std::to_string(kMessageLength) + " bytes");
-  }
-  for (const auto& parameter : plan_.design().spec().parameters) {
-    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
-    Handle dcpl = ChunkedCreation({chunk}, level, H5T_NATIVE_DOUBLE, &nan);
-    Handle d = CreateDataset(file, archive::DesignPath(info.name), H5T_IEEE_F64LE, {rows}, dcpl.get());
-    Describe(d.get(), info.units, info.description);
-    if (!info.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", info.levels);
-    const DesignKind kind = plan_.design().spec().kind;
-    if (kind == DesignKind::kLhs || kind == DesignKind::kSobol || kind == DesignKind::kMorris) {
-      hdf5::WriteAttribute(d.get(), "distribution", std::string(ToString(parameter.distribution)));
-      hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
-    } else if (kind == DesignKind::kGrid) {
-      hdf5::WriteAttribute(d.get(), "axis_values", parameter.values);
-    }
-  }
   for (const auto& axis : plan_.schema().axes) {
     hdf5::CreateGroups(file, axis.path.substr(0, axis.path.rfind('/')));
     hsize_t dims[1] = {axis.times_s.size()};
@@ -303,125 +229,130 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     Describe(d.get(), "s", axis.description);
   }
   Handle complex_type = hdf5::ComplexType();
-  for (const auto& column : plan_.schema().columns) {
-    hdf5::CreateGroups(file, column.path.substr(0, column.path.rfind('/')));
-    std::vector<hsize_t> dims{rows}, chunks{chunk};
-    if (column.width > 1) {
-      dims.push_back(static_cast<hsize_t>(column.width));
-      const int chunk_rows =
-          column.time_axis.empty() ? plan_.chunk_runs() : SeriesChunkRows(plan_.chunk_runs(), column.width);
-      chunks = {static_cast<hsize_t>(chunk_rows), static_cast<hsize_t>(column.width)};
+  Handle message_type = hdf5::FixedStringType(kMessageLength);
+  const auto& parameters = plan_.design().spec().parameters;
+  const auto& columns = plan_.schema().columns;
+  for (const archive::StoredDataset& stored : layout_.datasets()) {
+    hid_t type = H5T_IEEE_F64LE;
+    switch (stored.kind) {
+      case archive::ElementKind::kFloat64: type = H5T_IEEE_F64LE; break;
+      case archive::ElementKind::kInt64: type = H5T_STD_I64LE; break;
+      case archive::ElementKind::kUInt64: type = H5T_STD_U64LE; break;
+      case archive::ElementKind::kInt32: type = H5T_STD_I32LE; break;
+      case archive::ElementKind::kInt8: type = H5T_STD_I8LE; break;
+      case archive::ElementKind::kComplex: type = complex_type.get(); break;
+      case archive::ElementKind::kString: type = message_type.get(); break;
     }
-    Handle dcpl;
-    if (column.type == ColumnType::kFloat64) {
-      dcpl = ChunkedCreation(chunks, level, H5T_NATIVE_DOUBLE, &nan);
-    } else if (column.type == ColumnType::kInt32) {
-      const std::int32_t fill = column.integer_fill;
-      dcpl = ChunkedCreation(chunks, level, H5T_NATIVE_INT32, &fill);
-    } else if (column.type == ColumnType::kInt8) {
-      const auto fill = static_cast<std::int8_t>(column.integer_fill);
-      dcpl = ChunkedCreation(chunks, level, H5T_NATIVE_INT8, &fill);
-    } else {
-      const double fill[2] = {nan, nan};
-      dcpl = ChunkedCreation(chunks, level, complex_memory_type_.get(), fill);
+    // The fill value is given in the stored type (little-endian, as the layout holds it).
+    Handle dcpl = Creation(stored, type);
+    std::vector<hsize_t> dims{rows};
+    if (stored.width > 1) dims.push_back(static_cast<hsize_t>(stored.width));
+    hdf5::CreateGroups(file, stored.path.substr(0, stored.path.rfind('/')));
+    Handle d = CreateDataset(file, stored.path, type, dims, dcpl.get(), static_cast<hsize_t>(stored.chunk_rows));
+    switch (stored.source) {
+      case archive::ValueSource::kDesign: {
+        const DesignParameter& parameter = parameters[static_cast<std::size_t>(stored.column)];
+        const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
+        Describe(d.get(), info.units, info.description);
+        if (!info.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", info.levels);
+        const DesignKind kind = plan_.design().spec().kind;
+        if (kind == DesignKind::kLhs || kind == DesignKind::kSobol || kind == DesignKind::kMorris) {
+          hdf5::WriteAttribute(d.get(), "distribution", std::string(ToString(parameter.distribution)));
+          hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
+        } else if (kind == DesignKind::kGrid) {
+          hdf5::WriteAttribute(d.get(), "axis_values", parameter.values);
+        }
+        break;
+      }
+      case archive::ValueSource::kResult: {
+        const OutputColumn& column = columns[static_cast<std::size_t>(stored.column)];
+        Describe(d.get(), column.units, column.description);
+        if (!column.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", column.levels);
+        if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
+          hdf5::WriteAttribute(d.get(), "fill", static_cast<std::int64_t>(column.integer_fill));
+        }
+        if (!column.time_axis.empty()) hdf5::WriteAttribute(d.get(), "time_axis", column.time_axis);
+        if (!column.component_names.empty())
+          hdf5::WriteAttribute(d.get(), "component_names", column.component_names);
+        break;
+      }
+      case archive::ValueSource::kIndex:
+        Describe(d.get(), "1", "Index of the run in the design (0-based); -1 where not written yet");
+        break;
+      case archive::ValueSource::kId:
+        Describe(d.get(), "1",
+                 "Stable id of the run: FNV-1a hash of its design parameters' names and values "
+                 "(with runs/index, identifies the run across shards and resumes)");
+        break;
+      case archive::ValueSource::kStatus:
+        Describe(d.get(), "1",
+                 "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
+                 "results, so a nonzero status marks a complete run");
+        hdf5::WriteAttribute(d.get(), "levels", std::vector<std::string>{"pending", "ok", "failed"});
+        break;
+      case archive::ValueSource::kMessage:
+        Describe(d.get(), "1",
+                 "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
+                     std::to_string(kMessageLength) +
+                     " bytes (a longer message ends in '...'); empty for most runs, whose chunks are "
+                     "never written");
+        hdf5::WriteAttribute(d.get(), "max_bytes", static_cast<std::int64_t>(kMessageLength));
+        break;
     }
-    Handle d =
-        CreateDataset(file, column.path, StoredType(column.type, complex_type.get()), dims, dcpl.get());
-    Describe(d.get(), column.units, column.description);
-    if (!column.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", column.levels);
-    if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
-      hdf5::WriteAttribute(d.get(), "fill", static_cast<std::int64_t>(column.integer_fill));
-    }
-    if (!column.time_axis.empty()) hdf5::WriteAttribute(d.get(), "time_axis", column.time_axis);
-    if (!column.component_names.empty())
-      hdf5::WriteAttribute(d.get(), "component_names", column.component_names);
   }
   Handle design(H5Gopen2(file, archive::kDesignGroup, H5P_DEFAULT), "open design group");
   WriteDesignAttributes(design.get(), plan_);
 }
 
 void ArchiveWriter::OpenDatasets() {
-  auto open = [&](const std::string& path) {
-    return Handle(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), "open dataset " + path);
-  };
-  index_ = open(archive::kRunIndex);
-  id_ = open(archive::kRunId);
-  status_ = open(archive::kRunStatus);
-  message_ = open(archive::kRunMessage);
-  design_.clear();
-  results_.clear();
-  for (const auto& parameter : plan_.design().spec().parameters) {
-    design_.push_back(open(archive::DesignPath(ParameterNameOf(parameter))));
-  }
-  for (const auto& column : plan_.schema().columns) {
-    Handle dataset = open(column.path);
+  datasets_.clear();
+  for (const archive::StoredDataset& stored : layout_.datasets()) {
+    Handle dataset(H5Dopen2(file_.get(), stored.path.c_str(), H5P_DEFAULT), "open dataset " + stored.path);
     const auto dims = hdf5::Dimensions(dataset.get());
-    const bool shape_ok =
-        !dims.empty() && dims[0] == plan_.run_count() &&
-        (column.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == column.width);
-    if (!shape_ok) throw ArchiveError(path_.string() + ": dataset " + column.path + " has the wrong shape");
-    results_.push_back(std::move(dataset));
+    const bool shape_ok = !dims.empty() && dims[0] == plan_.run_count() &&
+                          (stored.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == stored.width);
+    if (!shape_ok) throw ArchiveError(path_.string() + ": dataset " + stored.path + " has the wrong shape");
+    datasets_.push_back(std::move(dataset));
   }
+}
+
+void ArchiveWriter::CloseDatasets() { datasets_.clear(); }
+
+void ArchiveWriter::WriteChunks(const ResultBlock& block) {
+  const std::int64_t first = block.first_row - block_row_offset_;
+  GESWEEP_DEMAND(first >= 0 && first + block.rows <= plan_.run_count());
+  const int status = layout_.status_dataset();
+  auto store = [&](const StoredChunk& chunk) {
+    const archive::StoredDataset& stored = layout_.datasets()[static_cast<std::size_t>(chunk.dataset)];
+    const hsize_t offset[2] = {static_cast<hsize_t>(first + chunk.row), 0};
+    Check(H5Dwrite_chunk(datasets_[static_cast<std::size_t>(chunk.dataset)].get(), H5P_DEFAULT, chunk.filter_mask,
+                         offset, chunk.bytes.size(), chunk.bytes.data()),
+          "write " + stored.path + " of " + path_.string());
+  };
+  for (int c = 0; c < block.chunk_count; ++c) {
+    const StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
+    if (chunk.dataset != status) store(chunk);
+  }
+  // Results reach the disk before the statuses that declare them complete.
+  Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
+  for (int c = 0; c < block.chunk_count; ++c) {
+    const StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
+    if (chunk.dataset == status) store(chunk);
+  }
+  Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
 }
 
 void ArchiveWriter::Write(const ResultBlock& block) {
   // HDF5's error printing is per thread: keep the writer thread's errors for the exception.
   thread_local const bool quiet = (hdf5::Quiet(), true);
   (void)quiet;
-  const std::int64_t first = block.first_row;
-  const std::int64_t rows = block.rows;
-  const auto n = static_cast<std::size_t>(rows);
-  for (std::size_t c = 0; c < design_.size(); ++c) {
-    WriteRows(design_[c].get(), first, rows, H5T_NATIVE_DOUBLE, block.design[c].data(), "design");
+  if (block.chunk_count > 0 || block.rows == 0) {
+    WriteChunks(block);
+    return;
   }
-  const auto& columns = plan_.schema().columns;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    const OutputColumn& column = columns[c];
-    const std::vector<double>& values = block.results[c];
-    switch (column.type) {
-      case ColumnType::kFloat64:
-        WriteRows(results_[c].get(), first, rows, H5T_NATIVE_DOUBLE, values.data(), column.path);
-        break;
-      case ColumnType::kComplex:
-        WriteRows(results_[c].get(), first, rows, complex_memory_type_.get(), values.data(), column.path);
-        break;
-      case ColumnType::kInt32: {
-        int_buffer_.resize(n * static_cast<std::size_t>(column.width));
-        for (std::size_t i = 0; i < int_buffer_.size(); ++i) {
-          int_buffer_[i] = std::isnan(values[i]) ? column.integer_fill : static_cast<std::int32_t>(values[i]);
-        }
-        WriteRows(results_[c].get(), first, rows, H5T_NATIVE_INT32, int_buffer_.data(), column.path);
-        break;
-      }
-      case ColumnType::kInt8: {
-        byte_buffer_.resize(n * static_cast<std::size_t>(column.width));
-        for (std::size_t i = 0; i < byte_buffer_.size(); ++i) {
-          byte_buffer_[i] = std::isnan(values[i]) ? static_cast<std::int8_t>(column.integer_fill)
-                                                  : static_cast<std::int8_t>(values[i]);
-        }
-        WriteRows(results_[c].get(), first, rows, H5T_NATIVE_INT8, byte_buffer_.data(), column.path);
-        break;
-      }
-    }
-  }
-  WriteRows(index_.get(), first, rows, H5T_NATIVE_INT64, block.design_index.data(), archive::kRunIndex);
-  WriteRows(id_.get(), first, rows, H5T_NATIVE_UINT64, block.run_id.data(), archive::kRunId);
-  // Most batches have no message at all: their chunk stays unwritten and reads as the fill value
-  // (empty strings), which saves compressing kMessageLength zero bytes per run.
-  const bool any_message = std::any_of(block.message.begin(), block.message.begin() + rows,
-                                       [](const std::string& m) { return !m.empty(); });
-  if (any_message) {
-    message_buffer_.assign(n * kMessageLength, '\0');
-    for (std::size_t r = 0; r < n; ++r) {
-      std::memcpy(message_buffer_.data() + r * kMessageLength, block.message[r].data(),
-                  std::min<std::size_t>(block.message[r].size(), kMessageLength));
-    }
-    WriteRows(message_.get(), first, rows, message_type_.get(), message_buffer_.data(), archive::kRunMessage);
-  }
-  // Results reach the disk before the statuses that declare them complete.
-  Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
-  WriteRows(status_.get(), first, rows, H5T_NATIVE_INT8, block.status.data(), archive::kRunStatus);
-  Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
+  unencoded_ = block;
+  layout_.Encode(unencoded_);
+  WriteChunks(unencoded_);
 }
 
 void ArchiveWriter::CountStatuses() {
@@ -432,8 +363,9 @@ void ArchiveWriter::CountStatuses() {
   for (std::int64_t first = 0; first < n; first += step) {
     const std::int64_t count = std::min(step, n - first);
     Handle memory;
-    Handle space = hdf5::SelectRows(status_.get(), first, count, &memory);
-    Check(H5Dread(status_.get(), H5T_NATIVE_INT8, memory.get(), space.get(), H5P_DEFAULT, status.data()),
+    const hid_t status_dataset = datasets_[static_cast<std::size_t>(layout_.status_dataset())].get();
+    Handle space = hdf5::SelectRows(status_dataset, first, count, &memory);
+    Check(H5Dread(status_dataset, H5T_NATIVE_INT8, memory.get(), space.get(), H5P_DEFAULT, status.data()),
           "read runs/status");
     for (std::int64_t i = 0; i < count; ++i) {
       const auto s = static_cast<RunStatus>(status[static_cast<std::size_t>(i)]);
@@ -456,12 +388,7 @@ void ArchiveWriter::Finish() {
   hdf5::UpdateAttribute(file_.get(), "runs_failed", runs_failed_);
   hdf5::UpdateAttribute(file_.get(), "runs_pending", runs_pending_);
   Check(H5Fflush(file_.get(), H5F_SCOPE_LOCAL), "flush " + path_.string());
-  index_.Reset();
-  id_.Reset();
-  status_.Reset();
-  message_.Reset();
-  design_.clear();
-  results_.clear();
+  CloseDatasets();
   file_.Close("close " + path_.string());
   finished_ = true;
 }
@@ -514,6 +441,11 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   std::string resumed_at;
   if (exists && mode == ArchiveOpenMode::kResume) {
     ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
+    if (!existing.StringListAttribute("merged_from").empty()) {
+      throw InputError("command line", "-o", shown,
+                       "is a merged archive (gesweep merge), not a shard a sweep writes; resume the shards, "
+                       "then merge again");
+    }
     existing.CheckSameSweep(plan, shown);
     plan.set_chunk_runs(static_cast<int>(existing.IntegerAttribute("chunk_runs")));
     complete_blocks = existing.CompleteBlocks(plan.chunk_runs());
@@ -568,12 +500,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
         writer->OpenDatasets();
         crashed->CopyBlocks(*writer, complete_blocks, plan.chunk_runs());
         Check(H5Fflush(writer->file_.get(), H5F_SCOPE_LOCAL), "flush " + temporary.string());
-        writer->index_.Reset();
-        writer->id_.Reset();
-        writer->status_.Reset();
-        writer->message_.Reset();
-        writer->design_.clear();
-        writer->results_.clear();
+        writer->CloseDatasets();
         file = std::move(writer->file_);
       }
       file.Close("close " + temporary.string());
@@ -586,12 +513,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     writer->OpenDatasets();
     std::filesystem::rename(temporary, path, ec);
     if (ec) {
-      writer->index_.Reset();
-      writer->id_.Reset();
-      writer->status_.Reset();
-      writer->message_.Reset();
-      writer->design_.clear();
-      writer->results_.clear();
+      writer->CloseDatasets();
       writer->file_.Reset();
       std::filesystem::remove(temporary);
       throw ArchiveError("rename " + temporary.string() + " to " + shown + ": " + ec.message());

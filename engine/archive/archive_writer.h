@@ -1,9 +1,14 @@
 #pragma once
 /// The HDF5 archive of a sweep (layout: schemas/archive.md; crash safety: docs/sweep.md).
 ///
+/// The workers filter their own chunks (Encode: shuffle, deflate, Fletcher-32 in the worker thread
+/// that computed the batch, byte for byte what HDF5 would write; archive_layout.h) and the one
+/// writer thread only stores them (H5Dwrite_chunk) and flushes.
+///
 /// Crash safety by construction:
 ///  - every dataset is created up front with the shard's full length, chunked with one chunk per
-///    write batch, so every chunk is written exactly once (no compressed chunk is ever rewritten,
+///    write batch (runs/message: a few small chunks per batch, written only where a run has a
+///    message), so every chunk is written exactly once (no compressed chunk is ever rewritten,
 ///    so no file space is freed and reused);
 ///  - the file is written in HDF5's SWMR mode, whose ordered metadata flushes keep the file on disk
 ///    consistent at every instant; a batch is written results first, flushed, then its statuses
@@ -18,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/archive_layout.h"
 #include "engine/archive/hdf5_util.h"
 #include "engine/sweep/runner.h"
 
@@ -34,6 +40,11 @@ enum class ArchiveOpenMode {
 struct RunProvenance {
   std::string command_line;
   int threads = 0;
+  /// Under MPI: this archive is the shard of node `node_index` of `node_count` (its writer's node);
+  /// -1 otherwise.
+  int node_index = -1;
+  int node_count = 0;
+  int ranks = 1;  ///< MPI ranks of the job (1 without MPI)
 };
 
 /// What opening for a sweep found.
@@ -60,8 +71,16 @@ class ArchiveWriter final : public ResultSink {
   ArchiveWriter(const ArchiveWriter&) = delete;
   ArchiveWriter& operator=(const ArchiveWriter&) = delete;
 
-  /// Writes one batch: design values, results, ids, messages; flush; statuses; flush.
+  /// Filters a computed batch's chunks (any thread, concurrently).
+  void Encode(ResultBlock& block) override { layout_.Encode(block); }
+  /// Stores one batch's chunks: design values, results, ids, messages; flush; statuses; flush.
+  /// A batch not encoded yet is encoded here first.
   void Write(const ResultBlock& block) override;
+
+  /// The batches given to Write are numbered in a plan whose shard starts `runs` runs before this
+  /// archive's (a node's shard of an MPI sweep): their rows are shifted by that much.
+  void set_block_row_offset(std::int64_t runs) { block_row_offset_ = runs; }
+  const archive::ArchiveLayout& layout() const { return layout_; }
 
   /// Ends the sweep: leaves SWMR mode and records the end time and the run counts by status.
   void Finish();
@@ -75,18 +94,17 @@ class ArchiveWriter final : public ResultSink {
   ArchiveWriter(std::filesystem::path path, const SweepPlan& plan);
   void CreateSkeleton(hid_t file, const RunProvenance& provenance);
   void OpenDatasets();
+  void CloseDatasets();
   void CountStatuses();
+  void WriteChunks(const ResultBlock& block);
 
   std::filesystem::path path_;
   const SweepPlan& plan_;
+  archive::ArchiveLayout layout_;
   hdf5::Handle file_;
-  hdf5::Handle index_, id_, status_, message_;
-  std::vector<hdf5::Handle> design_;
-  std::vector<hdf5::Handle> results_;
-  hdf5::Handle complex_memory_type_, message_type_;
-  std::vector<std::int32_t> int_buffer_;
-  std::vector<std::int8_t> byte_buffer_;
-  std::vector<char> message_buffer_;
+  std::vector<hdf5::Handle> datasets_;  ///< layout_.datasets() order
+  std::int64_t block_row_offset_ = 0;
+  ResultBlock unencoded_;  ///< scratch for a batch given to Write without Encode
   std::int64_t runs_ok_ = 0, runs_failed_ = 0, runs_pending_ = 0;
   bool finished_ = false;
   int lock_fd_ = -1;  ///< flock on ARCHIVE.lock: one writer per archive at a time
@@ -95,8 +113,6 @@ class ArchiveWriter final : public ResultSink {
   friend class ArchiveReader;  // copies the complete batches of a crashed archive (resume)
 };
 
-/// Series chunk rows for a series of `samples` values when batches have `chunk_runs` runs: the
-/// largest divisor of chunk_runs whose chunk stays within 1 MiB (at least 1).
-int SeriesChunkRows(int chunk_runs, int samples);
+using archive::SeriesChunkRows;
 
 }  // namespace gesweep

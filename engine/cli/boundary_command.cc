@@ -14,7 +14,7 @@
 #include "engine/analysis/boundary_curve.h"
 #include "engine/analysis/local_sensitivity.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/archive_error.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"

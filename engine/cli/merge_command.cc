@@ -1,9 +1,12 @@
 // gesweep merge: merges shard archives into one (docs/sweep.md, "Sharding and merge").
-//   gesweep merge A.h5 B.h5 ... -o ALL.h5 [--force]
+//   gesweep merge A.h5 B.h5 ... -o ALL.h5 [--copy] [--force]
+// Default: a virtual archive over the shard files (nothing copied; they must stay where they are);
+// --copy: a self-contained archive, chunks copied raw.
+#include <iomanip>
 #include <iostream>
 
+#include "engine/archive/archive_error.h"
 #include "engine/archive/archive_merge.h"
-#include "engine/archive/hdf5_util.h"
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
 
@@ -14,6 +17,7 @@ struct MergeFlags {
   std::vector<std::string> inputs;
   std::string output;
   bool force = false;
+  bool copy = false;
   bool quiet = false;
 };
 
@@ -21,13 +25,24 @@ int Merge(const MergeFlags& flags) {
   std::vector<std::filesystem::path> inputs(flags.inputs.begin(), flags.inputs.end());
   std::string command_line = "gesweep merge";
   for (const auto& input : flags.inputs) command_line += " " + input;
-  command_line += " -o " + flags.output + (flags.force ? " --force" : "");
+  command_line += " -o " + flags.output + (flags.copy ? " --copy" : "") + (flags.force ? " --force" : "");
   try {
-    const MergeReport report = MergeArchives(inputs, flags.output, flags.force, command_line);
+    const MergeReport report = MergeArchives(inputs, flags.output, flags.force, command_line,
+                                             flags.copy ? MergeKind::kCopy : MergeKind::kVirtual);
     if (!flags.quiet) {
       std::cerr << "gesweep: merged " << report.shards << " shard" << (report.shards > 1 ? "s" : "") << ": "
-                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed
-                << " failed) -> " << flags.output << "\n";
+                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed << " failed) -> "
+                << flags.output;
+      if (report.kind == MergeKind::kVirtual) {
+        std::cerr << " (virtual)\ngesweep: " << flags.output << " reads the shard files in place: keep them where "
+                  << "they are (moving the directory with them is fine); `gesweep merge --copy` makes a "
+                  << "self-contained archive\n";
+      } else {
+        std::cerr << " (" << report.chunks_copied << " chunks copied raw, " << std::fixed << std::setprecision(1)
+                  << report.bytes_copied / 1e6 << " MB";
+        if (report.chunks_rewritten) std::cerr << "; " << report.chunks_rewritten << " rewritten";
+        std::cerr << ")\n";
+      }
     }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
@@ -38,12 +53,16 @@ int Merge(const MergeFlags& flags) {
 
 const CommandRegistrar kRegistrar{Command{
     "merge",
-    "Merge shard archives of one study into one archive, checking they cover the design exactly once",
+    "Merge shard archives of one study into one archive (virtual by default; --copy: self-contained), "
+    "checking they cover the design exactly once",
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<MergeFlags>();
       app.add_option("archives", flags->inputs, "Shard archives (from gesweep run --shard i/N)")->required();
       app.add_option("-o,--output", flags->output, "Merged archive to write")->required();
       app.add_flag("--force", flags->force, "Replace an existing output archive");
+      app.add_flag("--copy", flags->copy,
+                   "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
+                   "files, which must then stay where they are)");
       app.add_flag("-q,--quiet", flags->quiet, "No summary line");
       return [flags] { return Merge(*flags); };
     }}};

@@ -13,7 +13,7 @@
 #include <iostream>
 
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/archive_error.h"
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"

@@ -53,6 +53,8 @@ struct RunFlags {
   bool threads_given = false;
   bool quiet = false;
   bool mpi = false;
+  int ranks_per_node = 0;
+  std::string merge = "virtual";
   std::string format = "text";
 };
 
@@ -293,6 +295,100 @@ std::string WriteFailure(const RunFlags& flags, const std::string& cause, std::i
          flags.study + " -o " + flags.output + " --resume";
 }
 
+// mpirun -n R gesweep run ... --mpi (docs/cluster.md, "MPI"): the same pipeline with MPI as its
+// transport; one writer per node writes the node's shard, rank 0 merges them into -o. RunStudyMpi
+// initialises and finalises MPI itself and prints nothing; rank 0 prints here.
+int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
+#ifdef GESWEEP_HAVE_MPI
+  if (flags.merge != "virtual" && flags.merge != "copy") {
+    throw InputError("command line", "--merge", "'" + flags.merge + "'", "expected virtual or copy");
+  }
+  if (flags.ranks_per_node < 0) {
+    throw InputError("command line", "--ranks-per-node", std::to_string(flags.ranks_per_node),
+                     "expected a whole number >= 1 (0: the ranks that share a machine)");
+  }
+  const SignalCancellation signals;  // SIGINT/SIGTERM stop every rank between two steps
+  MpiRunOptions options;
+  options.output = flags.output;
+  options.mode = flags.resume ? ArchiveOpenMode::kResume
+                              : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate);
+  options.threads = flags.threads;
+  options.command_line = CommandLine(flags) + " --mpi";
+  options.cancel = signals.flag();
+  options.ranks_per_node = flags.ranks_per_node;
+  options.merge = flags.merge == "copy" ? MergeKind::kCopy : MergeKind::kVirtual;
+  MpiFinalizer finalize_after_printing;
+  SweepProgress progress;
+  std::unique_ptr<ProgressPrinter> printer;
+  const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
+  MpiSweepReport report;
+  try {
+    report = RunStudyMpi(plan, options, &progress, [&](const MpiSweepReport& started) {
+      if (started.rank != 0 || flags.quiet) return;
+      std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
+      if (plan.shard().count > 1) std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count;
+      std::cerr << ", " << started.ranks << " MPI rank" << (started.ranks > 1 ? "s" : "") << " x " << threads
+                << " thread" << (threads > 1 ? "s" : "") << " on " << started.nodes << " node"
+                << (started.nodes > 1 ? "s" : "") << " -> " << flags.output << " (node shards "
+                << NodeArchivePath(flags.output, 0, started.nodes).filename().string()
+                << (started.nodes > 1 ? " ..." : "") << ")\n";
+      if (started.runs_complete_at_start > 0) {
+        std::cerr << "gesweep: resuming: " << started.runs_complete_at_start << " runs already complete, "
+                  << started.runs_to_do << " to run\n";
+      }
+      printer = std::make_unique<ProgressPrinter>(progress, started.runs_to_do > 0);
+    });
+  } catch (const std::exception& e) {
+    if (printer) printer->Stop();
+    std::cerr << "\ngesweep: error: " << e.what() << " (stopping every rank)\n";
+    AbortMpi(1);
+  }
+  if (printer) printer->Stop();
+  const bool speaks = report.rank == 0;
+  if (report.error_code != 0) {
+    if (speaks) {
+      std::cerr << "gesweep: error: " << report.error;
+      if (report.error_code == 1) std::cerr << " (the runs written so far are kept in the node shards; fix the cause and rerun with --resume)";
+      std::cerr << "\n";
+    }
+    return report.error_code;
+  }
+  if (speaks && (!flags.quiet || report.runs_failed > 0 || report.cancelled)) {
+    std::int64_t ran = 0;
+    for (const std::int64_t r : report.runs_per_rank) ran += r;
+    std::ostringstream line;
+    line << "gesweep: " << ran << " runs in " << FormatDuration(report.seconds) << " (" << std::fixed
+         << std::setprecision(1) << (report.seconds > 0 ? ran / report.seconds : 0.0) << " runs/s) on " << report.ranks
+         << " ranks (runs per rank:";
+    for (const std::int64_t r : report.runs_per_rank) line << " " << r;
+    line << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
+         << " pending in " << report.node_archives.size() << " node shard" << (report.node_archives.size() > 1 ? "s" : "");
+    if (report.merged) {
+      line << " -> " << flags.output << " ("
+           << (report.merge.kind == MergeKind::kVirtual ? "virtual: keep the node shards beside it"
+                                                        : "copied: self-contained")
+           << ")";
+    }
+    std::cerr << line.str() << "\n";
+  }
+  if (report.cancelled) {
+    if (speaks) std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
+    return signals.exit_code();
+  }
+  if (report.runs_failed > 0) {
+    if (speaks) {
+      std::cerr << "gesweep: " << report.runs_failed
+                << " runs failed; their status is 'failed' and runs/message says why\n";
+    }
+    return 3;
+  }
+  return 0;
+#else
+  (void)plan;
+  throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
+#endif
+}
+
 int Run(const RunFlags& flags) {
   if (flags.format != "text" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected text or json");
@@ -317,24 +413,10 @@ int Run(const RunFlags& flags) {
   if (flags.dry_run) return DryRun(plan, threads, flags);
   if (flags.output.empty())
     throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
-  if (flags.mpi) {
-#ifdef GESWEEP_HAVE_MPI
-    // mpirun -n R gesweep run ... --mpi (docs/cluster.md, "MPI"): RunStudyMpi initialises and
-    // finalises MPI itself; rank 0 alone writes the archive and prints.
-    const SignalCancellation signals;
-    MpiRunOptions options;
-    options.output = flags.output;
-    options.mode = flags.resume ? ArchiveOpenMode::kResume
-                                : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate);
-    options.threads = flags.threads;
-    options.command_line = CommandLine(flags) + " --mpi";
-    options.cancel = signals.flag();
-    options.signal = signals.signal_number();
-    options.quiet = flags.quiet;
-    return RunStudyMpi(plan, options);
-#else
-    throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
-#endif
+  if (flags.mpi) return RunMpi(flags, plan);
+  if (flags.ranks_per_node != 0 || flags.merge != "virtual") {
+    throw InputError("command line", flags.ranks_per_node != 0 ? "--ranks-per-node" : "--merge", "",
+                     "only with --mpi");
   }
 
   // From here on SIGINT/SIGTERM stop the sweep between two integration steps (exit 128 + signal);
@@ -453,6 +535,12 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
       app.add_flag("-q,--quiet", flags->quiet, "No progress output");
       app.add_flag("--mpi", flags->mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
+      app.add_option("--ranks-per-node", flags->ranks_per_node,
+                     "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
+                     "the ranks sharing a machine)");
+      app.add_option("--merge", flags->merge,
+                     "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
+                     "or copy (self-contained)");
       return [flags] { return Run(*flags); };
     }}};
 

@@ -20,7 +20,7 @@
 
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/archive_error.h"
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"

@@ -2,272 +2,154 @@
 
 #include <mpi.h>
 #include <tbb/concurrent_queue.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/info.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_pipeline.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <exception>
-#include <iomanip>
-#include <iostream>
-#include <sstream>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <regex>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
+#include "engine/archive/archive_layout.h"
 #include "engine/common/errors.h"
-#include "engine/sweep/runner.h"
+#include "engine/sweep/study.h"
 
 namespace gesweep {
 namespace {
 
-// Message tags of the protocol between the ranks and rank 0 (docs/cluster.md, "MPI").
-constexpr int kTagRequest = 1;  // rank -> 0: int32, batches wanted
-constexpr int kTagAssign = 2;   // 0 -> rank: int64[n], batch numbers (n = 0: no more work)
-constexpr int kTagResult = 3;   // rank -> 0: one finished batch, packed (PackBlock)
-constexpr int kTagDone = 4;     // rank -> 0: int64[2], batches sent and runs computed; the rank's last message
+// Message tags (docs/cluster.md, "MPI").
+constexpr int kTagRequest = 1;   // rank -> 0: int64[3] {batches wanted (0: I am done), runs done, runs failed}
+constexpr int kTagGrant = 2;     // 0 -> rank: int64[n] batch numbers (n = 0: no more)
+constexpr int kTagResult = 3;    // rank -> the owning node's writer: one filtered batch (PackBlock)
+constexpr int kTagFinished = 4;  // rank -> each writer: int64, the batches it sent that writer
+constexpr int kTagError = 5;     // rank -> 0: char[], why it cannot go on (stop handing out batches)
 
 // An idle main thread sleeps this long between polls: MPI's own blocking calls spin, which on a
 // shared or oversubscribed node takes a core from the compute threads.
 constexpr auto kIdlePoll = std::chrono::microseconds(200);
-// Batches rank 0 can hold received but not yet written: with the compute threads' buffers, this
-// bounds rank 0's memory; a full queue makes the senders wait (back-pressure).
-constexpr int kReceiveBuffers = 8;
-// Progress log line interval on rank 0 (a log, not a terminal bar: mpirun pipes stderr).
-constexpr double kLogInterval_s = 5.0;
+// Filtered batches a rank holds for sending (back-pressure on its pipeline beyond that).
+constexpr int kOutgoingBatches = 8;
+
+class MpiError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 void CheckMpi(int code, const char* what) {
   if (code == MPI_SUCCESS) return;
   char text[MPI_MAX_ERROR_STRING];
   int length = 0;
   MPI_Error_string(code, text, &length);
-  std::cerr << "gesweep: MPI error in " << what << ": " << std::string(text, static_cast<std::size_t>(length)) << "\n";
-  MPI_Abort(MPI_COMM_WORLD, 1);
+  throw MpiError(std::string("MPI error in ") + what + ": " + std::string(text, static_cast<std::size_t>(length)));
 }
 
-// Initialises MPI for the runner's lifetime (main thread only calls MPI: FUNNELED), and finalises
-// it when this object initialised it, also during unwinding.
-class MpiSession {
- public:
-  MpiSession() {
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (!initialized) {
-      int provided = 0;
-      CheckMpi(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
-      owner_ = true;
-      GESWEEP_DEMAND(provided >= MPI_THREAD_FUNNELED);
-    }
-  }
-  ~MpiSession() {
-    int finalized = 0;
-    MPI_Finalized(&finalized);
-    if (owner_ && !finalized) MPI_Finalize();
-  }
-  MpiSession(const MpiSession&) = delete;
-  MpiSession& operator=(const MpiSession&) = delete;
+// MPI for the runner: initialised here when the caller has not (FUNNELED: only the main thread
+// calls MPI); finalised by FinalizeMpi once the caller has printed the outcome -- a rank that
+// finalises before its output is out may lose it when mpirun is stopping the job.
+void EnsureMpi() {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (initialized) return;
+  int provided = 0;
+  CheckMpi(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+  GESWEEP_DEMAND(provided >= MPI_THREAD_FUNNELED);
+}
 
- private:
-  bool owner_ = false;
+// ---- Who is who ----
+
+struct Topology {
+  int rank = 0, ranks = 1;
+  int node = 0, nodes = 1;  // node index: the order of the nodes' writers by world rank
+  bool writer = false;      // lowest rank of its node
+  std::vector<int> writer_rank;  // by node
+  std::vector<int> node_of;      // by world rank
 };
 
-// ---- Packing a batch (bit-exact copies of the values; ranks of one job share the byte order) ----
-
-template <typename T>
-void Append(std::vector<char>& out, const T* values, std::size_t count) {
-  const auto bytes = count * sizeof(T);
-  const std::size_t at = out.size();
-  out.resize(at + bytes);
-  if (bytes) std::memcpy(out.data() + at, values, bytes);
+int RanksPerNode(const MpiRunOptions& options) {
+  if (options.ranks_per_node > 0) return options.ranks_per_node;
+  if (const char* env = std::getenv("GESWEEP_RANKS_PER_NODE"); env && *env) {
+    char* end = nullptr;
+    const long value = std::strtol(env, &end, 10);
+    if (end && *end == '\0' && value >= 1 && value <= 1 << 20) return static_cast<int>(value);
+  }
+  return 0;
 }
 
-class Unpacker {
- public:
-  Unpacker(const char* data, std::size_t size) : data_(data), size_(size) {}
-  template <typename T>
-  void Take(T* values, std::size_t count) {
-    const auto bytes = count * sizeof(T);
-    GESWEEP_DEMAND(at_ + bytes <= size_);
-    if (bytes) std::memcpy(values, data_ + at_, bytes);
-    at_ += bytes;
+Topology MakeTopology(int ranks_per_node) {
+  Topology t;
+  MPI_Comm_rank(MPI_COMM_WORLD, &t.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &t.ranks);
+  MPI_Comm node_comm = MPI_COMM_NULL;
+  if (ranks_per_node > 0) {
+    CheckMpi(MPI_Comm_split(MPI_COMM_WORLD, t.rank / ranks_per_node, t.rank, &node_comm), "MPI_Comm_split");
+  } else {
+    CheckMpi(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, t.rank, MPI_INFO_NULL, &node_comm),
+             "MPI_Comm_split_type");
   }
-  bool AtEnd() const { return at_ == size_; }
+  int node_rank = 0;
+  MPI_Comm_rank(node_comm, &node_rank);
+  t.writer = node_rank == 0;
+  std::vector<int> is_writer(static_cast<std::size_t>(t.ranks), 0);
+  const int mine = t.writer ? 1 : 0;
+  CheckMpi(MPI_Allgather(&mine, 1, MPI_INT, is_writer.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  for (int r = 0; r < t.ranks; ++r) {
+    if (is_writer[static_cast<std::size_t>(r)]) {
+      if (r == t.rank) t.node = static_cast<int>(t.writer_rank.size());
+      t.writer_rank.push_back(r);
+    }
+  }
+  t.nodes = static_cast<int>(t.writer_rank.size());
+  CheckMpi(MPI_Bcast(&t.node, 1, MPI_INT, 0, node_comm), "MPI_Bcast");
+  MPI_Comm_free(&node_comm);
+  t.node_of.resize(static_cast<std::size_t>(t.ranks));
+  CheckMpi(MPI_Allgather(&t.node, 1, MPI_INT, t.node_of.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Allgather");
+  return t;
+}
 
- private:
-  const char* data_;
-  std::size_t size_;
-  std::size_t at_ = 0;
+// Node k's part of the plan: batches [first, first + count). Contiguous, in node order, about B/K
+// each; a node whose only batch would be the plan's partial last one gives it to the node before
+// (its shard would be smaller than a batch, with chunks of another size than the workers make).
+struct BatchRange {
+  std::int64_t first = 0, count = 0;
 };
 
-void PackBlock(const SweepPlan& plan, const ResultBlock& block, std::vector<char>& out) {
-  out.clear();
-  out.reserve(static_cast<std::size_t>(BatchMessageBytes(plan, block.rows)));
-  const auto n = static_cast<std::size_t>(block.rows);
-  const std::int64_t header[2] = {block.block_index, block.rows};
-  Append(out, header, 2);
-  Append(out, block.design_index.data(), n);
-  Append(out, block.run_id.data(), n);
-  Append(out, block.status.data(), n);
-  for (std::size_t c = 0; c < block.design.size(); ++c) Append(out, block.design[c].data(), n);
-  const auto& columns = plan.schema().columns;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    Append(out, block.results[c].data(), n * static_cast<std::size_t>(columns[c].doubles_per_run()));
+std::vector<BatchRange> NodeRanges(const SweepPlan& plan, int nodes) {
+  const std::int64_t batches = plan.block_count();
+  std::vector<BatchRange> ranges(static_cast<std::size_t>(nodes));
+  for (int k = 0; k < nodes; ++k) {
+    const std::int64_t a = batches * k / nodes, b = batches * (k + 1) / nodes;
+    ranges[static_cast<std::size_t>(k)] = {a, b - a};
   }
-  for (std::size_t r = 0; r < n; ++r) {
-    const auto length = static_cast<std::uint16_t>(block.message[r].size());
-    Append(out, &length, 1);
-    Append(out, block.message[r].data(), length);
+  const bool last_partial = plan.run_count() % plan.chunk_runs() != 0;
+  BatchRange& last = ranges.back();
+  if (nodes > 1 && last_partial && last.count == 1) {
+    for (int k = nodes - 2; k >= 0; --k) {
+      if (ranges[static_cast<std::size_t>(k)].count > 0) {
+        ranges[static_cast<std::size_t>(k)].count += 1;
+        last = {last.first + 1, 0};
+        break;
+      }
+    }
   }
+  return ranges;
 }
 
-// Unpacks a batch into `block` (allocated for `plan`) and checks that it lands where the plan puts
-// it: a batch's rows are the design runs first_run + block_index·chunk_runs onwards.
-void UnpackBlock(const SweepPlan& plan, const char* data, std::size_t size, ResultBlock& block) {
-  Unpacker in(data, size);
-  std::int64_t header[2] = {0, 0};
-  in.Take(header, 2);
-  block.block_index = header[0];
-  block.first_row = header[0] * plan.chunk_runs();
-  GESWEEP_DEMAND(header[0] >= 0 && header[0] < plan.block_count());
-  block.rows = static_cast<int>(header[1]);
-  GESWEEP_DEMAND(block.rows == std::min<std::int64_t>(plan.chunk_runs(), plan.run_count() - block.first_row));
-  const auto n = static_cast<std::size_t>(block.rows);
-  in.Take(block.design_index.data(), n);
-  in.Take(block.run_id.data(), n);
-  in.Take(block.status.data(), n);
-  for (std::size_t r = 0; r < n; ++r) {
-    GESWEEP_DEMAND(block.design_index[r] == plan.first_run() + block.first_row + static_cast<std::int64_t>(r));
+int OwnerOf(const std::vector<BatchRange>& ranges, std::int64_t batch) {
+  for (std::size_t k = 0; k < ranges.size(); ++k) {
+    if (batch >= ranges[k].first && batch < ranges[k].first + ranges[k].count) return static_cast<int>(k);
   }
-  for (std::size_t c = 0; c < block.design.size(); ++c) in.Take(block.design[c].data(), n);
-  const auto& columns = plan.schema().columns;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    in.Take(block.results[c].data(), n * static_cast<std::size_t>(columns[c].doubles_per_run()));
-  }
-  for (std::size_t r = 0; r < n; ++r) {
-    std::uint16_t length = 0;
-    in.Take(&length, 1);
-    GESWEEP_DEMAND(length <= kMessageLength);
-    block.message[r].resize(length);
-    in.Take(block.message[r].data(), length);
-  }
-  GESWEEP_DEMAND(in.AtEnd());
+  GESWEEP_DEMAND(false);
+  return -1;
 }
-
-// ---- One rank's compute threads ----
-
-// Computes batches with oneTBB, the way RunSweep does (a pipeline of batches, the runs of a batch
-// in parallel, a workspace per thread), but fed batch numbers one at a time from outside and
-// handing finished batches back through a queue: the main thread talks MPI meanwhile.
-class BatchEngine {
- public:
-  BatchEngine(const SweepPlan& plan, int threads, int buffers) : plan_(plan), threads_(threads) {
-    pool_.resize(static_cast<std::size_t>(buffers));
-    for (auto& block : pool_) {
-      block.Allocate(plan);
-      free_.push(&block);
-    }
-    thread_ = std::thread([this] { Loop(); });
-  }
-  ~BatchEngine() {
-    Close();
-    thread_.join();
-  }
-  BatchEngine(const BatchEngine&) = delete;
-  BatchEngine& operator=(const BatchEngine&) = delete;
-
-  /// Queues batch `block_index` (never blocks).
-  void Push(std::int64_t block_index) { todo_.push(block_index); }
-  /// No more batches: the engine finishes the queued ones and stops.
-  void Close() {
-    if (!closed_) todo_.push(-1);
-    closed_ = true;
-  }
-  /// A finished batch, if any; give it back with Release once sent or written.
-  bool TryPop(ResultBlock*& block) { return done_.try_pop(block); }
-  /// Returns a batch buffer (any thread).
-  void Release(ResultBlock* block) { free_.push(block); }
-  /// The exception that stopped the compute threads (none for numerical failures: those are data).
-  std::exception_ptr error() const { return finished_.load() ? error_ : nullptr; }
-  std::int64_t runs_done() const { return runs_done_.load(); }
-
- private:
-  void Loop() {
-    const int tokens = 2 * threads_;  // as RunSweep: two batches in flight per thread
-    tbb::enumerable_thread_specific<RunWorkspace> workspaces([this] { return RunWorkspace(plan_); });
-    try {
-      tbb::task_arena arena(threads_);
-      arena.execute([&] {
-        tbb::parallel_pipeline(
-            static_cast<std::size_t>(tokens),
-            tbb::make_filter<void, ResultBlock*>(
-                tbb::filter_mode::serial_in_order,
-                [&](tbb::flow_control& control) -> ResultBlock* {
-                  std::int64_t index = -1;
-                  todo_.pop(index);
-                  if (index < 0) {
-                    control.stop();
-                    return nullptr;
-                  }
-                  ResultBlock* block = nullptr;
-                  free_.pop(block);
-                  block->Reset(plan_, index);
-                  return block;
-                }) &
-                tbb::make_filter<ResultBlock*, ResultBlock*>(
-                    tbb::filter_mode::parallel,
-                    [&](ResultBlock* block) {
-                      tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1),
-                                        [&](const tbb::blocked_range<int>& range) {
-                                          RunWorkspace& workspace = workspaces.local();
-                                          for (int row = range.begin(); row != range.end(); ++row) {
-                                            ExecuteRun(plan_, block->design_index[static_cast<std::size_t>(row)],
-                                                       workspace, *block, row);
-                                          }
-                                        });
-                      runs_done_.fetch_add(block->rows, std::memory_order_relaxed);
-                      return block;
-                    }) &
-                tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
-                                                     [&](ResultBlock* block) { done_.push(block); }));
-      });
-    } catch (...) {
-      error_ = std::current_exception();
-    }
-    finished_.store(true);
-  }
-
-  const SweepPlan& plan_;
-  int threads_;
-  std::vector<ResultBlock> pool_;
-  tbb::concurrent_bounded_queue<ResultBlock*> free_;
-  tbb::concurrent_bounded_queue<std::int64_t> todo_;
-  tbb::concurrent_queue<ResultBlock*> done_;
-  std::atomic<std::int64_t> runs_done_{0};
-  std::exception_ptr error_;
-  std::atomic<bool> finished_{false};
-  bool closed_ = false;
-  std::thread thread_;
-};
-
-// Stops the job when a rank's compute threads died of something other than a run's failure (which
-// is data): the other ranks would otherwise wait for its batches forever.
-void AbortOnEngineError(const BatchEngine& engine, int rank) {
-  if (const std::exception_ptr error = engine.error()) {
-    try {
-      std::rethrow_exception(error);
-    } catch (const std::exception& e) {
-      std::cerr << "gesweep: error: rank " << rank << ": " << e.what() << "\n";
-    } catch (...) {
-      std::cerr << "gesweep: error: rank " << rank << ": unknown exception\n";
-    }
-    MPI_Abort(MPI_COMM_WORLD, 1);
-  }
-}
-
-bool Cancelled(const MpiRunOptions& options) { return options.cancel != nullptr && options.cancel->load(); }
 
 // What every rank must agree on before anything is written: the same study (fingerprint), design,
 // shard, batch size and output columns.
@@ -281,365 +163,690 @@ std::vector<std::int64_t> PlanSignature(const SweepPlan& plan) {
           doubles};
 }
 
-// ---- A compute rank (rank > 0) ----
-
-void RunWorkerRank(const SweepPlan& plan, const MpiRunOptions& options, int threads, int target, int rank,
-                   MpiSweepReport& report) {
-  BatchEngine engine(plan, threads, target + 1);
-  std::vector<char> buffer;
-  std::vector<std::int64_t> assigned;
-  int outstanding = 0;  // batches received and not yet sent back
-  bool request_pending = false;
-  bool exhausted = false;
-  std::int64_t sent = 0;
-  for (;;) {
-    bool progressed = false;
-    AbortOnEngineError(engine, rank);
-    if (!request_pending && !exhausted && Cancelled(options)) {
-      exhausted = true;  // ask for nothing more; finish and send what we hold
-      engine.Close();
-    }
-    if (!request_pending && !exhausted && outstanding < target) {
-      const int want = target - outstanding;
-      CheckMpi(MPI_Send(&want, 1, MPI_INT, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send request");
-      request_pending = true;
-      progressed = true;
-    }
-    if (request_pending) {
-      int ready = 0;
-      MPI_Status status;
-      CheckMpi(MPI_Iprobe(0, kTagAssign, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe assign");
-      if (ready) {
-        int count = 0;
-        MPI_Get_count(&status, MPI_INT64_T, &count);
-        assigned.resize(static_cast<std::size_t>(count));
-        CheckMpi(MPI_Recv(assigned.data(), count, MPI_INT64_T, 0, kTagAssign, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-                 "MPI_Recv assign");
-        request_pending = false;
-        progressed = true;
-        if (count == 0) {
-          exhausted = true;
-          engine.Close();
-        }
-        for (const std::int64_t index : assigned) engine.Push(index);
-        outstanding += count;
-      }
-    }
-    ResultBlock* block = nullptr;
-    while (engine.TryPop(block)) {
-      PackBlock(plan, *block, buffer);
-      engine.Release(block);
-      CheckMpi(MPI_Send(buffer.data(), static_cast<int>(buffer.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD),
-               "MPI_Send result");
-      --outstanding;
-      ++sent;
-      progressed = true;
-    }
-    if (exhausted && !request_pending && outstanding == 0) break;
-    if (!progressed) std::this_thread::sleep_for(kIdlePoll);
+// Rank 0 receives one text from every rank (empty for most).
+std::vector<std::string> GatherText(const std::string& text, int ranks) {
+  const int length = static_cast<int>(text.size());
+  std::vector<int> lengths(static_cast<std::size_t>(ranks)), offsets(static_cast<std::size_t>(ranks));
+  CheckMpi(MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  int total = 0;
+  for (int r = 0; r < ranks; ++r) {
+    offsets[static_cast<std::size_t>(r)] = total;
+    total += lengths[static_cast<std::size_t>(r)];
   }
-  report.runs_computed = engine.runs_done();
-  const std::int64_t done[2] = {sent, report.runs_computed};
-  CheckMpi(MPI_Send(done, 2, MPI_INT64_T, 0, kTagDone, MPI_COMM_WORLD), "MPI_Send done");
+  std::vector<char> all(static_cast<std::size_t>(std::max(total, 1)));
+  CheckMpi(MPI_Gatherv(text.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR, 0,
+                       MPI_COMM_WORLD),
+           "MPI_Gatherv");
+  std::vector<std::string> texts(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) {
+    texts[static_cast<std::size_t>(r)].assign(all.data() + offsets[static_cast<std::size_t>(r)],
+                                              static_cast<std::size_t>(lengths[static_cast<std::size_t>(r)]));
+  }
+  return texts;
 }
 
-// ---- Rank 0: dispatcher, writer, and a compute rank too ----
-
-struct WriteItem {
-  ResultBlock* block = nullptr;
-  bool local = false;  // from rank 0's own engine (else a receive buffer)
-};
-
-struct Rank0Outcome {
-  bool cancelled = false;
-  std::exception_ptr writer_error;
-  std::vector<std::int64_t> runs_per_rank;
-};
-
-Rank0Outcome RunRank0(const SweepPlan& plan, const std::vector<std::int64_t>& pending, ResultSink& sink,
-                      const MpiRunOptions& options, int threads, int target, int ranks, MpiSweepReport& report) {
-  Rank0Outcome outcome;
-  outcome.runs_per_rank.assign(static_cast<std::size_t>(ranks), 0);
-  BatchEngine engine(plan, threads, target + kReceiveBuffers + 1);
-
-  std::vector<ResultBlock> receive_pool(kReceiveBuffers);
-  tbb::concurrent_queue<ResultBlock*> receive_free;
-  for (auto& block : receive_pool) {
-    block.Allocate(plan);
-    receive_free.push(&block);
-  }
-
-  // The one writer thread, as in RunSweep: batches in any order, each at its design position.
-  tbb::concurrent_bounded_queue<WriteItem> write_queue;
-  std::atomic<bool> writer_failed{false};
-  std::atomic<std::int64_t> runs_written{0};
-  std::thread writer([&] {
-    for (;;) {
-      WriteItem item;
-      write_queue.pop(item);
-      if (item.block == nullptr) break;
-      if (!writer_failed.load()) {
-        try {
-          sink.Write(*item.block);
-          runs_written.fetch_add(item.block->rows, std::memory_order_relaxed);
-        } catch (...) {
-          outcome.writer_error = std::current_exception();
-          writer_failed.store(true);
-        }
-      }
-      if (item.local) {
-        engine.Release(item.block);
-      } else {
-        receive_free.push(item.block);
+// Every rank learns the worst code (2 > 1 > 0) and rank 0 the first text of a rank with that code.
+int AgreeOnError(int code, const std::string& text, const Topology& t, std::string* first) {
+  int worst = 0;
+  CheckMpi(MPI_Allreduce(&code, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  if (worst == 0) return 0;
+  const std::vector<std::string> texts = GatherText(code == worst ? text : std::string(), t.ranks);
+  if (t.rank == 0) {
+    for (const auto& candidate : texts) {
+      if (!candidate.empty()) {
+        *first = candidate;
+        break;
       }
     }
-  });
+  }
+  return worst;
+}
 
-  const auto total = static_cast<std::int64_t>(pending.size());
-  std::int64_t next = 0;
-  int local_outstanding = 0;
-  bool stop_assigning = false;
-  int workers_done = 0;
-  std::int64_t results_expected = 0, results_received = 0;
-  std::vector<char> buffer;
-  std::vector<std::int64_t> grant;
-  const auto start = std::chrono::steady_clock::now();
-  auto last_log = start;
-  // Guided self-scheduling: a rank gets at most its share of what is left, so the last batches
-  // spread over every rank instead of queueing behind one.
-  auto share = [&](std::int64_t want) {
-    const std::int64_t remaining = total - next;
-    const std::int64_t fair = std::max<std::int64_t>(1, remaining / (2 * ranks));
-    return std::min({want, fair, remaining});
+// ---- A filtered batch on the wire ----
+
+void PackBlock(const ResultBlock& block, std::vector<char>& out) {
+  std::size_t bytes = 5 * 8;
+  for (int c = 0; c < block.chunk_count; ++c) bytes += 4 * 8 + block.chunks[static_cast<std::size_t>(c)].bytes.size();
+  out.resize(bytes);
+  char* at = out.data();
+  auto put = [&](std::int64_t value) {
+    std::memcpy(at, &value, 8);
+    at += 8;
   };
-
-  for (;;) {
-    bool progressed = false;
-    AbortOnEngineError(engine, 0);
-    if (!stop_assigning && (Cancelled(options) || writer_failed.load())) {
-      stop_assigning = true;
-      outcome.cancelled = next < total;
-    }
-    const bool no_more = stop_assigning || next >= total;
-    while (!no_more && next < total && local_outstanding < target) {
-      engine.Push(pending[static_cast<std::size_t>(next++)]);
-      ++local_outstanding;
-      progressed = true;
-    }
-    if (stop_assigning || next >= total) engine.Close();
-
-    ResultBlock* block = nullptr;
-    while (engine.TryPop(block)) {
-      write_queue.push({block, true});
-      --local_outstanding;
-      progressed = true;
-    }
-
-    int ready = 0;
-    MPI_Status status;
-    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe request");
-    if (ready) {
-      int want = 0;
-      CheckMpi(MPI_Recv(&want, 1, MPI_INT, status.MPI_SOURCE, kTagRequest, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-               "MPI_Recv request");
-      const std::int64_t n = (stop_assigning || next >= total) ? 0 : share(want);
-      grant.assign(pending.begin() + next, pending.begin() + next + n);
-      next += n;
-      CheckMpi(MPI_Send(grant.data(), static_cast<int>(n), MPI_INT64_T, status.MPI_SOURCE, kTagAssign, MPI_COMM_WORLD),
-               "MPI_Send assign");
-      progressed = true;
-    }
-    ResultBlock* receive_block = nullptr;
-    if (receive_free.try_pop(receive_block)) {
-      CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe result");
-      if (ready) {
-        int bytes = 0;
-        MPI_Get_count(&status, MPI_BYTE, &bytes);
-        buffer.resize(static_cast<std::size_t>(bytes));
-        CheckMpi(MPI_Recv(buffer.data(), bytes, MPI_BYTE, status.MPI_SOURCE, kTagResult, MPI_COMM_WORLD,
-                          MPI_STATUS_IGNORE),
-                 "MPI_Recv result");
-        UnpackBlock(plan, buffer.data(), buffer.size(), *receive_block);
-        write_queue.push({receive_block, false});
-        ++results_received;
-        progressed = true;
-      } else {
-        receive_free.push(receive_block);
-      }
-    }
-    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagDone, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe done");
-    if (ready) {
-      std::int64_t done[2] = {0, 0};
-      CheckMpi(MPI_Recv(done, 2, MPI_INT64_T, status.MPI_SOURCE, kTagDone, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-               "MPI_Recv done");
-      results_expected += done[0];
-      outcome.runs_per_rank[static_cast<std::size_t>(status.MPI_SOURCE)] = done[1];
-      ++workers_done;
-      progressed = true;
-    }
-    if (workers_done == ranks - 1 && results_received == results_expected && (stop_assigning || next >= total) &&
-        local_outstanding == 0) {
-      break;
-    }
-    if (!options.quiet) {
-      const auto now = std::chrono::steady_clock::now();
-      if (std::chrono::duration<double>(now - last_log).count() >= kLogInterval_s) {
-        last_log = now;
-        const double elapsed = std::chrono::duration<double>(now - start).count();
-        const std::int64_t written = runs_written.load();
-        std::cerr << "gesweep: " << written << " runs written, " << next << "/" << total << " batches handed out, "
-                  << std::fixed << std::setprecision(1) << written / elapsed << " runs/s, " << ranks << " ranks\n"
-                  << std::flush;
-      }
-    }
-    if (!progressed) std::this_thread::sleep_for(kIdlePoll);
+  put(block.block_index);
+  put(block.rows);
+  put(block.chunk_count);
+  put(block.runs_failed);
+  put(0);
+  for (int c = 0; c < block.chunk_count; ++c) {
+    const StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
+    put(chunk.dataset);
+    put(chunk.row);
+    put(chunk.filter_mask);
+    put(static_cast<std::int64_t>(chunk.bytes.size()));
   }
-  write_queue.push({nullptr, false});
-  writer.join();
-  report.runs_computed = engine.runs_done();
-  outcome.runs_per_rank[0] = report.runs_computed;
-  return outcome;
+  for (int c = 0; c < block.chunk_count; ++c) {
+    const StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
+    std::memcpy(at, chunk.bytes.data(), chunk.bytes.size());
+    at += chunk.bytes.size();
+  }
+}
+
+// Unpacks a received batch into `block` and checks that it is one of `range`'s batches of `plan`,
+// with chunks of the layout's datasets.
+void UnpackBlock(const SweepPlan& plan, const archive::ArchiveLayout& layout, const BatchRange& range,
+                 const std::vector<char>& data, ResultBlock& block) {
+  const char* at = data.data();
+  const char* end = data.data() + data.size();
+  auto get = [&]() {
+    GESWEEP_DEMAND(at + 8 <= end);
+    std::int64_t value = 0;
+    std::memcpy(&value, at, 8);
+    at += 8;
+    return value;
+  };
+  block.block_index = get();
+  GESWEEP_DEMAND(block.block_index >= range.first && block.block_index < range.first + range.count);
+  block.first_row = block.block_index * plan.chunk_runs();
+  block.rows = static_cast<int>(get());
+  GESWEEP_DEMAND(block.rows == std::min<std::int64_t>(plan.chunk_runs(), plan.run_count() - block.first_row));
+  const std::int64_t count = get();
+  GESWEEP_DEMAND(count >= 1 && count <= 1 << 24);
+  block.runs_failed = static_cast<int>(get());
+  get();
+  block.chunk_count = static_cast<int>(count);
+  if (block.chunks.size() < static_cast<std::size_t>(count)) block.chunks.resize(static_cast<std::size_t>(count));
+  std::vector<std::int64_t> sizes(static_cast<std::size_t>(count));
+  for (std::int64_t c = 0; c < count; ++c) {
+    StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
+    chunk.dataset = static_cast<int>(get());
+    GESWEEP_DEMAND(chunk.dataset >= 0 && chunk.dataset < static_cast<int>(layout.datasets().size()));
+    chunk.row = get();
+    GESWEEP_DEMAND(chunk.row >= 0 && chunk.row < block.rows);
+    chunk.filter_mask = static_cast<std::uint32_t>(get());
+    sizes[static_cast<std::size_t>(c)] = get();
+  }
+  for (std::int64_t c = 0; c < count; ++c) {
+    const auto size = static_cast<std::size_t>(sizes[static_cast<std::size_t>(c)]);
+    GESWEEP_DEMAND(size >= 1 && at + size <= end);
+    block.chunks[static_cast<std::size_t>(c)].bytes.assign(at, at + size);
+    at += size;
+  }
+  GESWEEP_DEMAND(at == end);
+}
+
+// ---- The transport ----
+
+// Batch numbers for this rank's pipeline, pushed by the main thread (-1: no more).
+class QueueSource final : public BatchSource {
+ public:
+  std::int64_t Next() override {
+    std::int64_t index = -1;
+    queue_.pop(index);
+    return index;
+  }
+  void Push(std::int64_t index) { queue_.push(index); }
+
+ private:
+  tbb::concurrent_bounded_queue<std::int64_t> queue_;
+};
+
+// Where this rank's finished batches go: this node's shard archive when this rank is the node's
+// writer and the batch is the node's, else a packed message for the owning node's writer (sent by
+// the main thread).
+class TransportSink final : public ResultSink {
+ public:
+  TransportSink(const SweepPlan& plan, const std::vector<BatchRange>& ranges, int node, ArchiveWriter* writer,
+                std::mutex* write_mutex)
+      : layout_(plan), ranges_(ranges), node_(node), writer_(writer), write_mutex_(write_mutex) {
+    outgoing_.set_capacity(kOutgoingBatches);
+  }
+
+  void Encode(ResultBlock& block) override { layout_.Encode(block); }
+
+  void Write(const ResultBlock& block) override {
+    const int owner = OwnerOf(ranges_, block.block_index);
+    if (owner == node_ && writer_ != nullptr) {
+      std::lock_guard<std::mutex> lock(*write_mutex_);
+      writer_->Write(block);
+    } else {
+      auto message = std::make_unique<Outgoing>();
+      message->node = owner;
+      PackBlock(block, message->bytes);
+      outgoing_.push(std::move(message));
+    }
+    delivered_.fetch_add(1);
+  }
+
+  struct Outgoing {
+    int node = 0;
+    std::vector<char> bytes;
+    MPI_Request request = MPI_REQUEST_NULL;
+  };
+  bool TryTake(std::unique_ptr<Outgoing>& message) { return outgoing_.try_pop(message); }
+  bool outgoing_empty() const { return outgoing_.empty(); }
+  std::int64_t delivered() const { return delivered_.load(); }
+  const archive::ArchiveLayout& layout() const { return layout_; }
+
+ private:
+  archive::ArchiveLayout layout_;
+  const std::vector<BatchRange>& ranges_;
+  int node_;
+  ArchiveWriter* writer_;
+  std::mutex* write_mutex_;
+  tbb::concurrent_bounded_queue<std::unique_ptr<Outgoing>> outgoing_;
+  std::atomic<std::int64_t> delivered_{0};
+};
+
+// Rank 0's book of the batches still to hand out, one queue per node.
+class Dispatcher {
+ public:
+  Dispatcher(std::vector<std::deque<std::int64_t>> pending, int ranks) : pending_(std::move(pending)), ranks_(ranks) {
+    for (const auto& queue : pending_) remaining_ += static_cast<std::int64_t>(queue.size());
+  }
+  // Up to `want` batches for a rank of `node`: its node's first, then (once they are gone) from the
+  // end of the node with the most left. Guided: at most remaining / (2·ranks), at least 1.
+  std::vector<std::int64_t> Grant(int node, std::int64_t want) {
+    std::vector<std::int64_t> out;
+    if (stopped_ || remaining_ == 0 || want <= 0) return out;
+    const std::int64_t fair = std::max<std::int64_t>(1, remaining_ / (2 * ranks_));
+    const std::int64_t n = std::min(want, fair);
+    auto& own = pending_[static_cast<std::size_t>(node)];
+    while (static_cast<std::int64_t>(out.size()) < n && !own.empty()) {
+      out.push_back(own.front());
+      own.pop_front();
+    }
+    while (static_cast<std::int64_t>(out.size()) < n) {
+      std::size_t victim = 0;
+      for (std::size_t k = 1; k < pending_.size(); ++k)
+        if (pending_[k].size() > pending_[victim].size()) victim = k;
+      if (pending_[victim].empty()) break;
+      out.push_back(pending_[victim].back());
+      pending_[victim].pop_back();
+    }
+    remaining_ -= static_cast<std::int64_t>(out.size());
+    return out;
+  }
+  void Stop() { stopped_ = true; }
+  bool stopped() const { return stopped_; }
+  std::int64_t remaining() const { return remaining_; }
+
+ private:
+  std::vector<std::deque<std::int64_t>> pending_;
+  int ranks_;
+  std::int64_t remaining_ = 0;
+  bool stopped_ = false;
+};
+
+bool Cancelled(const MpiRunOptions& options) { return options.cancel != nullptr && options.cancel->load(); }
+
+std::string ErrorText(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown exception";
+  }
 }
 
 }  // namespace
 
+std::filesystem::path NodeArchivePath(const std::filesystem::path& output, int node, int nodes) {
+  std::filesystem::path stem = output;
+  if (stem.extension() == ".h5") stem.replace_extension();
+  return std::filesystem::path(stem.string() + ".node" + std::to_string(node) + "-of-" + std::to_string(nodes) + ".h5");
+}
+
 std::int64_t BatchMessageBytes(const SweepPlan& plan, int rows) {
   std::int64_t doubles = plan.design().column_count();
   for (const auto& column : plan.schema().columns) doubles += column.doubles_per_run();
-  // header; per run: design index, run id, status, message length; the doubles
-  return 16 + static_cast<std::int64_t>(rows) * (8 + 8 + 1 + 2 + 8 * doubles);
+  // per run: design index, run id, status; the doubles (messages are sparse)
+  return static_cast<std::int64_t>(rows) * (8 + 8 + 1 + 8 * doubles);
 }
 
-int RunStudyMpi(SweepPlan& plan, const MpiRunOptions& options, MpiSweepReport* report_out) {
-  MpiSession session;
-  int rank = 0, ranks = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+void FinalizeMpi() {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  if (initialized && !finalized) MPI_Finalize();
+}
+
+[[noreturn]] void AbortMpi(int code) {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  if (initialized && !finalized) MPI_Abort(MPI_COMM_WORLD, code);
+  std::exit(code);
+}
+
+MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, SweepProgress* progress,
+                           const MpiStartCallback& on_started) {
+  EnsureMpi();
+  SweepProgress local_progress;
+  SweepProgress& shown = progress ? *progress : local_progress;
   MpiSweepReport report;
-  report.ranks = ranks;
+  const Topology t = MakeTopology(RanksPerNode(options));
+  report.rank = t.rank;
+  report.ranks = t.ranks;
+  report.node = t.node;
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   const int prefetch = options.prefetch_batches > 0 ? options.prefetch_batches : threads;
-  const int target = 2 * threads + prefetch;  // batches a rank holds: the pipeline's tokens + prefetch
+  const std::int64_t target = 2 * threads + prefetch;  // batches a rank holds: the pipeline's tokens + prefetch
 
   // 1. Every rank must have built the same plan (a study file that differs between nodes would
   //    otherwise mix two studies in one archive).
-  const std::vector<std::int64_t> mine = PlanSignature(plan);
-  std::vector<std::int64_t> lowest(mine.size()), highest(mine.size());
-  const int n = static_cast<int>(mine.size());
-  CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
-  CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
-  if (lowest != highest) {
-    if (rank == 0) {
-      std::cerr << "gesweep: error: the " << ranks << " MPI ranks did not build the same sweep (study fingerprint, "
-                << "design, shard or batch size differ): every node must see the same study and aircraft files\n";
+  {
+    const std::vector<std::int64_t> mine = PlanSignature(plan);
+    std::vector<std::int64_t> lowest(mine.size()), highest(mine.size());
+    const int n = static_cast<int>(mine.size());
+    CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
+    CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+    if (lowest != highest) {
+      report.error_code = 2;
+      report.error = "the " + std::to_string(t.ranks) +
+                     " MPI ranks did not build the same sweep (study fingerprint, design, shard or batch size "
+                     "differ): every node must see the same study and aircraft files";
+      return report;
     }
-    return 2;
   }
 
-  // 2. Rank 0 opens the archive (the only rank that touches it) and tells the others the batch size
-  //    (a resumed archive keeps its own) or that it could not.
+  // 2. The nodes' parts of the plan and their shard archives.
+  const std::vector<BatchRange> ranges = NodeRanges(plan, t.nodes);
+  report.nodes = t.nodes;
+  for (int k = 0; k < t.nodes; ++k)
+    if (ranges[static_cast<std::size_t>(k)].count > 0)
+      report.node_archives.push_back(NodeArchivePath(options.output, k, t.nodes).string());
+  const bool writes = t.writer && ranges[static_cast<std::size_t>(t.node)].count > 0;
+  report.writer = writes;
+
+  std::string error;
+  int code = 0;
+  if (t.rank == 0) {
+    try {
+      const std::string out = options.output.string();
+      std::error_code ec;
+      if (std::filesystem::is_directory(options.output, ec)) {
+        throw InputError("command line", "-o", out, "is a directory; expected an archive file name such as out.h5");
+      }
+      if (options.mode == ArchiveOpenMode::kCreate && std::filesystem::exists(options.output, ec)) {
+        throw InputError("command line", "-o", out, "already exists; pass --resume to continue it or --force to replace it");
+      }
+      // Node shards of another node count: they cannot be resumed by this layout.
+      std::filesystem::path directory = options.output.parent_path();
+      if (directory.empty()) directory = ".";
+      std::filesystem::path stem = options.output.filename();
+      if (stem.extension() == ".h5") stem.replace_extension();
+      const std::regex pattern(std::regex_replace(stem.string(), std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
+                               R"(\.node\d+-of-(\d+)\.h5)");
+      if (std::filesystem::is_directory(directory, ec)) {
+        for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
+          std::smatch match;
+          const std::string name = entry.path().filename().string();
+          if (!std::regex_match(name, match, pattern) || std::stoi(match[1].str()) == t.nodes) continue;
+          if (options.mode == ArchiveOpenMode::kForce) {
+            std::filesystem::remove(entry.path(), ec);
+          } else {
+            throw InputError("command line", "-o", out,
+                             "has node shards of a run on " + match[1].str() + " nodes (" + entry.path().string() +
+                                 "), this run has " + std::to_string(t.nodes) +
+                                 (options.mode == ArchiveOpenMode::kResume
+                                      ? "; resume with as many nodes (GESWEEP_RANKS_PER_NODE or the same allocation)"
+                                      : "; pass --force to replace them or --resume with as many nodes"));
+          }
+        }
+      }
+    } catch (const InputError& e) {
+      code = 2;
+      error = e.what();
+    }
+  }
+  if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
+
+  // Writers open their node's shard (the ordinary ArchiveWriter: crash safety, --resume).
+  std::unique_ptr<SweepPlan> node_plan;
   std::unique_ptr<ArchiveWriter> writer;
   ArchiveOpenReport opened;
-  std::exception_ptr open_error;
-  int open_code = 0;  // 0 ok, 1 I/O error, 2 a person's mistake
-  if (rank == 0) {
+  std::vector<std::int64_t> pending_mine;
+  if (writes) {
     try {
-      writer = ArchiveWriter::Open(options.output, plan,
-                                   RunProvenance{options.command_line + " (" + std::to_string(ranks) + " MPI ranks)",
-                                                 threads * ranks},
+      const BatchRange& range = ranges[static_cast<std::size_t>(t.node)];
+      node_plan = std::make_unique<SweepPlan>(LoadStudy(plan.study().path), plan.shard());
+      if (node_plan->chunk_runs() != plan.chunk_runs() || node_plan->block_count() != plan.block_count()) {
+        throw InputError(plan.study().path, "", "", "the study file changed while the MPI job started");
+      }
+      node_plan->RestrictToBatches(range.first, range.count);
+      RunProvenance provenance{options.command_line + " (" + std::to_string(t.ranks) + " MPI ranks)",
+                               threads * t.ranks, t.node, t.nodes, t.ranks};
+      writer = ArchiveWriter::Open(NodeArchivePath(options.output, t.node, t.nodes), *node_plan, provenance,
                                    options.mode, &opened);
-    } catch (const InputError&) {
-      open_error = std::current_exception();
-      open_code = 2;
+      if (node_plan->chunk_runs() != plan.chunk_runs()) {
+        throw InputError("command line", "-o", NodeArchivePath(options.output, t.node, t.nodes).string(),
+                         "cannot resume: it has batches of " + std::to_string(node_plan->chunk_runs()) +
+                             " runs, this run " + std::to_string(plan.chunk_runs()));
+      }
+      writer->set_block_row_offset(range.first * plan.chunk_runs());
+      for (const std::int64_t local : opened.pending_blocks) pending_mine.push_back(range.first + local);
+    } catch (const InputError& e) {
+      code = 2;
+      error = e.what();
     } catch (const ArchiveError& e) {
-      std::cerr << "gesweep: error: " << e.what() << "\n";
-      open_code = 1;
+      code = 1;
+      error = e.what();
     }
   }
-  std::int64_t setup[2] = {open_code, plan.chunk_runs()};
-  CheckMpi(MPI_Bcast(setup, 2, MPI_INT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
-  if (setup[0] != 0) {
-    if (open_error) std::rethrow_exception(open_error);  // the CLI prints it: one line, exit 2
-    return static_cast<int>(setup[0]);
-  }
-  if (rank != 0) plan.set_chunk_runs(static_cast<int>(setup[1]));
+  if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
 
-  if (rank != 0) {
-    RunWorkerRank(plan, options, threads, target, rank, report);
-    std::int64_t computed = report.runs_computed;
-    MPI_Gather(&computed, 1, MPI_INT64_T, nullptr, 0, MPI_INT64_T, 0, MPI_COMM_WORLD);
-    std::int64_t exit_code = 0;
-    CheckMpi(MPI_Bcast(&exit_code, 1, MPI_INT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
-    if (report_out) *report_out = report;
-    return static_cast<int>(exit_code);
-  }
+  // 3. Rank 0 learns every node's pending batches.
+  {
+    const int mine = static_cast<int>(pending_mine.size());
+    std::vector<int> counts(static_cast<std::size_t>(t.ranks)), offsets(static_cast<std::size_t>(t.ranks));
+    CheckMpi(MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+    int total = 0;
+    for (int r = 0; r < t.ranks; ++r) {
+      offsets[static_cast<std::size_t>(r)] = total;
+      total += counts[static_cast<std::size_t>(r)];
+    }
+    std::vector<std::int64_t> all(static_cast<std::size_t>(std::max(total, 1)));
+    CheckMpi(MPI_Gatherv(pending_mine.data(), mine, MPI_INT64_T, all.data(), counts.data(), offsets.data(),
+                         MPI_INT64_T, 0, MPI_COMM_WORLD),
+             "MPI_Gatherv");
+    std::int64_t complete_runs = writes ? opened.runs_complete : 0, all_complete = 0;
+    CheckMpi(MPI_Allreduce(&complete_runs, &all_complete, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    report.runs_complete_at_start = all_complete;
+    report.runs_to_do = plan.run_count() - all_complete;
+    shown.runs_skipped.store(all_complete);
+    shown.runs_to_do.store(report.runs_to_do);
+    std::vector<std::deque<std::int64_t>> pending(static_cast<std::size_t>(t.nodes));
+    if (t.rank == 0) {
+      for (int r = 0; r < t.ranks; ++r) {
+        for (int i = 0; i < counts[static_cast<std::size_t>(r)]; ++i) {
+          const std::int64_t batch = all[static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)] + i)];
+          pending[static_cast<std::size_t>(t.node_of[static_cast<std::size_t>(r)])].push_back(batch);
+        }
+      }
+    }
+    report.runs_per_rank.assign(static_cast<std::size_t>(t.ranks), 0);
+    if (on_started) on_started(report);
+    // 4. Compute: the one pipeline (RunSweep), fed and drained by this thread's MPI traffic.
+    Dispatcher dispatcher(std::move(pending), t.ranks);
+    std::mutex write_mutex;
+    QueueSource source;
+    TransportSink sink(plan, ranges, t.node, writes ? writer.get() : nullptr, &write_mutex);
+    SweepProgress computed;
+    std::atomic<bool> compute_done{false};
+    std::exception_ptr compute_error;
+    SweepOutcome outcome;
+    RunnerOptions runner_options;
+    runner_options.threads = threads;
+    runner_options.cancel = options.cancel;
+    const auto start = std::chrono::steady_clock::now();
+    std::thread compute([&] {
+      try {
+        outcome = RunSweep(plan, source, sink, runner_options, &computed);
+      } catch (...) {
+        compute_error = std::current_exception();
+      }
+      compute_done.store(true);
+    });
 
-  const std::int64_t to_do = plan.run_count() - opened.runs_complete;
-  if (!options.quiet) {
-    std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
-    if (plan.shard().count > 1) {
-      std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count;
-    }
-    std::cerr << ", " << ranks << " MPI rank" << (ranks > 1 ? "s" : "") << " x " << threads << " thread"
-              << (threads > 1 ? "s" : "") << " -> " << options.output.string() << "\n";
-    if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
-      std::cerr << "gesweep: resuming: " << opened.runs_complete << " runs already complete, " << to_do
-                << " to run\n";
-    }
-  }
-  const auto start = std::chrono::steady_clock::now();
-  Rank0Outcome outcome = RunRank0(plan, opened.pending_blocks, *writer, options, threads, target, ranks, report);
-  std::vector<std::int64_t> per_rank(static_cast<std::size_t>(ranks), 0);
-  std::int64_t computed = report.runs_computed;
-  MPI_Gather(&computed, 1, MPI_INT64_T, per_rank.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+    std::int64_t granted = 0;          // batches this rank was given
+    bool request_pending = false;      // a request to rank 0 awaits its grant (ranks > 0)
+    bool ended = false;                // this rank got its last (empty) grant
+    bool source_closed = false;        // -1 pushed to the pipeline
+    int ranks_ended = 0;               // rank 0: other ranks that got their last grant
+    std::vector<std::int64_t> sent_to(static_cast<std::size_t>(t.nodes), 0);
+    bool finished_sent = false;
+    std::vector<std::int64_t> received_from(static_cast<std::size_t>(t.ranks), 0);
+    std::vector<std::int64_t> expected_from(static_cast<std::size_t>(t.ranks), -1);
+    std::vector<std::int64_t> done_of(static_cast<std::size_t>(t.ranks), 0), failed_of(static_cast<std::size_t>(t.ranks), 0);
+    std::list<std::unique_ptr<TransportSink::Outgoing>> in_flight;
+    std::vector<char> buffer;
+    ResultBlock received;
+    std::string fatal;                 // this rank's reason to stop (an I/O error of its writer, a bug)
+    bool fatal_reported = false;
+    const BatchRange my_range = ranges[static_cast<std::size_t>(t.node)];
+    auto fail = [&](const std::string& why) {
+      if (fatal.empty()) fatal = why;
+    };
+    auto close_source = [&] {
+      if (!source_closed) source.Push(-1);
+      source_closed = true;
+    };
 
-  std::int64_t exit_code = 0;
-  if (outcome.writer_error) {
-    try {
-      std::rethrow_exception(outcome.writer_error);
-    } catch (const std::exception& e) {
-      std::cerr << "gesweep: error: " << e.what() << " (the runs written so far are kept; fix the cause and rerun "
-                << "with --resume)\n";
+    for (;;) {
+      bool progressed = false;
+      if (compute_done.load() && compute_error && fatal.empty()) fail(ErrorText(compute_error));
+      // A fatal error stops the handing out of batches everywhere (rank 0 hears of it).
+      if (!fatal.empty() && !fatal_reported) {
+        fatal_reported = true;
+        if (t.rank == 0) {
+          dispatcher.Stop();
+        } else {
+          CheckMpi(MPI_Send(fatal.data(), static_cast<int>(fatal.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD),
+                   "MPI_Send error");
+        }
+      }
+      if (t.rank == 0 && Cancelled(options) && !dispatcher.stopped()) {
+        report.cancelled = dispatcher.remaining() > 0;
+        dispatcher.Stop();
+      }
+
+      // Batches for this rank's pipeline.
+      const std::int64_t outstanding = granted - sink.delivered();
+      if (t.rank == 0) {
+        if (!ended) {
+          if (compute_done.load()) {
+            ended = true;
+          } else if (outstanding < target) {
+            const std::vector<std::int64_t> grant = dispatcher.Grant(t.node, target - outstanding);
+            for (const std::int64_t batch : grant) source.Push(batch);
+            granted += static_cast<std::int64_t>(grant.size());
+            if (grant.empty()) ended = true;
+            progressed = !grant.empty() || ended;
+          }
+          if (ended) close_source();
+        }
+      } else if (!ended && !request_pending && (outstanding < target || compute_done.load())) {
+        const std::int64_t request[3] = {compute_done.load() ? 0 : target - outstanding, computed.runs_done.load(),
+                                         computed.runs_failed.load()};
+        CheckMpi(MPI_Send(request, 3, MPI_INT64_T, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send request");
+        request_pending = true;
+        progressed = true;
+      }
+      int ready = 0;
+      MPI_Status status;
+      if (request_pending) {
+        CheckMpi(MPI_Iprobe(0, kTagGrant, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe grant");
+        if (ready) {
+          int count = 0;
+          MPI_Get_count(&status, MPI_INT64_T, &count);
+          std::vector<std::int64_t> grant(static_cast<std::size_t>(count));
+          CheckMpi(MPI_Recv(grant.data(), count, MPI_INT64_T, 0, kTagGrant, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                   "MPI_Recv grant");
+          request_pending = false;
+          for (const std::int64_t batch : grant) source.Push(batch);
+          granted += count;
+          if (count == 0) {
+            ended = true;
+            close_source();
+          }
+          progressed = true;
+        }
+      }
+
+      // Rank 0: requests of the others, and their errors.
+      if (t.rank == 0) {
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe request");
+        if (ready) {
+          std::int64_t request[3] = {0, 0, 0};
+          const int from = status.MPI_SOURCE;
+          CheckMpi(MPI_Recv(request, 3, MPI_INT64_T, from, kTagRequest, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                   "MPI_Recv request");
+          done_of[static_cast<std::size_t>(from)] = request[1];
+          failed_of[static_cast<std::size_t>(from)] = request[2];
+          const std::vector<std::int64_t> grant =
+              dispatcher.Grant(t.node_of[static_cast<std::size_t>(from)], request[0]);
+          CheckMpi(MPI_Send(grant.data(), static_cast<int>(grant.size()), MPI_INT64_T, from, kTagGrant, MPI_COMM_WORLD),
+                   "MPI_Send grant");
+          if (grant.empty()) ++ranks_ended;
+          progressed = true;
+        }
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagError, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe error");
+        if (ready) {
+          int length = 0;
+          MPI_Get_count(&status, MPI_CHAR, &length);
+          std::string text(static_cast<std::size_t>(length), '\0');
+          CheckMpi(MPI_Recv(text.data(), length, MPI_CHAR, status.MPI_SOURCE, kTagError, MPI_COMM_WORLD,
+                            MPI_STATUS_IGNORE),
+                   "MPI_Recv error");
+          dispatcher.Stop();
+          if (report.error.empty()) report.error = text;
+          progressed = true;
+        }
+        std::int64_t done = computed.runs_done.load(), failed = computed.runs_failed.load();
+        for (int r = 1; r < t.ranks; ++r) {
+          done += done_of[static_cast<std::size_t>(r)];
+          failed += failed_of[static_cast<std::size_t>(r)];
+        }
+        shown.runs_done.store(done);
+        shown.runs_failed.store(failed);
+      }
+
+      // Filtered batches for other nodes' writers.
+      std::unique_ptr<TransportSink::Outgoing> message;
+      while (sink.TryTake(message)) {
+        const int to = t.writer_rank[static_cast<std::size_t>(message->node)];
+        CheckMpi(MPI_Isend(message->bytes.data(), static_cast<int>(message->bytes.size()), MPI_BYTE, to, kTagResult,
+                           MPI_COMM_WORLD, &message->request),
+                 "MPI_Isend result");
+        ++sent_to[static_cast<std::size_t>(message->node)];
+        in_flight.push_back(std::move(message));
+        progressed = true;
+      }
+      for (auto it = in_flight.begin(); it != in_flight.end();) {
+        int complete = 0;
+        CheckMpi(MPI_Test(&(*it)->request, &complete, MPI_STATUS_IGNORE), "MPI_Test");
+        if (complete) {
+          it = in_flight.erase(it);
+          progressed = true;
+        } else {
+          ++it;
+        }
+      }
+      if (!finished_sent && compute_done.load() && ended && sink.outgoing_empty() && in_flight.empty()) {
+        for (int k = 0; k < t.nodes; ++k) {
+          const int to = t.writer_rank[static_cast<std::size_t>(k)];
+          if (ranges[static_cast<std::size_t>(k)].count == 0 || to == t.rank) continue;
+          CheckMpi(MPI_Send(&sent_to[static_cast<std::size_t>(k)], 1, MPI_INT64_T, to, kTagFinished, MPI_COMM_WORLD),
+                   "MPI_Send finished");
+        }
+        finished_sent = true;
+        progressed = true;
+      }
+
+      // The node's writer: batches from the other ranks.
+      bool writer_complete = !writes;
+      if (writes) {
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe result");
+        if (ready) {
+          int bytes = 0;
+          MPI_Get_count(&status, MPI_BYTE, &bytes);
+          buffer.resize(static_cast<std::size_t>(bytes));
+          const int from = status.MPI_SOURCE;
+          CheckMpi(MPI_Recv(buffer.data(), bytes, MPI_BYTE, from, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                   "MPI_Recv result");
+          ++received_from[static_cast<std::size_t>(from)];
+          if (fatal.empty()) {
+            try {
+              UnpackBlock(plan, sink.layout(), my_range, buffer, received);
+              std::lock_guard<std::mutex> lock(write_mutex);
+              writer->Write(received);
+            } catch (const std::exception& e) {
+              fail(std::string("the writer of node ") + std::to_string(t.node) + ": " + e.what());
+            }
+          }
+          progressed = true;
+        }
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagFinished, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe finished");
+        if (ready) {
+          std::int64_t count = 0;
+          CheckMpi(MPI_Recv(&count, 1, MPI_INT64_T, status.MPI_SOURCE, kTagFinished, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+                   "MPI_Recv finished");
+          expected_from[static_cast<std::size_t>(status.MPI_SOURCE)] = count;
+          progressed = true;
+        }
+        writer_complete = true;
+        for (int r = 0; r < t.ranks; ++r) {
+          if (r == t.rank) continue;
+          const auto i = static_cast<std::size_t>(r);
+          if (expected_from[i] < 0 || received_from[i] != expected_from[i]) writer_complete = false;
+        }
+      }
+
+      const bool rank0_done = t.rank != 0 || ranks_ended == t.ranks - 1;
+      if (compute_done.load() && ended && finished_sent && writer_complete && rank0_done) break;
+      if (!progressed) std::this_thread::sleep_for(kIdlePoll);
     }
-    exit_code = 1;
-  } else {
-    try {
-      writer->Finish();
-      report.runs_ok = writer->runs_ok();
-      report.runs_failed = writer->runs_failed();
-      report.runs_pending = writer->runs_pending();
-    } catch (const ArchiveError& e) {
-      std::cerr << "gesweep: error: " << e.what() << "\n";
-      exit_code = 1;
+    compute.join();
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (outcome.cancelled && t.rank != 0) report.cancelled = true;
+    report.runs_computed = computed.runs_done.load();
+
+    // 5. The node shards are closed; rank 0 learns the counts and merges.
+    std::int64_t counts_mine[3] = {0, 0, 0};
+    if (writes && fatal.empty()) {
+      try {
+        writer->Finish();
+        counts_mine[0] = writer->runs_ok();
+        counts_mine[1] = writer->runs_failed();
+        counts_mine[2] = writer->runs_pending();
+      } catch (const ArchiveError& e) {
+        fail(std::string("the writer of node ") + std::to_string(t.node) + ": " + e.what());
+      }
     }
+    writer.reset();
+    std::int64_t counts_all[3] = {0, 0, 0};
+    CheckMpi(MPI_Allreduce(counts_mine, counts_all, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    report.runs_ok = counts_all[0];
+    report.runs_failed = counts_all[1];
+    report.runs_pending = counts_all[2];
+    std::int64_t computed_mine = report.runs_computed;
+    CheckMpi(MPI_Gather(&computed_mine, 1, MPI_INT64_T, report.runs_per_rank.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD),
+             "MPI_Gather");
+    int cancelled = report.cancelled ? 1 : 0, any_cancelled = 0;
+    CheckMpi(MPI_Allreduce(&cancelled, &any_cancelled, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+    report.cancelled = any_cancelled != 0 && report.runs_pending > 0;
+    std::string rank0_error = report.error;  // an error another rank reported during the sweep
+    if ((report.error_code = AgreeOnError(fatal.empty() ? 0 : 1, fatal, t, &report.error)) != 0) {
+      if (report.error.empty()) report.error = rank0_error;
+      return report;
+    }
+
+    int merged = 0;
+    code = 0;
+    error.clear();
+    if (t.rank == 0 && report.runs_pending == 0) {
+      try {
+        std::vector<std::filesystem::path> shards(report.node_archives.begin(), report.node_archives.end());
+        MergeScope scope{plan.first_run(), plan.run_count(), plan.shard().index, plan.shard().count};
+        report.merge = MergeArchives(shards, options.output, /*force=*/true, options.command_line + " (merge of the node shards)",
+                                     options.merge, scope);
+        merged = 1;
+      } catch (const InputError& e) {
+        code = 2;
+        error = e.what();
+      } catch (const ArchiveError& e) {
+        code = 1;
+        error = e.what();
+      }
+      report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    CheckMpi(MPI_Bcast(&merged, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
+    report.merged = merged != 0;
+    report.error_code = AgreeOnError(code, error, t, &report.error);
   }
-  report.cancelled = outcome.cancelled;
-  if (exit_code == 0) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::int64_t ran = 0;
-    for (const std::int64_t r : per_rank) ran += r;
-    if (!options.quiet || report.runs_failed > 0 || report.cancelled) {
-      std::ostringstream line;
-      line << "gesweep: " << ran << " runs in " << std::fixed << std::setprecision(1) << elapsed << " s ("
-           << (elapsed > 0 ? ran / elapsed : 0.0) << " runs/s) on " << ranks << " ranks (runs per rank:";
-      for (const std::int64_t r : per_rank) line << " " << r;
-      line << "); archive: " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
-           << " pending -> " << options.output.string() << "\n";
-      std::cerr << line.str();
-    }
-    if (report.cancelled) {
-      const int signal = options.signal ? options.signal->load() : 0;
-      std::cerr << "gesweep: stopped by signal " << signal << "; continue with --resume\n";
-      exit_code = 128 + signal;
-    } else if (report.runs_failed > 0) {
-      std::cerr << "gesweep: " << report.runs_failed << " runs failed; their status is 'failed' and runs/message says why\n";
-      exit_code = 3;
-    }
-  }
-  CheckMpi(MPI_Bcast(&exit_code, 1, MPI_INT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
-  writer.reset();
-  if (report_out) *report_out = report;
-  return static_cast<int>(exit_code);
+  return report;
 }
 
 }  // namespace gesweep

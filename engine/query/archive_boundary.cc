@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "engine/archive/archive_format.h"
+#include "engine/archive/analysis_product.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/modal/modal_analysis.h"
@@ -17,9 +17,6 @@
 
 namespace gesweep {
 namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
 
 constexpr const char* kMarginPath = "results/modes/stability_margin_per_s";
 constexpr const char* kHeightPath = "design/height_m";
@@ -50,39 +47,6 @@ std::string Number(double value) {
   out.precision(6);
   out << value;
   return out.str();
-}
-
-void Describe(hid_t object, const std::string& units, const std::string& description) {
-  hdf5::WriteAttribute(object, "units", units);
-  hdf5::WriteAttribute(object, "description", description);
-}
-
-void WriteNumbers(hid_t group, const std::string& name, hid_t file_type, hid_t memory_type, const void* data,
-                  std::size_t count, const std::string& units, const std::string& description) {
-  hsize_t dims[1] = {count};
-  Handle space(H5Screate_simple(1, dims, nullptr), "dataspace of " + name);
-  Handle dataset(
-      H5Dcreate2(group, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-      "create " + name);
-  if (count > 0)
-    Check(H5Dwrite(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
-  Describe(dataset.get(), units, description);
-}
-
-void WriteDoubles(hid_t group, const std::string& name, const std::vector<double>& values,
-                  const std::string& units, const std::string& description) {
-  WriteNumbers(group, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), units,
-               description);
-}
-
-void WriteStrings(hid_t group, const std::string& name, const std::vector<std::string>& values,
-                  const std::string& description) {
-  Handle type(H5Tcopy(H5T_C_S1), "string type");
-  Check(H5Tset_size(type.get(), H5T_VARIABLE), "string size");
-  Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
-  std::vector<const char*> pointers;
-  for (const auto& value : values) pointers.push_back(value.c_str());
-  WriteNumbers(group, name, type.get(), type.get(), pointers.data(), pointers.size(), "1", description);
 }
 
 }  // namespace
@@ -281,63 +245,41 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
 
 void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBoundary& boundary,
                         const std::string& command_line) {
-  hdf5::Quiet();
-  const std::string shown = archive.string();
-  Handle fapl = hdf5::FileAccess();
-  const hid_t id = H5Fopen(archive.c_str(), H5F_ACC_RDWR, fapl.get());
-  if (id < 0) {
-    const std::string detail = hdf5::LastError();
-    H5Eclear2(H5E_DEFAULT);
-    throw InputError(
-        shown, "", "",
-        "cannot open the archive for writing (HDF5: " + detail +
-            "); is another program reading or writing it? pass --no-write to only print the boundary");
-  }
-  Handle file(id);
-  hdf5::ReplaceGroup(file.get(), kBoundaryGroup, [&](const std::string& temporary) {
-    Handle group(H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                 "create group " + temporary);
-    const hid_t g = group.get();
+  WriteAnalysisProduct(archive, kBoundaryGroup, "pass --no-write to only print the boundary", [&](ProductGroup& g) {
     std::string keys_text;
     for (const auto& name : boundary.key_names) keys_text += (keys_text.empty() ? "" : ", ") + name;
-    hdf5::WriteAttribute(
-        g, "description",
-        "Stability boundary H*: for each combination of the swept parameters other than height_m (" +
-            (keys_text.empty() ? std::string("none: one boundary") : keys_text) +
-            "), the highest sign change of results/modes/stability_margin_per_s along "
-            "design/height_m with unstable below and stable above, refined on the run's continuous "
-            "model (docs/report.md)");
-    hdf5::WriteAttribute(
-        g, "method",
-        "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
-        "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
-        "parameters, inside the bracket");
-    hdf5::WriteAttribute(g, "keys", boundary.key_names);
-    hdf5::WriteAttribute(g, "source_dataset", kMarginPath);
-    hdf5::WriteAttribute(g, "along", kHeightPath);
-    hdf5::WriteAttribute(g, "tolerance_m", boundary.tolerance_m);
-    hdf5::WriteAttribute(g, "wingspan_m", boundary.wingspan_m);
-    hdf5::WriteAttribute(g, "aircraft_name", boundary.aircraft_name);
-    hdf5::WriteAttribute(g, "runs_used", boundary.runs_used);
-    hdf5::WriteAttribute(g, "runs_skipped", boundary.runs_skipped);
-    hdf5::WriteAttribute(g, "engine_version", EngineVersion());
-    hdf5::WriteAttribute(g, "git_commit", EngineGitCommit());
-    hdf5::WriteAttribute(g, "created", UtcTimestamp());
-    hdf5::WriteAttribute(g, "command_line", command_line);
+    g.Attribute("description",
+                "Stability boundary H*: for each combination of the swept parameters other than height_m (" +
+                    (keys_text.empty() ? std::string("none: one boundary") : keys_text) +
+                    "), the highest sign change of results/modes/stability_margin_per_s along "
+                    "design/height_m with unstable below and stable above, refined on the run's continuous "
+                    "model (docs/report.md)");
+    g.Attribute("method",
+                "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+                "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+                "parameters, inside the bracket");
+    g.Attribute("keys", boundary.key_names);
+    g.Attribute("source_dataset", kMarginPath);
+    g.Attribute("along", kHeightPath);
+    g.Attribute("tolerance_m", boundary.tolerance_m);
+    g.Attribute("wingspan_m", boundary.wingspan_m);
+    g.Attribute("aircraft_name", boundary.aircraft_name);
+    g.Attribute("runs_used", boundary.runs_used);
+    g.Attribute("runs_skipped", boundary.runs_skipped);
+    g.Attribute("engine_version", EngineVersion());
+    g.Attribute("git_commit", EngineGitCommit());
+    g.Attribute("created", UtcTimestamp());
+    g.Attribute("command_line", command_line);
 
-    const std::size_t n = boundary.points.size();
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
       std::vector<double> values;
       for (const auto& p : boundary.points) values.push_back(p.key_values[k]);
-      WriteDoubles(g, boundary.key_names[k], values, boundary.key_units[k],
-                   "Value of the swept parameter " + boundary.key_names[k] + " of this boundary point" +
-                       (boundary.key_levels[k].empty() ? "" : " (index of its level; levels attribute)"));
-      if (!boundary.key_levels[k].empty()) {
-        Handle dataset(H5Dopen2(g, boundary.key_names[k].c_str(), H5P_DEFAULT),
-                       "open " + boundary.key_names[k]);
-        hdf5::WriteAttribute(dataset.get(), "levels", boundary.key_levels[k]);
-      }
+      ProductDataset dataset =
+          g.Numbers(boundary.key_names[k], values, boundary.key_units[k],
+                    "Value of the swept parameter " + boundary.key_names[k] + " of this boundary point" +
+                        (boundary.key_levels[k].empty() ? "" : " (index of its level; levels attribute)"));
+      if (!boundary.key_levels[k].empty()) dataset.Attribute("levels", boundary.key_levels[k]);
     }
     std::vector<double> height, ratio, lower, upper, width;
     std::vector<std::int8_t> found;
@@ -354,71 +296,44 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
       heights.push_back(static_cast<std::int32_t>(p.heights));
       reasons.push_back(p.reason);
     }
-    WriteDoubles(
-        g, "height_m", height, "m",
-        "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none");
-    WriteDoubles(g, "height_over_span", ratio, "1",
-                 "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none");
-    WriteNumbers(g, "found", H5T_STD_I8LE, H5T_NATIVE_INT8, found.data(), n, "1",
-                 "1 when a boundary was found");
-    {
-      Handle dataset(H5Dopen2(g, "found", H5P_DEFAULT), "open found");
-      hdf5::WriteAttribute(dataset.get(), "levels", std::vector<std::string>{"false", "true"});
-      // The archive's convention for integer codes (schemas/archive.md): never stored here, every
-      // point is 0 or 1.
-      hdf5::WriteAttribute(dataset.get(), "fill", std::int64_t{-1});
-    }
-    WriteDoubles(g, "grid_lower_height_m", lower, "m",
-                 "Grid height just below the sign change (sigma >= 0); NaN when none");
-    WriteDoubles(g, "grid_upper_height_m", upper, "m",
-                 "Grid height just above the sign change (sigma < 0); NaN when none");
-    WriteDoubles(g, "bracket_width_m", width, "m",
-                 "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
-    WriteNumbers(g, "grid_crossings", H5T_STD_I32LE, H5T_NATIVE_INT32, crossings.data(), n, "1",
-                 "Sign changes of sigma between neighbouring grid heights of this point");
-    WriteNumbers(g, "heights", H5T_STD_I32LE, H5T_NATIVE_INT32, heights.data(), n, "1",
-                 "Grid heights with a finite sigma (complete ok runs) of this point");
-    WriteStrings(g, "reason", reasons, "Why there is no boundary (empty when there is one)");
+    g.Numbers("height_m", height, "m",
+              "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none");
+    g.Numbers("height_over_span", ratio, "1", "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none");
+    ProductDataset found_dataset = g.Numbers("found", found, "1", "1 when a boundary was found");
+    found_dataset.Attribute("levels", std::vector<std::string>{"false", "true"});
+    // The archive's convention for integer codes (schemas/archive.md): never stored here, every
+    // point is 0 or 1.
+    found_dataset.Attribute("fill", std::int64_t{-1});
+    g.Numbers("grid_lower_height_m", lower, "m", "Grid height just below the sign change (sigma >= 0); NaN when none");
+    g.Numbers("grid_upper_height_m", upper, "m", "Grid height just above the sign change (sigma < 0); NaN when none");
+    g.Numbers("bracket_width_m", width, "m", "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
+    g.Numbers("grid_crossings", crossings, "1", "Sign changes of sigma between neighbouring grid heights of this point");
+    g.Numbers("heights", heights, "1", "Grid heights with a finite sigma (complete ok runs) of this point");
+    g.Strings("reason", reasons, "Why there is no boundary (empty when there is one)");
   });
-  file.Close("close " + shown);
 }
 
 void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
                              const std::string& command_line) {
-  hdf5::Quiet();
-  const std::string shown = archive.string();
-  Handle fapl = hdf5::FileAccess();
-  const hid_t id = H5Fopen(archive.c_str(), H5F_ACC_RDWR, fapl.get());
-  if (id < 0) {
-    const std::string detail = hdf5::LastError();
-    H5Eclear2(H5E_DEFAULT);
-    throw InputError(shown, "", "", "cannot open the archive for writing (HDF5: " + detail + ")");
-  }
-  Handle file(id);
-  hdf5::ReplaceGroup(file.get(), kBoundaryCurveGroup, [&](const std::string& temporary) {
-    Handle group(H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                 "create group " + temporary);
-    const hid_t g = group.get();
-    hdf5::WriteAttribute(g, "description",
-                         "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
-                         "the continuous model over the archive's speed range, every point confirmed by the "
-                         "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
-    hdf5::WriteAttribute(g, "wingspan_m", curve.wingspan_m);
-    hdf5::WriteAttribute(g, "engine_version", EngineVersion());
-    hdf5::WriteAttribute(g, "created", UtcTimestamp());
-    hdf5::WriteAttribute(g, "command_line", command_line);
-    WriteDoubles(g, "speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
-    WriteDoubles(g, "height_m", curve.height_m, "m", "Boundary height H* at that speed");
-    WriteDoubles(g, "height_over_span", curve.height_over_span, "1", "H*/b");
-    WriteDoubles(g, "height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
-                 "dH*/du0 by the implicit-function theorem on the crossing criterion");
-    WriteNumbers(g, "branch", H5T_STD_I32LE, H5T_NATIVE_INT32, curve.branch.data(), curve.branch.size(), "1",
-                 "Branch of each point (a new one after each event)");
-    WriteDoubles(g, "event_speed_mps", curve.event_speed_mps, "m/s",
-                 "Speeds where the boundary appears, ends or jumps to another crossing");
-    WriteStrings(g, "event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
+  WriteAnalysisProduct(archive, kBoundaryCurveGroup, "", [&](ProductGroup& g) {
+    g.Attribute("description",
+                "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
+                "the continuous model over the archive's speed range, every point confirmed by the "
+                "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
+    g.Attribute("wingspan_m", curve.wingspan_m);
+    g.Attribute("engine_version", EngineVersion());
+    g.Attribute("created", UtcTimestamp());
+    g.Attribute("command_line", command_line);
+    g.Numbers("speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
+    g.Numbers("height_m", curve.height_m, "m", "Boundary height H* at that speed");
+    g.Numbers("height_over_span", curve.height_over_span, "1", "H*/b");
+    g.Numbers("height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
+              "dH*/du0 by the implicit-function theorem on the crossing criterion");
+    g.Numbers("branch", curve.branch, "1", "Branch of each point (a new one after each event)");
+    g.Numbers("event_speed_mps", curve.event_speed_mps, "m/s",
+              "Speeds where the boundary appears, ends or jumps to another crossing");
+    g.Strings("event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
   });
-  file.Close("close " + shown);
 }
 
 }  // namespace gesweep

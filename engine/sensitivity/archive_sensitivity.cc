@@ -6,16 +6,13 @@
 #include <limits>
 
 #include "engine/archive/archive_format.h"
+#include "engine/archive/archive_error.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/hdf5_util.h"
 #include "engine/common/errors.h"
 #include "engine/common/toml_reader.h"
 
 namespace gesweep {
 namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
 
 // Run statuses of runs/status (schemas/archive.md).
 constexpr std::int8_t kStatusPending = 0;
@@ -39,37 +36,11 @@ std::string Join(const std::vector<std::string>& names) {
   return text;
 }
 
-Handle OpenDataset(const ArchiveReader& archive, const std::string& path) {
-  return Handle(H5Dopen2(archive.file(), path.c_str(), H5P_DEFAULT),
-                "open " + path + " of " + archive.path().string());
-}
-
-Handle OpenGroup(const ArchiveReader& archive, const std::string& path) {
-  return Handle(H5Gopen2(archive.file(), path.c_str(), H5P_DEFAULT),
-                "open " + path + " of " + archive.path().string());
-}
-
-// A numeric array attribute (float or integer stored) as doubles; empty when absent.
-std::vector<double> ReadDoubleArrayAttribute(hid_t object, const std::string& name) {
-  if (H5Aexists(object, name.c_str()) <= 0) return {};
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
-  Handle type(H5Aget_type(attribute.get()), "type of attribute " + name);
-  const H5T_class_t type_class = H5Tget_class(type.get());
-  if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) {
-    throw ArchiveError("attribute " + name + " is not numeric");
-  }
-  Handle space(H5Aget_space(attribute.get()), "space of attribute " + name);
-  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
-  std::vector<double> values(count);
-  if (count > 0) Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()), "read attribute " + name);
-  return values;
-}
-
 // An integer attribute of a group that the layout needs: an InputError naming it when absent, since
 // an archive without it was not made by a sweep of this kind (or by an older engine).
-std::int64_t RequireInteger(hid_t group, const std::string& group_name, const std::string& name,
+std::int64_t RequireInteger(const ArchiveReader& archive, const std::string& group_name, const std::string& name,
                             const std::string& source) {
-  const auto value = hdf5::ReadIntegerAttribute(group, name);
+  const auto value = archive.IntegerAttributeOf(group_name, name);
   if (!value) {
     throw InputError(
         source, group_name + "/" + name, "",
@@ -84,14 +55,11 @@ struct DatasetShape {
 };
 
 DatasetShape ShapeOf(const ArchiveReader& archive, const std::string& path) {
-  Handle dataset = OpenDataset(archive, path);
-  Handle type(H5Dget_type(dataset.get()), "type of " + path);
-  const H5T_class_t type_class = H5Tget_class(type.get());
-  const auto dims = hdf5::Dimensions(dataset.get());
+  const ArchiveReader::DatasetInfo info = archive.Describe(path);
   DatasetShape shape;
-  shape.integer = type_class == H5T_INTEGER;
-  shape.scalar =
-      dims.size() == 1 && dims[0] == archive.run_count() && (type_class == H5T_FLOAT || shape.integer);
+  shape.integer = info.kind == ArchiveReader::DatasetInfo::Kind::kInteger;
+  shape.scalar = info.dims.size() == 1 && info.dims[0] == archive.run_count() &&
+                 (info.kind == ArchiveReader::DatasetInfo::Kind::kFloat || shape.integer);
   return shape;
 }
 
@@ -99,8 +67,7 @@ DatasetShape ShapeOf(const ArchiveReader& archive, const std::string& path) {
 std::vector<double> ReadOutput(const ArchiveReader& archive, const ArchiveOutput& output) {
   std::vector<double> values = archive.ReadDoubles(output.path, 0, archive.run_count());
   if (ShapeOf(archive, output.path).integer) {
-    Handle dataset = OpenDataset(archive, output.path);
-    if (const auto fill = hdf5::ReadIntegerAttribute(dataset.get(), "fill")) {
+    if (const auto fill = archive.IntegerAttributeOf(output.path, "fill")) {
       const auto fill_value = static_cast<double>(*fill);
       for (double& v : values) {
         if (v == fill_value) v = std::numeric_limits<double>::quiet_NaN();
@@ -129,8 +96,7 @@ void RequireCompleteDesign(const ArchiveReader& archive, const std::vector<std::
         "expected every run complete: " + std::to_string(pending) + " of " + std::to_string(status.size()) +
             " runs have not run yet; finish the sweep with `gesweep run STUDY -o " + source + " --resume`");
   }
-  std::vector<std::int64_t> index(status.size());
-  archive.ReadRows(archive::kRunIndex, 0, archive.run_count(), H5T_NATIVE_INT64, index.data());
+  const std::vector<std::int64_t> index = archive.ReadIntegers(archive::kRunIndex, 0, archive.run_count());
   for (std::size_t r = 0; r < index.size(); ++r) {
     if (index[r] != static_cast<std::int64_t>(r)) {
       throw InputError(source, "runs/index", std::to_string(index[r]),
@@ -144,13 +110,12 @@ void RequireCompleteDesign(const ArchiveReader& archive, const std::vector<std::
 void ReadRanges(const ArchiveReader& archive, ArchiveSensitivity& result, const std::string& source) {
   for (const auto& name : result.parameters) {
     const std::string path = archive::DesignPath(name);
-    if (!hdf5::Exists(archive.file(), path)) {
+    if (!archive.Exists(path)) {
       throw InputError(source, path, "",
                        "missing: the design group lists " + name + " but has no dataset for it");
     }
-    Handle dataset = OpenDataset(archive, path);
-    const std::vector<double> bounds = ReadDoubleArrayAttribute(dataset.get(), "bounds");
-    const std::string distribution = hdf5::ReadStringAttribute(dataset.get(), "distribution").value_or("");
+    const std::vector<double> bounds = archive.DoubleListAttributeOf(path, "bounds");
+    const std::string distribution = archive.StringAttributeOf(path, "distribution").value_or("");
     if (bounds.size() != 2 || (distribution != "uniform" && distribution != "loguniform")) {
       throw InputError(
           source, path, "",
@@ -163,7 +128,7 @@ void ReadRanges(const ArchiveReader& archive, ArchiveSensitivity& result, const 
     range.upper = bounds[1];
     range.log_uniform = distribution == "loguniform";
     result.ranges.push_back(range);
-    result.parameter_units.push_back(hdf5::ReadStringAttribute(dataset.get(), "units").value_or(""));
+    result.parameter_units.push_back(archive.StringAttributeOf(path, "units").value_or(""));
   }
 }
 
@@ -212,16 +177,15 @@ void CheckSaltelliRows(const ArchiveReader& archive, const ArchiveSensitivity& r
 
 SaltelliLayout ReadSaltelliLayout(const ArchiveReader& archive, const ArchiveSensitivity& result,
                                   const std::string& source) {
-  Handle design = OpenGroup(archive, archive::kDesignGroup);
-  const std::string layout_name = hdf5::ReadStringAttribute(design.get(), "layout").value_or("");
+  const std::string layout_name = archive.StringAttributeOf(archive::kDesignGroup, "layout").value_or("");
   if (layout_name != "saltelli") {
     throw InputError(source, "design/layout", layout_name,
                      "expected saltelli (the row layout of a sobol design)");
   }
-  const std::int64_t N = RequireInteger(design.get(), "design", "base_samples", source);
-  const std::int64_t D = RequireInteger(design.get(), "design", "dimension", source);
-  const std::int64_t second = RequireInteger(design.get(), "design", "second_order", source);
-  const std::int64_t block_rows = RequireInteger(design.get(), "design", "block_rows", source);
+  const std::int64_t N = RequireInteger(archive, archive::kDesignGroup, "base_samples", source);
+  const std::int64_t D = RequireInteger(archive, archive::kDesignGroup, "dimension", source);
+  const std::int64_t second = RequireInteger(archive, archive::kDesignGroup, "second_order", source);
+  const std::int64_t block_rows = RequireInteger(archive, archive::kDesignGroup, "block_rows", source);
   SaltelliLayout layout;
   layout.parameter_count = static_cast<int>(D);
   layout.base_samples = N > 0 && N <= INT_MAX ? static_cast<int>(N) : 0;
@@ -285,12 +249,11 @@ std::vector<ArchiveOutput> ScalarOutputs(const ArchiveReader& archive) {
   std::vector<ArchiveOutput> outputs;
   for (const std::string& path : archive.Datasets()) {
     if (!StartsWith(path, kResultsPrefix) || !ShapeOf(archive, path).scalar) continue;
-    Handle dataset = OpenDataset(archive, path);
     ArchiveOutput output;
     output.path = path;
     output.name = path.substr(kResultsPrefix.size());
-    output.units = hdf5::ReadStringAttribute(dataset.get(), "units").value_or("");
-    output.description = hdf5::ReadStringAttribute(dataset.get(), "description").value_or("");
+    output.units = archive.StringAttributeOf(path, "units").value_or("");
+    output.description = archive.StringAttributeOf(path, "description").value_or("");
     outputs.push_back(std::move(output));
   }
   return outputs;
@@ -357,11 +320,8 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
   result.output = ResolveOutput(archive, output_name);
 
   // The design: its kind decides which estimator applies.
-  {
-    Handle design = OpenGroup(archive, archive::kDesignGroup);
-    result.design_kind = hdf5::ReadStringAttribute(design.get(), "kind").value_or("");
-    result.parameters = hdf5::ReadStringListAttribute(design.get(), "parameters");
-  }
+  result.design_kind = archive.StringAttributeOf(archive::kDesignGroup, "kind").value_or("");
+  result.parameters = archive.StringListAttributeOf(archive::kDesignGroup, "parameters");
   const auto design_method = ParseSensitivityMethod(result.design_kind);
   if (options.method && design_method != options.method) {
     const std::string needed = *options.method == SensitivityMethod::kSobol ? "sobol" : "morris";
@@ -416,11 +376,10 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
     result.status = result.sobol.status;
     result.message = result.sobol.message;
   } else {
-    Handle design = OpenGroup(archive, archive::kDesignGroup);
-    const std::int64_t trajectories = RequireInteger(design.get(), "design", "trajectories", source);
-    const std::int64_t trajectory_rows = RequireInteger(design.get(), "design", "trajectory_rows", source);
-    result.morris_levels = static_cast<int>(RequireInteger(design.get(), "design", "levels", source));
-    result.morris_delta = hdf5::ReadDoubleAttribute(design.get(), "delta").value_or(std::nan(""));
+    const std::int64_t trajectories = RequireInteger(archive, archive::kDesignGroup, "trajectories", source);
+    const std::int64_t trajectory_rows = RequireInteger(archive, archive::kDesignGroup, "trajectory_rows", source);
+    result.morris_levels = static_cast<int>(RequireInteger(archive, archive::kDesignGroup, "levels", source));
+    result.morris_delta = archive.DoubleAttributeOf(archive::kDesignGroup, "delta").value_or(std::nan(""));
     const auto D = static_cast<std::int64_t>(result.parameters.size());
     if (trajectory_rows != D + 1 || trajectories * trajectory_rows != archive.run_count()) {
       throw InputError(source, "design", std::to_string(trajectories) + " trajectories",

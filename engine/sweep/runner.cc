@@ -66,16 +66,15 @@ void AppendMessage(std::string& message, std::string_view analysis, const std::s
   message.append(analysis).append(": ").append(text);
 }
 
-// Cuts a message to the stored length without splitting a UTF-8 sequence.
-void Truncate(std::string& message) {
+}  // namespace
+
+void TruncateMessage(std::string& message) {
   if (static_cast<int>(message.size()) <= kMessageLength) return;
   std::size_t cut = static_cast<std::size_t>(kMessageLength) - 3;
   while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;
   message.resize(cut);
   message += "...";
 }
-
-}  // namespace
 
 void ResultBlock::Allocate(const SweepPlan& plan) {
   const auto capacity = static_cast<std::size_t>(plan.chunk_runs());
@@ -88,6 +87,8 @@ void ResultBlock::Allocate(const SweepPlan& plan) {
   for (const auto& column : plan.schema().columns) {
     results.emplace_back(capacity * static_cast<std::size_t>(column.doubles_per_run()));
   }
+  chunk_count = 0;
+  runs_failed = 0;
 }
 
 void ResultBlock::Reset(const SweepPlan& plan, std::int64_t index) {
@@ -102,6 +103,8 @@ void ResultBlock::Reset(const SweepPlan& plan, std::int64_t index) {
   }
   for (auto& column : results)
     std::fill(column.begin(), column.end(), std::numeric_limits<double>::quiet_NaN());
+  chunk_count = 0;
+  runs_failed = 0;
 }
 
 RunWorkspace::RunWorkspace(const SweepPlan& plan)
@@ -147,7 +150,7 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
       model = &workspace.Model(plan);
     } catch (const std::exception& e) {
       AppendMessage(message, "model", e.what());
-      Truncate(message);
+      TruncateMessage(message);
       block.status[r] = static_cast<std::int8_t>(RunStatus::kFailed);
       return;
     }
@@ -171,12 +174,12 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
     ok = ok && outcome.ok;
     AppendMessage(message, analysis->name(), outcome.message);
   }
-  Truncate(message);
+  TruncateMessage(message);
   block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
 }
 
-SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
-                      ResultSink& sink, const RunnerOptions& options, SweepProgress* progress) {
+SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink, const RunnerOptions& options,
+                      SweepProgress* progress) {
   SweepProgress local_progress;
   SweepProgress& counters = progress ? *progress : local_progress;
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
@@ -214,9 +217,8 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
   });
 
   tbb::enumerable_thread_specific<RunWorkspace> workspaces([&plan] { return RunWorkspace(plan); });
-  std::size_t next = 0;
-  std::size_t started = 0;
-  std::size_t dropped = 0;
+  bool exhausted = false;
+  std::atomic<std::size_t> dropped{0};
   std::exception_ptr worker_error;
   try {
     tbb::task_arena arena(threads);
@@ -227,34 +229,50 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
               tbb::filter_mode::serial_in_order,
               [&](tbb::flow_control& control) -> ResultBlock* {
                 const bool cancelled = options.cancel != nullptr && options.cancel->load();
-                if (next >= pending_blocks.size() || cancelled || stop.load()) {
+                if (cancelled || stop.load()) {
+                  control.stop();
+                  return nullptr;
+                }
+                const std::int64_t index = source.Next();
+                if (index < 0) {
+                  exhausted = true;
                   control.stop();
                   return nullptr;
                 }
                 ResultBlock* block = nullptr;
                 free_blocks.pop(block);
-                block->Reset(plan, pending_blocks[next++]);
-                ++started;
+                block->Reset(plan, index);
                 return block;
               }) &
               tbb::make_filter<ResultBlock*, ResultBlock*>(
                   tbb::filter_mode::parallel,
                   [&](ResultBlock* block) {
+                    std::atomic<int> failed{0};
                     tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1),
                                       [&](const tbb::blocked_range<int>& range) {
                                         RunWorkspace& workspace = workspaces.local();
+                                        int range_failed = 0;
                                         for (int row = range.begin(); row != range.end(); ++row) {
-                                          if (options.cancel != nullptr && options.cancel->load()) return;
+                                          if (options.cancel != nullptr && options.cancel->load()) break;
                                           ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)],
                                                      workspace, *block, row, options.cancel);
                                           const auto status = block->status[static_cast<std::size_t>(row)];
                                           if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
-                                          if (status == static_cast<std::int8_t>(RunStatus::kFailed)) {
-                                            counters.runs_failed.fetch_add(1, std::memory_order_relaxed);
-                                          }
+                                          range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
                                           counters.runs_done.fetch_add(1, std::memory_order_relaxed);
                                         }
+                                        failed.fetch_add(range_failed, std::memory_order_relaxed);
+                                        counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
                                       });
+                    block->runs_failed = failed.load();
+                    // A batch a cancellation left unfinished is not encoded (nor written, below).
+                    const auto begin = block->status.begin();
+                    if (std::find(begin, begin + block->rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
+                        begin + block->rows) {
+                      return block;
+                    }
+                    // The worker that computed the batch encodes it (filters its chunks).
+                    sink.Encode(*block);
                     return block;
                   }) &
               tbb::make_filter<ResultBlock*, void>(
@@ -263,7 +281,7 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
                     const auto begin = block->status.begin();
                     if (std::find(begin, begin + block->rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
                         begin + block->rows) {
-                      ++dropped;
+                      dropped.fetch_add(1);
                       free_blocks.push(block);
                       return;
                     }
@@ -281,9 +299,15 @@ SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pe
   SweepOutcome outcome;
   outcome.runs_failed = counters.runs_failed.load();
   outcome.runs_ok = counters.runs_done.load() - outcome.runs_failed;
-  outcome.runs_skipped = counters.runs_skipped;
-  outcome.cancelled = started < pending_blocks.size() || dropped > 0;
+  outcome.runs_skipped = counters.runs_skipped.load();
+  outcome.cancelled = !exhausted || dropped.load() > 0;
   return outcome;
+}
+
+SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
+                      ResultSink& sink, const RunnerOptions& options, SweepProgress* progress) {
+  ListBatchSource source(pending_blocks);
+  return RunSweep(plan, source, sink, options, progress);
 }
 
 }  // namespace gesweep

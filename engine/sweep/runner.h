@@ -1,10 +1,14 @@
 #pragma once
 /// The parallel runner (docs/sweep.md, "Runner"). oneTBB schedules the runs of a plan in batches
-/// (one batch = one HDF5 chunk of every column), each worker thread with its own workspace; finished
-/// batches go through a bounded queue to ONE writer thread, which hands them to a ResultSink (the
-/// HDF5 archive; the runner knows nothing of HDF5). A fixed pool of batch buffers bounds memory
-/// whatever the run count. Every run's result depends only on its design row, so the archive is
-/// the same bit for bit whatever the thread count or sharding.
+/// (one batch = one HDF5 chunk of every column), each worker thread with its own workspace. The
+/// worker that computed a batch also encodes it (ResultSink::Encode: the archive filters its chunks,
+/// shuffle + deflate + Fletcher-32, in the worker); finished batches go through a bounded queue to
+/// ONE writer thread, which hands them to ResultSink::Write (the HDF5 archive stores the ready
+/// chunks; the runner knows nothing of HDF5). Where batch numbers come from is a BatchSource: a list
+/// in one process, the MPI transport's dispatcher across ranks (engine/mpi) -- the same pipeline
+/// either way. A fixed pool of batch buffers bounds memory whatever the run count. Every run's
+/// result depends only on its design row, so the archive is the same bit for bit whatever the
+/// thread count, sharding or rank count.
 
 #include <atomic>
 #include <cstdint>
@@ -24,6 +28,15 @@ enum class RunStatus : std::int8_t {
   kFailed = 2,  ///< a numerical failure or an exception; the message says why
 };
 
+/// One stored chunk of a batch, filtered by the worker that computed it (opaque to the runner: the
+/// sink's Encode makes them, its Write stores them).
+struct StoredChunk {
+  int dataset = 0;               ///< index of the dataset in the sink's layout
+  std::int64_t row = 0;          ///< first row of the chunk, counted from the batch's first row
+  std::uint32_t filter_mask = 0; ///< HDF5's filter mask (bit i set: filter i skipped)
+  std::vector<unsigned char> bytes;
+};
+
 /// One batch of consecutive runs of a shard, column by column.
 struct ResultBlock {
   std::int64_t block_index = 0;  ///< batch number within the shard
@@ -35,6 +48,11 @@ struct ResultBlock {
   std::vector<std::string> message;
   std::vector<std::vector<double>> design;   ///< [design column][row]
   std::vector<std::vector<double>> results;  ///< [output column][row · doubles_per_run]
+  /// The batch as stored, once encoded: chunks[0 .. chunk_count) (the buffers are kept between
+  /// batches, so a reused block allocates nothing).
+  std::vector<StoredChunk> chunks;
+  int chunk_count = 0;
+  int runs_failed = 0;  ///< failed runs of the batch (counted when it is computed)
 
   /// Sizes the buffers for `plan` (capacity chunk_runs rows).
   void Allocate(const SweepPlan& plan);
@@ -42,12 +60,38 @@ struct ResultBlock {
   void Reset(const SweepPlan& plan, std::int64_t block_index);
 };
 
-/// Receives finished batches. Write is called from the one writer thread only, in no particular
-/// batch order; it may throw (e.g. disk full), which stops the sweep.
+/// Receives finished batches. Encode is called by the worker thread that computed a batch, right
+/// after computing it, concurrently for different batches (it must be thread-safe); Write from the
+/// one writer thread only, in no particular batch order. Either may throw (e.g. disk full), which
+/// stops the sweep.
 class ResultSink {
  public:
   virtual ~ResultSink() = default;
+  /// Prepares a computed batch for Write (e.g. filters its chunks). Default: nothing.
+  virtual void Encode(ResultBlock& block) { (void)block; }
   virtual void Write(const ResultBlock& block) = 0;
+};
+
+/// Where a sweep's batch numbers come from (the pipeline's input stage; called by one thread at a
+/// time). A list in one process; under MPI, the batches the dispatcher hands this rank.
+class BatchSource {
+ public:
+  virtual ~BatchSource() = default;
+  /// The next batch of the plan to compute, or -1 when there is none left (it may block until one
+  /// is known).
+  virtual std::int64_t Next() = 0;
+};
+
+/// A BatchSource over a fixed list (ascending batch numbers of the plan's shard).
+class ListBatchSource final : public BatchSource {
+ public:
+  explicit ListBatchSource(const std::vector<std::int64_t>& blocks) : blocks_(blocks) {}
+  std::int64_t Next() override { return next_ < blocks_.size() ? blocks_[next_++] : -1; }
+  std::size_t remaining() const { return blocks_.size() - next_; }
+
+ private:
+  const std::vector<std::int64_t>& blocks_;
+  std::size_t next_ = 0;
 };
 
 /// The per-thread state of the workers: the parameter vector, the design row, and a cache of the
@@ -65,6 +109,10 @@ class RunWorkspace {
   std::optional<LongitudinalModel> model_;
 };
 
+/// Cuts a run's message to the stored length (kMessageLength bytes) without splitting a UTF-8
+/// sequence, ending it in "..." when it was cut.
+void TruncateMessage(std::string& message);
+
 /// Runs design run `design_index` (row `row` of `block`): fills its design values, id, status,
 /// message and results. Never throws for a numerical problem or an exception of an analysis: the
 /// run is marked failed with the message. `cancel` (may be null) reaches inside the analyses (time
@@ -77,8 +125,8 @@ struct SweepProgress {
   std::atomic<std::int64_t> runs_done{0};     ///< computed in this process
   std::atomic<std::int64_t> runs_failed{0};   ///< of them, failed
   std::atomic<std::int64_t> runs_written{0};  ///< handed to the sink
-  std::int64_t runs_to_do = 0;                ///< pending runs at the start
-  std::int64_t runs_skipped = 0;              ///< already complete (resume)
+  std::atomic<std::int64_t> runs_to_do{0};    ///< pending runs at the start (all ranks under MPI)
+  std::atomic<std::int64_t> runs_skipped{0};  ///< already complete (resume)
 };
 
 /// Options of RunSweep.
@@ -99,8 +147,13 @@ struct SweepOutcome {
   bool cancelled = false;  ///< stopped by `cancel` before every batch was run and written
 };
 
-/// Runs the batches `pending_blocks` (ascending batch numbers of the plan's shard) and writes them
-/// through `sink`. Rethrows the first exception of the sink after stopping cleanly.
+/// Runs the batches `source` gives and writes them through `sink` (the one pipeline: threads,
+/// MPI ranks and the benchmarks all come through here). Rethrows the first exception of the sink
+/// or of a worker after stopping cleanly. `cancelled` in the outcome: `options.cancel` stopped it
+/// before `source` ran dry.
+SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink, const RunnerOptions& options,
+                      SweepProgress* progress);
+/// The same over a list of batches (ascending batch numbers of the plan's shard).
 SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
                       ResultSink& sink, const RunnerOptions& options, SweepProgress* progress);
 

@@ -48,15 +48,23 @@ ShardSpec ParseShard(const std::string& text, const std::string& flag) {
   return shard;
 }
 
-void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* first, std::int64_t* count) {
-  // floor(i·M/N) without overflow: M = qN + r gives floor(i·M/N) = i·q + floor(i·r/N).
-  const std::int64_t q = design_runs / shard.count, r = design_runs % shard.count;
-  const auto split = [&](std::int64_t i) { return i * q + i * r / shard.count; };
-  *first = split(shard.index);
-  *count = split(shard.index + 1) - *first;
+int ShardBatchRuns(std::int64_t design_runs, int batch_runs, int shards) {
+  const std::int64_t per_shard = std::max<std::int64_t>(1, design_runs / std::max(shards, 1));
+  return static_cast<int>(std::max<std::int64_t>(1, std::min<std::int64_t>({batch_runs, per_shard, design_runs})));
 }
 
-std::int64_t BookkeepingBytesPerRun() { return 8 /* index */ + 8 /* id */ + 1 /* status */ + kMessageLength; }
+void ShardRange(std::int64_t design_runs, int batch_runs, const ShardSpec& shard, std::int64_t* first,
+                std::int64_t* count) {
+  const std::int64_t b = ShardBatchRuns(design_runs, batch_runs, shard.count);
+  const std::int64_t batches = (design_runs + b - 1) / b;
+  // floor(i·B/N) without overflow: B = qN + r gives floor(i·B/N) = i·q + floor(i·r/N).
+  const std::int64_t q = batches / shard.count, r = batches % shard.count;
+  const auto split = [&](std::int64_t i) { return i * q + i * r / shard.count; };
+  *first = std::min(design_runs, split(shard.index) * b);
+  *count = std::min(design_runs, split(shard.index + 1) * b) - *first;
+}
+
+std::int64_t BookkeepingBytesPerRun() { return 8 /* index */ + 8 /* id */ + 1 /* status */; }
 
 std::string FormatBytes(double bytes) {
   const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
@@ -82,7 +90,18 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
   design_ = MakeDesign(std::move(study_.design));
   study_.design = DesignSpec{};
   study_.design.kind = kind;
-  ShardRange(design_runs_, shard_, &first_run_, &run_count_);
+  // Batch size: about kTargetBatchCost_us of work on one core, within memory and chunk bounds.
+  int batch_runs = study_.chunk_runs;
+  if (batch_runs == 0) {
+    const double per_run = std::max(nominal_run_cost_us(), 1e-3);
+    batch_runs = FloorPowerOfTwo(
+        std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns}, double{kMaximumChunkRuns}));
+    std::int64_t memory_per_run =
+        8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
+    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
+    while (batch_runs > 1 && batch_runs * memory_per_run > kMaximumBatchBytes) batch_runs /= 2;
+  }
+  ShardRange(design_runs_, batch_runs, shard_, &first_run_, &run_count_);
   if (run_count_ < 1) {
     throw InputError("command line", "--shard",
                      std::to_string(shard_.index) + "/" + std::to_string(shard_.count),
@@ -113,18 +132,11 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
 
   CheckRuns();
 
-  // Batch size: about kTargetBatchCost_us of work on one core, within memory and chunk bounds.
-  int chunk = study_.chunk_runs;
-  if (chunk == 0) {
-    const double per_run = std::max(nominal_run_cost_us(), 1e-3);
-    chunk = FloorPowerOfTwo(
-        std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns}, double{kMaximumChunkRuns}));
-    std::int64_t memory_per_run =
-        8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
-    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
-    while (chunk > 1 && chunk * memory_per_run > kMaximumBatchBytes) chunk /= 2;
-  }
-  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(chunk, run_count_));
+  // Every shard of an N-way split has batches of the same size (ShardBatchRuns), so its chunks
+  // coincide with those of the merged archive; a shard smaller than a batch (a design's only,
+  // partial batch) has one chunk of its own size.
+  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(
+      ShardBatchRuns(design_runs_, batch_runs, shard_.count), run_count_));
 }
 
 void SweepPlan::CheckStorage() {
@@ -226,6 +238,14 @@ void SweepPlan::CheckRuns() const {
       values[static_cast<std::size_t>(c)] = extremes[static_cast<std::size_t>(c)].first;
     }
   }
+}
+
+void SweepPlan::RestrictToBatches(std::int64_t first_batch, std::int64_t batch_count) {
+  GESWEEP_DEMAND(first_batch >= 0 && batch_count >= 1 && first_batch + batch_count <= block_count());
+  const std::int64_t first = first_batch * chunk_runs_;
+  const std::int64_t end = std::min(run_count_, (first_batch + batch_count) * chunk_runs_);
+  first_run_ += first;
+  run_count_ = end - first;
 }
 
 void SweepPlan::set_chunk_runs(int chunk_runs) {

@@ -12,8 +12,9 @@
 
 namespace gesweep {
 
-/// A contiguous block of the design: shard `index` of `count` (0 ≤ index < count) takes runs
-/// [floor(index·M/count), floor((index+1)·M/count)) of a design of M runs.
+/// A contiguous block of the design: shard `index` of `count` (0 ≤ index < count). Shards are cut
+/// at batch boundaries (ShardRange), so that the chunks of every shard coincide with the chunks of
+/// the merged archive and `gesweep merge --copy` copies them as they are.
 struct ShardSpec {
   int index = 0;
   int count = 1;
@@ -22,8 +23,16 @@ struct ShardSpec {
 /// Parses "i/N" (0 ≤ i < N, 1 ≤ N ≤ 100000); throws InputError naming `flag`.
 ShardSpec ParseShard(const std::string& text, const std::string& flag);
 
-/// First run and run count of a shard of a design of `design_runs` runs.
-void ShardRange(std::int64_t design_runs, const ShardSpec& shard, std::int64_t* first, std::int64_t* count);
+/// Runs per batch of a design of `design_runs` runs split in `shards` shards, when the study asks
+/// for batches of `batch_runs`: at most design_runs / shards (so every shard has a batch), at least 1.
+int ShardBatchRuns(std::int64_t design_runs, int batch_runs, int shards);
+
+/// First run and run count of a shard, in whole batches of ShardBatchRuns(design_runs, batch_runs,
+/// N): with B = ceil(M / b) batches of b runs, shard i of N takes batches [floor(i·B/N),
+/// floor((i+1)·B/N)) -- every shard starts at a multiple of b, shards differ by at most one batch,
+/// and only the last batch of the design can be partial.
+void ShardRange(std::int64_t design_runs, int batch_runs, const ShardSpec& shard, std::int64_t* first,
+                std::int64_t* count);
 
 /// Storage of one run of a plan, in bytes before compression.
 struct StorageEstimate {
@@ -56,6 +65,9 @@ class SweepPlan {
   int chunk_runs() const { return chunk_runs_; }
   /// Overrides the batch size (a resumed archive keeps the one it was created with).
   void set_chunk_runs(int chunk_runs);
+  /// Narrows the plan to batches [first_batch, first_batch + batch_count) of its shard (one node's
+  /// part of an MPI sweep, engine/mpi): first_run and run_count change, the batch size does not.
+  void RestrictToBatches(std::int64_t first_batch, std::int64_t batch_count);
   /// Number of batches of this shard.
   std::int64_t block_count() const { return (run_count_ + chunk_runs_ - 1) / chunk_runs_; }
 
@@ -97,10 +109,12 @@ class SweepPlan {
 /// Formats a byte count for people: "812 B", "3.4 MB", "1.2 TB" (powers of 1000).
 std::string FormatBytes(double bytes);
 
-/// Bytes per run of the bookkeeping columns (index, id, status, message).
+/// Bytes per run of the bookkeeping columns (index, id, status; runs/message is sparse -- only the
+/// chunks holding a message are stored -- and is not counted).
 std::int64_t BookkeepingBytesPerRun();
 
-/// Fixed length of a run's stored message, bytes (longer messages are cut).
-inline constexpr int kMessageLength = 160;
+/// Most bytes of a run's stored message (runs/message, fixed-length UTF-8); a longer message is cut
+/// at a character boundary and ends in "..." (docs/sweep.md, "Messages").
+inline constexpr int kMessageLength = 1024;
 
 }  // namespace gesweep

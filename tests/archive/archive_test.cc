@@ -245,6 +245,165 @@ TEST_F(ArchiveTest, MergeNamesMissingOverlappingIncompleteAndForeignShards) {
   EXPECT_NE(error_of({shards[0], other, shards[2]}).find("same study"), std::string::npos);
 }
 
+// Every stored chunk of every dataset, as bytes (the filtered chunks themselves, not the values).
+std::map<std::string, std::vector<unsigned char>> StoredChunks(const std::filesystem::path& archive) {
+  ArchiveReader reader = ArchiveReader::Open(archive);
+  std::map<std::string, std::vector<unsigned char>> chunks;
+  for (const std::string& path : reader.Datasets()) {
+    hdf5::Handle dataset(H5Dopen2(reader.file(), path.c_str(), H5P_DEFAULT), "open");
+    hdf5::Handle space(H5Dget_space(dataset.get()), "space");
+    hdf5::Handle dcpl(H5Dget_create_plist(dataset.get()), "dcpl");
+    if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED) continue;
+    hsize_t count = 0;
+    H5Dget_num_chunks(dataset.get(), space.get(), &count);
+    for (hsize_t i = 0; i < count; ++i) {
+      hsize_t offset[2] = {0, 0};
+      unsigned mask = 0;
+      haddr_t address = 0;
+      hsize_t size = 0;
+      H5Dget_chunk_info(dataset.get(), space.get(), i, offset, &mask, &address, &size);
+      std::vector<unsigned char> bytes(size);
+      std::uint32_t filters = 0;
+      H5Dread_chunk(dataset.get(), H5P_DEFAULT, offset, &filters, bytes.data());
+      bytes.push_back(static_cast<unsigned char>(filters));
+      chunks[path + "@" + std::to_string(offset[0])] = std::move(bytes);
+    }
+  }
+  return chunks;
+}
+
+TEST_F(ArchiveTest, OneAndTwoThreadsStoreTheSameChunksByteForByte) {
+  const auto study = StudyFile("s.toml", 8);
+  SweepPlan one(LoadStudy(study), ShardSpec{});
+  {
+    auto writer = ArchiveWriter::Open(directory_ / "one.h5", one, RunProvenance{"test", 1}, ArchiveOpenMode::kCreate,
+                                      nullptr);
+    RunSweep(one, std::vector<std::int64_t>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13}, *writer,
+             RunnerOptions{1, nullptr, 1}, nullptr);
+    writer->Finish();
+  }
+  SweepPlan two(LoadStudy(study), ShardSpec{});
+  Run(two, directory_ / "two.h5", ArchiveOpenMode::kCreate);
+  EXPECT_EQ(Contents(directory_ / "one.h5"), Contents(directory_ / "two.h5"));
+  const auto chunks = StoredChunks(directory_ / "one.h5");
+  EXPECT_EQ(chunks.size(), StoredChunks(directory_ / "two.h5").size());
+  EXPECT_TRUE(chunks == StoredChunks(directory_ / "two.h5"));
+  EXPECT_GT(chunks.size(), 14u * 30u);  // every dataset has a chunk per batch (runs/message none: no message)
+}
+
+TEST_F(ArchiveTest, ThreeShardsMergedVirtuallyOrByCopyEqualOneProcess) {
+  const auto study = StudyFile("s.toml", 8);
+  SweepPlan whole(LoadStudy(study), ShardSpec{});
+  Run(whole, directory_ / "whole.h5", ArchiveOpenMode::kCreate);
+  std::vector<std::filesystem::path> shards;
+  std::uintmax_t shard_bytes = 0;
+  for (int i = 0; i < 3; ++i) {
+    SweepPlan plan(LoadStudy(study), ShardSpec{i, 3});
+    EXPECT_EQ(plan.first_run() % 8, 0) << "shards start at a batch boundary";
+    shards.push_back(directory_ / ("shard" + std::to_string(i) + ".h5"));
+    Run(plan, shards.back(), ArchiveOpenMode::kCreate);
+    shard_bytes += std::filesystem::file_size(shards.back());
+  }
+  const MergeReport virtual_report = MergeArchives(shards, directory_ / "virtual.h5", false, "test");
+  EXPECT_EQ(virtual_report.kind, MergeKind::kVirtual);
+  EXPECT_EQ(virtual_report.sources, (std::vector<std::string>{"shard0.h5", "shard1.h5", "shard2.h5"}));
+  EXPECT_EQ(Contents(directory_ / "virtual.h5"), Contents(directory_ / "whole.h5"));
+  {
+    ArchiveReader reader = ArchiveReader::Open(directory_ / "virtual.h5");
+    EXPECT_EQ(reader.StringAttribute("merge_kind"), "virtual");
+    hdf5::Handle status(H5Dopen2(reader.file(), "runs/status", H5P_DEFAULT), "open");
+    hdf5::Handle dcpl(H5Dget_create_plist(status.get()), "dcpl");
+    EXPECT_EQ(H5Pget_layout(dcpl.get()), H5D_VIRTUAL);
+  }
+
+  const MergeReport copy_report = MergeArchives(shards, directory_ / "copy.h5", false, "test", MergeKind::kCopy);
+  EXPECT_EQ(Contents(directory_ / "copy.h5"), Contents(directory_ / "whole.h5"));
+  EXPECT_GT(copy_report.chunks_copied, 0);
+  EXPECT_EQ(copy_report.chunks_rewritten, 0) << "shards cut at batch boundaries: every chunk coincides";
+  // The copy holds the shards' chunks as they were stored: the same bytes as one process's archive.
+  EXPECT_TRUE(StoredChunks(directory_ / "copy.h5") == StoredChunks(directory_ / "whole.h5"));
+  // The virtual archive is small: a mapping, not a copy.
+  EXPECT_LT(std::filesystem::file_size(directory_ / "virtual.h5"), shard_bytes);
+
+  // A shard the virtual archive reads is moved away: refused, naming it (HDF5 would read fill values).
+  std::filesystem::rename(shards[1], directory_ / "moved.h5");
+  try {
+    ArchiveReader::Open(directory_ / "virtual.h5");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shard1.h5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("must stay"), std::string::npos) << e.what();
+  }
+  // The copy is self-contained.
+  EXPECT_EQ(Contents(directory_ / "copy.h5"), Contents(directory_ / "whole.h5"));
+}
+
+TEST_F(ArchiveTest, ShardsOfASmallDesignStillCoverItWhenTheyCannotAllBeWholeBatches) {
+  // 105 runs in batches of 64 over 4 shards: batches of min(64, 105/4 = 26) runs, shards of whole
+  // batches; merged by copy every chunk still coincides.
+  const auto study = StudyFile("s.toml", 64);
+  SweepPlan whole(LoadStudy(study), ShardSpec{});
+  Run(whole, directory_ / "whole.h5", ArchiveOpenMode::kCreate);
+  std::vector<std::filesystem::path> shards;
+  for (int i = 0; i < 4; ++i) {
+    SweepPlan plan(LoadStudy(study), ShardSpec{i, 4});
+    EXPECT_EQ(plan.chunk_runs(), 26);  // ShardBatchRuns(105, 64, 4) = min(64, 105 / 4)
+    shards.push_back(directory_ / ("shard" + std::to_string(i) + ".h5"));
+    Run(plan, shards.back(), ArchiveOpenMode::kCreate);
+  }
+  MergeArchives(shards, directory_ / "copy.h5", false, "test", MergeKind::kCopy);
+  EXPECT_EQ(Contents(directory_ / "copy.h5"), Contents(directory_ / "whole.h5"));
+  MergeArchives(shards, directory_ / "virtual.h5", false, "test");
+  EXPECT_EQ(Contents(directory_ / "virtual.h5"), Contents(directory_ / "whole.h5"));
+}
+
+TEST_F(ArchiveTest, LongMessagesAreStoredWholeAndOnlyTheirChunksWritten) {
+  // One long message (an LQR failure's reason runs past the old 160-byte cut) and one past the
+  // limit, with multi-byte UTF-8 characters at the cut.
+  SweepPlan plan(LoadStudy(StudyFile("s.toml", 64)), ShardSpec{});
+  const auto archive = directory_ / "a.h5";
+  auto writer = ArchiveWriter::Open(archive, plan, RunProvenance{"test", 1}, ArchiveOpenMode::kCreate, nullptr);
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  for (int r = 0; r < block.rows; ++r) ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
+  std::string lqr = "landing: design_failed: (Q, A) is not detectable: the mode at lambda = -0.0123+0.4567i is "
+                    "unweighted by Q and not stable; ";
+  while (lqr.size() < 700) lqr += "the useful part of the reason continues past the old cut at 160 bytes; ";
+  std::string huge;
+  while (huge.size() < 3000) huge += "\u00e9t\u00e9 ";  // "été ": two-byte characters
+  TruncateMessage(huge);
+  EXPECT_EQ(huge.size() <= static_cast<std::size_t>(kMessageLength), true);
+  EXPECT_EQ(huge.substr(huge.size() - 3), "...");
+  block.message[3] = lqr;
+  block.message[40] = huge;
+  block.status[3] = 2;
+  writer->Write(block);
+  for (std::int64_t b = 1; b < plan.block_count(); ++b) {
+    block.Reset(plan, b);
+    for (int r = 0; r < block.rows; ++r) ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
+    writer->Write(block);
+  }
+  writer->Finish();
+  writer.reset();
+  ArchiveReader reader = ArchiveReader::Open(archive);
+  const auto messages = reader.ReadMessages(0, reader.run_count());
+  EXPECT_EQ(messages[3], lqr);
+  EXPECT_EQ(messages[40], huge);
+  for (std::size_t r = 0; r < messages.size(); ++r) {
+    if (r != 3 && r != 40) {
+      EXPECT_EQ(messages[r], "") << r;
+    }
+  }
+  // Sparse: the two message chunks (rows 0..63 in 64-run chunks -- one chunk) are all that is stored.
+  hdf5::Handle dataset(H5Dopen2(reader.file(), "runs/message", H5P_DEFAULT), "open");
+  hdf5::Handle space(H5Dget_space(dataset.get()), "space");
+  hsize_t count = 0;
+  H5Dget_num_chunks(dataset.get(), space.get(), &count);
+  EXPECT_EQ(count, 1u);
+}
+
 TEST_F(ArchiveTest, ReaderRefusesWhatIsNotAnArchive) {
   std::ofstream(directory_ / "text.h5") << "not hdf5";
   EXPECT_THROW(ArchiveReader::Open(directory_ / "text.h5"), InputError);

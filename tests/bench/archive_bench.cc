@@ -1,7 +1,8 @@
-// The HDF5 write per 1000 runs through the archive writer (issue 9; docs/performance.md): what the
-// writer thread of `gesweep run` spends on a finished batch (design values, results, ids, messages,
-// flush, statuses, flush; shuffle + deflate + Fletcher-32 per chunk), for the columns of a modes
-// study and of a modes + open-loop summary study. The batches hold real results, computed once
+// The HDF5 write per 1000 runs through the archive writer (issue 9, 14; docs/performance.md): what
+// a finished batch costs, split the way `gesweep run` splits it since issue 14 -- the worker that
+// computed it encodes it (shuffle + deflate + Fletcher-32 per chunk, ArchiveWriter::Encode) and the
+// writer thread stores the chunks (H5Dwrite_chunk, flush, statuses, flush) -- for the columns of a
+// modes study and of a modes + open-loop summary study. The batches hold real results, computed once
 // before the timing (compression depends on the values), and are written into a fresh archive
 // under $TMPDIR (default /tmp), deleted afterwards.
 #include <benchmark/benchmark.h>
@@ -97,16 +98,23 @@ std::vector<ResultBlock> ComputeBlocks(const SweepPlan& plan) {
 // deletes it (not timed).
 void WriteArchive(benchmark::State& state, const char* study_text, const std::string& name) {
   SweepPlan plan(ParseStudy(study_text, kStudyPath), ShardSpec{});
-  const std::vector<ResultBlock> blocks = ComputeBlocks(plan);
+  std::vector<ResultBlock> blocks = ComputeBlocks(plan);
   const std::filesystem::path path = ScratchArchive(name);
   std::uintmax_t bytes = 0;
-  double cpu_s = 0;
+  double cpu_s = 0, encode_s = 0, store_s = 0;
   for (auto _ : state) {
     RemoveArchive(path);
     auto writer = ArchiveWriter::Open(path, plan, RunProvenance{"bench", 1}, ArchiveOpenMode::kCreate, nullptr);
     const double cpu_start = ThreadCpuSeconds();
     const auto start = std::chrono::steady_clock::now();
-    for (const ResultBlock& block : blocks) writer->Write(block);
+    for (ResultBlock& block : blocks) {
+      const double t0 = ThreadCpuSeconds();
+      writer->Encode(block);
+      const double t1 = ThreadCpuSeconds();
+      writer->Write(block);
+      encode_s += t1 - t0;
+      store_s += ThreadCpuSeconds() - t1;
+    }
     writer->Finish();
     const auto stop = std::chrono::steady_clock::now();
     cpu_s += ThreadCpuSeconds() - cpu_start;
@@ -127,6 +135,9 @@ void WriteArchive(benchmark::State& state, const char* study_text, const std::st
   // the cores are busy, and what a loaded machine inflates less than the wall clock.
   state.counters["cpu_per_1000_runs"] =
       cpu_s / static_cast<double>(state.iterations()) / thousands;
+  // Of it: the workers' share (filtering the chunks) and the writer thread's (storing them).
+  state.counters["encode_cpu_per_1000_runs"] = encode_s / static_cast<double>(state.iterations()) / thousands;
+  state.counters["store_cpu_per_1000_runs"] = store_s / static_cast<double>(state.iterations()) / thousands;
 }
 
 // The study with an [output] table inserted before its first analysis: compression level (-1: the

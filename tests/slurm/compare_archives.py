@@ -25,11 +25,15 @@ import numpy as np
 # (schemas/archive.md, "Provenance"): they legitimately differ between a single-process run and a
 # merge of shards run elsewhere, at other times, with other thread counts and paths. Every other
 # root attribute (the study and aircraft text and fingerprint, the engine version, commit and
-# compiler, the design's run count, shard 0/1, chunking, the ok/failed/pending counts) must match.
+# compiler, the design's run count, shard 0/1, the ok/failed/pending counts) must match. The batch
+# size (chunk_runs) is how the archive was cut into chunks, not what it holds: an N-way split of a
+# small design has smaller batches (ShardBatchRuns), and the datasets must still be equal.
 PROVENANCE_ROOT_ATTRIBUTES = {
     "host", "threads", "command_line", "start_time", "end_time", "resumed_at",
     "study_path", "aircraft_path",  # as given on each command line
     "merged_from", "merged_shards", "merge_command_line", "merge_time",  # written by gesweep merge
+    "merge_kind", "virtual_sources", "virtual_note",  # how the merge was made (virtual or copied)
+    "chunk_runs", "mpi_ranks", "node_index", "node_count",  # how the runs were batched and spread
 }
 
 MAX_REPORTED_RUNS = 5

@@ -318,19 +318,34 @@ TEST(ShardSpec, ParsesAndSplitsContiguously) {
   const ShardSpec shard = ParseShard("1/3", "--shard");
   EXPECT_EQ(shard.index, 1);
   EXPECT_EQ(shard.count, 3);
-  // Every run in exactly one shard, in order, sizes differing by at most one.
-  for (std::int64_t runs : {1, 2, 10, 1000, 1001}) {
-    for (int count : {1, 2, 3, 7}) {
-      std::int64_t next = 0;
-      for (int i = 0; i < count; ++i) {
-        std::int64_t first = 0, n = 0;
-        ShardRange(runs, ShardSpec{i, count}, &first, &n);
-        EXPECT_EQ(first, next);
-        EXPECT_LE(n, runs / count + 1);
-        EXPECT_GE(n, runs / count);
-        next = first + n;
+  // Every run in exactly one shard, in order; every shard starts at a batch boundary (so its chunks
+  // coincide with the merged archive's) and shards differ by at most one batch.
+  for (std::int64_t runs : {1, 2, 10, 1000, 1001, 10000}) {
+    for (int batch : {1, 7, 64, 4096}) {
+      for (int count : {1, 2, 3, 7}) {
+        if (count > runs) continue;
+        const std::int64_t b = ShardBatchRuns(runs, batch, count);
+        EXPECT_GE(b, 1);
+        EXPECT_LE(b, batch);
+        EXPECT_LE(b * count, runs);  // at least one batch per shard
+        std::int64_t next = 0, smallest = runs, largest = 0;
+        for (int i = 0; i < count; ++i) {
+          std::int64_t first = 0, n = 0;
+          ShardRange(runs, batch, ShardSpec{i, count}, &first, &n);
+          EXPECT_EQ(first, next);
+          EXPECT_EQ(first % b, 0) << runs << " runs, batch " << batch << ", shard " << i << "/" << count;
+          EXPECT_GE(n, 1);
+          if (first + n < runs) {
+            smallest = std::min(smallest, n);
+            largest = std::max(largest, n);
+          }
+          next = first + n;
+        }
+        EXPECT_EQ(next, runs);
+        if (largest > 0) {
+          EXPECT_LE(largest - smallest, b);
+        }
       }
-      EXPECT_EQ(next, runs);
     }
   }
 }

@@ -249,7 +249,7 @@ def merge_sbatch_arguments(manifest, dependency, options):
             f"--output={os.path.join(out_dir, 'logs', 'merge.log')}",
             *options,
             os.path.join(SCRIPTS_DIR, "merge_job"),
-            SCRIPTS_DIR, manifest["gesweep"], out_dir, str(manifest["shards"])]
+            SCRIPTS_DIR, manifest["gesweep"], out_dir, str(manifest["shards"]), manifest.get("merge", "virtual")]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -298,13 +298,6 @@ def check_study_unchanged(manifest):
 # Shard completeness
 
 
-def shard_range(runs, shards, index):
-    """(first, count) of shard `index` of `shards` over `runs` runs: gesweep's contiguous split
-    [floor(i*M/N), floor((i+1)*M/N)) (engine/sweep/sweep_plan.h, ShardSpec)."""
-    first = index * runs // shards
-    return first, (index + 1) * runs // shards - first
-
-
 def shard_progress(manifest, index):
     """(state, detail) of shard `index`: 'complete', 'incomplete', 'missing', or 'present' (exists;
     its runs not counted because h5py is not available).
@@ -325,7 +318,6 @@ def shard_progress(manifest, index):
     except ImportError:
         return "present", "h5py not available to count its runs; gesweep merge will check them"
     shards = manifest["shards"]
-    expected_first, expected_count = shard_range(manifest["runs"], shards, index)
     try:
         handle = h5py.File(archive, "r")
         snapshot = False
@@ -344,6 +336,9 @@ def shard_progress(manifest, index):
         if shard != f"{index}/{shards}" or int(attributes.get("design_runs", -1)) != manifest["runs"]:
             return "incomplete", (f"wrong archive: shard {shard} of {attributes.get('design_runs')} runs, "
                                   f"expected {index}/{shards} of {manifest['runs']}")
+        # The shard's own run count: gesweep cuts shards at batch boundaries (engine/sweep/sweep_plan.h,
+        # ShardRange); `gesweep merge` checks that the shards cover the design exactly once.
+        expected_count = int(attributes.get("run_count", -1))
         if "runs/status" not in handle or handle["runs/status"].shape != (expected_count,):
             return "incomplete", "no runs/status of the shard's length"
         status = handle["runs/status"][()]

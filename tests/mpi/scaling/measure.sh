@@ -38,36 +38,44 @@ measure open_loop_sum    tests/mpi/scaling/open_loop_summary.toml 1
 measure open_loop_series tests/mpi/scaling/open_loop_series.toml 1
 measure landing          studies/bench/landing.toml 1
 
-echo "== merge (gesweep merge of 8 shards of studies/bench/modes.toml)"
+merge_measure() {  # label shard-prefix [--copy]
+  local label=$1 prefix=$2; shift 2
+  rm -f "$WORK/$label.h5"
+  /usr/bin/time -f "%e %U %S" -o "$WORK/$label.time" "$G" merge "$WORK/$prefix"-{0,1,2,3,4,5,6,7}.h5 -o "$WORK/$label.h5" -q "$@"
+  read -r wall user sys < "$WORK/$label.time"
+  /usr/bin/python3 -c "
+import sys
+label, runs, wall, cpu, b, shards = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]) + float(sys.argv[5]), int(sys.argv[6]), int(sys.argv[7])
+print(f'{label}: {runs} runs, {shards} B of shards -> {b} B in {wall:.3f} s wall ({cpu:.3f} s cpu): '
+      f'{shards/wall/1e6:.0f} MB/s wall, {shards/max(cpu, 1e-9)/1e6:.0f} MB per CPU-second')" \
+    "$label" "$(runs_of "$WORK/$label.h5")" "$wall" "$user" "$sys" "$(stat -c %s "$WORK/$label.h5")" \
+    "$(du -cb "$WORK/$prefix"-*.h5 | tail -1 | cut -f1)"
+}
+
+echo "== merge (gesweep merge of 8 shards: virtual, the default, and --copy)"
 for i in 0 1 2 3 4 5 6 7; do
   "$G" run studies/bench/modes.toml -o "$WORK/shard-$i.h5" --shard "$i/8" --threads 2 -q --force
+  "$G" run tests/mpi/scaling/open_loop_series.toml -o "$WORK/sshard-$i.h5" --shard "$i/8" --threads 2 -q --force
 done
-rm -f "$WORK/merged.h5"
-/usr/bin/time -f "%e %U %S" -o "$WORK/merge.time" "$G" merge "$WORK"/shard-{0,1,2,3,4,5,6,7}.h5 -o "$WORK/merged.h5"
-read -r wall user sys < "$WORK/merge.time"
-/usr/bin/python3 -c "
-import sys
-runs, wall, cpu, b = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3]) + float(sys.argv[4]), int(sys.argv[5])
-print(f'merge: {runs} runs, {b} B in {wall:.2f} s wall ({cpu:.2f} s cpu): {runs/wall:.0f} runs/s, {b/wall/1e6:.1f} MB/s')" \
-  "$(runs_of "$WORK/merged.h5")" "$wall" "$user" "$sys" "$(stat -c %s "$WORK/merged.h5")"
-for i in 0 1 2 3 4 5 6 7; do "$G" run tests/mpi/scaling/open_loop_series.toml -o "$WORK/sshard-$i.h5" --shard "$i/8" --threads 2 -q --force; done
-rm -f "$WORK/smerged.h5"
-/usr/bin/time -f "%e %U %S" -o "$WORK/smerge.time" "$G" merge "$WORK"/sshard-{0,1,2,3,4,5,6,7}.h5 -o "$WORK/smerged.h5"
-read -r wall user sys < "$WORK/smerge.time"
-/usr/bin/python3 -c "
-import sys
-runs, wall, cpu, b = int(sys.argv[1]), float(sys.argv[2]), float(sys.argv[3]) + float(sys.argv[4]), int(sys.argv[5])
-print(f'merge (series): {runs} runs, {b} B in {wall:.2f} s wall ({cpu:.2f} s cpu): {runs/wall:.0f} runs/s, {b/wall/1e6:.1f} MB/s')" \
-  "$(runs_of "$WORK/smerged.h5")" "$wall" "$user" "$sys" "$(stat -c %s "$WORK/smerged.h5")"
+merge_measure merge_virtual shard
+merge_measure merge_copy shard --copy
+merge_measure merge_series_virtual sshard
+merge_measure merge_series_copy sshard --copy
 
 if [ -x "$DRIVER" ]; then
-  echo "== MPI runner, rank 0 writes (studies/bench/modes.toml, 1 thread per rank)"
-  for n in 1 2 3; do
-    rm -f "$WORK/mpi-$n.h5"
+  echo "== MPI (studies/bench/modes.toml, 1 thread per rank, 2 ranks per node: one writer each)"
+  for n in 1 2 4; do
+    rm -f "$WORK"/mpi-$n*.h5
     /usr/bin/time -f "%e %U %S" -o "$WORK/mpi-$n.time" mpirun --allow-run-as-root --oversubscribe -n "$n" \
-      "$DRIVER" studies/bench/modes.toml -o "$WORK/mpi-$n.h5" --threads 1 2>&1 | grep "runs in" || true
+      -x GESWEEP_RANKS_PER_NODE=2 "$DRIVER" studies/bench/modes.toml -o "$WORK/mpi-$n.h5" --threads 1 2>&1 || true
     echo "  -n $n: wall/user/sys $(cat "$WORK/mpi-$n.time")"
   done
-  /usr/bin/python3 tests/slurm/compare_archives.py "$WORK/modes.h5" "$WORK/mpi-3.h5"
+  /usr/bin/python3 tests/slurm/compare_archives.py "$WORK/modes.h5" "$WORK/mpi-4.h5"
+  echo "== writer-bound: 1,000,000 near-free runs, one process and mpirun -n 4 as 2 nodes"
+  measure writer_bound tests/mpi/scaling/writer_bound.toml 1
+  rm -f "$WORK"/wb-mpi*.h5
+  /usr/bin/time -f "%e %U %S" -o "$WORK/wb-mpi.time" mpirun --allow-run-as-root --oversubscribe -n 4 \
+    -x GESWEEP_RANKS_PER_NODE=2 "$DRIVER" tests/mpi/scaling/writer_bound.toml -o "$WORK/wb-mpi.h5" --threads 1 -q || true
+  echo "  mpirun -n 4 as 2 nodes: wall/user/sys $(cat "$WORK/wb-mpi.time")"
 fi
 echo "work dir: $WORK"

@@ -1,0 +1,157 @@
+#include "engine/archive/analysis_product.h"
+
+#include <type_traits>
+
+#include "engine/archive/hdf5_util.h"
+#include "engine/common/errors.h"
+
+namespace gesweep {
+namespace {
+
+static_assert(std::is_same_v<hid_t, std::int64_t>, "ProductGroup holds HDF5 identifiers as int64");
+
+using hdf5::Check;
+using hdf5::Handle;
+
+template <typename T>
+hid_t FileType();
+template <>
+hid_t FileType<double>() { return H5T_IEEE_F64LE; }
+template <>
+hid_t FileType<std::int8_t>() { return H5T_STD_I8LE; }
+template <>
+hid_t FileType<std::int32_t>() { return H5T_STD_I32LE; }
+template <>
+hid_t FileType<std::int64_t>() { return H5T_STD_I64LE; }
+
+template <typename T>
+hid_t MemoryType();
+template <>
+hid_t MemoryType<double>() { return H5T_NATIVE_DOUBLE; }
+template <>
+hid_t MemoryType<std::int8_t>() { return H5T_NATIVE_INT8; }
+template <>
+hid_t MemoryType<std::int32_t>() { return H5T_NATIVE_INT32; }
+template <>
+hid_t MemoryType<std::int64_t>() { return H5T_NATIVE_INT64; }
+
+}  // namespace
+
+#define GESWEEP_PRODUCT_ATTRIBUTES(Class)                                                                   \
+  void Class::Attribute(const std::string& name, const std::string& value) {                              \
+    hdf5::WriteAttribute(id_, name, value);                                                               \
+  }                                                                                                       \
+  void Class::Attribute(const std::string& name, const char* value) { hdf5::WriteAttribute(id_, name, value); } \
+  void Class::Attribute(const std::string& name, std::int64_t value) { hdf5::WriteAttribute(id_, name, value); } \
+  void Class::Attribute(const std::string& name, double value) { hdf5::WriteAttribute(id_, name, value); }       \
+  void Class::Attribute(const std::string& name, const std::vector<std::string>& values) {                \
+    hdf5::WriteAttribute(id_, name, values);                                                              \
+  }                                                                                                       \
+  void Class::Attribute(const std::string& name, const std::vector<double>& values) {                     \
+    hdf5::WriteAttribute(id_, name, values);                                                              \
+  }                                                                                                       \
+  void Class::Attribute(const std::string& name, const std::vector<std::int64_t>& values) {               \
+    hdf5::WriteAttribute(id_, name, values);                                                              \
+  }
+
+GESWEEP_PRODUCT_ATTRIBUTES(ProductDataset)
+GESWEEP_PRODUCT_ATTRIBUTES(ProductGroup)
+#undef GESWEEP_PRODUCT_ATTRIBUTES
+
+ProductGroup::ProductGroup(ProductGroup&& other) noexcept : id_(other.id_), datasets_(std::move(other.datasets_)) {
+  other.id_ = H5I_INVALID_HID;
+  other.datasets_.clear();
+}
+
+ProductGroup::~ProductGroup() {
+  for (const std::int64_t id : datasets_) H5Dclose(id);
+  if (id_ >= 0) H5Gclose(id_);
+}
+
+template <typename T>
+ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<T>& values, const std::string& units,
+                                     const std::string& description, const std::vector<std::size_t>& dims) {
+  std::vector<hsize_t> shape;
+  std::size_t count = 1;
+  for (const std::size_t d : dims) {
+    shape.push_back(d);
+    count *= d;
+  }
+  if (shape.empty()) {
+    shape.push_back(values.size());
+    count = values.size();
+  }
+  GESWEEP_DEMAND(count == values.size());
+  Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), "dataspace of " + name);
+  const hid_t id = H5Dcreate2(id_, name.c_str(), FileType<T>(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  Check(id, "create " + name);
+  datasets_.push_back(id);
+  if (count > 0) Check(H5Dwrite(id, MemoryType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
+  ProductDataset dataset(id);
+  dataset.Attribute("units", units);
+  dataset.Attribute("description", description);
+  return dataset;
+}
+
+template ProductDataset ProductGroup::Numbers<double>(const std::string&, const std::vector<double>&,
+                                                      const std::string&, const std::string&,
+                                                      const std::vector<std::size_t>&);
+template ProductDataset ProductGroup::Numbers<std::int8_t>(const std::string&, const std::vector<std::int8_t>&,
+                                                           const std::string&, const std::string&,
+                                                           const std::vector<std::size_t>&);
+template ProductDataset ProductGroup::Numbers<std::int32_t>(const std::string&, const std::vector<std::int32_t>&,
+                                                            const std::string&, const std::string&,
+                                                            const std::vector<std::size_t>&);
+template ProductDataset ProductGroup::Numbers<std::int64_t>(const std::string&, const std::vector<std::int64_t>&,
+                                                            const std::string&, const std::string&,
+                                                            const std::vector<std::size_t>&);
+
+ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<std::string>& values,
+                                     const std::string& description) {
+  Handle type(H5Tcopy(H5T_C_S1), "string type");
+  Check(H5Tset_size(type.get(), H5T_VARIABLE), "string size");
+  Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
+  std::vector<const char*> pointers;
+  for (const auto& value : values) pointers.push_back(value.c_str());
+  const hsize_t dims[1] = {values.size()};
+  Handle space(H5Screate_simple(1, dims, nullptr), "dataspace of " + name);
+  const hid_t id = H5Dcreate2(id_, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  Check(id, "create " + name);
+  datasets_.push_back(id);
+  if (!values.empty()) Check(H5Dwrite(id, type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data()), "write " + name);
+  ProductDataset dataset(id);
+  dataset.Attribute("units", "1");
+  dataset.Attribute("description", description);
+  return dataset;
+}
+
+ProductGroup ProductGroup::Group(const std::string& name) {
+  const hid_t id = H5Gcreate2(id_, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  Check(id, "create group " + name);
+  return ProductGroup(id);
+}
+
+void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path, const std::string& busy_hint,
+                          const std::function<void(ProductGroup&)>& write) {
+  hdf5::Quiet();
+  const std::string shown = archive.string();
+  Handle fapl = hdf5::FileAccess();
+  const hid_t id = H5Fopen(archive.c_str(), H5F_ACC_RDWR, fapl.get());
+  if (id < 0) {
+    const std::string detail = hdf5::LastError();
+    H5Eclear2(H5E_DEFAULT);
+    throw InputError(shown, "", "",
+                     "cannot open the archive for writing (HDF5: " + detail +
+                         "); is another program reading or writing it?" + (busy_hint.empty() ? "" : " " + busy_hint));
+  }
+  Handle file(id);
+  hdf5::ReplaceGroup(file.get(), path, [&](const std::string& temporary) {
+    const hid_t group = H5Gcreate2(file.get(), temporary.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    Check(group, "create group " + temporary);
+    ProductGroup product(group);
+    write(product);
+  });
+  file.Close("close " + shown);
+}
+
+}  // namespace gesweep

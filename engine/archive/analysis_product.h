@@ -1,0 +1,80 @@
+#pragma once
+/// Derived products of an archive under /analysis (schemas/archive.md): the stability boundary
+/// (`gesweep boundary --archive`), sensitivity indices (`gesweep sensitivity`), and whatever comes
+/// next (a dispersion product...). One way to write them, so that every product is written the same
+/// safe way: the archive opened for writing (one line naming it when another program holds it),
+/// the product built under a temporary name and moved over the old one only when complete
+/// (hdf5::ReplaceGroup), the file closed with errors reported. The callers describe their product
+/// with the small API below and never see HDF5.
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace gesweep {
+
+/// A dataset of a product being written: more attributes can be added.
+class ProductDataset {
+ public:
+  void Attribute(const std::string& name, const std::string& value);
+  void Attribute(const std::string& name, const char* value);
+  void Attribute(const std::string& name, std::int64_t value);
+  void Attribute(const std::string& name, double value);
+  void Attribute(const std::string& name, const std::vector<std::string>& values);
+  void Attribute(const std::string& name, const std::vector<double>& values);
+  void Attribute(const std::string& name, const std::vector<std::int64_t>& values);
+
+ private:
+  friend class ProductGroup;
+  explicit ProductDataset(std::int64_t id) : id_(id) {}
+  std::int64_t id_;  // the open dataset (an HDF5 identifier, owned by the group that made it)
+};
+
+/// A group of a product being written (valid only inside WriteAnalysisProduct's callback).
+class ProductGroup {
+ public:
+  void Attribute(const std::string& name, const std::string& value);
+  void Attribute(const std::string& name, const char* value);
+  void Attribute(const std::string& name, std::int64_t value);
+  void Attribute(const std::string& name, double value);
+  void Attribute(const std::string& name, const std::vector<std::string>& values);
+  void Attribute(const std::string& name, const std::vector<double>& values);
+  void Attribute(const std::string& name, const std::vector<std::int64_t>& values);
+
+  /// A dataset of `values` (row-major) of shape `dims` (empty: 1-D of values.size()), stored as
+  /// little-endian float64 / int8 / int32 / int64, with its units and description.
+  template <typename T>
+  ProductDataset Numbers(const std::string& name, const std::vector<T>& values, const std::string& units,
+                         const std::string& description, const std::vector<std::size_t>& dims = {});
+  /// A 1-D dataset of variable-length UTF-8 strings (units "1").
+  ProductDataset Strings(const std::string& name, const std::vector<std::string>& values,
+                         const std::string& description);
+  /// A subgroup.
+  ProductGroup Group(const std::string& name);
+
+  ProductGroup(ProductGroup&& other) noexcept;
+  ProductGroup& operator=(ProductGroup&&) = delete;
+  ProductGroup(const ProductGroup&) = delete;
+  ProductGroup& operator=(const ProductGroup&) = delete;
+  ~ProductGroup();
+
+ private:
+  friend void WriteAnalysisProduct(const std::filesystem::path&, const std::string&, const std::string&,
+                                   const std::function<void(ProductGroup&)>&);
+  explicit ProductGroup(std::int64_t id) : id_(id) {}
+  std::int64_t id_;                      // the open group (an HDF5 identifier)
+  std::vector<std::int64_t> datasets_;   // datasets made here, closed with the group
+};
+
+/// Writes the product `path` (e.g. "analysis/boundary", "analysis/sensitivity/H_m") of `archive`:
+/// `write` fills a fresh group, which then replaces the old product whole (a failure leaves the old
+/// one as it was). Throws InputError naming the archive when it cannot be opened for writing
+/// (another program reads or writes it; `busy_hint` is added, e.g. "pass --no-write to only print
+/// it"), ArchiveError for an I/O failure.
+void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path, const std::string& busy_hint,
+                          const std::function<void(ProductGroup&)>& write);
+
+}  // namespace gesweep
