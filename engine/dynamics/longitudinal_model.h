@@ -44,6 +44,24 @@ Matrix5d AssembleStateMatrix(const DimensionalDerivatives& d, double reference_s
 /// Eq. (1): B, the elevator column [Xδe, Zδe, Mδe + Mẇ·Zδe, 0, 0].
 Vector5d AssembleInputMatrix(const DimensionalDerivatives& d);
 
+/// The air's motion at the airplane, the extra inputs of Eq. (1) in air-relative form
+/// (docs/model.md §9): u_g along x (positive forward: a headwind is negative), w_g along z (positive
+/// down), the pitch-rate gust q_g, and ẇ_g, the rate of w_g along the flight path. Zero: still air.
+struct AirVelocity {
+  double u_g_mps = 0;
+  double w_g_mps = 0;
+  double q_g_radps = 0;
+  double w_g_dot_mps2 = 0;
+};
+
+/// Eq. (1) in air-relative form (docs/model.md §9): the aerodynamic terms act on Δu_a = Δu − u_g,
+/// Δw_a = Δw − w_g (and Mq on q − q_g, Mẇ on Δẇ − ẇ_g); the kinematic terms u0·q, q and
+/// u0·Δθ − Δw keep the inertial velocities. d are the derivatives at the current H and airspeed,
+/// u0 the kinematic reference speed. With AirVelocity{} the result is ẋ = A x + B δe, computed by
+/// the same operations as Equation1Derivative of engine/simulation/derivative_kernel.h.
+Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double reference_speed_mps, const Vector5d& x,
+                               double elevator_rad, const AirVelocity& air);
+
 /// One aircraft under one set of model options.
 class LongitudinalModel {
  public:
@@ -65,6 +83,11 @@ class LongitudinalModel {
   Matrix5d StateMatrix(double height_m, double speed_mps) const;
   /// B of Eq. (1) at H and u.
   Vector5d InputMatrix(double height_m, double speed_mps) const;
+  /// ẋ of Eq. (1) at state x (SI), elevator δe (rad) and air motion `air`, with the derivatives
+  /// re-evaluated (docs/model.md §7, §9) at H = H0 + ΔH and the airspeed u0 + Δu − u_g, and the
+  /// kinematic entries at the reference u0. Still air gives the open-loop run's generic path exactly.
+  Vector5d StateDerivative(double start_height_m, double reference_speed_mps, const Vector5d& x,
+                           double elevator_rad, const AirVelocity& air = {}) const;
 
  private:
   Aircraft aircraft_;

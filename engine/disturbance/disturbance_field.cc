@@ -1,0 +1,133 @@
+#include "engine/disturbance/disturbance_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "engine/common/errors.h"
+#include "engine/disturbance/discrete_gust.h"
+#include "engine/disturbance/dryden.h"
+#include "engine/disturbance/mean_wind.h"
+
+namespace gesweep {
+
+DisturbanceField::DisturbanceField(const DisturbanceOptions& options, std::uint64_t study_seed,
+                                   std::uint64_t run_index)
+    : options_(options), noise_(study_seed, run_index) {
+  ValidateDisturbanceOptions(options_, "disturbance options");
+  sigma_w_mps_ = EffectiveSigmaW(options_);
+  turbulent_ = options_.turbulence == TurbulenceModel::kDryden;
+  has_gust_ = options_.gust_amplitude_mps != 0.0;
+  noise_scale_ = 1.0 / std::sqrt(options_.turbulence_sample_interval_s);
+}
+
+DisturbanceField::State DisturbanceField::InitialState() const {
+  State x{};
+  if (turbulent_) {
+    // Stationary covariances of the normalised filters (dryden.h): z ~ N(0, 1);
+    // (x1, x2) ~ N(0, [[1/2, 1/4], [1/4, 1/4]]) by its Cholesky factor [[√½, 0], [√⅛, √⅛]].
+    const double n0 = noise_.StandardNormal(NoiseStream::kInitialState, 0);
+    const double n1 = noise_.StandardNormal(NoiseStream::kInitialState, 1);
+    const double n2 = noise_.StandardNormal(NoiseStream::kInitialState, 2);
+    x[kTurbulenceU] = n0;
+    x[kTurbulenceW1] = std::sqrt(0.5) * n1;
+    x[kTurbulenceW2] = std::sqrt(0.125) * (n1 + n2);
+  }
+  // w_g(0): σ_w does not depend on height, and the gust has not begun (distance 0).
+  x[kPitchRateLag] = sigma_w_mps_ * DrydenWOutput(x[kTurbulenceW1], x[kTurbulenceW2]);
+  return x;
+}
+
+std::int64_t DisturbanceField::SampleIndexAt(double t) const {
+  const double dt = options_.turbulence_sample_interval_s;
+  if (!(t >= dt)) return 0;
+  // The instants are the doubles k·Δt_n exactly as Breakpoints writes them; correct the division's rounding.
+  auto k = static_cast<std::int64_t>(std::floor(t / dt));
+  while (static_cast<double>(k + 1) * dt <= t) ++k;
+  while (k > 0 && static_cast<double>(k) * dt > t) --k;
+  return k;
+}
+
+std::vector<double> DisturbanceField::Breakpoints(double start_s, double end_s) const {
+  std::vector<double> b;
+  if (turbulent_) {
+    const double dt = options_.turbulence_sample_interval_s;
+    for (std::int64_t k = SampleIndexAt(start_s) + 1;; ++k) {
+      const double t = static_cast<double>(k) * dt;
+      if (!(t < end_s)) break;
+      if (t > start_s) b.push_back(t);
+    }
+  }
+  if (has_gust_ && options_.gust_start_s > start_s && options_.gust_start_s < end_s) {
+    b.insert(std::upper_bound(b.begin(), b.end(), options_.gust_start_s), options_.gust_start_s);
+    b.erase(std::unique(b.begin(), b.end()), b.end());
+  }
+  return b;
+}
+
+std::vector<DisturbanceField::Segment> DisturbanceField::SegmentTable(std::span<const double> breakpoints_s,
+                                                                      double start_s) const {
+  std::vector<Segment> table(breakpoints_s.size() + 1);
+  for (std::size_t s = 0; s < table.size(); ++s) {
+    const double t = s == 0 ? start_s : breakpoints_s[s - 1];  // the segment's left end
+    table[s].sample_index = SampleIndexAt(t);
+    table[s].gust_started = t >= options_.gust_start_s;
+  }
+  return table;
+}
+
+double DisturbanceField::HeldNoise(NoiseStream stream, std::int64_t sample_index) const {
+  GESWEEP_DEMAND(sample_index >= 0);
+  return noise_.StandardNormal(stream, static_cast<std::uint64_t>(sample_index)) * noise_scale_;
+}
+
+AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, double inertial_speed_mps,
+                                     const State& x, State& dxdt) const {
+  AirMotion m;
+  dxdt.fill(0.0);
+  m.mean_wind_mps = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
+  double gust_slope = 0.0;
+  if (has_gust_) {
+    m.gust_mps = OneMinusCosineGust(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
+    gust_slope = OneMinusCosineGustSlope(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
+  }
+  DrydenScales scales;
+  if (turbulent_) {
+    scales = LowAltitudeDrydenScales(height_m, sigma_w_mps_);
+    m.turbulence_u_mps = scales.sigma_u_mps * x[kTurbulenceU];
+    m.turbulence_w_mps = sigma_w_mps_ * DrydenWOutput(x[kTurbulenceW1], x[kTurbulenceW2]);
+  }
+  const bool u_gust = options_.gust_axis == GustAxis::kU;
+  m.u_g_mps = m.mean_wind_mps + m.turbulence_u_mps + (u_gust ? m.gust_mps : 0.0);
+  m.w_g_mps = m.turbulence_w_mps + (u_gust ? 0.0 : m.gust_mps);
+  m.airspeed_mps = inertial_speed_mps - m.u_g_mps;
+
+  if (turbulent_) {
+    if (segment.sample_index != cached_index_) {
+      cached_u_ = HeldNoise(NoiseStream::kTurbulenceU, segment.sample_index);
+      cached_w_ = HeldNoise(NoiseStream::kTurbulenceW, segment.sample_index);
+      cached_index_ = segment.sample_index;
+    }
+    const DrydenFilterRates rates = DrydenRates(scales, m.airspeed_mps);
+    dxdt[kTurbulenceU] = DrydenUDerivative(rates.a_u_per_s, x[kTurbulenceU], cached_u_);
+    DrydenWDerivative(rates.a_w_per_s, x[kTurbulenceW1], x[kTurbulenceW2], cached_w_, &dxdt[kTurbulenceW1],
+                      &dxdt[kTurbulenceW2]);
+    // σ_w does not vary with height, so ẇ_g of the turbulence is σ_w times the output's rate.
+    m.w_g_dot_mps2 = sigma_w_mps_ * DrydenWOutput(dxdt[kTurbulenceW1], dxdt[kTurbulenceW2]);
+  }
+  if (has_gust_ && segment.gust_started) {
+    dxdt[kGustDistance] = m.airspeed_mps;  // the gust is frozen in the air mass
+    if (!u_gust) m.w_g_dot_mps2 += gust_slope * m.airspeed_mps;
+  }
+  if (options_.pitch_rate_gust) {
+    // q_g = −(s/V)/(1 + τ s)·w_g with τ = 4b/(πV): with the lag p = w_g/(1 + τ s),
+    // q_g = −ṗ/V = −(w_g − p)·π/(4b), ṗ = (w_g − p)·πV/(4b).
+    const double k = std::numbers::pi / (4.0 * options_.wing_span_m);
+    const double lead = m.w_g_mps - x[kPitchRateLag];
+    dxdt[kPitchRateLag] = lead * k * std::max(m.airspeed_mps, 0.0);
+    m.q_g_radps = -lead * k;
+  }
+  return m;
+}
+
+}  // namespace gesweep

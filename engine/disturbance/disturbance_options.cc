@@ -1,0 +1,85 @@
+#include "engine/disturbance/disturbance_options.h"
+
+#include <cmath>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+
+std::string_view ToString(WindShear shear) {
+  switch (shear) {
+    case WindShear::kLogarithmic:
+      return "logarithmic";
+    case WindShear::kNone:
+      return "none";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::string_view ToString(TurbulenceModel model) {
+  switch (model) {
+    case TurbulenceModel::kNone:
+      return "none";
+    case TurbulenceModel::kDryden:
+      return "dryden";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::string_view ToString(GustAxis axis) {
+  switch (axis) {
+    case GustAxis::kU:
+      return "u";
+    case GustAxis::kW:
+      return "w";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::optional<WindShear> ParseWindShear(std::string_view text) {
+  if (text == "logarithmic") return WindShear::kLogarithmic;
+  if (text == "none") return WindShear::kNone;
+  return std::nullopt;
+}
+
+std::optional<TurbulenceModel> ParseTurbulenceModel(std::string_view text) {
+  if (text == "none") return TurbulenceModel::kNone;
+  if (text == "dryden") return TurbulenceModel::kDryden;
+  return std::nullopt;
+}
+
+std::optional<GustAxis> ParseGustAxis(std::string_view text) {
+  if (text == "u") return GustAxis::kU;
+  if (text == "w") return GustAxis::kW;
+  return std::nullopt;
+}
+
+double EffectiveSigmaW(const DisturbanceOptions& options) {
+  if (options.turbulence == TurbulenceModel::kNone) return 0.0;
+  return options.turbulence_sigma_w_mps.value_or(0.1 * std::abs(options.wind_20ft_mps));
+}
+
+void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& source) {
+  auto fail = [&](const char* key, double value, const char* expected) {
+    throw InputError(source, key, ShortNumber(value), expected);
+  };
+  if (!std::isfinite(o.wind_20ft_mps)) fail("wind_20ft_mps", o.wind_20ft_mps, "a finite speed in m/s");
+  if (o.turbulence_sigma_w_mps && !(std::isfinite(*o.turbulence_sigma_w_mps) && *o.turbulence_sigma_w_mps >= 0.0)) {
+    fail("turbulence_sigma_w_mps", *o.turbulence_sigma_w_mps, "a finite number >= 0 (m/s)");
+  }
+  if (!(o.turbulence_sample_interval_s >= 1e-4 && o.turbulence_sample_interval_s <= 1.0)) {
+    fail("turbulence_sample_interval_s", o.turbulence_sample_interval_s, "a number in [0.0001, 1] (s)");
+  }
+  if (o.pitch_rate_gust && !(std::isfinite(o.wing_span_m) && o.wing_span_m > 0.0)) {
+    fail("wing_span_m", o.wing_span_m, "a finite span > 0 (m) for the pitch-rate gust");
+  }
+  if (!std::isfinite(o.gust_amplitude_mps)) fail("gust_amplitude_mps", o.gust_amplitude_mps, "a finite speed in m/s");
+  if (!(std::isfinite(o.gust_half_length_m) && o.gust_half_length_m > 0.0)) {
+    fail("gust_half_length_m", o.gust_half_length_m, "a finite length > 0 (m)");
+  }
+  if (!(std::isfinite(o.gust_start_s) && o.gust_start_s >= 0.0)) {
+    fail("gust_start_s", o.gust_start_s, "a finite time >= 0 (s)");
+  }
+}
+
+}  // namespace gesweep
