@@ -6,54 +6,6 @@
 
 namespace gesweep {
 
-std::string_view ToString(WindShear shear) {
-  switch (shear) {
-    case WindShear::kLogarithmic:
-      return "logarithmic";
-    case WindShear::kNone:
-      return "none";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::string_view ToString(TurbulenceModel model) {
-  switch (model) {
-    case TurbulenceModel::kNone:
-      return "none";
-    case TurbulenceModel::kDryden:
-      return "dryden";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::string_view ToString(GustAxis axis) {
-  switch (axis) {
-    case GustAxis::kU:
-      return "u";
-    case GustAxis::kW:
-      return "w";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::optional<WindShear> ParseWindShear(std::string_view text) {
-  if (text == "logarithmic") return WindShear::kLogarithmic;
-  if (text == "none") return WindShear::kNone;
-  return std::nullopt;
-}
-
-std::optional<TurbulenceModel> ParseTurbulenceModel(std::string_view text) {
-  if (text == "none") return TurbulenceModel::kNone;
-  if (text == "dryden") return TurbulenceModel::kDryden;
-  return std::nullopt;
-}
-
-std::optional<GustAxis> ParseGustAxis(std::string_view text) {
-  if (text == "u") return GustAxis::kU;
-  if (text == "w") return GustAxis::kW;
-  return std::nullopt;
-}
-
 double EffectiveSigmaW(const DisturbanceOptions& options) {
   if (options.turbulence == TurbulenceModel::kNone) return 0.0;
   return options.turbulence_sigma_w_mps.value_or(0.1 * std::abs(options.wind_20ft_mps));

@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <string_view>
 
 #include "engine/disturbance/mean_wind.h"
 
@@ -16,19 +15,23 @@ enum class TurbulenceModel {
   kNone,    ///< no continuous turbulence
   kDryden,  ///< the Dryden form, low altitude (dryden.h)
 };
+template <>
+struct EnumNames<TurbulenceModel> {
+  static constexpr EnumName<TurbulenceModel> kTable[] = {{TurbulenceModel::kNone, "none"},
+                                                         {TurbulenceModel::kDryden, "dryden"}};
+};
 
 /// Body axis of the discrete gust.
 enum class GustAxis {
   kU,  ///< along x, adds to u_g (positive forward: a tail gust)
   kW,  ///< along z, adds to w_g (positive down: a down gust)
 };
+template <>
+struct EnumNames<GustAxis> {
+  static constexpr EnumName<GustAxis> kTable[] = {{GustAxis::kU, "u"}, {GustAxis::kW, "w"}};
+};
 
-std::string_view ToString(WindShear shear);              ///< "logarithmic" / "none"
-std::string_view ToString(TurbulenceModel model);        ///< "none" / "dryden"
-std::string_view ToString(GustAxis axis);                ///< "u" / "w"
-std::optional<WindShear> ParseWindShear(std::string_view text);
-std::optional<TurbulenceModel> ParseTurbulenceModel(std::string_view text);
-std::optional<GustAxis> ParseGustAxis(std::string_view text);
+// Their names (the study keys' values): ToString, ParseEnum, EnumChoices of engine/common/enum_names.h.
 
 /// Options of one run's disturbances.
 struct DisturbanceOptions {

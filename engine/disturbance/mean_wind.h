@@ -2,6 +2,8 @@
 /// The mean wind of MIL-F-8785C, section 3.7, and its logarithmic shear with height
 /// (docs/model.md §9). Lengths in metres at the interface; only ratios of lengths enter the profile.
 
+#include "engine/common/enum_names.h"
+
 namespace gesweep {
 
 inline constexpr double kMetresPerFoot = 0.3048;  ///< international foot
@@ -17,6 +19,10 @@ inline constexpr double kLowAltitudeCeiling_m = 1000.0 * kMetresPerFoot;
 enum class WindShear {
   kLogarithmic,  ///< W(h) = W20·ln(h/z0)/ln(20 ft/z0), 0 below z0, held above 1000 ft
   kNone,         ///< W(h) = W20 at every height
+};
+template <>
+struct EnumNames<WindShear> {
+  static constexpr EnumName<WindShear> kTable[] = {{WindShear::kLogarithmic, "logarithmic"}, {WindShear::kNone, "none"}};
 };
 
 /// The mean wind at height h above the ground, m/s, with the sign of W20 (W20 is the u_g of the
