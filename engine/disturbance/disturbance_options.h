@@ -44,7 +44,7 @@ struct DisturbanceOptions {
   std::optional<double> turbulence_sigma_w_mps;
   /// Interval Δt_n at which the white noise is sampled and held, s. In [1e-4, 1]. The w filter
   /// loses variance above ω ≈ 1/Δt_n (docs/disturbance.md gives the loss and the cost).
-  double turbulence_sample_interval_s = 0.005;
+  double turbulence_sample_interval_s = 0.01;
   /// Adds the Dryden pitch-rate gust q_g = −(s/V)/(1 + 4b s/(πV))·w_g (needs wing_span_m > 0).
   bool pitch_rate_gust = false;
   /// Wing span b for the pitch-rate gust, m (> 0 when pitch_rate_gust).
