@@ -88,8 +88,10 @@ AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, do
   m.mean_wind_mps = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
   double gust_slope = 0.0;
   if (has_gust_) {
-    m.gust_mps = OneMinusCosineGust(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
-    gust_slope = OneMinusCosineGustSlope(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
+    m.gust_mps =
+        OneMinusCosineGust(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
+    gust_slope =
+        OneMinusCosineGustSlope(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
   }
   DrydenScales scales;
   if (turbulent_) {

@@ -35,14 +35,20 @@ struct AirMotion {
   double mean_wind_mps = 0;  ///< the mean wind W(h)
   double turbulence_u_mps = 0;
   double turbulence_w_mps = 0;
-  double gust_mps = 0;       ///< the discrete gust on its axis
+  double gust_mps = 0;  ///< the discrete gust on its axis
 };
 
 class DisturbanceField {
  public:
   /// The field's states: the normalised u filter, the two w filter states, the pitch-rate lag (m/s)
   /// and the distance flown into the gust relative to the air (m).
-  enum StateIndex : int { kTurbulenceU = 0, kTurbulenceW1 = 1, kTurbulenceW2 = 2, kPitchRateLag = 3, kGustDistance = 4 };
+  enum StateIndex : int {
+    kTurbulenceU = 0,
+    kTurbulenceW1 = 1,
+    kTurbulenceW2 = 2,
+    kPitchRateLag = 3,
+    kGustDistance = 4
+  };
   static constexpr int kStateCount = 5;
   using State = std::array<double, kStateCount>;
 

@@ -16,7 +16,8 @@ void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& 
     throw InputError(source, key, ShortNumber(value), expected);
   };
   if (!std::isfinite(o.wind_20ft_mps)) fail("wind_20ft_mps", o.wind_20ft_mps, "a finite speed in m/s");
-  if (o.turbulence_sigma_w_mps && !(std::isfinite(*o.turbulence_sigma_w_mps) && *o.turbulence_sigma_w_mps >= 0.0)) {
+  if (o.turbulence_sigma_w_mps &&
+      !(std::isfinite(*o.turbulence_sigma_w_mps) && *o.turbulence_sigma_w_mps >= 0.0)) {
     fail("turbulence_sigma_w_mps", *o.turbulence_sigma_w_mps, "a finite number >= 0 (m/s)");
   }
   if (!(o.turbulence_sample_interval_s >= 1e-4 && o.turbulence_sample_interval_s <= 1.0)) {
@@ -25,7 +26,8 @@ void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& 
   if (o.pitch_rate_gust && !(std::isfinite(o.wing_span_m) && o.wing_span_m > 0.0)) {
     fail("wing_span_m", o.wing_span_m, "a finite span > 0 (m) for the pitch-rate gust");
   }
-  if (!std::isfinite(o.gust_amplitude_mps)) fail("gust_amplitude_mps", o.gust_amplitude_mps, "a finite speed in m/s");
+  if (!std::isfinite(o.gust_amplitude_mps))
+    fail("gust_amplitude_mps", o.gust_amplitude_mps, "a finite speed in m/s");
   if (!(std::isfinite(o.gust_half_length_m) && o.gust_half_length_m > 0.0)) {
     fail("gust_half_length_m", o.gust_half_length_m, "a finite length > 0 (m)");
   }

@@ -51,7 +51,7 @@ inline DrydenFilterRates DrydenRates(const DrydenScales& scales, double airspeed
   return {v / scales.length_u_m, v / scales.length_w_m};
 }
 
-/// Coefficient of x2 in the w output: 1 − √3.
+/// √3, of the w filter's zero and output.
 inline constexpr double kSqrt3 = 1.7320508075688772;
 
 /// ż of the normalised u filter driven by ξ_u (1/√s).
@@ -60,7 +60,8 @@ inline double DrydenUDerivative(double a_u_per_s, double z, double noise_u) {
 }
 
 /// (ẋ1, ẋ2) of the normalised w filter driven by ξ_w.
-inline void DrydenWDerivative(double a_w_per_s, double x1, double x2, double noise_w, double* dx1, double* dx2) {
+inline void DrydenWDerivative(double a_w_per_s, double x1, double x2, double noise_w, double* dx1,
+                              double* dx2) {
   *dx1 = -a_w_per_s * x1 + std::sqrt(a_w_per_s) * noise_w;
   *dx2 = a_w_per_s * (x1 - x2);
 }

@@ -22,7 +22,8 @@ enum class WindShear {
 };
 template <>
 struct EnumNames<WindShear> {
-  static constexpr EnumName<WindShear> kTable[] = {{WindShear::kLogarithmic, "logarithmic"}, {WindShear::kNone, "none"}};
+  static constexpr EnumName<WindShear> kTable[] = {{WindShear::kLogarithmic, "logarithmic"},
+                                                   {WindShear::kNone, "none"}};
 };
 
 /// The mean wind at height h above the ground, m/s, with the sign of W20 (W20 is the u_g of the

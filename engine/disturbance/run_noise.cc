@@ -6,7 +6,8 @@
 namespace gesweep {
 namespace {
 
-constexpr std::uint64_t kSeedDomain = 0x6765737765657021ULL;  // "gesweep!": separates from other uses of the seed
+constexpr std::uint64_t kSeedDomain =
+    0x6765737765657021ULL;  // "gesweep!": separates from other uses of the seed
 constexpr int kStreamCount = 4;
 
 constexpr std::uint64_t Hash(std::uint64_t key, std::uint64_t counter) {
@@ -24,7 +25,7 @@ double RunNoise::Uniform(std::uint64_t counter) const {
 
 double RunNoise::StandardNormal(NoiseStream stream, std::uint64_t sample_index) const {
   const std::uint64_t counter = 2 * (kStreamCount * sample_index + static_cast<std::uint64_t>(stream));
-  const double u1 = Uniform(counter);      // (0, 1]: the log is finite
+  const double u1 = Uniform(counter);  // (0, 1]: the log is finite
   const double u2 = Uniform(counter + 1);
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }

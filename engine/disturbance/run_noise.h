@@ -30,9 +30,9 @@ constexpr std::uint64_t SplitMix64Mix(std::uint64_t z) {
 
 /// Streams of one run's noise (at most 4; each sample index k has one normal per stream).
 enum class NoiseStream : int {
-  kTurbulenceU = 0,  ///< drives the u forming filter
-  kTurbulenceW = 1,  ///< drives the w forming filter
-  kInitialState = 2, ///< the filters' stationary initial states (sample indices 0, 1, 2)
+  kTurbulenceU = 0,   ///< drives the u forming filter
+  kTurbulenceW = 1,   ///< drives the w forming filter
+  kInitialState = 2,  ///< the filters' stationary initial states (sample indices 0, 1, 2)
 };
 
 /// One run's noise.

@@ -66,8 +66,8 @@ struct InTurbulence {
     const AirMotion air = field->Evaluate((*table)[segment], h, kSpeed_mps + x[kDeltaU], xf, dxf);
     const DimensionalDerivatives d = Table().DerivativesAt(h, air.airspeed_mps, hint);
     const Vector5d x5(x[0], x[1], x[2], x[3], x[4]);
-    const Vector5d d5 = AirRelativeDerivative(d, kSpeed_mps, x5, 0.0,
-                                              AirVelocity{air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2});
+    const Vector5d d5 = AirRelativeDerivative(
+        d, kSpeed_mps, x5, 0.0, AirVelocity{air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2});
     for (int i = 0; i < 5; ++i) dxdt[i] = d5[i];
     std::copy(dxf.begin(), dxf.end(), dxdt.begin() + 5);
   }

@@ -1,9 +1,9 @@
 // The 1 − cos discrete gust (docs/model.md §9): shape, ends and slope.
+#include "engine/disturbance/discrete_gust.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "engine/disturbance/discrete_gust.h"
 
 namespace gesweep {
 namespace {
@@ -32,7 +32,8 @@ TEST(DiscreteGust, SlopeIsTheDerivative) {
   constexpr double kStep = 1e-4;                 // central difference, error ~ kStep² · v''' ≈ 1e-11
   constexpr double kDifferenceTolerance = 1e-8;  // rounding of the difference: 1e-16 · vm / kStep
   for (double x : {0.5, 5.0, 12.5, 25.0, 40.0, 49.5}) {
-    const double fd = (OneMinusCosineGust(x + kStep, vm, dm) - OneMinusCosineGust(x - kStep, vm, dm)) / (2 * kStep);
+    const double fd =
+        (OneMinusCosineGust(x + kStep, vm, dm) - OneMinusCosineGust(x - kStep, vm, dm)) / (2 * kStep);
     EXPECT_NEAR(OneMinusCosineGustSlope(x, vm, dm), fd, kDifferenceTolerance) << x;
   }
   EXPECT_EQ(OneMinusCosineGustSlope(-1.0, vm, dm), 0.0);

@@ -1,13 +1,14 @@
 // DisturbanceField inside the engine's integrator: breakpoints and segments, a turbulence that is
 // the same function of time whatever the integrator, replay by (seed, run), the gust through the
 // field, and the airplane of Eq. (1) in a steady headwind (docs/model.md §9).
+#include "engine/disturbance/disturbance_field.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
-#include "engine/disturbance/disturbance_field.h"
 #include "engine/disturbance/discrete_gust.h"
 #include "engine/disturbance/mean_wind.h"
 #include "engine/dynamics/longitudinal_model.h"
@@ -160,8 +161,11 @@ TEST(DisturbanceField, GustThroughTheField) {
   for (std::size_t i = 0; i < air.size(); ++i) {
     const double t = 0.02 * static_cast<double>(i);
     const double x = std::max(0.0, v * (t - 1.0));
-    EXPECT_NEAR(air[i].w_g_mps, -1.5 * (1 - std::cos(std::numbers::pi * std::min(x, 40.0) / 20.0)), kTolerance) << t;
-    const double slope = x < 40.0 ? -1.5 * std::numbers::pi / 20.0 * std::sin(std::numbers::pi * x / 20.0) : 0.0;
+    EXPECT_NEAR(air[i].w_g_mps, -1.5 * (1 - std::cos(std::numbers::pi * std::min(x, 40.0) / 20.0)),
+                kTolerance)
+        << t;
+    const double slope =
+        x < 40.0 ? -1.5 * std::numbers::pi / 20.0 * std::sin(std::numbers::pi * x / 20.0) : 0.0;
     EXPECT_NEAR(air[i].w_g_dot_mps2, slope * v, 1e-7) << t;
     EXPECT_EQ(air[i].u_g_mps, 0.0);
   }

@@ -1,10 +1,11 @@
 // The disturbance options: names, the σ_w in force, and one clear error per bad value.
+#include "engine/disturbance/disturbance_options.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "engine/common/errors.h"
-#include "engine/disturbance/disturbance_options.h"
 
 namespace gesweep {
 namespace {

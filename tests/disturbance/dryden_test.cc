@@ -1,20 +1,19 @@
 // The Dryden low-altitude model (docs/model.md §9): scales worked by hand, spectra that integrate to
 // σ², and forming filters whose frequency response and stationary covariance are the spectra's.
+#include "engine/disturbance/dryden.h"
+
 #include <gtest/gtest.h>
 
+#include <boost/math/quadrature/exp_sinh.hpp>
 #include <cmath>
 #include <complex>
 #include <numbers>
-
-#include <boost/math/quadrature/exp_sinh.hpp>
-
-#include "engine/disturbance/dryden.h"
 
 namespace gesweep {
 namespace {
 
 constexpr double kFt = 0.3048;
-constexpr double kRelativeTolerance = 1e-12;  // closed forms evaluated two ways: rounding only
+constexpr double kRelativeTolerance = 1e-12;   // closed forms evaluated two ways: rounding only
 constexpr double kQuadratureTolerance = 1e-9;  // exp_sinh on a smooth algebraic tail
 
 TEST(DrydenScales, LowAltitudeFormulasByHand) {
@@ -52,8 +51,8 @@ TEST(DrydenSpectra, OneSidedIntegralsAreTheVariances) {
   }
   // Values by hand at Ω = 1/L: Φ_u = σ²·(2L/π)/2, Φ_w = σ²·(L/π)·4/4.
   const DrydenScales s = LowAltitudeDrydenScales(30.0, 0.8);
-  EXPECT_NEAR(DrydenSpectrumU(1 / s.length_u_m, s), s.sigma_u_mps * s.sigma_u_mps * s.length_u_m / std::numbers::pi,
-              1e-12);
+  EXPECT_NEAR(DrydenSpectrumU(1 / s.length_u_m, s),
+              s.sigma_u_mps * s.sigma_u_mps * s.length_u_m / std::numbers::pi, 1e-12);
   EXPECT_NEAR(DrydenSpectrumW(1 / s.length_w_m, s), 0.64 * s.length_w_m / std::numbers::pi, 1e-12);
 }
 
@@ -91,13 +90,15 @@ TEST(DrydenFilters, FrequencyResponseIsTheSpectrum) {
       const double au = DrydenUDerivative(r.a_u_per_s, 1.0, 0.0);
       // The normalised filter has unit variance; u_g = σ_u·z (σ_u ≠ σ_w = 1 here).
       const double hu2 = s.sigma_u_mps * s.sigma_u_mps * std::norm(bu / (iw - au));
-      EXPECT_NEAR(hu2 / std::numbers::pi, DrydenSpectrumU(omega / v, s) / v, 1e-12 * (1 + hu2)) << h << " " << omega;
+      EXPECT_NEAR(hu2 / std::numbers::pi, DrydenSpectrumU(omega / v, s) / v, 1e-12 * (1 + hu2))
+          << h << " " << omega;
       // w: H = C (iωI − A)⁻¹ B, C = [√3, 1 − √3].
       const std::complex<double> det = (iw - m.a11) * (iw - m.a22) - m.a12 * m.a21;
       const std::complex<double> x1 = ((iw - m.a22) * m.b1 + m.a12 * m.b2) / det;
       const std::complex<double> x2 = (m.a21 * m.b1 + (iw - m.a11) * m.b2) / det;
       const double hw2 = std::norm(std::sqrt(3.0) * x1 + (1.0 - std::sqrt(3.0)) * x2);
-      EXPECT_NEAR(hw2 / std::numbers::pi, DrydenSpectrumW(omega / v, s) / v, 1e-12 * (1 + hw2)) << h << " " << omega;
+      EXPECT_NEAR(hw2 / std::numbers::pi, DrydenSpectrumW(omega / v, s) / v, 1e-12 * (1 + hw2))
+          << h << " " << omega;
     }
   }
 }

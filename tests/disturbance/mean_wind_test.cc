@@ -1,9 +1,9 @@
 // The MIL-F-8785C mean wind and its shear (docs/model.md §9) against the formula worked by hand.
+#include "engine/disturbance/mean_wind.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "engine/disturbance/mean_wind.h"
 
 namespace gesweep {
 namespace {

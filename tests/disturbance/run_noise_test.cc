@@ -1,5 +1,7 @@
 // Randomness as data (docs/disturbance.md): the noise of a run is a function of (seed, run, stream,
 // index) alone, and it is standard normal white noise.
+#include "engine/disturbance/run_noise.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,8 +9,6 @@
 #include <numeric>
 #include <random>
 #include <vector>
-
-#include "engine/disturbance/run_noise.h"
 
 namespace gesweep {
 namespace {
@@ -46,7 +46,8 @@ TEST(RunNoise, SameSeedSameSequenceOtherRunOtherSequence) {
   int equal_to_c = 0;
   for (int k = 0; k < 1000; ++k) {
     EXPECT_EQ(a.StandardNormal(NoiseStream::kTurbulenceW, k), b.StandardNormal(NoiseStream::kTurbulenceW, k));
-    equal_to_c += a.StandardNormal(NoiseStream::kTurbulenceW, k) == c.StandardNormal(NoiseStream::kTurbulenceW, k);
+    equal_to_c +=
+        a.StandardNormal(NoiseStream::kTurbulenceW, k) == c.StandardNormal(NoiseStream::kTurbulenceW, k);
   }
   EXPECT_EQ(equal_to_c, 0);
 }
@@ -83,7 +84,8 @@ TEST(RunNoise, StandardNormalWhiteAndIndependentAcrossStreamsAndRuns) {
   EXPECT_NEAR(Correlation(u, lagged), 0.0, kCorrelationTolerance) << "lag-1";
   EXPECT_NEAR(Correlation(u, w), 0.0, kCorrelationTolerance) << "streams u, w";
   EXPECT_NEAR(Correlation(u, u1), 0.0, kCorrelationTolerance) << "runs 0, 1";
-  const double tail = static_cast<double>(std::count_if(u.begin(), u.end(), [](double x) { return x > 3.0; })) / kSamples;
+  const double tail =
+      static_cast<double>(std::count_if(u.begin(), u.end(), [](double x) { return x > 3.0; })) / kSamples;
   // P(Z > 3) = 0.0013499; binomial sd √(p/N).
   EXPECT_NEAR(tail, 0.0013499, 5.0 * std::sqrt(0.0013499 / kSamples));
 }

@@ -4,13 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <cmath>
 #include <complex>
 #include <numbers>
-#include <vector>
-
-#include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <unsupported/Eigen/FFT>
+#include <vector>
 
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/simulation/integrator.h"
@@ -51,8 +50,8 @@ struct Record {
   double airspeed_mps;
 };
 
-Record Fly(double height_m, double speed_mps, double sample_interval_s, double duration_s, double output_interval_s,
-           double sigma_w_mps, std::uint64_t run) {
+Record Fly(double height_m, double speed_mps, double sample_interval_s, double duration_s,
+           double output_interval_s, double sigma_w_mps, std::uint64_t run) {
   DisturbanceOptions options;
   options.turbulence = TurbulenceModel::kDryden;
   options.turbulence_sigma_w_mps = sigma_w_mps;
@@ -165,14 +164,16 @@ void ExpectSpectrum(const Welch& welch, F expected, double omega_max, const char
     }
     ASSERT_GT(m, 0);
     const double sd = std::sqrt(1.06 / welch.segments) / std::sqrt(std::max(1.0, m / 1.5));
-    EXPECT_NEAR(sum_est / sum_exp, 1.0, 5 * sd + 0.03) << name << " bin " << lo << "-" << hi << " rad/s, " << m
-                                                        << " ordinates";
+    EXPECT_NEAR(sum_est / sum_exp, 1.0, 5 * sd + 0.03)
+        << name << " bin " << lo << "-" << hi << " rad/s, " << m << " ordinates";
   }
 }
 
 // Relative sd of the variance of a record of length T: √(2∫ρ²dτ/T), with ∫ρ² dτ over the whole line
 // = L_u/V for u (ρ = e^{−a|τ|}) and 0.625·L_w/V for w (Parseval on Φ_w: ∫(1+3x²)²/(1+x²)⁴ dx = 5π/4).
-double VarianceSd(double integral_rho2_s, double duration_s) { return std::sqrt(2 * integral_rho2_s / duration_s); }
+double VarianceSd(double integral_rho2_s, double duration_s) {
+  return std::sqrt(2 * integral_rho2_s / duration_s);
+}
 
 void CheckRecord(double height_m, double dt, double duration, double output_dt, int welch_length) {
   constexpr double kSigmaW = 0.1;  // small: the turbulence modulates the filters' airspeed by < 0.5 %
@@ -192,10 +193,12 @@ void CheckRecord(double height_m, double dt, double duration, double output_dt, 
   EXPECT_NEAR(Variance(r.w) / var_w, 1.0, 4 * sd_w) << "w at " << height_m << " m, sd " << sd_w;
   // Spectra up to a tenth of the output's Nyquist frequency (aliasing of the ω⁻² tail < 1 %).
   const double omega_max = 0.1 * kPi / output_dt;
-  ExpectSpectrum(WelchEstimate(r.u, output_dt, welch_length),
-                 [&](double omega) { return phi_u(omega) * HoldFactor(omega, dt); }, omega_max, "u");
-  ExpectSpectrum(WelchEstimate(r.w, output_dt, welch_length),
-                 [&](double omega) { return phi_w(omega) * HoldFactor(omega, dt); }, omega_max, "w");
+  ExpectSpectrum(
+      WelchEstimate(r.u, output_dt, welch_length),
+      [&](double omega) { return phi_u(omega) * HoldFactor(omega, dt); }, omega_max, "u");
+  ExpectSpectrum(
+      WelchEstimate(r.w, output_dt, welch_length),
+      [&](double omega) { return phi_w(omega) * HoldFactor(omega, dt); }, omega_max, "w");
 }
 
 TEST(TurbulenceStatistics, VarianceAndSpectrumAt100Feet) {

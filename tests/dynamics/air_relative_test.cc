@@ -6,7 +6,6 @@
 #include <cmath>
 #include <numbers>
 #include <random>
-
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "engine/dynamics/longitudinal_model.h"
@@ -70,7 +69,8 @@ TEST(AirRelative, WindTermsEqualTheRearrangedMatrixForm) {
       expected[kDeltaTheta] += air.q_g_radps;
       expected[kDeltaH] -= air.w_g_mps;
       const Vector5d actual = Model().StateDerivative(h0, u0, x, elevator, air);
-      for (int k = 0; k < 5; ++k) EXPECT_NEAR(actual[k], expected[k], kTolerance * (1 + std::abs(expected[k]))) << k;
+      for (int k = 0; k < 5; ++k)
+        EXPECT_NEAR(actual[k], expected[k], kTolerance * (1 + std::abs(expected[k]))) << k;
     }
   }
 }
@@ -96,7 +96,6 @@ TEST(AirRelative, SteadyHeadwindEquilibrium) {
   EXPECT_EQ(dx[kPitchRate], 0.0);
   EXPECT_EQ(dx[kDeltaH], 1.0);
 }
-
 
 // The frozen linear model (derivatives fixed at H0, u0) flown through a 1 − cos vertical gust,
 // w_g = (v/2)(1 − cos ωt), ω = π·u0/d_m, integrated by the engine's RK4.
