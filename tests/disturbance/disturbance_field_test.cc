@@ -115,8 +115,9 @@ TEST(DisturbanceField, SameTurbulenceWhateverTheIntegrator) {
   const auto c = FlyField(Turbulent(), 5, 11, adaptive, 20.0);
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), c.size());
-  // RK4 at a·h ≤ 0.16 (a_w = V/L_w = 40/20 m/s·… at 20 m): local error ~ (a h)⁵/120 per step of a
-  // unit-variance state; 1e-4 m/s on σ ≈ 2 m/s is far below the turbulence itself.
+  // At 20 m and 40 m/s a_w = V/L_w = 2 s⁻¹, so RK4's a·h ≤ 0.02 and its error is ~1e-9 of σ_w; the
+  // bound 1e-4 m/s (1e-4 of σ_w = 1.54 m/s) leaves room for dopri5's error control, and a noise that
+  // depended on the steps would differ by O(σ_w).
   constexpr double kIntegratorAgreement_mps = 1e-4;
   double largest = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
