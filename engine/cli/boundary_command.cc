@@ -11,8 +11,8 @@
 #include <optional>
 #include <sstream>
 
-#include "engine/analysis/boundary_curve.h"
-#include "engine/analysis/local_sensitivity.h"
+#include "engine/estimators/boundary_curve.h"
+#include "engine/estimators/local_sensitivity.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_error.h"
 #include "engine/cli/command.h"
@@ -20,10 +20,10 @@
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
 #include "engine/modal/boundary.h"
-#include "engine/query/archive_boundary.h"
+#include "engine/products/archive_boundary.h"
 #include "engine/archive/archive_lock.h"
 #include "engine/query/run_columns.h"
-#include "engine/query/run_model.h"
+#include "engine/products/run_model.h"
 
 namespace gesweep::cli {
 namespace {

@@ -17,7 +17,7 @@
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
-#include "engine/query/report_script.h"
+#include "engine/cli/report_script.h"
 
 extern char** environ;
 

@@ -24,8 +24,8 @@
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
-#include "engine/sensitivity/archive_sensitivity.h"
-#include "engine/sensitivity/sensitivity_group.h"
+#include "engine/products/archive_sensitivity.h"
+#include "engine/products/sensitivity_group.h"
 
 namespace gesweep::cli {
 namespace {

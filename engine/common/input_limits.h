@@ -6,7 +6,7 @@
 /// one-line reason. The study validator, the analyses' settings and every CLI flag check values
 /// against this table, so a value the study schema refuses is refused on the command line too, with
 /// the same words. The table is data: `gesweep limits` prints it, docs/limits.md is that output, and
-/// the parameter catalogue (engine/sweep/parameter_catalog.h) takes its ranges from it.
+/// the parameter catalogue (engine/analyses/parameter_catalog.h) takes its ranges from it.
 ///
 /// Names: a study parameter's own name ("speed_mps", "height_m"); an analysis setting as
 /// "<analysis>.<key>" ("open_loop.step_s", "landing.max_step_s"); a setting shared by two analyses

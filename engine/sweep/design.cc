@@ -5,7 +5,7 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/analysis/sensitivity_common.h"
+#include "engine/estimators/sensitivity_common.h"
 #include "engine/common/errors.h"
 #include "engine/sweep/hashing.h"
 

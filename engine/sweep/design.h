@@ -9,19 +9,19 @@
 ///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (row layout: see below);
 ///  - morris: r trajectories of D+1 rows, p levels, seeded (Morris 1991).
 ///
-/// These are the only designs of the project: the sensitivity estimators of engine/analysis are fed,
+/// These are the only designs of the project: the sensitivity estimators of engine/estimators are fed,
 /// and unit-tested, with the rows these classes make. The sobol design's rows follow the Saltelli
-/// layout of engine/analysis/saltelli_layout.h; A_j and B_j are the first D and last D coordinates of
+/// layout of engine/estimators/saltelli_layout.h; A_j and B_j are the first D and last D coordinates of
 /// point j+1 of the 2D-dimensional Sobol' sequence (Boost's engine skips the origin). Every sampled
-/// design maps its unit coordinates by ValueAtUnit (engine/analysis/sensitivity_common.h).
+/// design maps its unit coordinates by ValueAtUnit (engine/estimators/sensitivity_common.h).
 
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "engine/analysis/saltelli_layout.h"
-#include "engine/sweep/parameter_catalog.h"
+#include "engine/estimators/saltelli_layout.h"
+#include "engine/analyses/parameter_catalog.h"
 
 namespace gesweep {
 

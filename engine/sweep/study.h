@@ -16,7 +16,7 @@
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/common/output_guard.h"
-#include "engine/sweep/analysis.h"
+#include "engine/analyses/analysis.h"
 #include "engine/sweep/design.h"
 
 namespace gesweep {

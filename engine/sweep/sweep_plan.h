@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "engine/sweep/analysis.h"
+#include "engine/analyses/analysis.h"
 #include "engine/sweep/design.h"
 #include "engine/sweep/study.h"
 

@@ -29,12 +29,12 @@
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/hdf5_util.h"
 #include "engine/common/errors.h"
-#include "engine/query/archive_boundary.h"
+#include "engine/products/archive_boundary.h"
 #include "engine/query/query.h"
 #include "engine/query/query_output.h"
 #include "engine/query/run_columns.h"
-#include "engine/query/run_model.h"
-#include "engine/sensitivity/archive_sensitivity.h"
+#include "engine/products/run_model.h"
+#include "engine/products/archive_sensitivity.h"
 
 namespace {
 

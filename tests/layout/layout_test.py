@@ -9,6 +9,7 @@
    nothing includes a folder above it.
 3. No tracked file of the product cites or reads ../shared, or cites MODEL.md / STYLE.md (the
    project's model is docs/model.md).
+4. Only engine/archive includes HDF5 (hdf5.h or an H5*.h header).
 Lists every offender; exit 1 when there is one.
 """
 import pathlib
@@ -57,6 +58,15 @@ for folder in sorted(folders & table.keys()):
                 problems.append(f"{path.relative_to(root)}:{number}: engine/{folder} includes engine/{m.group(1)}, "
                                 f"which it does not depend on (docs/architecture.md): {line.strip()}")
 
+# 4. HDF5 stays in engine/archive.
+hdf5_include = re.compile(r'^\s*#\s*include\s*[<"](hdf5\.h|H5\w*\.h)[>"]')
+for path in sorted((root / "engine").rglob("*")):
+    if path.suffix not in (".cc", ".h") or path.parent.name == "archive":
+        continue
+    for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+        if hdf5_include.match(line):
+            problems.append(f"{path.relative_to(root)}:{number}: includes HDF5 outside engine/archive: {line.strip()}")
+
 # 3. Standing alone: every tracked file (this test names the patterns, so it is left out).
 tracked = subprocess.run(["git", "-C", str(root), "ls-files"], capture_output=True, text=True)
 files = tracked.stdout.split() if tracked.returncode == 0 else [
@@ -82,4 +92,4 @@ if problems:
         print("  " + p)
     sys.exit(1)
 print(f"layout: {len(folders)} engine folders as docs/architecture.md lists them; includes point down; "
-      f"{len(files)} tracked files cite nothing outside the repository")
+      f"only engine/archive includes HDF5; {len(files)} tracked files cite nothing outside the repository")

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "engine/sweep/analysis_adapters.h"
+#include "engine/analyses/analysis_adapters.h"
 
 namespace gesweep {
 namespace {

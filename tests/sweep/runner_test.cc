@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "engine/modal/modal_analysis.h"
-#include "engine/sweep/analysis_adapters.h"
+#include "engine/analyses/analysis_adapters.h"
 #include "engine/simulation/open_loop.h"
 #include "engine/control/landing_simulation.h"
 

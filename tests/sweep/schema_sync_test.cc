@@ -9,8 +9,8 @@
 
 #include "engine/common/input_limits.h"
 
-#include "engine/sweep/analysis.h"
-#include "engine/sweep/parameter_catalog.h"
+#include "engine/analyses/analysis.h"
+#include "engine/analyses/parameter_catalog.h"
 
 namespace gesweep {
 namespace {

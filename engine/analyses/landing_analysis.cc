@@ -1,0 +1,282 @@
+// Adapter: the `landing` analysis. The closed-loop automatic landing of docs/model.md §8 (the
+// paper's Fig. 6-9): SimulateLanding from the run's start height and speed, glide slope, flare and
+// LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
+// the gain always; time series when the study stores them.
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "engine/control/landing_simulation.h"
+#include "engine/analyses/analysis_adapters.h"
+
+namespace gesweep {
+namespace {
+
+// Measured (docs/sweep.md): a dopri5 landing from 500 m and one Riccati solution, about 15 ms.
+constexpr double kLandingCost_us = 15000.0;
+// Stored series cover this long unless the study says otherwise (the paper's landing from 500 m at
+// 52.21 m/s down a 2.5° slope lasts about 230 s).
+constexpr double kDefaultSeriesDuration_s = 400.0;
+constexpr double kGridTolerance_s = 1e-9;
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+class LandingAnalysis final : public Analysis {
+ public:
+  LandingAnalysis(LandingConfig config, double series_duration_s)
+      : config_(std::move(config)), series_duration_s_(series_duration_s) {
+    for (std::string_view state : LandingStateNames()) {
+      q_.push_back(RequireParameter("lqr.q_" + std::string(state)));
+    }
+  }
+
+  std::string_view name() const override { return "landing"; }
+  std::vector<ParameterId> parameters_used() const override {
+    std::vector<ParameterId> ids = {height_, speed_, glide_slope_, flare_height_, flare_tau_, r_};
+    ids.insert(ids.end(), q_.begin(), q_.end());
+    return ids;
+  }
+  double nominal_run_cost_us() const override { return kLandingCost_us; }
+
+  void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
+    const std::string base = "results/landing/";
+    std::vector<std::string> outcomes;
+    for (auto o : {LandingOutcome::kLanded, LandingOutcome::kNoTouchdown, LandingOutcome::kStall,
+                   LandingOutcome::kDiverged, LandingOutcome::kDesignFailed}) {
+      outcomes.emplace_back(ToString(o));
+    }
+    outcome_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "outcome", "1",
+                                                "How the landing ended (levels attribute)", outcomes));
+    auto real = [&](const char* name, const char* units, const char* description) {
+      scalars_.push_back(schema.Add(OutputColumn::Real(base + name, units, description)));
+    };
+    real("touchdown_time_s", "s", "Time of touchdown (NaN when there was none)");
+    real("touchdown_distance_past_transmitter_m", "m",
+         "Along-track distance from the glide-slope transmitter to the touchdown point, positive past it");
+    real("touchdown_sink_rate_mps", "m/s", "Sink rate -dH/dt at touchdown, positive down");
+    real("touchdown_pitch_deg", "deg", "Pitch angle at touchdown");
+    real("touchdown_speed_mps", "m/s", "Speed at touchdown");
+    real("flare_start_time_s", "s", "When H fell to the flare height (NaN when it did not)");
+    real("glide_path_error_at_flare_m", "m", "Glide-path deviation d at the flare switch, positive above");
+    real("max_abs_elevator_deg", "deg", "Largest |elevator deflection| (actuator position)");
+    real("max_abs_elevator_command_deg", "deg", "Largest |elevator command| before the limits");
+    real("max_abs_pitch_rate_degps", "deg/s", "Largest |q|");
+    real("saturated_time_s", "s", "Total time the elevator command was beyond a limit");
+    real("longest_saturation_s", "s", "Longest single interval of saturation");
+    real("min_speed_mps", "m/s", "Lowest speed");
+    real("max_speed_mps", "m/s", "Highest speed");
+    real("final_time_s", "s", "End of the run");
+    real("final_height_m", "m", "H at the end of the run");
+    real("flare_time_constant_s", "s", "Flare time constant tau used");
+    real("time_limit_s", "s", "Time limit used");
+    real("design_height_m", "m", "Height of the linear model the gain was designed on");
+    real("closed_loop_max_real_per_s", "1/s",
+         "Largest real part of the design model's closed-loop eigenvalues");
+    steps_ =
+        schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
+    rhs_calls_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    OutputColumn gain = OutputColumn::Real(
+        base + "gain", "rad per unit state",
+        "LQR gain K on the 9 states of Eq. (14), eta_e = -K z (component_names attribute)");
+    gain.width = kLandingStateCount;
+    for (std::string_view state : LandingStateNames()) gain.component_names.emplace_back(state);
+    gain_ = schema.Add(gain);
+    if (!storage.time_series) {
+      config_.output_interval_s = 0.0;
+      return;
+    }
+    dt_s_ = storage.output_dt_s;
+    config_.output_interval_s = dt_s_;
+    TimeAxis axis;
+    axis.path = "series/landing/time_s";
+    axis.description = "Time since the start of each landing; samples after a run ended are NaN";
+    samples_ = static_cast<int>(std::floor(series_duration_s_ / dt_s_ + kGridTolerance_s)) + 1;
+    for (int k = 0; k < samples_; ++k) axis.times_s.push_back(k * dt_s_);
+    schema.AddAxis(axis);
+    auto series = [&](const char* name, const char* units, const char* description) {
+      series_.push_back(schema.Add(OutputColumn::Series(std::string("series/landing/") + name, units,
+                                                        description, axis.path, samples_)));
+    };
+    series("height_m", "m", "Height H of the mean chord above ground");
+    series("reference_height_m", "m", "Height of the glide path, or H_ref in the flare");
+    series("tracking_error_m", "m", "H minus the reference");
+    series("distance_past_transmitter_m", "m",
+           "Along-track distance past the glide-slope transmitter, u0 (t - t_transmitter)");
+    series("speed_mps", "m/s", "Speed u");
+    series("delta_w_mps", "m/s", "Delta w, positive down");
+    series("pitch_rate_radps", "rad/s", "Pitch rate q");
+    series("pitch_rad", "rad", "Pitch angle theta");
+    series("sink_rate_mps", "m/s", "Sink rate -dH/dt, positive down");
+    series("elevator_rad", "rad", "Elevator deflection (actuator position)");
+    series("elevator_command_rad", "rad", "Elevator command before the limits");
+    series("phase", "1", "0 glide slope, 1 flare");
+  }
+
+  std::string CheckRun(const RunParameters& p, const Aircraft* aircraft) const override {
+    try {
+      ValidateLandingConfig(ConfigFor(p), *aircraft, "landing");
+    } catch (const InputError& e) {
+      return e.key() + (e.value().empty() ? "" : " = " + e.value()) + ": " + e.expected();
+    }
+    return "";
+  }
+
+  AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
+    const LandingConfig config = ConfigFor(context.parameters);
+    const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
+    if (r.cancelled) return AnalysisOutcome::Cancelled();
+    row.Set(outcome_, static_cast<double>(static_cast<int>(r.outcome)));
+    const double values[] = {r.touchdown_time_s,
+                             r.touchdown_distance_past_transmitter_m,
+                             r.touchdown_sink_rate_mps,
+                             r.touchdown_pitch_deg,
+                             r.touchdown_speed_mps,
+                             r.flare_start_time_s,
+                             r.glide_path_error_at_flare_m,
+                             r.max_abs_elevator_deg,
+                             r.max_abs_elevator_command_deg,
+                             r.max_abs_pitch_rate_degps,
+                             r.saturated_time_s,
+                             r.longest_saturation_s,
+                             r.min_speed_mps,
+                             r.max_speed_mps,
+                             r.final_time_s,
+                             r.final_height_m,
+                             r.flare_time_constant_s,
+                             r.time_limit_s,
+                             r.design.design_height_m,
+                             r.design.closed_loop_eigenvalues.size()
+                                 ? r.design.closed_loop_eigenvalues[0].real()
+                                 : std::numeric_limits<double>::quiet_NaN()};
+    for (std::size_t i = 0; i < scalars_.size(); ++i) row.Set(scalars_[i], values[i]);
+    row.Set(steps_, static_cast<double>(r.accepted_steps));
+    row.Set(rhs_calls_, static_cast<double>(r.rhs_calls));
+    if (r.design.ok()) {
+      double* gain = row.Slot(gain_);
+      for (int i = 0; i < kLandingStateCount; ++i) gain[i] = r.design.gain[static_cast<std::size_t>(i)];
+    }
+    bool truncated = false;
+    if (samples_ > 0) truncated = StoreSeries(r, config, row);
+    const std::string note =
+        truncated ? r.message + " (series cut at " + ShortNumber(series_duration_s_) + " s)" : r.message;
+    if (r.outcome == LandingOutcome::kDiverged || r.outcome == LandingOutcome::kDesignFailed) {
+      return AnalysisOutcome::Failed(std::string(ToString(r.outcome)) + ": " + note);
+    }
+    return AnalysisOutcome::Ok(r.outcome == LandingOutcome::kLanded && !truncated ? "" : note);
+  }
+
+ private:
+  LandingConfig ConfigFor(const RunParameters& p) const {
+    auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
+    LandingConfig config = config_;
+    config.start_height_m = at(height_);
+    config.start_speed_mps = at(speed_);
+    config.glide_slope_deg = at(glide_slope_);
+    config.flare_height_m = at(flare_height_);
+    if (!std::isnan(at(flare_tau_))) config.flare_time_constant_s = at(flare_tau_);
+    for (int i = 0; i < kLandingStateCount; ++i) {
+      config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
+    }
+    config.r_weight = at(r_);
+    return config;
+  }
+
+  // Samples on the grid t = k·dt; returns whether some fell past the stored duration.
+  bool StoreSeries(const LandingResult& r, const LandingConfig& config, OutputRow& row) const {
+    const double u0 = config.start_speed_mps;
+    const double transmitter_time_s = (config.start_height_m - config.start_glide_path_offset_m) /
+                                      (u0 * config.glide_slope_deg * kRadPerDeg);
+    bool truncated = false;
+    for (const LandingSample& s : r.series) {
+      const double position = s.time_s / dt_s_;
+      const double k = std::round(position);
+      if (std::abs(position - k) * dt_s_ > kGridTolerance_s || k < 0) continue;
+      if (k >= samples_) {
+        truncated = true;
+        continue;
+      }
+      const double values[] = {s.height_m,
+                               s.reference_height_m,
+                               s.tracking_error_m,
+                               u0 * (s.time_s - transmitter_time_s),
+                               s.speed_mps,
+                               s.delta_w_mps,
+                               s.pitch_rate_radps,
+                               s.pitch_rad,
+                               s.sink_rate_mps,
+                               s.elevator_rad,
+                               s.elevator_command_rad,
+                               static_cast<double>(static_cast<int>(s.phase))};
+      for (std::size_t c = 0; c < series_.size(); ++c) row.Slot(series_[c])[static_cast<int>(k)] = values[c];
+    }
+    return truncated;
+  }
+
+  LandingConfig config_;
+  double series_duration_s_;
+  ParameterId height_ = RequireParameter("height_m");
+  ParameterId speed_ = RequireParameter("speed_mps");
+  ParameterId glide_slope_ = RequireParameter("glide_slope_deg");
+  ParameterId flare_height_ = RequireParameter("flare_height_m");
+  ParameterId flare_tau_ = RequireParameter("flare_tau_s");
+  ParameterId r_ = RequireParameter("lqr.r");
+  std::vector<ParameterId> q_;
+  int outcome_ = 0, steps_ = 0, rhs_calls_ = 0, gain_ = 0;
+  std::vector<int> scalars_, series_;
+  int samples_ = 0;
+  double dt_s_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
+  settings.RejectUnknownKeys(
+      {"start_pitch_deg", "start_glide_path_offset_m", "design_height_m", "design_speed_mps",
+       "design_h_derivatives", "actuator_pole_per_s", "compensator_pole_per_s", "elevator_min_deg",
+       "elevator_max_deg", "plant_height_reference", "plant_fixed_reference_height_m", "relative_tolerance",
+       "absolute_tolerance", "max_step_s", "time_limit_s", "divergence_pitch_deg", "series_duration_s"});
+  LandingConfig config;
+  // Every number against the limits table (docs/limits.md), with the study's file and line; what
+  // depends on the run's parameters is checked on the design's extreme runs (CheckRun).
+  auto number = [&](const char* key, double& field) {
+    if (const auto value = settings.OptionalLimitedNumber(key, "landing." + std::string(key))) field = *value;
+  };
+  number("start_pitch_deg", config.start_pitch_deg);
+  number("start_glide_path_offset_m", config.start_glide_path_offset_m);
+  if (const auto value = settings.OptionalLimitedNumber("design_height_m", "landing.design_height_m")) {
+    config.design_height_m = *value;
+  }
+  if (const auto value = settings.OptionalLimitedNumber("design_speed_mps", "speed_mps")) {
+    config.design_speed_mps = *value;
+  }
+  config.design_h_derivatives = settings.OptionalBool("design_h_derivatives").value_or(true);
+  number("actuator_pole_per_s", config.actuator_pole_per_s);
+  number("compensator_pole_per_s", config.compensator_pole_per_s);
+  number("elevator_min_deg", config.elevator_min_deg);
+  number("elevator_max_deg", config.elevator_max_deg);
+  if (const auto reference = settings.OptionalString("plant_height_reference")) {
+    const auto parsed = ParsePlantHeightReference(*reference);
+    if (!parsed) settings.Fail("plant_height_reference", "\"" + *reference + "\"", "expected path or fixed");
+    config.plant_height_reference = *parsed;
+  }
+  if (const auto value =
+          settings.OptionalLimitedNumber("plant_fixed_reference_height_m", "landing.plant_fixed_reference_height_m")) {
+    config.plant_fixed_reference_height_m = *value;
+  }
+  if (const auto value = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
+    config.relative_tolerance = *value;
+  }
+  if (const auto value = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
+    config.absolute_tolerance = *value;
+  }
+  number("max_step_s", config.max_step_s);
+  if (const auto value = settings.OptionalLimitedNumber("time_limit_s", "landing.time_limit_s")) {
+    config.time_limit_s = *value;
+  }
+  number("divergence_pitch_deg", config.divergence_pitch_deg);
+  double series_duration_s = kDefaultSeriesDuration_s;
+  number("series_duration_s", series_duration_s);
+  return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
+}
+
+}  // namespace gesweep

@@ -1,0 +1,213 @@
+// Adapter: the `open_loop` analysis. The time response of docs/model.md §7 (the paper's Fig. 4):
+// SimulateOpenLoop from the run's height and speed after an elevator input of the run's amplitude
+// and duration; summary scalars always, time series when the study stores them.
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "engine/common/input_limits.h"
+#include "engine/simulation/open_loop.h"
+#include "engine/analyses/analysis_adapters.h"
+
+namespace gesweep {
+namespace {
+
+// Measured (docs/sweep.md): RK4 at 0.015 s for 30 s, derivatives re-evaluated per stage, about 300 µs.
+constexpr double kOpenLoopCost_us = 300.0;
+constexpr double kDefaultDuration_s = 30.0;
+// A sample lands on the series grid when within this of a grid time (the integrator's output times
+// are t0 + j·dt, computed in floating point).
+constexpr double kGridTolerance_s = 1e-9;
+
+class OpenLoopAnalysis final : public Analysis {
+ public:
+  explicit OpenLoopAnalysis(OpenLoopConfig config) : config_(std::move(config)) {}
+
+  std::string_view name() const override { return "open_loop"; }
+  std::vector<ParameterId> parameters_used() const override {
+    return {height_, speed_, amplitude_, duration_};
+  }
+  double nominal_run_cost_us() const override {
+    return kOpenLoopCost_us * config_.duration_s / kDefaultDuration_s;
+  }
+
+  void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
+    const std::string base = "results/open_loop/";
+    std::vector<std::string> events;
+    for (auto e : {OpenLoopEndEvent::kTouchdown, OpenLoopEndEvent::kStall, OpenLoopEndEvent::kTimeLimit,
+                   OpenLoopEndEvent::kDiverged}) {
+      events.emplace_back(ToString(e));
+    }
+    end_event_ =
+        schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "end_event", "1",
+                                         "How the run ended (levels attribute, docs/model.md §7)", events));
+    end_time_ = schema.Add(OutputColumn::Real(base + "end_time_s", "s", "Time of the end event"));
+    min_height_ = schema.Add(OutputColumn::Real(base + "min_height_m", "m", "Lowest height H reached"));
+    min_height_time_ =
+        schema.Add(OutputColumn::Real(base + "min_height_time_s", "s", "When the lowest height was reached"));
+    max_pitch_rate_ =
+        schema.Add(OutputColumn::Real(base + "max_abs_pitch_rate_radps", "rad/s", "Largest |q|"));
+    final_height_ = schema.Add(OutputColumn::Real(base + "final_height_m", "m", "H at the end of the run"));
+    final_speed_ = schema.Add(OutputColumn::Real(base + "final_speed_mps", "m/s", "u at the end of the run"));
+    final_state_ =
+        schema.Add(OutputColumn::Real(base + "final_delta_w_mps", "m/s", "Delta w at the end of the run"));
+    final_pitch_ = schema.Add(
+        OutputColumn::Real(base + "final_delta_theta_rad", "rad", "Delta theta at the end of the run"));
+    final_q_ =
+        schema.Add(OutputColumn::Real(base + "final_pitch_rate_radps", "rad/s", "q at the end of the run"));
+    steps_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "steps", "1", "Accepted integration steps"));
+    rhs_calls_ = schema.Add(
+        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    if (!storage.time_series) return;
+    dt_s_ = storage.output_dt_s;
+    config_.series_interval_s = dt_s_;
+    TimeAxis axis;
+    axis.path = "series/open_loop/time_s";
+    axis.description = "Time since the start of each open-loop run; samples after a run ended are NaN";
+    const auto samples = static_cast<int>(std::floor(config_.duration_s / dt_s_ + kGridTolerance_s)) + 1;
+    for (int k = 0; k < samples; ++k) axis.times_s.push_back(k * dt_s_);
+    schema.AddAxis(axis);
+    const std::string series = "series/open_loop/";
+    series_height_ =
+        schema.Add(OutputColumn::Series(series + "height_m", "m", "Height H", axis.path, samples));
+    series_speed_ =
+        schema.Add(OutputColumn::Series(series + "speed_mps", "m/s", "Speed u", axis.path, samples));
+    series_w_ = schema.Add(
+        OutputColumn::Series(series + "delta_w_mps", "m/s", "Delta w (positive down)", axis.path, samples));
+    series_q_ = schema.Add(
+        OutputColumn::Series(series + "pitch_rate_radps", "rad/s", "Pitch rate q", axis.path, samples));
+    series_theta_ = schema.Add(
+        OutputColumn::Series(series + "delta_theta_rad", "rad", "Delta theta", axis.path, samples));
+    series_elevator_ = schema.Add(OutputColumn::Series(series + "elevator_rad", "rad",
+                                                       "Elevator deflection (positive trailing edge down)",
+                                                       axis.path, samples));
+    samples_ = samples;
+  }
+
+  std::string CheckRun(const RunParameters& p, const Aircraft* aircraft) const override {
+    const double touchdown = config_.touchdown_height_m.value_or(aircraft->wheel_contact_height_m);
+    const double stall = config_.stall_speed_mps.value_or(aircraft->stall_speed_mps);
+    std::ostringstream out;
+    if (!(p[static_cast<std::size_t>(height_)] > touchdown)) {
+      out << "expected height_m > the touchdown height " << touchdown << " m";
+    } else if (!(p[static_cast<std::size_t>(speed_)] > stall)) {
+      out << "expected speed_mps > the stall speed " << stall << " m/s";
+    } else if (!(p[static_cast<std::size_t>(duration_)] > 0) &&
+               config_.elevator.kind != ElevatorInputKind::kNone &&
+               config_.elevator.kind != ElevatorInputKind::kStep) {
+      out << "expected pulse_duration_s > 0 for a " << ToString(config_.elevator.kind);
+    }
+    return out.str();
+  }
+
+  AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
+    OpenLoopConfig config = config_;
+    config.start_height_m = context.value(height_);
+    config.reference_speed_mps = context.value(speed_);
+    config.elevator.amplitude_rad = context.value(amplitude_) * std::numbers::pi / 180.0;
+    config.elevator.duration_s = context.value(duration_);
+    const OpenLoopResult result = SimulateOpenLoop(*context.model, config, context.cancel);
+    const OpenLoopSummary& s = result.summary;
+    if (s.cancelled) return AnalysisOutcome::Cancelled();
+    row.Set(end_event_, static_cast<double>(static_cast<int>(s.end_event)));
+    row.Set(end_time_, s.end_time_s);
+    row.Set(min_height_, s.min_height_m);
+    row.Set(min_height_time_, s.min_height_time_s);
+    row.Set(max_pitch_rate_, s.max_abs_pitch_rate_radps);
+    row.Set(final_height_, s.final_height_m);
+    row.Set(final_speed_, s.final_speed_mps);
+    row.Set(final_state_, s.final_state[kDeltaW]);
+    row.Set(final_pitch_, s.final_state[kDeltaTheta]);
+    row.Set(final_q_, s.final_state[kPitchRate]);
+    row.Set(steps_, static_cast<double>(s.steps));
+    row.Set(rhs_calls_, static_cast<double>(s.rhs_calls));
+    if (samples_ > 0) StoreSeries(result.series, row);
+    if (s.end_event == OpenLoopEndEvent::kDiverged) {
+      return AnalysisOutcome::Failed(s.message.empty() ? "diverged" : s.message);
+    }
+    return AnalysisOutcome::Ok(s.message);
+  }
+
+ private:
+  // The simulation samples every dt and once more at the end; keep the samples on the grid.
+  void StoreSeries(const OpenLoopSeries& series, OutputRow& row) const {
+    const std::pair<int, const std::vector<double>*> columns[] = {
+        {series_height_, &series.height_m},
+        {series_speed_, &series.speed_mps},
+        {series_w_, &series.delta_normal_velocity_mps},
+        {series_q_, &series.pitch_rate_radps},
+        {series_theta_, &series.delta_pitch_rad},
+        {series_elevator_, &series.elevator_rad}};
+    for (std::size_t i = 0; i < series.time_s.size(); ++i) {
+      const double position = series.time_s[i] / dt_s_;
+      const double k = std::round(position);
+      if (std::abs(position - k) * dt_s_ > kGridTolerance_s || k < 0 || k >= samples_) continue;
+      for (const auto& [column, values] : columns) row.Slot(column)[static_cast<int>(k)] = (*values)[i];
+    }
+  }
+
+  OpenLoopConfig config_;
+  ParameterId height_ = RequireParameter("height_m");
+  ParameterId speed_ = RequireParameter("speed_mps");
+  ParameterId amplitude_ = RequireParameter("pulse_amplitude_deg");
+  ParameterId duration_ = RequireParameter("pulse_duration_s");
+  int end_event_ = 0, end_time_ = 0, min_height_ = 0, min_height_time_ = 0, max_pitch_rate_ = 0;
+  int final_height_ = 0, final_speed_ = 0, final_state_ = 0, final_pitch_ = 0, final_q_ = 0, steps_ = 0,
+      rhs_calls_ = 0;
+  int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0,
+      series_elevator_ = 0;
+  int samples_ = 0;
+  double dt_s_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, const Aircraft*) {
+  settings.RejectUnknownKeys({"input", "input_start_s", "duration_s", "integrator", "step_s",
+                              "relative_tolerance", "absolute_tolerance", "max_step_s", "honour_breakpoints",
+                              "freeze_derivatives"});
+  OpenLoopConfig config;
+  config.duration_s = kDefaultDuration_s;
+  if (const auto input = settings.OptionalString("input")) {
+    const auto kind = ParseElevatorInputKind(*input);
+    if (!kind) settings.Fail("input", "\"" + *input + "\"", "expected pulse, step, doublet or none");
+    config.elevator.kind = *kind;
+  }
+  // Every number against the limits table (docs/limits.md), with the study's file and line.
+  if (const auto start = settings.OptionalLimitedNumber("input_start_s", "open_loop.input_start_s")) {
+    config.elevator.start_s = *start;
+  }
+  if (const auto duration = settings.OptionalLimitedNumber("duration_s", "open_loop.duration_s")) {
+    config.duration_s = *duration;
+  }
+  if (const auto integrator = settings.OptionalString("integrator")) {
+    const auto kind = ParseIntegratorKind(*integrator);
+    if (!kind) settings.Fail("integrator", "\"" + *integrator + "\"", "expected rk4 or dopri5");
+    config.integrator.kind = *kind;
+  }
+  if (const auto step = settings.OptionalLimitedNumber("step_s", "open_loop.step_s")) config.integrator.step_s = *step;
+  if (const auto rtol = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
+    config.integrator.relative_tolerance = *rtol;
+  }
+  if (const auto atol = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
+    config.integrator.absolute_tolerance = *atol;
+  }
+  if (const auto max_step = settings.OptionalLimitedNumber("max_step_s", "open_loop.max_step_s")) {
+    config.integrator.max_step_s = *max_step;
+  }
+  config.integrator.honour_breakpoints = settings.OptionalBool("honour_breakpoints").value_or(true);
+  config.freeze_derivatives = settings.OptionalBool("freeze_derivatives").value_or(false);
+  try {
+    ValidateIntegratorOptions(config.integrator, settings.source());
+    // Bounded work: refused here, before the first run, not as a failed run later.
+    const bool rk4 = config.integrator.kind == IntegratorKind::kRk4;
+    CheckStepCount(config.duration_s, rk4 ? config.integrator.step_s : config.integrator.max_step_s,
+                   settings.source(), "duration_s", rk4 ? "step_s" : "max_step_s");
+  } catch (const InputError& e) {
+    settings.Fail(e.key(), e.value(), e.expected());
+  }
+  return std::make_unique<OpenLoopAnalysis>(std::move(config));
+}
+
+}  // namespace gesweep

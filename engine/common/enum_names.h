@@ -1,0 +1,71 @@
+#pragma once
+/// One table of names per enum, from which come its printing, its parsing and the list of choices an
+/// error message offers (docs/architecture.md, "Describe once").
+///
+/// An enum opts in by specializing `EnumNames` next to its declaration:
+///
+///     enum class IntegratorKind { kRk4, kDopri5 };
+///     template <> struct EnumNames<IntegratorKind> {
+///       static constexpr EnumName<IntegratorKind> kTable[] = {{IntegratorKind::kRk4, "rk4"},
+///                                                            {IntegratorKind::kDopri5, "dopri5"}};
+///     };
+///
+/// and then `ToString(kind)`, `ParseEnum<IntegratorKind>("rk4")` and `EnumChoices<IntegratorKind>()`
+/// ("rk4 or dopri5") all read that one table.
+
+#include <concepts>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "engine/common/errors.h"
+
+namespace gesweep {
+
+/// One value of an enum and its name in study files, CLI flags and archives.
+template <class E>
+struct EnumName {
+  E value;
+  std::string_view name;
+};
+
+/// Specialize with `static constexpr EnumName<E> kTable[] = {...}` listing every value once.
+template <class E>
+struct EnumNames;
+
+/// An enum with a names table.
+template <class E>
+concept NamedEnum = std::is_enum_v<E> && requires { EnumNames<E>::kTable; };
+
+/// The name of `value`. Every value is in the table (GESWEEP_UNREACHABLE otherwise: a broken table).
+template <NamedEnum E>
+constexpr std::string_view ToString(E value) {
+  for (const auto& entry : EnumNames<E>::kTable) {
+    if (entry.value == value) return entry.name;
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+/// The value named `text` exactly; nullopt for any other text.
+template <NamedEnum E>
+constexpr std::optional<E> ParseEnum(std::string_view text) {
+  for (const auto& entry : EnumNames<E>::kTable) {
+    if (entry.name == text) return entry.value;
+  }
+  return std::nullopt;
+}
+
+/// The names in table order for a message: "a", "a or b", "a, b or c".
+template <NamedEnum E>
+std::string EnumChoices() {
+  std::string out;
+  const auto& table = EnumNames<E>::kTable;
+  const std::size_t n = std::size(table);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0) out += (i + 1 == n) ? " or " : ", ";
+    out += table[i].name;
+  }
+  return out;
+}
+
+}  // namespace gesweep

@@ -1,0 +1,339 @@
+#include "engine/products/archive_boundary.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "engine/archive/archive_format.h"
+#include "engine/archive/analysis_product.h"
+#include "engine/archive/archive_reader.h"
+#include "engine/archive/provenance.h"
+#include "engine/common/errors.h"
+#include "engine/modal/modal_analysis.h"
+#include "engine/query/run_columns.h"
+#include "engine/products/run_model.h"
+
+namespace gesweep {
+namespace {
+
+constexpr const char* kMarginPath = "results/modes/stability_margin_per_s";
+constexpr const char* kHeightPath = "design/height_m";
+constexpr std::int64_t kChunkRows = 1 << 16;
+// Samples per table segment inside a grid bracket, for BoundaryMethod::kSampled only (the default
+// Hurwitz finder enumerates every crossing in the bracket; it keeps the highest).
+constexpr int kRefineSamplesPerSegment = 8;
+// The rebuilt model must give the archived σ at the bracket's ends. The same engine gives the same
+// bits; this slack only absorbs a different compiler's rounding, not a different model.
+constexpr double kMarginRelativeAgreement = 1e-8;
+constexpr double kMarginAbsoluteAgreement = 1e-12;
+
+struct Sample {
+  double height_m;
+  double margin_per_s;
+  std::uint32_t group;
+};
+
+std::string Metres(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value << " m";
+  return out.str();
+}
+
+std::string Number(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+
+}  // namespace
+
+ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalog& catalog,
+                                ArchiveRunModels& models, const BoundaryExtractionOptions& options) {
+  const std::string source = archive.path().string();
+  const auto height_column = catalog.FindPath(kHeightPath);
+  if (!height_column) {
+    throw InputError(
+        source, "design", "",
+        "the design does not sweep height_m; the boundary is the sign change of the stability margin "
+        "along height, so the study needs a height_m axis");
+  }
+  const auto margin_column = catalog.FindPath(kMarginPath);
+  if (!margin_column) {
+    throw InputError(source, kMarginPath, "",
+                     "missing: the study did not run the modes analysis, which stores the stability margin");
+  }
+  const auto speed_id = FindParameter("speed_mps");
+  GESWEEP_DEMAND(speed_id.has_value());
+
+  ArchiveBoundary boundary;
+  boundary.archive = source;
+  boundary.study_name = archive.StringAttribute("study_name");
+  boundary.aircraft_name = models.aircraft().name;
+  boundary.wingspan_m = models.aircraft().wingspan_m;
+  boundary.tolerance_m = options.tolerance_m;
+  boundary.snapshot = archive.snapshot();
+
+  // The other axes: --by first, then the remaining design parameters in design order.
+  std::vector<int> key_columns;
+  std::vector<std::string> swept;
+  for (int c : catalog.design_columns()) {
+    if (c != *height_column) swept.push_back(catalog.column(c).name);
+  }
+  for (const std::string& name : options.by) {
+    const auto c = catalog.FindPath(archive::DesignPath(name));
+    if (c == height_column) {
+      throw InputError("command line", "--by", name,
+                       "the boundary is located along height_m; --by names the other swept parameters");
+    }
+    if (!c || std::find(catalog.design_columns().begin(), catalog.design_columns().end(), *c) ==
+                  catalog.design_columns().end()) {
+      std::string list;
+      for (const auto& s : swept) list += (list.empty() ? "" : ", ") + s;
+      throw InputError(
+          "command line", "--by", name,
+          "expected a parameter the design sweeps besides height_m" +
+              (list.empty() ? std::string(" (it sweeps none: one boundary)") : " (" + list + ")"));
+    }
+    if (std::find(key_columns.begin(), key_columns.end(), *c) == key_columns.end()) key_columns.push_back(*c);
+  }
+  for (int c : catalog.design_columns()) {
+    if (c != *height_column && std::find(key_columns.begin(), key_columns.end(), c) == key_columns.end()) {
+      key_columns.push_back(c);
+    }
+  }
+  for (int c : key_columns) {
+    boundary.key_names.push_back(
+        catalog.column(c).path.substr(std::string(archive::kDesignGroup).size() + 1));
+    boundary.key_units.push_back(catalog.column(c).units);
+    boundary.key_levels.push_back(catalog.column(c).levels);
+  }
+
+  // Read every complete ok run's height, σ and axes, block by block.
+  std::map<std::vector<double>, std::uint32_t> groups;
+  std::vector<std::vector<double>> group_keys;
+  std::vector<Sample> samples;
+  std::vector<ColumnValues> keys(key_columns.size());
+  ColumnValues heights, margins;
+  std::vector<double> key(key_columns.size());
+  for (std::int64_t first = 0; first < archive.run_count(); first += kChunkRows) {
+    const std::int64_t count = std::min(kChunkRows, archive.run_count() - first);
+    const std::vector<std::int8_t> status = archive.ReadStatus(first, count);  // before the values: snapshots
+    ReadColumn(archive, catalog.column(*height_column), first, count, heights);
+    ReadColumn(archive, catalog.column(*margin_column), first, count, margins);
+    for (std::size_t k = 0; k < key_columns.size(); ++k) {
+      ReadColumn(archive, catalog.column(key_columns[k]), first, count, keys[k]);
+    }
+    for (std::size_t r = 0; r < static_cast<std::size_t>(count); ++r) {
+      if (status[r] != 1 || !std::isfinite(margins.numbers[r]) || !std::isfinite(heights.numbers[r])) {
+        ++boundary.runs_skipped;
+        continue;
+      }
+      for (std::size_t k = 0; k < key_columns.size(); ++k) key[k] = keys[k].numbers[r];
+      auto [it, inserted] = groups.try_emplace(key, static_cast<std::uint32_t>(group_keys.size()));
+      if (inserted) group_keys.push_back(key);
+      samples.push_back(Sample{heights.numbers[r], margins.numbers[r], it->second});
+      ++boundary.runs_used;
+    }
+  }
+  std::sort(samples.begin(), samples.end(), [](const Sample& a, const Sample& b) {
+    return a.group != b.group ? a.group < b.group : a.height_m < b.height_m;
+  });
+
+  // Where each key axis sits in the design's columns (to rebuild a run's design values).
+  const std::vector<ParameterId>& design_ids = models.design_parameters();
+  std::vector<int> design_slot_of_key(key_columns.size(), -1);
+  int height_slot = -1;
+  for (std::size_t d = 0; d < design_ids.size(); ++d) {
+    const std::string& name = ParameterCatalog()[static_cast<std::size_t>(design_ids[d])].name;
+    if (name == "height_m") height_slot = static_cast<int>(d);
+    for (std::size_t k = 0; k < key_columns.size(); ++k) {
+      if (boundary.key_names[k] == name) design_slot_of_key[k] = static_cast<int>(d);
+    }
+  }
+  GESWEEP_DEMAND(height_slot >= 0);
+
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::size_t begin = 0;
+  std::vector<ArchiveBoundaryPoint> points(group_keys.size());
+  while (begin < samples.size()) {
+    std::size_t end = begin;
+    while (end < samples.size() && samples[end].group == samples[begin].group) ++end;
+    // One σ per height (a repeated height keeps its first run).
+    std::vector<double> h, s;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!h.empty() && samples[i].height_m == h.back()) continue;
+      h.push_back(samples[i].height_m);
+      s.push_back(samples[i].margin_per_s);
+    }
+    ArchiveBoundaryPoint& point = points[samples[begin].group];
+    point.key_values = group_keys[samples[begin].group];
+    point.heights = static_cast<std::int64_t>(h.size());
+    point.grid_lower_height_m = point.grid_upper_height_m = point.bracket_width_m = nan;
+    std::optional<std::size_t> bracket;  // index of the lower end
+    for (std::size_t i = 0; i + 1 < h.size(); ++i) {
+      if ((s[i] < 0) != (s[i + 1] < 0)) ++point.grid_crossings;
+      if (s[i] >= 0 && s[i + 1] < 0) bracket = i;  // ascending: the last one found is the highest
+    }
+    std::vector<double> design_values(design_ids.size());
+    for (std::size_t k = 0; k < key_columns.size(); ++k) {
+      if (design_slot_of_key[k] >= 0)
+        design_values[static_cast<std::size_t>(design_slot_of_key[k])] = point.key_values[k];
+    }
+    design_values[static_cast<std::size_t>(height_slot)] = h.front();
+    point.parameters = models.Parameters(design_values);
+    const std::string range = h.empty() ? std::string() : Metres(h.front()) + " to " + Metres(h.back());
+    if (!bracket) {
+      if (h.size() < 2) {
+        point.reason = "fewer than two heights with a finite stability margin";
+      } else if (std::all_of(s.begin(), s.end(), [](double v) { return v < 0; })) {
+        point.reason = "stable at every grid height from " + range;
+      } else if (std::all_of(s.begin(), s.end(), [](double v) { return v >= 0; })) {
+        point.reason = "unstable at every grid height from " + range;
+      } else {
+        point.reason = "no grid height has unstable below and stable above (" +
+                       std::to_string(point.grid_crossings) + " sign changes from " + range + ")";
+      }
+      begin = end;
+      continue;
+    }
+    const double lower = h[*bracket], upper = h[*bracket + 1];
+    point.grid_lower_height_m = lower;
+    point.grid_upper_height_m = upper;
+    const LongitudinalModel& model = models.Model(point.parameters);
+    const double speed_mps = point.parameters[static_cast<std::size_t>(*speed_id)];
+    // The rebuilt model must reproduce the archived σ at both ends of the bracket.
+    for (const auto& [height, stored] : {std::pair{lower, s[*bracket]}, std::pair{upper, s[*bracket + 1]}}) {
+      const double again = StabilityMargin(model, height, speed_mps);
+      if (!(std::abs(again - stored) <=
+            kMarginRelativeAgreement * std::abs(stored) + kMarginAbsoluteAgreement)) {
+        point.reason = "the model rebuilt from the archive gives sigma = " + Number(again) +
+                       " 1/s at H = " + Metres(height) + " where the archive has " + Number(stored) +
+                       " 1/s (made by another engine version?); not refined";
+        break;
+      }
+    }
+    if (point.reason.empty()) {
+      BoundaryOptions refine;
+      refine.lower_height_m = lower;
+      refine.upper_height_m = upper;
+      refine.samples_per_segment = kRefineSamplesPerSegment;
+      refine.tolerance_m = options.tolerance_m;
+      point.refined = FindBoundary(model, speed_mps, refine);
+      if (point.refined.height_m) {
+        point.height_m = point.refined.height_m;
+        point.height_over_span = *point.refined.height_m / boundary.wingspan_m;
+        for (const auto& crossing : point.refined.crossings) {
+          if (crossing.height_m == *point.height_m) point.bracket_width_m = crossing.bracket_width_m;
+        }
+      } else {
+        point.reason = "refinement inside the grid bracket " + Metres(lower) + " to " + Metres(upper) +
+                       " found none: " + point.refined.reason;
+      }
+    }
+    begin = end;
+  }
+  std::sort(points.begin(), points.end(), [](const ArchiveBoundaryPoint& a, const ArchiveBoundaryPoint& b) {
+    return a.key_values < b.key_values;
+  });
+  boundary.points = std::move(points);
+  return boundary;
+}
+
+void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBoundary& boundary,
+                        const std::string& command_line) {
+  WriteAnalysisProduct(archive, kBoundaryGroup, "pass --no-write to only print the boundary", [&](ProductGroup& g) {
+    std::string keys_text;
+    for (const auto& name : boundary.key_names) keys_text += (keys_text.empty() ? "" : ", ") + name;
+    g.Attribute("description",
+                "Stability boundary H*: for each combination of the swept parameters other than height_m (" +
+                    (keys_text.empty() ? std::string("none: one boundary") : keys_text) +
+                    "), the highest sign change of results/modes/stability_margin_per_s along "
+                    "design/height_m with unstable below and stable above, refined on the run's continuous "
+                    "model (docs/report.md)");
+    g.Attribute("method",
+                "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+                "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+                "parameters, inside the bracket");
+    g.Attribute("keys", boundary.key_names);
+    g.Attribute("source_dataset", kMarginPath);
+    g.Attribute("along", kHeightPath);
+    g.Attribute("tolerance_m", boundary.tolerance_m);
+    g.Attribute("wingspan_m", boundary.wingspan_m);
+    g.Attribute("aircraft_name", boundary.aircraft_name);
+    g.Attribute("runs_used", boundary.runs_used);
+    g.Attribute("runs_skipped", boundary.runs_skipped);
+    g.Attribute("engine_version", EngineVersion());
+    g.Attribute("git_commit", EngineGitCommit());
+    g.Attribute("created", UtcTimestamp());
+    g.Attribute("command_line", command_line);
+
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
+      std::vector<double> values;
+      for (const auto& p : boundary.points) values.push_back(p.key_values[k]);
+      ProductDataset dataset =
+          g.Numbers(boundary.key_names[k], values, boundary.key_units[k],
+                    "Value of the swept parameter " + boundary.key_names[k] + " of this boundary point" +
+                        (boundary.key_levels[k].empty() ? "" : " (index of its level; levels attribute)"));
+      if (!boundary.key_levels[k].empty()) dataset.Attribute("levels", boundary.key_levels[k]);
+    }
+    std::vector<double> height, ratio, lower, upper, width;
+    std::vector<std::int8_t> found;
+    std::vector<std::int32_t> crossings, heights;
+    std::vector<std::string> reasons;
+    for (const auto& p : boundary.points) {
+      height.push_back(p.height_m.value_or(nan));
+      ratio.push_back(p.height_over_span.value_or(nan));
+      lower.push_back(p.grid_lower_height_m);
+      upper.push_back(p.grid_upper_height_m);
+      width.push_back(p.bracket_width_m);
+      found.push_back(p.height_m ? 1 : 0);
+      crossings.push_back(p.grid_crossings);
+      heights.push_back(static_cast<std::int32_t>(p.heights));
+      reasons.push_back(p.reason);
+    }
+    g.Numbers("height_m", height, "m",
+              "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none");
+    g.Numbers("height_over_span", ratio, "1", "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none");
+    ProductDataset found_dataset = g.Numbers("found", found, "1", "1 when a boundary was found");
+    found_dataset.Attribute("levels", std::vector<std::string>{"false", "true"});
+    // The archive's convention for integer codes (schemas/archive.md): never stored here, every
+    // point is 0 or 1.
+    found_dataset.Attribute("fill", std::int64_t{-1});
+    g.Numbers("grid_lower_height_m", lower, "m", "Grid height just below the sign change (sigma >= 0); NaN when none");
+    g.Numbers("grid_upper_height_m", upper, "m", "Grid height just above the sign change (sigma < 0); NaN when none");
+    g.Numbers("bracket_width_m", width, "m", "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
+    g.Numbers("grid_crossings", crossings, "1", "Sign changes of sigma between neighbouring grid heights of this point");
+    g.Numbers("heights", heights, "1", "Grid heights with a finite sigma (complete ok runs) of this point");
+    g.Strings("reason", reasons, "Why there is no boundary (empty when there is one)");
+  });
+}
+
+void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
+                             const std::string& command_line) {
+  WriteAnalysisProduct(archive, kBoundaryCurveGroup, "", [&](ProductGroup& g) {
+    g.Attribute("description",
+                "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
+                "the continuous model over the archive's speed range, every point confirmed by the "
+                "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
+    g.Attribute("wingspan_m", curve.wingspan_m);
+    g.Attribute("engine_version", EngineVersion());
+    g.Attribute("created", UtcTimestamp());
+    g.Attribute("command_line", command_line);
+    g.Numbers("speed_mps", curve.speed_mps, "m/s", "Reference speed u0 of each traced point");
+    g.Numbers("height_m", curve.height_m, "m", "Boundary height H* at that speed");
+    g.Numbers("height_over_span", curve.height_over_span, "1", "H*/b");
+    g.Numbers("height_speed_derivative", curve.height_speed_derivative, "m/(m/s)",
+              "dH*/du0 by the implicit-function theorem on the crossing criterion");
+    g.Numbers("branch", curve.branch, "1", "Branch of each point (a new one after each event)");
+    g.Numbers("event_speed_mps", curve.event_speed_mps, "m/s",
+              "Speeds where the boundary appears, ends or jumps to another crossing");
+    g.Strings("event_what", curve.event_what, "What happens at each event: appears, ends, jumps");
+  });
+}
+
+}  // namespace gesweep
