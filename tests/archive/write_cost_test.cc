@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <string>
 
-#include "engine/sweep/analysis_adapters.h"
+#include "engine/analyses/analysis_adapters.h"
 
 namespace gesweep {
 namespace {
