@@ -61,8 +61,16 @@ struct RunFlags {
 std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream out;
+  if (seconds < 1) {
+    // Three significant digits, so that a sweep of milliseconds reads as one ("0.0234 s"): the dry
+    // run's estimate is compared with this line (scripts/lib/dry_run_accuracy.py).
+    const int decimals =
+        seconds > 0 ? std::clamp(2 - static_cast<int>(std::floor(std::log10(seconds))), 2, 6) : 2;
+    out << std::fixed << std::setprecision(decimals) << seconds << " s";
+    return out.str();
+  }
   if (seconds < 60) {
-    out << std::fixed << std::setprecision(seconds < 1 ? 2 : (seconds < 10 ? 1 : 0)) << seconds << " s";
+    out << std::fixed << std::setprecision(seconds < 10 ? 1 : 0) << seconds << " s";
     return out.str();
   }
   const auto total = static_cast<long long>(std::llround(seconds));
