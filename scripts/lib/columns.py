@@ -28,6 +28,12 @@ MANIFEST_FORMAT_VERSION = 1
 RATING, OVERALL_RATING = "rating", "overall_rating"
 
 
+# The archive's groups of per-run datasets, as the manifest names them (a column's "group"; the first
+# part of a runs/ or design/ path). A design dataset is DESIGN_GROUP/<parameter> for each name of the
+# archive's /design@parameters.
+RUNS_GROUP, DESIGN_GROUP, RESULTS_GROUP, SERIES_GROUP = "runs", "design", "results", "series"
+
+
 class UnknownColumn(LookupError):
     """A script asked for an analysis or column the manifest does not have."""
 
@@ -62,7 +68,7 @@ def analysis(name):
 def column(analysis_name, name, series=False):
     """The manifest entry of one column: path, units, description, type, width, levels, ...; raises
     UnknownColumn naming the analysis, the column and the names it does have."""
-    group = "series" if series else "results"
+    group = SERIES_GROUP if series else RESULTS_GROUP
     entry = analysis(analysis_name)
     for c in entry["columns"]:
         if c["group"] == group and c["name"] == name:
@@ -113,6 +119,11 @@ def runs_path(name):
         if entry["path"].split("/")[-1] == name:
             return entry["path"]
     raise UnknownColumn(f"{MANIFEST_PATH}: no runs dataset '{name}'")
+
+
+def runs_paths():
+    """The paths of every bookkeeping dataset (runs/index, runs/id, runs/status, runs/message)."""
+    return tuple(entry["path"] for entry in manifest()["runs"])
 
 
 def ratings():
