@@ -12,8 +12,8 @@
 #include "engine/analyses/parameter_catalog.h"
 #include "engine/archive/archive_format.h"
 #include "engine/cli/command.h"
-#include "engine/common/toml_reader.h"
 #include "engine/common/errors.h"
+#include "engine/common/toml_reader.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep::cli {
@@ -37,37 +37,50 @@ constexpr std::pair<std::string_view, std::string_view> kRequiredSettings[] = {
 // The settings table `name` is built with: its required settings, or none.
 toml::table SettingsOf(std::string_view name) {
   for (const auto& [analysis, text] : kRequiredSettings) {
-    if (analysis == name) return ParseToml(text, "gesweep columns (its settings of " + std::string(name) + ")");
+    if (analysis == name)
+      return ParseToml(text, "gesweep columns (its settings of " + std::string(name) + ")");
   }
   return toml::table{};
 }
 
 std::string_view TypeName(ColumnType type) {
   switch (type) {
-    case ColumnType::kFloat64: return "float64";
-    case ColumnType::kInt32: return "int32";
-    case ColumnType::kInt8: return "int8";
-    case ColumnType::kComplex: return "complex128";
+    case ColumnType::kFloat64:
+      return "float64";
+    case ColumnType::kInt32:
+      return "int32";
+    case ColumnType::kInt8:
+      return "int8";
+    case ColumnType::kComplex:
+      return "complex128";
   }
   GESWEEP_UNREACHABLE();
 }
 
 std::string_view KindName(ParameterKind kind) {
   switch (kind) {
-    case ParameterKind::kReal: return "real";
-    case ParameterKind::kBoolean: return "boolean";
-    case ParameterKind::kChoice: return "choice";
+    case ParameterKind::kReal:
+      return "real";
+    case ParameterKind::kBoolean:
+      return "boolean";
+    case ParameterKind::kChoice:
+      return "choice";
   }
   GESWEEP_UNREACHABLE();
 }
 
 std::string_view GroupName(ParameterGroup group) {
   switch (group) {
-    case ParameterGroup::kFlight: return "flight";
-    case ParameterGroup::kModel: return "model";
-    case ParameterGroup::kOpenLoop: return "open_loop";
-    case ParameterGroup::kLanding: return "landing";
-    case ParameterGroup::kVerification: return "verification";
+    case ParameterGroup::kFlight:
+      return "flight";
+    case ParameterGroup::kModel:
+      return "model";
+    case ParameterGroup::kOpenLoop:
+      return "open_loop";
+    case ParameterGroup::kLanding:
+      return "landing";
+    case ParameterGroup::kVerification:
+      return "verification";
   }
   GESWEEP_UNREACHABLE();
 }
@@ -87,7 +100,8 @@ std::string NameUnder(const std::string& path, const std::string& prefix) {
 
 // "rating", "overall_rating" or "" (see kRatingFirstLevel).
 std::string Role(const OutputColumn& column, const std::string& name) {
-  if (column.type != ColumnType::kInt8 || column.levels.empty() || Lower(column.levels[0]) != kRatingFirstLevel) {
+  if (column.type != ColumnType::kInt8 || column.levels.empty() ||
+      Lower(column.levels[0]) != kRatingFirstLevel) {
     return "";
   }
   return name == kOverallRatingName ? "overall_rating" : "rating";
@@ -144,22 +158,24 @@ Json RunsJson() {
                    "runs/index, identifies the run across shards and resumes)"},
                   {"type", "uint64"},
                   {"levels", Json::array()}});
-  runs.push_back({{"path", archive::kRunStatus},
-                  {"units", "1"},
-                  {"description",
-                   "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's results, so "
-                   "a nonzero status marks a complete run"},
-                  {"type", "int8"},
-                  {"levels", {"pending", "ok", "failed"}}});
-  runs.push_back({{"path", archive::kRunMessage},
-                  {"units", "1"},
-                  {"description",
-                   "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
-                       std::to_string(kMessageLength) +
-                       " bytes (a longer message ends in '...'); empty for most runs, whose chunks are never "
-                       "written"},
-                  {"type", "string" + std::to_string(kMessageLength)},
-                  {"levels", Json::array()}});
+  runs.push_back(
+      {{"path", archive::kRunStatus},
+       {"units", "1"},
+       {"description",
+        "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's results, so "
+        "a nonzero status marks a complete run"},
+       {"type", "int8"},
+       {"levels", {"pending", "ok", "failed"}}});
+  runs.push_back(
+      {{"path", archive::kRunMessage},
+       {"units", "1"},
+       {"description",
+        "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
+            std::to_string(kMessageLength) +
+            " bytes (a longer message ends in '...'); empty for most runs, whose chunks are never "
+            "written"},
+       {"type", "string" + std::to_string(kMessageLength)},
+       {"levels", Json::array()}});
   return runs;
 }
 
@@ -193,7 +209,8 @@ Json Manifest(const Aircraft& aircraft) {
     OutputSchema schema;
     analysis->DeclareOutputs(schema, storage);
     Json columns = Json::array();
-    for (const OutputColumn& column : schema.columns) columns.push_back(ColumnJson(column, std::string(entry.name)));
+    for (const OutputColumn& column : schema.columns)
+      columns.push_back(ColumnJson(column, std::string(entry.name)));
     Json axes = Json::array();
     for (const TimeAxis& axis : schema.axes) axes.push_back(AxisJson(axis));
     Json parameters = Json::array();
@@ -267,7 +284,8 @@ void PrintText(const Json& manifest) {
     }
     for (const auto& axis : analysis["time_axes"]) {
       row(Text(axis["path"]), "float64[" + Text(axis["samples"]) + "]", "s",
-          "time axis: " + Text(axis["first_s"]) + " to " + Text(axis["last_s"]) + " s by " + Text(axis["step_s"]),
+          "time axis: " + Text(axis["first_s"]) + " to " + Text(axis["last_s"]) + " s by " +
+              Text(axis["step_s"]),
           Text(axis["description"]));
     }
   }
