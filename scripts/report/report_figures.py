@@ -313,7 +313,8 @@ def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
 LEVEL_COLOURS = ("#1a9850", "#fee08b", "#f46d43", "#7f0000")
 # The parts' lines, in the order the parts are drawn (the last-declared part first: the phugoid, then
 # the short period, of flying_qualities): style and width.
-LEVEL_PART_STYLES = (("-", 2.2), ((0, (4, 2)), 1.6), ((0, (1, 1.5)), 1.6), ((0, (6, 2, 1, 2)), 1.6))
+# (Dash-dot before dotted: the last table row's line is dotted.)
+LEVEL_PART_STYLES = (("-", 2.2), ((0, (4, 2)), 1.6), ((0, (6, 2, 1, 2)), 1.6), ((0, (1, 1.5)), 1.6))
 # Wording of the figures of the analyses that have their own (section title, what a part is, the
 # caption's opening with {grid} for "N speeds × M heights (R runs of FILE)"); any other rated
 # analysis is described from its manifest entry.
@@ -451,7 +452,8 @@ def _level_map(archive, analysis, key, rows, outdir, number):
     if wording:
         opening = wording[2].format(grid=grid_text) + f" Black lines mark where a {wording[1]} changes level. "
     else:
-        parts = " and ".join(analysis.part_label(p) for p in analysis.parts)
+        labels = [analysis.part_label(p) for p in analysis.parts]
+        parts = labels[0] if len(labels) == 1 else ", ".join(labels[:-1]) + " and " + labels[-1]
         opening = (f"Levels of {parts} ({analysis.description}) over {grid_text}, from "
                    f"the {analysis.name} columns of the archive. Black lines mark where each changes level. ")
     caption = opening + " ".join(t for t in lost if t)
