@@ -10,8 +10,7 @@
 /// and every place that needs the list is a visitor of it (docs/architecture.md, "Describe once"):
 /// - the study file's [analyses.<name>] table: ReadFields (describe_toml.h), unknown keys refused
 ///   from the same list;
-/// - the command-line flags (engine/cli/described_flags.h): key `step_s` is flag `--step-s`, a
-///   boolean that defaults to true is `--no-<key>`;
+/// - the command-line flags (engine/cli/described_flags.h), named mechanically from the keys;
 /// - the archive columns and their row filling (engine/analyses/described_columns.h);
 /// - the CSV and JSON output of `simulate` and `land`;
 /// - the check of the schema documents (tests/sweep/schema_sync_test.cc) through ListFields.
