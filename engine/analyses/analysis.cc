@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "engine/analyses/described_columns.h"
 #include "engine/common/errors.h"
 
 namespace gesweep {
@@ -16,6 +17,20 @@ int OutputColumn::stored_bytes_per_run() const {
       return width;
     case ColumnType::kComplex:
       return 16 * width;
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+ColumnType ColumnTypeOf(StoredAs stored) {
+  switch (stored) {
+    case StoredAs::kFloat64:
+      return ColumnType::kFloat64;
+    case StoredAs::kInt32:
+      return ColumnType::kInt32;
+    case StoredAs::kInt8:
+      return ColumnType::kInt8;
+    case StoredAs::kNotStored:
+      break;
   }
   GESWEEP_UNREACHABLE();
 }

@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/common/describe.h"
 #include "engine/common/toml_reader.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/analyses/parameter_catalog.h"
@@ -176,6 +177,9 @@ class Analysis {
     (void)aircraft;
     return "";
   }
+  /// Its settings as read from [analyses.<name>] (describe.h), defaults included: the study keys of
+  /// its description, for the schema check and the column manifest. Empty when it has none described.
+  virtual std::vector<FieldRecord> SettingsFields() const { return {}; }
   /// Fills its columns for one run. Thread-safe (const, no shared mutable state). May throw; the
   /// runner turns any exception into a failed run.
   virtual AnalysisOutcome Run(const RunContext& context, OutputRow& row) const = 0;

@@ -5,6 +5,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "engine/analyses/described_columns.h"
+#include "engine/common/describe_toml.h"
 #include "engine/common/input_limits.h"
 #include "engine/simulation/open_loop.h"
 #include "engine/analyses/analysis_adapters.h"
@@ -32,33 +34,7 @@ class OpenLoopAnalysis final : public Analysis {
   }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
-    const std::string base = "results/open_loop/";
-    std::vector<std::string> events;
-    for (auto e : {OpenLoopEndEvent::kTouchdown, OpenLoopEndEvent::kStall, OpenLoopEndEvent::kTimeLimit,
-                   OpenLoopEndEvent::kDiverged}) {
-      events.emplace_back(ToString(e));
-    }
-    end_event_ =
-        schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "end_event", "1",
-                                         "How the run ended (levels attribute, docs/model.md §7)", events));
-    end_time_ = schema.Add(OutputColumn::Real(base + "end_time_s", "s", "Time of the end event"));
-    min_height_ = schema.Add(OutputColumn::Real(base + "min_height_m", "m", "Lowest height H reached"));
-    min_height_time_ =
-        schema.Add(OutputColumn::Real(base + "min_height_time_s", "s", "When the lowest height was reached"));
-    max_pitch_rate_ =
-        schema.Add(OutputColumn::Real(base + "max_abs_pitch_rate_radps", "rad/s", "Largest |q|"));
-    final_height_ = schema.Add(OutputColumn::Real(base + "final_height_m", "m", "H at the end of the run"));
-    final_speed_ = schema.Add(OutputColumn::Real(base + "final_speed_mps", "m/s", "u at the end of the run"));
-    final_state_ =
-        schema.Add(OutputColumn::Real(base + "final_delta_w_mps", "m/s", "Delta w at the end of the run"));
-    final_pitch_ = schema.Add(
-        OutputColumn::Real(base + "final_delta_theta_rad", "rad", "Delta theta at the end of the run"));
-    final_q_ =
-        schema.Add(OutputColumn::Real(base + "final_pitch_rate_radps", "rad/s", "q at the end of the run"));
-    steps_ = schema.Add(
-        OutputColumn::Integer(ColumnType::kInt32, base + "steps", "1", "Accepted integration steps"));
-    rhs_calls_ = schema.Add(
-        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    summary_.Declare(schema, "results/open_loop/");
     if (!storage.time_series) return;
     dt_s_ = storage.output_dt_s;
     config_.series_interval_s = dt_s_;
@@ -85,6 +61,8 @@ class OpenLoopAnalysis final : public Analysis {
     samples_ = samples;
   }
 
+  std::vector<FieldRecord> SettingsFields() const override { return ListFields(config_); }
+
   std::string CheckRun(const RunParameters& p, const Aircraft* aircraft) const override {
     const double touchdown = config_.touchdown_height_m.value_or(aircraft->wheel_contact_height_m);
     const double stall = config_.stall_speed_mps.value_or(aircraft->stall_speed_mps);
@@ -110,18 +88,7 @@ class OpenLoopAnalysis final : public Analysis {
     const OpenLoopResult result = SimulateOpenLoop(*context.model, config, context.cancel);
     const OpenLoopSummary& s = result.summary;
     if (s.cancelled) return AnalysisOutcome::Cancelled();
-    row.Set(end_event_, static_cast<double>(static_cast<int>(s.end_event)));
-    row.Set(end_time_, s.end_time_s);
-    row.Set(min_height_, s.min_height_m);
-    row.Set(min_height_time_, s.min_height_time_s);
-    row.Set(max_pitch_rate_, s.max_abs_pitch_rate_radps);
-    row.Set(final_height_, s.final_height_m);
-    row.Set(final_speed_, s.final_speed_mps);
-    row.Set(final_state_, s.final_state[kDeltaW]);
-    row.Set(final_pitch_, s.final_state[kDeltaTheta]);
-    row.Set(final_q_, s.final_state[kPitchRate]);
-    row.Set(steps_, static_cast<double>(s.steps));
-    row.Set(rhs_calls_, static_cast<double>(s.rhs_calls));
+    summary_.Fill(s, row);
     if (samples_ > 0) StoreSeries(result.series, row);
     if (s.end_event == OpenLoopEndEvent::kDiverged) {
       return AnalysisOutcome::Failed(s.message.empty() ? "diverged" : s.message);
@@ -152,9 +119,7 @@ class OpenLoopAnalysis final : public Analysis {
   ParameterId speed_ = RequireParameter("speed_mps");
   ParameterId amplitude_ = RequireParameter("pulse_amplitude_deg");
   ParameterId duration_ = RequireParameter("pulse_duration_s");
-  int end_event_ = 0, end_time_ = 0, min_height_ = 0, min_height_time_ = 0, max_pitch_rate_ = 0;
-  int final_height_ = 0, final_speed_ = 0, final_state_ = 0, final_pitch_ = 0, final_q_ = 0, steps_ = 0,
-      rhs_calls_ = 0;
+  DescribedColumns<OpenLoopSummary> summary_;
   int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0,
       series_elevator_ = 0;
   int samples_ = 0;
@@ -164,46 +129,17 @@ class OpenLoopAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys({"input", "input_start_s", "duration_s", "integrator", "step_s",
-                              "relative_tolerance", "absolute_tolerance", "max_step_s", "honour_breakpoints",
-                              "freeze_derivatives"});
   OpenLoopConfig config;
   config.duration_s = kDefaultDuration_s;
-  if (const auto input = settings.OptionalString("input")) {
-    const auto kind = ParseElevatorInputKind(*input);
-    if (!kind) settings.Fail("input", "\"" + *input + "\"", "expected pulse, step, doublet or none");
-    config.elevator.kind = *kind;
-  }
-  // Every number against the limits table (docs/limits.md), with the study's file and line.
-  if (const auto start = settings.OptionalLimitedNumber("input_start_s", "open_loop.input_start_s")) {
-    config.elevator.start_s = *start;
-  }
-  if (const auto duration = settings.OptionalLimitedNumber("duration_s", "open_loop.duration_s")) {
-    config.duration_s = *duration;
-  }
-  if (const auto integrator = settings.OptionalString("integrator")) {
-    const auto kind = ParseIntegratorKind(*integrator);
-    if (!kind) settings.Fail("integrator", "\"" + *integrator + "\"", "expected rk4 or dopri5");
-    config.integrator.kind = *kind;
-  }
-  if (const auto step = settings.OptionalLimitedNumber("step_s", "open_loop.step_s")) config.integrator.step_s = *step;
-  if (const auto rtol = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
-    config.integrator.relative_tolerance = *rtol;
-  }
-  if (const auto atol = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
-    config.integrator.absolute_tolerance = *atol;
-  }
-  if (const auto max_step = settings.OptionalLimitedNumber("max_step_s", "open_loop.max_step_s")) {
-    config.integrator.max_step_s = *max_step;
-  }
-  config.integrator.honour_breakpoints = settings.OptionalBool("honour_breakpoints").value_or(true);
-  config.freeze_derivatives = settings.OptionalBool("freeze_derivatives").value_or(false);
+  // Every key of OpenLoopConfig::Describe, each number against the limits table (docs/limits.md).
+  ReadFields(settings, config);
   try {
     ValidateIntegratorOptions(config.integrator, settings.source());
     // Bounded work: refused here, before the first run, not as a failed run later.
     const bool rk4 = config.integrator.kind == IntegratorKind::kRk4;
-    CheckStepCount(config.duration_s, rk4 ? config.integrator.step_s : config.integrator.max_step_s,
-                   settings.source(), "duration_s", rk4 ? "step_s" : "max_step_s");
+    const double& step_s = rk4 ? config.integrator.step_s : config.integrator.max_step_s;
+    CheckStepCount(config.duration_s, step_s, settings.source(), std::string(KeyOf(config, &config.duration_s)),
+                   std::string(KeyOf(config, &step_s)));
   } catch (const InputError& e) {
     settings.Fail(e.key(), e.value(), e.expected());
   }

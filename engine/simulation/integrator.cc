@@ -6,30 +6,6 @@
 
 namespace gesweep {
 
-std::string_view ToString(IntegratorKind kind) { return kind == IntegratorKind::kRk4 ? "rk4" : "dopri5"; }
-
-std::optional<IntegratorKind> ParseIntegratorKind(std::string_view text) {
-  if (text == "rk4") return IntegratorKind::kRk4;
-  if (text == "dopri5") return IntegratorKind::kDopri5;
-  return std::nullopt;
-}
-
-std::string_view ToString(IntegrationStatus status) {
-  switch (status) {
-    case IntegrationStatus::kReachedEnd:
-      return "reached_end";
-    case IntegrationStatus::kStoppedByEvent:
-      return "stopped_by_event";
-    case IntegrationStatus::kNonFinite:
-      return "non_finite";
-    case IntegrationStatus::kStepSizeUnderflow:
-      return "step_size_underflow";
-    case IntegrationStatus::kCancelled:
-      return "cancelled";
-  }
-  return "unknown";
-}
-
 namespace {
 
 std::string Text(double value) { return ShortNumber(value); }

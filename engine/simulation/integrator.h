@@ -72,6 +72,9 @@
 
 #include <Eigen/Core>
 
+#include "engine/common/describe.h"
+#include "engine/common/enum_names.h"
+
 namespace gesweep {
 
 /// A state of N components. std::array keeps it on the stack and lets Boost.Odeint use its
@@ -96,10 +99,18 @@ enum class IntegratorKind {
   kDopri5,  ///< Dormand–Prince 5(4), error-controlled step, 4th-order dense output (Boost.Odeint)
 };
 
-/// "rk4" / "dopri5".
-std::string_view ToString(IntegratorKind kind);
-/// Parses "rk4" / "dopri5"; nullopt otherwise.
-std::optional<IntegratorKind> ParseIntegratorKind(std::string_view text);
+/// Names in study files, flags and output: "rk4", "dopri5" (ToString, ParseEnum, EnumChoices).
+template <>
+struct EnumNames<IntegratorKind> {
+  static constexpr EnumName<IntegratorKind> kTable[] = {{IntegratorKind::kRk4, "rk4"},
+                                                        {IntegratorKind::kDopri5, "dopri5"}};
+};
+
+/// The limits-table entries (input_limits.h) of the integrator's steps for one analysis.
+struct IntegratorLimitNames {
+  std::string_view step_s = "open_loop.step_s";
+  std::string_view max_step_s = "open_loop.max_step_s";
+};
 
 /// Options of Integrate. Defaults: the paper's RK4 at 0.015 s with breakpoints honoured.
 struct IntegratorOptions {
@@ -120,6 +131,19 @@ struct IntegratorOptions {
   double event_time_tolerance_s = 1e-10;
   /// Not null: checked before every step; the run ends with kCancelled once it holds true.
   const std::atomic<bool>* cancel = nullptr;
+
+  /// The settings a person gives (describe.h); output_interval_s, event_time_tolerance_s and cancel
+  /// are set by the caller. `limits` names the ranges of the analysis the options belong to.
+  template <class V>
+  void Describe(V& v, const IntegratorLimitNames& limits = {}) {
+    v(Field("integrator", &kind).Doc("Integration method: rk4 (fixed step, the paper's) or dopri5 (adaptive)"));
+    v(Field("step_s", &step_s).Unit("s").Limit(limits.step_s).Doc("RK4 step (dopri5: first trial step), s"));
+    v(Field("relative_tolerance", &relative_tolerance).Limit("relative_tolerance").Doc("dopri5 relative tolerance"));
+    v(Field("absolute_tolerance", &absolute_tolerance).Limit("absolute_tolerance").Doc("dopri5 absolute tolerance"));
+    v(Field("max_step_s", &max_step_s).Unit("s").Limit(limits.max_step_s).Doc("dopri5 largest step, s; 0: no limit"));
+    v(Field("honour_breakpoints", &honour_breakpoints)
+          .Doc("true: no step straddles an input jump; false: steps may (the paper's plain fixed-step RK4)"));
+  }
 };
 
 /// Throws InputError(source, <field name>, value, expectation) when an option is out of range.
@@ -142,7 +166,15 @@ enum class IntegrationStatus {
 };
 
 /// "reached_end" / "stopped_by_event" / "non_finite" / "step_size_underflow" / "cancelled".
-std::string_view ToString(IntegrationStatus status);
+template <>
+struct EnumNames<IntegrationStatus> {
+  static constexpr EnumName<IntegrationStatus> kTable[] = {
+      {IntegrationStatus::kReachedEnd, "reached_end"},
+      {IntegrationStatus::kStoppedByEvent, "stopped_by_event"},
+      {IntegrationStatus::kNonFinite, "non_finite"},
+      {IntegrationStatus::kStepSizeUnderflow, "step_size_underflow"},
+      {IntegrationStatus::kCancelled, "cancelled"}};
+};
 
 /// What Integrate returns. Counts include everything: `rhs_calls` counts every Derivative call
 /// (RK4: 1 at the start, 4 per step, 1 per breakpoint or restart; dopri5: 1 at the start, 6 per

@@ -9,42 +9,6 @@
 
 namespace gesweep {
 
-std::string_view ToString(ElevatorInputKind kind) {
-  switch (kind) {
-    case ElevatorInputKind::kNone:
-      return "none";
-    case ElevatorInputKind::kPulse:
-      return "pulse";
-    case ElevatorInputKind::kStep:
-      return "step";
-    case ElevatorInputKind::kDoublet:
-      return "doublet";
-  }
-  return "unknown";
-}
-
-std::optional<ElevatorInputKind> ParseElevatorInputKind(std::string_view text) {
-  if (text == "none") return ElevatorInputKind::kNone;
-  if (text == "pulse") return ElevatorInputKind::kPulse;
-  if (text == "step") return ElevatorInputKind::kStep;
-  if (text == "doublet") return ElevatorInputKind::kDoublet;
-  return std::nullopt;
-}
-
-std::string_view ToString(OpenLoopEndEvent event) {
-  switch (event) {
-    case OpenLoopEndEvent::kTouchdown:
-      return "touchdown";
-    case OpenLoopEndEvent::kStall:
-      return "stall";
-    case OpenLoopEndEvent::kTimeLimit:
-      return "time_limit";
-    case OpenLoopEndEvent::kDiverged:
-      return "diverged";
-  }
-  return "unknown";
-}
-
 ElevatorSchedule MakeElevatorSchedule(const ElevatorInput& input) {
   const double a = input.amplitude_rad;
   const double t0 = input.start_s;
@@ -59,7 +23,7 @@ ElevatorSchedule MakeElevatorSchedule(const ElevatorInput& input) {
     case ElevatorInputKind::kDoublet:
       return {{t0, t0 + d, t0 + 2.0 * d}, {0.0, a, -a, 0.0}};
   }
-  return {{}, {0.0}};
+  GESWEEP_UNREACHABLE();
 }
 
 namespace {
@@ -252,32 +216,27 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
 }  // namespace
 
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source) {
-  auto require = [&source](bool ok, const char* key, double value, const char* expected) {
-    if (!ok) throw InputError(source, key, Text(value), expected);
+  auto require = [&source](bool ok, std::string_view key, double value, const char* expected) {
+    if (!ok) throw InputError(source, std::string(key), Text(value), expected);
   };
   const double touchdown_m = TouchdownHeight(model, config);
   const double stall_mps = StallSpeed(model, config);
   require(std::isfinite(touchdown_m) && touchdown_m >= 0.0, "touchdown_height_m", touchdown_m,
           "expected a finite height >= 0 m");
   require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps, "expected a finite speed >= 0 m/s");
-  CheckInputLimit("height_m", config.start_height_m, source, "start_height_m");
-  CheckInputLimit("open_loop.initial_delta_h_m", config.initial_offsets.delta_height_m, source,
-                  "initial_offsets.delta_height_m");
+  // Every described number against its range, named by its key (OpenLoopConfig::Describe).
+  CheckFieldRanges(config, source);
   const double start_m = config.start_height_m + config.initial_offsets.delta_height_m;
   if (!(start_m > touchdown_m)) {  // the message is built only on failure: this runs once per sweep run
-    throw InputError(source, "start_height_m", Text(start_m),
+    throw InputError(source, std::string(KeyOf(config, &config.start_height_m)), Text(start_m),
                      "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
                          " m; a run cannot start on or below the ground");
   }
-  CheckInputLimit("speed_mps", config.reference_speed_mps, source, "reference_speed_mps");
-  CheckInputLimit("open_loop.initial_delta_u_mps", config.initial_offsets.delta_speed_mps, source,
-                  "initial_offsets.delta_speed_mps");
   const double start_speed = config.reference_speed_mps + config.initial_offsets.delta_speed_mps;
   if (!(start_speed > stall_mps)) {
-    throw InputError(source, "reference_speed_mps", Text(start_speed),
+    throw InputError(source, std::string(KeyOf(config, &config.reference_speed_mps)), Text(start_speed),
                      "expected a start speed above the stall speed " + Text(stall_mps) + " m/s");
   }
-  CheckInputLimit("open_loop.duration_s", config.duration_s, source, "duration_s");
   require(std::isfinite(config.series_interval_s) && config.series_interval_s >= 0.0, "series_interval_s",
           config.series_interval_s, "expected a finite interval >= 0 s (0: summary only)");
   if (config.series_interval_s > 0.0) {
@@ -286,32 +245,21 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
             config.series_interval_s, "expected at most 1e8 samples per run");
   }
   const ElevatorInput& input = config.elevator;
-  require(std::isfinite(input.amplitude_rad), "elevator.amplitude_rad", input.amplitude_rad, "expected a finite angle");
-  CheckInputLimit("open_loop.input_start_s", input.start_s, source, "elevator.start_s");
   if (input.kind == ElevatorInputKind::kPulse || input.kind == ElevatorInputKind::kDoublet) {
-    require(std::isfinite(input.duration_s) && input.duration_s > 0.0, "elevator.duration_s", input.duration_s,
-            "expected a finite duration > 0 s");
-    CheckInputLimit("pulse_duration_s", input.duration_s, source, "elevator.duration_s");
-  }
-  const InitialOffsets& o = config.initial_offsets;
-  CheckInputLimit("open_loop.initial_delta_w_mps", o.delta_normal_velocity_mps, source,
-                  "initial_offsets.delta_normal_velocity_mps");
-  for (const auto& [key, value] : {std::pair{"initial_offsets.pitch_rate_radps", o.pitch_rate_radps},
-                                   {"initial_offsets.delta_pitch_rad", o.delta_pitch_rad}}) {
-    require(std::isfinite(value), key, value, "expected a finite number");
+    if (!(input.duration_s > 0.0)) {
+      throw InputError(source, std::string(KeyOf(config, &input.duration_s)), Text(input.duration_s),
+                       "expected a finite duration > 0 s");
+    }
   }
   ValidateIntegratorOptions(config.integrator, source);
   const IntegratorOptions& integrator = config.integrator;
-  CheckInputLimit("open_loop.step_s", integrator.step_s, source, "step_s");
-  if (integrator.kind == IntegratorKind::kDopri5) {
-    CheckInputLimit("relative_tolerance", integrator.relative_tolerance, source, "relative_tolerance");
-    CheckInputLimit("absolute_tolerance", integrator.absolute_tolerance, source, "absolute_tolerance");
-    CheckInputLimit("open_loop.max_step_s", integrator.max_step_s, source, "max_step_s");
-    // An adaptive run without a largest step has no step count known before it runs; its steps are
-    // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
-    CheckStepCount(config.duration_s, integrator.max_step_s, source, "duration_s", "max_step_s");
-  } else {
-    CheckStepCount(config.duration_s, integrator.step_s, source, "duration_s", "step_s");
+  // An adaptive run without a largest step has no step count known before it runs; its steps are
+  // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
+  const bool rk4 = integrator.kind == IntegratorKind::kRk4;
+  const double& step_s = rk4 ? integrator.step_s : integrator.max_step_s;
+  if (step_s > 0.0 && config.duration_s / step_s > kMaximumStepsPerRun) {  // the keys are looked up on failure only
+    CheckStepCount(config.duration_s, step_s, source, std::string(KeyOf(config, &config.duration_s)),
+                   std::string(KeyOf(config, &step_s)));
   }
 }
 

@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/common/describe.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/simulation/integrator.h"
 
@@ -24,10 +25,14 @@ enum class ElevatorInputKind {
   kDoublet,  ///< +amplitude on [start, start + duration), −amplitude on [start + duration, start + 2·duration)
 };
 
-/// "none" / "pulse" / "step" / "doublet".
-std::string_view ToString(ElevatorInputKind kind);
-/// Parses the names above; nullopt otherwise.
-std::optional<ElevatorInputKind> ParseElevatorInputKind(std::string_view text);
+/// Names in study files, flags and output: "pulse", "step", "doublet", "none".
+template <>
+struct EnumNames<ElevatorInputKind> {
+  static constexpr EnumName<ElevatorInputKind> kTable[] = {{ElevatorInputKind::kPulse, "pulse"},
+                                                           {ElevatorInputKind::kStep, "step"},
+                                                           {ElevatorInputKind::kDoublet, "doublet"},
+                                                           {ElevatorInputKind::kNone, "none"}};
+};
 
 /// A piecewise-constant elevator input. Its jumps are the integrator's breakpoints.
 struct ElevatorInput {
@@ -76,6 +81,41 @@ struct OpenLoopConfig {
   bool generic_derivative_path = false;
   std::optional<double> stall_speed_mps;     ///< default: the aircraft's stall speed, m/s
   std::optional<double> touchdown_height_m;  ///< default: the aircraft's wheel-contact height, m
+
+  /// The settings a person gives (describe.h): [analyses.open_loop] and the flags of `gesweep
+  /// simulate`. The start condition, the input's amplitude and length are a sweep's run parameters
+  /// of the same names, so they are flags only; so are the initial offsets.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("height_m", &start_height_m).Unit("m").Limit("height_m").CommandLineOnly()
+          .Doc("Start height H0 of the mean chord above ground, m; must be above the aircraft's wheel-contact "
+               "height: starts on or below it are refused"));
+    v(Field("speed_mps", &reference_speed_mps).Unit("m/s").Limit("speed_mps").CommandLineOnly()
+          .Doc("Reference speed u0, m/s; must be above the stall speed"));
+    v(Field("input", &elevator.kind).Doc("Elevator input: pulse, step, doublet or none"));
+    v(Field("pulse_amplitude_deg", &elevator.amplitude_rad).Unit("deg").Scale(kRadiansPerDegree)
+          .Limit("pulse_amplitude_deg").CommandLineOnly()
+          .Doc("Input amplitude, deg, positive trailing edge down (nose down)"));
+    v(Field("pulse_duration_s", &elevator.duration_s).Unit("s").Limit("pulse_duration_s").CommandLineOnly()
+          .Doc("Pulse length (doublet: each half), s"));
+    v(Field("input_start_s", &elevator.start_s).Unit("s").Limit("open_loop.input_start_s")
+          .Doc("Time of the input's first jump, s"));
+    v(Field("duration_s", &duration_s).Unit("s").Limit("open_loop.duration_s").Doc("Time limit of each run, s"));
+    integrator.Describe(v);
+    v(Field("freeze_derivatives", &freeze_derivatives)
+          .Doc("Freeze A and B at the start condition (the classical linear response) instead of re-evaluating "
+               "them (docs/model.md section 7)"));
+    v(Field("initial_delta_u_mps", &initial_offsets.delta_speed_mps).Unit("m/s")
+          .Limit("open_loop.initial_delta_u_mps").CommandLineOnly().Doc("Initial offset of u, m/s"));
+    v(Field("initial_delta_w_mps", &initial_offsets.delta_normal_velocity_mps).Unit("m/s")
+          .Limit("open_loop.initial_delta_w_mps").CommandLineOnly().Doc("Initial offset of w (positive down), m/s"));
+    v(Field("initial_pitch_rate_degps", &initial_offsets.pitch_rate_radps).Unit("deg/s").Scale(kRadiansPerDegree)
+          .Limit("open_loop.initial_pitch_rate_degps").CommandLineOnly().Doc("Initial pitch rate, deg/s"));
+    v(Field("initial_pitch_deg", &initial_offsets.delta_pitch_rad).Unit("deg").Scale(kRadiansPerDegree)
+          .Limit("open_loop.initial_pitch_deg").CommandLineOnly().Doc("Initial offset of the pitch angle, deg"));
+    v(Field("initial_delta_h_m", &initial_offsets.delta_height_m).Unit("m").Limit("open_loop.initial_delta_h_m")
+          .CommandLineOnly().Doc("Initial offset of H, m (the derivatives see H0 + offset)"));
+  }
 };
 
 /// Throws InputError(source, <field>, value, expectation) when a field is out of range: the limits
@@ -93,8 +133,21 @@ enum class OpenLoopEndEvent {
   kDiverged,   ///< the state became non-finite (or the adaptive step underflowed)
 };
 
-/// "touchdown" / "stall" / "time_limit" / "diverged".
-std::string_view ToString(OpenLoopEndEvent event);
+/// "touchdown" / "stall" / "time_limit" / "diverged", in code order (the archive's levels).
+template <>
+struct EnumNames<OpenLoopEndEvent> {
+  static constexpr EnumName<OpenLoopEndEvent> kTable[] = {{OpenLoopEndEvent::kTouchdown, "touchdown"},
+                                                          {OpenLoopEndEvent::kStall, "stall"},
+                                                          {OpenLoopEndEvent::kTimeLimit, "time_limit"},
+                                                          {OpenLoopEndEvent::kDiverged, "diverged"}};
+};
+
+/// The components of Eq. (1)'s state x = [Δu, Δw, q, Δθ, ΔH] as result columns.
+inline constexpr FieldComponent kStateComponents[] = {{"delta_u_mps", "m/s", "Delta u"},
+                                                      {"delta_w_mps", "m/s", "Delta w"},
+                                                      {"pitch_rate_radps", "rad/s", "q"},
+                                                      {"delta_theta_rad", "rad", "Delta theta"},
+                                                      {"delta_h_m", "m", "Delta H"}};
 
 /// The summary of one run. The state is x = [Δu m/s, Δw m/s, q rad/s, Δθ rad, ΔH m] (docs/model.md §1).
 struct OpenLoopSummary {
@@ -113,6 +166,27 @@ struct OpenLoopSummary {
   /// The run was stopped by its cancellation flag before it ended: the fields above describe the
   /// part flown (end_time_s is where it stopped) and end_event means nothing.
   bool cancelled = false;
+
+  /// The final state components the archive stores (Δu and ΔH are in final_speed_mps, final_height_m).
+  static constexpr int kStoredFinalState[] = {kDeltaW, kDeltaTheta, kPitchRate};
+
+  /// The results (describe.h): archive columns results/open_loop/<key>, simulate's CSV and JSON.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("end_event", &end_event).Stored(StoredAs::kInt8).Doc("How the run ended (levels attribute, docs/model.md §7)"));
+    v(Field("end_time_s", &end_time_s).Unit("s").Doc("Time of the end event"));
+    v(Field("min_height_m", &min_height_m).Unit("m").Doc("Lowest height H reached"));
+    v(Field("min_height_time_s", &min_height_time_s).Unit("s").Doc("When the lowest height was reached"));
+    v(Field("max_abs_pitch_rate_radps", &max_abs_pitch_rate_radps).Unit("rad/s").Doc("Largest |q|"));
+    v(Field("final_height_m", &final_height_m).Unit("m").Doc("H at the end of the run"));
+    v(Field("final_speed_mps", &final_speed_mps).Unit("m/s").Doc("u at the end of the run"));
+    v(Field("final_state", &final_state).Components(kStateComponents, "final_", kStoredFinalState)
+          .Doc("at the end of the run"));
+    v(Field("steps", &steps).Stored(StoredAs::kInt32).Doc("Accepted integration steps"));
+    v(Field("rejected_steps", &rejected_steps).NotStored().Doc("Rejected dopri5 trial steps"));
+    v(Field("rhs_calls", &rhs_calls).Stored(StoredAs::kInt32).Doc("Right-hand-side evaluations"));
+    v(Field("message", &message).NotStored().Doc("Empty, or what went wrong numerically"));
+  }
 };
 
 /// The time series, one entry per sample (every series_interval_s and at the end), SI units.

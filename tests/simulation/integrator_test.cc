@@ -319,8 +319,8 @@ TEST(OptionsTest, ValidationNamesTheField) {
   options.output_interval_s = std::nan("");
   EXPECT_THROW(ValidateIntegratorOptions(options, "test"), InputError);
   EXPECT_NO_THROW(ValidateIntegratorOptions(IntegratorOptions{}, "test"));
-  EXPECT_EQ(ParseIntegratorKind("dopri5"), IntegratorKind::kDopri5);
-  EXPECT_EQ(ParseIntegratorKind("rk45"), std::nullopt);
+  EXPECT_EQ(ParseEnum<IntegratorKind>("dopri5"), IntegratorKind::kDopri5);
+  EXPECT_EQ(ParseEnum<IntegratorKind>("rk45"), std::nullopt);
 }
 
 // Sets the cancellation flag from inside the run, after a given number of accepted steps.

@@ -144,8 +144,8 @@ TEST(ElevatorScheduleTest, PulseStepAndDoubletBreakpoints) {
   const ElevatorSchedule doublet = MakeElevatorSchedule({ElevatorInputKind::kDoublet, 0.1, 1.0, 0.2});
   EXPECT_EQ(doublet.breakpoints_s, (std::vector<double>{1.0, 1.2, 1.4}));
   EXPECT_EQ(doublet.elevator_rad, (std::vector<double>{0.0, 0.1, -0.1, 0.0}));
-  EXPECT_EQ(ParseElevatorInputKind("doublet"), ElevatorInputKind::kDoublet);
-  EXPECT_EQ(ParseElevatorInputKind("ramp"), std::nullopt);
+  EXPECT_EQ(ParseEnum<ElevatorInputKind>("doublet"), ElevatorInputKind::kDoublet);
+  EXPECT_EQ(ParseEnum<ElevatorInputKind>("ramp"), std::nullopt);
 }
 
 TEST(OpenLoopValidationTest, RefusesStartsOnTheGroundAndBadNumbers) {
@@ -159,14 +159,15 @@ TEST(OpenLoopValidationTest, RefusesStartsOnTheGroundAndBadNumbers) {
     return "";
   };
   EXPECT_EQ(key_of(PaperConfig(2.0)), "");
-  EXPECT_EQ(key_of(PaperConfig(0.788)), "start_height_m");  // on the wheels
-  EXPECT_EQ(key_of(PaperConfig(0.5)), "start_height_m");    // below them
+  // Messages name the fields by their keys (OpenLoopConfig::Describe), as study files and flags do.
+  EXPECT_EQ(key_of(PaperConfig(0.788)), "height_m");  // on the wheels
+  EXPECT_EQ(key_of(PaperConfig(0.5)), "height_m");    // below them
   OpenLoopConfig config = PaperConfig(2.0);
   config.reference_speed_mps = 20.0;  // below the stall speed
-  EXPECT_EQ(key_of(config), "reference_speed_mps");
+  EXPECT_EQ(key_of(config), "speed_mps");
   config = PaperConfig(2.0);
   config.reference_speed_mps = -1.0;
-  EXPECT_EQ(key_of(config), "reference_speed_mps");
+  EXPECT_EQ(key_of(config), "speed_mps");
   config = PaperConfig(2.0);
   config.duration_s = 0.0;
   EXPECT_EQ(key_of(config), "duration_s");
@@ -175,10 +176,10 @@ TEST(OpenLoopValidationTest, RefusesStartsOnTheGroundAndBadNumbers) {
   EXPECT_EQ(key_of(config), "step_s");
   config = PaperConfig(2.0);
   config.elevator.duration_s = 0.0;
-  EXPECT_EQ(key_of(config), "elevator.duration_s");
+  EXPECT_EQ(key_of(config), "pulse_duration_s");
   config = PaperConfig(2.0);
   config.initial_offsets.pitch_rate_radps = std::nan("");
-  EXPECT_EQ(key_of(config), "initial_offsets.pitch_rate_radps");
+  EXPECT_EQ(key_of(config), "initial_pitch_rate_degps");
   EXPECT_THROW(SimulateOpenLoop(model, PaperConfig(0.5)), InputError);
 }
 

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <iterator>
+#include <memory>
 #include <set>
 
 #include "engine/common/input_limits.h"
@@ -134,6 +136,99 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
   ExpectSameBounds(schema["properties"]["output"]["properties"]["output_dt_s"], RequireInputLimit("output_dt_s"),
                    "output.output_dt_s");
   EXPECT_GT(checked, 40);
+}
+
+// The analyses whose settings and results are described once (engine/common/describe.h): their part of
+// the schema and of schemas/archive.md is checked against the description.
+const std::vector<std::string> kDescribedAnalyses = {"open_loop"};
+
+std::unique_ptr<Analysis> MakeAnalysis(const std::string& name) {
+  const toml::table empty;
+  for (const auto& entry : AnalysisRegistry()) {
+    if (entry.name == name) return entry.factory(TomlSection(empty, "test", "analyses." + name), nullptr);
+  }
+  ADD_FAILURE() << name << " is not registered";
+  return nullptr;
+}
+
+// Each described setting is a schema property of the same kind, range and default, and the schema
+// has no other property.
+TEST(StudySchema, DescribedSettingsAreTheSchemaProperties) {
+  const nlohmann::json schema = Schema();
+  for (const std::string& name : kDescribedAnalyses) {
+    const auto analysis = MakeAnalysis(name);
+    ASSERT_TRUE(analysis);
+    const auto& properties = schema["properties"]["analyses"]["properties"][name]["properties"];
+    std::set<std::string> described, documented;
+    for (const FieldRecord& field : analysis->SettingsFields()) {
+      if (!InScope(field.attributes, true) || field.kind == FieldKind::kArray) continue;
+      const std::string key(field.attributes.key);
+      const std::string where = "analyses." + name + "." + key;
+      described.insert(key);
+      ASSERT_TRUE(properties.contains(key)) << where << " is not in schemas/study.schema.json";
+      const auto& entry = properties[key];
+      EXPECT_FALSE(entry.value("description", "").empty()) << where;
+      switch (field.kind) {
+        case FieldKind::kNumber:
+          EXPECT_EQ(entry["type"], "number") << where;
+          EXPECT_EQ(entry["default"].get<double>(), *field.number) << where;
+          if (!field.attributes.limit.empty()) ExpectSameBounds(entry, RequireInputLimit(field.attributes.limit), where);
+          break;
+        case FieldKind::kInteger:
+          EXPECT_EQ(entry["type"], "integer") << where;
+          EXPECT_EQ(entry["default"].get<double>(), *field.number) << where;
+          break;
+        case FieldKind::kBoolean:
+          EXPECT_EQ(entry["type"], "boolean") << where;
+          EXPECT_EQ(entry["default"].get<bool>(), field.default_text == "true") << where;
+          break;
+        case FieldKind::kChoice:
+          EXPECT_EQ(entry["enum"], nlohmann::json(field.choices)) << where;
+          EXPECT_EQ(entry["default"], field.default_text) << where;
+          break;
+        case FieldKind::kText:
+          EXPECT_EQ(entry["type"], "string") << where;
+          break;
+        case FieldKind::kArray:
+          break;
+      }
+    }
+    for (const auto& [key, entry] : properties.items()) documented.insert(key);
+    EXPECT_EQ(documented, described) << "analyses." << name;
+  }
+}
+
+// schemas/archive.md's paragraph of a described analysis names its result columns in order, each
+// integer code column followed by its levels.
+TEST(ArchiveDocument, NamesTheDescribedColumnsInOrder) {
+  std::ifstream in(std::string(GESWEEP_SOURCE_DIR) + "/schemas/archive.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const std::string& name : kDescribedAnalyses) {
+    const auto analysis = MakeAnalysis(name);
+    ASSERT_TRUE(analysis);
+    OutputSchema schema;
+    analysis->DeclareOutputs(schema, StorageOptions{});
+    std::vector<std::string> expected;
+    const std::string base = "results/" + name + "/";
+    for (const OutputColumn& column : schema.columns) {
+      if (column.path.rfind(base, 0) != 0) continue;
+      expected.push_back(column.path.substr(base.size()));
+      expected.insert(expected.end(), column.levels.begin(), column.levels.end());
+    }
+    const auto start = text.find("`" + name + "` —");
+    ASSERT_NE(start, std::string::npos) << "schemas/archive.md has no paragraph on " << name;
+    const auto end = text.find("\n\n", start);
+    const std::string paragraph = text.substr(start, end - start);
+    const auto body = paragraph.find(":\n");
+    ASSERT_NE(body, std::string::npos) << name;
+    std::vector<std::string> documented;
+    for (std::size_t at = paragraph.find('`', body); at != std::string::npos; at = paragraph.find('`', at)) {
+      const auto close = paragraph.find('`', at + 1);
+      documented.push_back(paragraph.substr(at + 1, close - at - 1));
+      at = close + 1;
+    }
+    EXPECT_EQ(documented, expected) << "schemas/archive.md, " << name;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,157 @@
+#pragma once
+/// The command-line visitor of a described struct (engine/common/describe.h): one flag per field.
+///
+/// The mapping is mechanical: key `step_s` is flag `--step-s` (underscores become hyphens); a
+/// boolean that defaults to false is a switch `--<key>`, one that defaults to true is `--no-<key>`;
+/// an enum field takes one of its names. A number flag is checked against the field's limits-table
+/// range as it is parsed (AddLimitedOption), in the key's unit. The help text is the field's
+/// description and its default. A command may keep older names of a flag as hidden aliases
+/// (FlagAlias); messages name the flag the person typed.
+
+#include <CLI/CLI.hpp>
+
+#include <deque>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/cli/model_flags.h"
+#include "engine/common/describe.h"
+#include "engine/common/errors.h"
+
+namespace gesweep::cli {
+
+/// The flag of a key: "--" + key with '_' replaced by '-'.
+std::string FlagName(std::string_view key);
+
+/// An older flag name a command keeps for a field: `--dt-s` for step_s. For a boolean field the
+/// alias is a switch with the same effect as the field's own (e.g. `--no-breakpoints`).
+struct FlagAlias {
+  std::string_view key;
+  std::string_view flag;
+};
+
+/// The flags of the fields of one or more described objects of a command.
+class DescribedFlags {
+ public:
+  explicit DescribedFlags(std::vector<FlagAlias> aliases = {}) : aliases_(std::move(aliases)) {}
+  DescribedFlags(const DescribedFlags&) = delete;
+  DescribedFlags& operator=(const DescribedFlags&) = delete;
+
+  /// Adds a flag per command-line field of `object` (scope kEverywhere or kCommandLineOnly); the
+  /// object's current values are the defaults. Keys in `required` are required flags. `object` must
+  /// outlive Apply().
+  template <class T>
+  void Add(CLI::App& app, T& object, const std::vector<std::string_view>& required = {});
+
+  /// After parsing: writes every flag given into its field (in the struct's unit).
+  void Apply() const;
+
+  /// The flag the person typed for `key` (an alias when it was given so), else FlagName(key); `key`
+  /// itself when no flag has that key.
+  std::string FlagOf(std::string_view key) const;
+
+  /// Throws `error` again (source "command line") with its key and the keys inside its expectation
+  /// ("duration_s = 30 s / step_s = ...") written as the flags the person typed.
+  [[noreturn]] void Rethrow(const InputError& error) const;
+
+ private:
+  struct Entry {
+    std::string key;
+    std::vector<CLI::Option*> options;  // its own flag first, then its aliases
+    std::vector<std::string> names;     // their names (CLI11 gives a hidden option none)
+  };
+  Entry& NewEntry(std::string_view key);
+  std::vector<std::string> AliasesOf(std::string_view key) const;
+  CLI::Option* AddNumber(CLI::App& app, const std::string& flag, double& slot, const FieldAttributes& attributes,
+                         const std::string& help);
+  CLI::Option* AddChoice(CLI::App& app, const std::string& flag, std::string& slot, const std::string& help,
+                         std::function<bool(const std::string&)> known, const std::string& choices);
+  static std::string Help(const FieldAttributes& attributes, const std::string& default_text, bool required);
+
+  std::vector<FlagAlias> aliases_;
+  std::deque<Entry> entries_;
+  std::deque<double> numbers_;
+  std::deque<std::string> texts_;
+  std::deque<bool> switches_;
+  std::vector<std::function<void()>> appliers_;
+
+  // Add's visitor.
+  struct Adder {
+    DescribedFlags* self;
+    CLI::App* app;
+    const std::vector<std::string_view>* required;
+    template <class U>
+    void operator()(const Field<U>& field) {
+      const FieldAttributes& a = field.attributes();
+      if constexpr (DoubleArray<U> || std::same_as<U, std::string> || IntegerValue<U>) {
+        return;  // results, never settings
+      } else {
+        Visit(field, a);
+      }
+    }
+    template <class U>
+    void Visit(const Field<U>& field, const FieldAttributes& a) {
+      if (!InScope(a, false)) return;
+      const bool is_required = std::find(required->begin(), required->end(), a.key) != required->end();
+      Entry& entry = self->NewEntry(a.key);
+      U* value = field.value();
+      if constexpr (std::same_as<U, bool>) {
+        // A switch that sets the field to the opposite of its default.
+        const bool default_value = *value;
+        bool& given = self->switches_.emplace_back(false);
+        const std::string flag = (default_value ? "--no-" : "--") + FlagName(a.key).substr(2);
+        const std::string help = default_value ? "Sets " + std::string(a.key) + " false; " + std::string(a.doc)
+                                               : std::string(a.doc);
+        entry.options.push_back(app->add_flag(flag, given, help));
+        entry.names.push_back(flag);
+        for (const std::string& alias : self->AliasesOf(a.key)) {
+          entry.options.push_back(app->add_flag(alias, given, "same as " + flag)->group(""));
+          entry.names.push_back(alias);
+        }
+        self->appliers_.push_back([value, default_value, &given] {
+          if (given) *value = !default_value;
+        });
+      } else if constexpr (NamedEnum<U>) {
+        std::string& slot = self->texts_.emplace_back(ToString(*value));
+        const std::string help = Help(a, slot, is_required);
+        auto known = [](const std::string& text) { return ParseEnum<U>(text).has_value(); };
+        entry.options.push_back(self->AddChoice(*app, FlagName(a.key), slot, help, known, EnumChoices<U>()));
+        entry.names.push_back(FlagName(a.key));
+        for (const std::string& alias : self->AliasesOf(a.key)) {
+          entry.options.push_back(self->AddChoice(*app, alias, slot, help, known, EnumChoices<U>())->group(""));
+          entry.names.push_back(alias);
+        }
+        self->appliers_.push_back([value, &slot] { *value = *ParseEnum<U>(slot); });
+      } else if constexpr (std::floating_point<U>) {
+        double& slot = self->numbers_.emplace_back(*value / a.scale);
+        const std::string help = Help(a, FieldNumberText(slot), is_required);
+        entry.options.push_back(self->AddNumber(*app, FlagName(a.key), slot, a, help));
+        entry.names.push_back(FlagName(a.key));
+        for (const std::string& alias : self->AliasesOf(a.key)) {
+          entry.options.push_back(self->AddNumber(*app, alias, slot, a, "same as " + FlagName(a.key))->group(""));
+          entry.names.push_back(alias);
+        }
+        const double scale = a.scale;
+        const std::vector<CLI::Option*> options = entry.options;
+        self->appliers_.push_back([value, scale, &slot, options] {
+          for (const CLI::Option* option : options) {
+            if (option->count() > 0) *value = slot * scale;  // untouched defaults keep their exact value
+          }
+        });
+      } else {
+        static_assert(!sizeof(U*), "a command-line field is a number, a bool or a named enum");
+      }
+      if (is_required) entry.options.front()->required();
+    }
+  };
+};
+
+template <class T>
+void DescribedFlags::Add(CLI::App& app, T& object, const std::vector<std::string_view>& required) {
+  Adder adder{this, &app, &required};
+  object.Describe(adder);
+}
+
+}  // namespace gesweep::cli
