@@ -37,7 +37,8 @@ WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compu
   {
     std::unique_ptr<ArchiveWriter> writer;
     try {
-      writer = ArchiveWriter::Open(directory / "scratch.h5", plan, RunProvenance{"gesweep run --dry-run", 1},
+      writer = ArchiveWriter::Open(directory / "scratch.h5", plan,
+                                   RunProvenance{"gesweep run, dry run: write cost", 1},
                                    ArchiveOpenMode::kCreate, nullptr);
       const auto start = Clock::now();
       // Each batch of the scratch archive once (each chunk is written exactly once), the same data.

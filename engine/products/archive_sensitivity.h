@@ -77,7 +77,10 @@ struct ArchiveSensitivity {
 
   FailedRunPolicy failed_runs = FailedRunPolicy::kDropBlocks;
   SensitivityStatus status = SensitivityStatus::kOk;
-  std::string message;  ///< why status is not kOk, in terms of the CLI's flags
+  std::string message;  ///< why status is not kOk
+  /// With kStoppedOnFailedRuns: what FailedRunPolicy::kDropBlocks would do instead ("leave out the 3
+  /// of 40 blocks that hold them"); a front end offers it in its own terms.
+  std::string failed_runs_remedy;
 
   SobolIndices sobol;       ///< when method is kSobol
   MorrisIndices morris;     ///< when method is kMorris

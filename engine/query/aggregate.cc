@@ -13,6 +13,7 @@
 
 #include "engine/archive/archive_reader.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/common/toml_reader.h"
 #include "engine/query/expression.h"
 
@@ -343,23 +344,23 @@ class Aggregator {
   // Checks every name before any row is read.
   void Prepare() {
     for (const std::string& name : request_.group_by) {
-      for (int c : catalog_.Expand(name, "command line", "--group-by")) {
+      for (int c : catalog_.Expand(name, "command line", "group_by")) {
         if (std::find(group_columns_.begin(), group_columns_.end(), c) == group_columns_.end())
           group_columns_.push_back(c);
       }
     }
     specs_ = ParseAggregates(
         request_.aggregates.empty() ? std::vector<std::string>{"count"} : request_.aggregates, catalog_);
-    if (!request_.where.empty()) filter_.emplace(RowFilter::Parse(request_.where, catalog_, "--where"));
+    if (!request_.where.empty()) filter_.emplace(RowFilter::Parse(request_.where, catalog_, "where"));
     GESWEEP_DEMAND(request_.chunk_rows > 0);
     if (request_.max_groups < 1) {
-      throw InputError("command line", "--max-groups", std::to_string(request_.max_groups),
+      throw InputError("command line", "max_groups", std::to_string(request_.max_groups),
                        "expected a count >= 1");
     }
     // The budget holds at least one histogram, so every pass makes progress.
     if (request_.memory_bytes < kHistogramBytes + kEntryBytes) {
-      throw InputError("command line", "--memory-mb", std::to_string(request_.memory_bytes / (1 << 20)),
-                       "expected at least 1 (MB)");
+      throw InputError("command line", "memory_bytes", std::to_string(request_.memory_bytes),
+                       "expected at least " + std::to_string(kHistogramBytes + kEntryBytes) + " bytes");
     }
     moment_slot_.assign(specs_.size(), -1);
     for (std::size_t s = 0; s < specs_.size(); ++s) {
@@ -444,9 +445,8 @@ class Aggregator {
     if (static_cast<std::int64_t>(groups_.size()) >= request_.max_groups) {
       std::string names;
       for (int c : group_columns_) names += (names.empty() ? "" : ",") + catalog_.column(c).name;
-      throw InputError("command line", "--group-by", names,
-                       "more than " + std::to_string(request_.max_groups) +
-                           " groups; group by fewer columns, narrow --where, or raise --max-groups");
+      throw RequestError("command line", "group_by", names,
+                         "more than " + std::to_string(request_.max_groups) + " groups", "fewer_groups");
     }
     Group group;
     for (int c : group_columns_) {
@@ -827,7 +827,7 @@ class Aggregator {
       if (it != group_columns_.end()) return static_cast<std::size_t>(it - group_columns_.begin());
     }
     try {
-      const std::vector<AggregateSpec> parsed = ParseAggregates({name}, catalog_, "--sort");
+      const std::vector<AggregateSpec> parsed = ParseAggregates({name}, catalog_, "sort");
       if (parsed.size() == 1) {
         for (std::size_t s = 0; s < specs_.size(); ++s) {
           if (specs_[s] == parsed[0]) return group_columns_.size() + s;
@@ -838,8 +838,8 @@ class Aggregator {
     }
     std::string names;
     for (const RunColumn* column : output_) names += (names.empty() ? "" : ", ") + column->name;
-    throw InputError("command line", "--sort", name,
-                     "with --group-by/--aggregate, sort by an output column: one of " + names);
+    throw RequestError("command line", "sort", name, "sort by an output column: one of " + names,
+                       "aggregate_sort");
   }
 
   void Emit(QueryRowSink& sink) {

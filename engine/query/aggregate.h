@@ -57,7 +57,7 @@ struct AggregateSpec {
 /// once. Throws InputError(source "command line", key `flag`) naming the item at fault.
 std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts,
                                            const ColumnCatalog& catalog,
-                                           const std::string& flag = "--aggregate");
+                                           const std::string& flag = "aggregates");
 
 /// What to compute.
 struct AggregateRequest {
