@@ -19,13 +19,16 @@ WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compu
                                    double write_budget_s) {
   using Clock = std::chrono::steady_clock;
   WriteCostEstimate estimate;
-  if (plan.block_count() < 1 || seconds_per_run_compute * plan.chunk_runs() > compute_budget_s) return estimate;
+  const bool write_batch =
+      plan.block_count() >= 1 && seconds_per_run_compute * plan.chunk_runs() <= compute_budget_s;
   ResultBlock block;
-  block.Allocate(plan);
-  block.Reset(plan, 0);
-  RunWorkspace workspace(plan);
-  for (int row = 0; row < block.rows; ++row) {
-    ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row);
+  if (write_batch) {
+    block.Allocate(plan);
+    block.Reset(plan, 0);
+    RunWorkspace workspace(plan);
+    for (int row = 0; row < block.rows; ++row) {
+      ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row);
+    }
   }
   std::string pattern = (std::filesystem::temp_directory_path() / "gesweep_write_cost.XXXXXX").string();
   if (mkdtemp(pattern.data()) == nullptr) return estimate;
@@ -37,12 +40,14 @@ WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compu
   {
     std::unique_ptr<ArchiveWriter> writer;
     try {
+      const auto open_start = Clock::now();
       writer = ArchiveWriter::Open(directory / "scratch.h5", plan,
                                    RunProvenance{"gesweep run, dry run: write cost", 1},
                                    ArchiveOpenMode::kCreate, nullptr);
+      estimate.open_seconds = std::chrono::duration<double>(Clock::now() - open_start).count();
       const auto start = Clock::now();
       // Each batch of the scratch archive once (each chunk is written exactly once), the same data.
-      for (std::int64_t b = 0; b < plan.block_count(); ++b) {
+      for (std::int64_t b = 0; write_batch && b < plan.block_count(); ++b) {
         block.block_index = b;
         block.first_row = b * plan.chunk_runs();
         if (b > 0 && block.first_row + block.rows > plan.run_count()) break;  // a short last batch
@@ -59,6 +64,10 @@ WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compu
         estimate.runs_written += block.rows;
         if (std::chrono::duration<double>(Clock::now() - start).count() > write_budget_s) break;
       }
+      const auto close_start = Clock::now();
+      writer->Finish();
+      estimate.close_seconds = std::chrono::duration<double>(Clock::now() - close_start).count();
+      estimate.archive_measured = true;
     } catch (...) {
       writer.reset();
       std::error_code ec;

@@ -62,8 +62,16 @@ struct RunFlags {
 std::string FormatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "?";
   std::ostringstream out;
+  if (seconds < 1) {
+    // Three significant digits, so that a sweep of milliseconds reads as one ("0.0234 s"): the dry
+    // run's estimate is compared with this line (scripts/lib/dry_run_accuracy.py).
+    const int decimals =
+        seconds > 0 ? std::clamp(2 - static_cast<int>(std::floor(std::log10(seconds))), 2, 6) : 2;
+    out << std::fixed << std::setprecision(decimals) << seconds << " s";
+    return out.str();
+  }
   if (seconds < 60) {
-    out << std::fixed << std::setprecision(seconds < 1 ? 2 : (seconds < 10 ? 1 : 0)) << seconds << " s";
+    out << std::fixed << std::setprecision(seconds < 10 ? 1 : 0) << seconds << " s";
     return out.str();
   }
   const auto total = static_cast<long long>(std::llround(seconds));
@@ -75,6 +83,12 @@ std::string FormatDuration(double seconds) {
     out << m << ":" << std::setw(2) << std::setfill('0') << s;
   }
   return out.str();
+}
+
+// A short time to 0.1 ms: the dry run's per-sweep parts.
+std::string Milliseconds(double seconds) {
+  if (seconds >= 1) return FormatDuration(seconds);
+  return ShortNumber(std::round(seconds * 1e4) / 10) + " ms";
 }
 
 std::string CommandLine(const RunFlags& flags) {
@@ -151,18 +165,11 @@ class ProgressPrinter {
   bool stopping_ = false;
 };
 
-// Wall time per run of the sweep from its parts (docs/sweep.md, "Dry run"): `compute_s` per run on
-// one worker (measured with every worker busy), `write_s` per run on the one writer thread, which runs
-// beside the workers: the slowest of the workers' share, the writer, and both sharing the cores.
-double WallPerRun(double compute_s, double write_s, int threads) {
-  const int cores = std::max(1, tbb::info::default_concurrency());
-  const int busy = std::min(threads + 1, cores);
-  return std::max({compute_s / threads, write_s, (compute_s + write_s) / busy});
-}
-
 int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
   RunCostEstimate cost;
   WriteCostEstimate write;
+  double pipeline_s = 0;
+  bool fixed_measured = false;
   {
     const SignalCancellation signals;
     // Most of the budget to the runs, the rest to one real batch written to a scratch archive.
@@ -171,26 +178,33 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
     options.budget_s = 0.75 * flags.dry_run_budget_s;
     cost = EstimateRunCost(plan, options, signals.flag());
     if (!cost.stopped && !cost.lower_bound) {
+      // What the sweep costs whatever its size: the pipeline's start and end (the process's first
+      // use of TBB, as in the sweep), then the archive's set-up and close, timed on the scratch archive.
+      pipeline_s = MeasurePipelineStart(plan, threads);
       try {
         write = MeasureWriteCost(plan, cost.seconds_per_run, 0.15 * flags.dry_run_budget_s,
                                  0.1 * flags.dry_run_budget_s);
       } catch (const ArchiveError&) {
         write = WriteCostEstimate{};  // no scratch space: the estimate leaves the writer out, and says so
       }
+      fixed_measured = write.archive_measured;
     }
     if (cost.stopped || signals.cancelled()) {
       std::cerr << "gesweep: dry run stopped by signal " << signals.signal() << "\n";
       return signals.exit_code();
     }
   }
-  const double runs = static_cast<double>(plan.run_count());
+  const double fixed_s = fixed_measured ? write.open_seconds + pipeline_s + write.close_seconds : 0.0;
+  const int cores = std::max(1, tbb::info::default_concurrency());
   // The workers run and encode; the writer thread stores.
-  const double encode = write.encode_seconds_per_run;
-  const double estimate_s = runs * WallPerRun(cost.seconds_per_run + encode, write.seconds_per_run, threads);
-  const double low_s = runs * WallPerRun(cost.seconds_per_run_low + encode, write.seconds_per_run_low, threads);
-  const double high_s = cost.lower_bound ? INFINITY
-                                         : runs * WallPerRun(cost.seconds_per_run_high + encode,
-                                                             write.seconds_per_run_high, threads);
+  auto sweep_seconds = [&](double compute_s, double store_s) {
+    const SweepTimeParts parts{compute_s, write.encode_seconds_per_run, store_s, fixed_s};
+    return SweepSeconds(parts, plan.run_count(), plan.chunk_runs(), threads, cores);
+  };
+  const double estimate_s = sweep_seconds(cost.seconds_per_run, write.seconds_per_run);
+  const double low_s = sweep_seconds(cost.seconds_per_run_low, write.seconds_per_run_low);
+  const double high_s =
+      cost.lower_bound ? INFINITY : sweep_seconds(cost.seconds_per_run_high, write.seconds_per_run_high);
   const auto& storage = plan.storage();
   const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
@@ -213,6 +227,12 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
         {"write_seconds_per_run", write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
         {"encode_seconds_per_run",
          write.measured ? nlohmann::json(write.encode_seconds_per_run) : nlohmann::json(nullptr)},
+        {"fixed_seconds", fixed_measured ? nlohmann::json(fixed_s) : nlohmann::json(nullptr)},
+        {"fixed_parts_seconds",
+         fixed_measured ? nlohmann::json{{"archive_open", write.open_seconds},
+                                         {"pipeline", pipeline_s},
+                                         {"archive_close", write.close_seconds}}
+                        : nlohmann::json(nullptr)},
         {"calibration_runs", cost.timed_runs},
         {"warmup_runs", cost.warmup_runs},
         {"measured_seconds", cost.measured_s},
@@ -256,6 +276,12 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
                 << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
     } else {
       std::cout << "; writing not measured";
+    }
+    if (fixed_measured) {
+      std::cout << "; per sweep " << Milliseconds(fixed_s) << ": archive set-up " << Milliseconds(write.open_seconds)
+                << ", pipeline " << Milliseconds(pipeline_s) << ", close " << Milliseconds(write.close_seconds);
+    } else {
+      std::cout << "; fixed per-sweep part not measured";
     }
     std::cout << ")\n";
   }
@@ -438,6 +464,9 @@ int Run(const RunFlags& flags) {
     std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
     return 1;
   }
+  // The sweep's time ("N runs in T") runs from here, the archive's set-up, to its close: the
+  // interval the dry run estimates (docs/sweep.md, "Dry run").
+  const auto start = std::chrono::steady_clock::now();
   try {
     writer =
         ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
@@ -470,7 +499,6 @@ int Run(const RunFlags& flags) {
     }
   }
 
-  const auto start = std::chrono::steady_clock::now();
   SweepOutcome outcome;
   int exit_code = 0;
   {

@@ -36,6 +36,12 @@ struct ThreadResult {
   double longest_cut_s = 0;   // how long the stopped burst had run
 };
 
+// The sink of MeasurePipelineStart's sweep of no batch: never called.
+class NoSink final : public ResultSink {
+ public:
+  void Write(const ResultBlock&) override { GESWEEP_UNREACHABLE(); }
+};
+
 }  // namespace
 
 RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options, const std::atomic<bool>* stop) {
@@ -168,6 +174,32 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   estimate.estimated_seconds_low = estimate.seconds_per_run_low * scale;
   estimate.estimated_seconds_high = estimate.lower_bound ? INFINITY : estimate.seconds_per_run_high * scale;
   return estimate;
+}
+
+double MeasurePipelineStart(const SweepPlan& plan, int threads) {
+  GESWEEP_DEMAND(threads >= 1);
+  const std::vector<std::int64_t> no_batch;
+  NoSink sink;
+  RunnerOptions options;
+  options.threads = threads;
+  const auto start = Clock::now();
+  RunSweep(plan, no_batch, sink, options, nullptr);
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double SteadyWallPerRun(const SweepTimeParts& parts, int threads, int cores) {
+  GESWEEP_DEMAND(threads >= 1 && cores >= 1);
+  const double work = parts.compute_s_per_run + parts.encode_s_per_run;
+  const int busy = std::min(threads + 1, cores);
+  return std::max({work / threads, parts.store_s_per_run, (work + parts.store_s_per_run) / busy});
+}
+
+double SweepSeconds(const SweepTimeParts& parts, std::int64_t runs, int chunk_runs, int threads, int cores) {
+  GESWEEP_DEMAND(runs >= 0 && chunk_runs >= 1 && threads >= 1 && cores >= 1);
+  const std::int64_t first = std::min<std::int64_t>(chunk_runs, runs);
+  const double one_batch_per_run = parts.compute_s_per_run / threads + parts.encode_s_per_run + parts.store_s_per_run;
+  return static_cast<double>(first) * one_batch_per_run +
+         static_cast<double>(runs - first) * SteadyWallPerRun(parts, threads, cores) + parts.fixed_s;
 }
 
 }  // namespace gesweep

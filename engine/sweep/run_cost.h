@@ -52,4 +52,31 @@ struct RunCostEstimate {
 RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options,
                                 const std::atomic<bool>* stop = nullptr);
 
+/// Wall time, s, RunSweep takes on `threads` threads for `plan` when there is no batch to run: its
+/// fixed cost, whatever the sweep's size -- the pool of batch buffers allocated (sized as the
+/// sweep's), the writer thread started and joined, the task arena (on the process's first use of
+/// TBB, its scheduler too). Runs nothing, writes nothing. Call it before anything else uses TBB in
+/// the process, as the sweep's RunSweep is the first use in `gesweep run`.
+double MeasurePipelineStart(const SweepPlan& plan, int threads);
+
+/// The measured parts of a sweep's wall time (docs/sweep.md, "Dry run"), all in seconds.
+struct SweepTimeParts {
+  double compute_s_per_run = 0;  ///< one run on one worker thread, with every worker busy
+  double encode_s_per_run = 0;   ///< a worker encoding a run's share of its batch
+  double store_s_per_run = 0;    ///< the one writer thread storing a run's share of a batch
+  double fixed_s = 0;            ///< once per sweep, whatever its size (archive set-up, pipeline, close)
+};
+
+/// Wall time per run at the pipeline's steady rate, s: the slowest of the workers' share
+/// (compute + encode) / threads, the writer's store, and both sharing the cores,
+/// (compute + encode + store) / min(threads + 1, cores). threads >= 1, cores >= 1.
+double SteadyWallPerRun(const SweepTimeParts& parts, int threads, int cores);
+
+/// Wall time of a sweep of `runs` runs in batches of `chunk_runs`, s: one batch (min(chunk_runs,
+/// runs) runs) passes through the whole pipeline -- computed on every thread, encoded by one
+/// worker, stored by the writer: rows x (compute / threads + encode + store) -- while the other
+/// runs go at SteadyWallPerRun; plus fixed_s. The first term is what a short sweep, of one or a
+/// few batches, cannot overlap. runs >= 0, chunk_runs >= 1, threads >= 1, cores >= 1.
+double SweepSeconds(const SweepTimeParts& parts, std::int64_t runs, int chunk_runs, int threads, int cores);
+
 }  // namespace gesweep

@@ -9,6 +9,7 @@ opens from disk. Exit codes: 0 ok, 2 bad input (one line on stderr), 1 anything 
 """
 
 import argparse
+import functools
 import html
 import os
 import shutil
@@ -197,19 +198,22 @@ def main(argv):
 
 def write_report(args, archives, progress):
     # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
+    # The level maps (one section per rated analysis of the column manifest) follow the stability map.
+    rated = report_figures.rated_analyses()
+    ours = {"stability", "root", "open", "landing", "sensitivity"} | {r.name.split("_")[0] for r in rated}
     for name in os.listdir(args.output):
-        if name.endswith(".png") and name.split("_")[0] in ("stability", "flying", "root", "open", "landing", "sensitivity"):
+        if name.endswith(".png") and name.split("_")[0] in ours:
             os.remove(os.path.join(args.output, name))
 
     sections = []
     drawn = []
-    for title, anchor, draw in (("Stability map", "map", report_figures.stability_maps),
-                                ("Flying qualities (MIL-F-8785C, Category C)", "flying_qualities",
-                                 report_figures.flying_qualities),
-                                ("Root locus against height", "locus", report_figures.root_locus),
-                                ("Open-loop responses", "open_loop", report_figures.open_loop),
-                                ("Landing", "landing", report_figures.landing),
-                                ("Sensitivity", "sensitivity", report_figures.sensitivity)):
+    level_sections = [(r.section_title(), r.name, functools.partial(report_figures.level_maps, rated=r))
+                      for r in rated]
+    for title, anchor, draw in ([("Stability map", "map", report_figures.stability_maps)] + level_sections
+                                + [("Root locus against height", "locus", report_figures.root_locus),
+                                   ("Open-loop responses", "open_loop", report_figures.open_loop),
+                                   ("Landing", "landing", report_figures.landing),
+                                   ("Sensitivity", "sensitivity", report_figures.sensitivity)]):
         figures = draw(archives, args.output)
         progress(f"{title.lower()}: {len(figures)} figure(s)")
         if figures:

@@ -7,8 +7,24 @@ from the archives given to the report and nothing else: a claim whose data are a
 """
 
 import math
+import os
+import sys
 
 import numpy as np
+
+_LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
+if _LIB not in sys.path:
+    sys.path.insert(0, _LIB)
+import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from schemas/columns.json)
+
+# The columns the claims read.
+SIGMA = columns.path("modes", "stability_margin_per_s")
+OPEN_LOOP_END_EVENT = columns.path("open_loop", "end_event")
+OPEN_LOOP_END_TIME = columns.path("open_loop", "end_time_s")
+OPEN_LOOP_MIN_HEIGHT = columns.path("open_loop", "min_height_m")
+OPEN_LOOP_MIN_HEIGHT_TIME = columns.path("open_loop", "min_height_time_s")
+LANDING_OUTCOME = columns.path("landing", "outcome")
+LANDING_TOUCHDOWN_TIME = columns.path("landing", "touchdown_time_s")
 
 PAPER_SPEED_MPS = 32.0208
 # A run is "at the paper's speed" when its speed is within this of 32.0208 m/s (the studies store it exactly).
@@ -47,7 +63,7 @@ def modes_claim(archives):
     paper = "stable for H/b ≥ 0.5, unstable for H/b < 0.5 (after Boschetti and Cárdenas)"
     heights, sigmas, b, sources = [], [], math.nan, []
     for archive in archives:
-        if not (archive.has("results/modes/stability_margin_per_s") and archive.aircraft.name == "ANCE"):
+        if not (archive.has(SIGMA) and archive.aircraft.name == "ANCE"):
             continue
         rows = np.nonzero(archive.ok)[0]
         rows = _h_on(archive, _speed_rows(archive, rows))
@@ -58,7 +74,7 @@ def modes_claim(archives):
         at_table = [r for r in rows if len(table) and np.min(np.abs(table - height[r])) < HEIGHT_MATCH_M]
         if not at_table:
             continue
-        sigma = archive.column("results/modes/stability_margin_per_s")
+        sigma = archive.column(SIGMA)
         heights += [float(height[r]) for r in at_table]
         sigmas += [float(sigma[r]) for r in at_table]
         b = archive.aircraft.wingspan_m
@@ -138,7 +154,7 @@ def _open_loop_runs(archives):
     """(archive, row, start height) of every complete open-loop run at the paper's condition."""
     runs = []
     for archive in archives:
-        if not (archive.has("results/open_loop/end_event") and archive.aircraft.name == "ANCE"):
+        if not (archive.has(OPEN_LOOP_END_EVENT) and archive.aircraft.name == "ANCE"):
             continue
         rows = _h_on(archive, _speed_rows(archive, np.nonzero(archive.complete)[0]))
         amplitude = archive.param("pulse_amplitude_deg")
@@ -152,8 +168,8 @@ def _open_loop_runs(archives):
 
 
 def _event(archive, row):
-    value = archive.column("results/open_loop/end_event")[row]
-    levels = archive.levels("results/open_loop/end_event")
+    value = archive.column(OPEN_LOOP_END_EVENT)[row]
+    levels = archive.levels(OPEN_LOOP_END_EVENT)
     if math.isnan(value):
         return "failed"
     return levels[int(value)] if levels and 0 <= int(value) < len(levels) else str(value)
@@ -161,7 +177,7 @@ def _event(archive, row):
 
 def _event_text(archive, row):
     event = _event(archive, row)
-    end = archive.column("results/open_loop/end_time_s")[row]
+    end = archive.column(OPEN_LOOP_END_TIME)[row]
     if event == "time_limit":
         return f"airborne at the end of the run ({end:.3g} s)"
     return f"{event} at {end:.3g} s"
@@ -169,9 +185,9 @@ def _event_text(archive, row):
 
 def _margin(archive, row):
     """σ of the run at its start height (the modes analysis of the same run), or None."""
-    if not archive.has("results/modes/stability_margin_per_s"):
+    if not archive.has(SIGMA):
         return None
-    value = archive.column("results/modes/stability_margin_per_s")[row]
+    value = archive.column(SIGMA)[row]
     return None if math.isnan(value) else float(value)
 
 
@@ -214,8 +230,8 @@ def fig4_claims(archives):
         rows.append((claim, paper, "no archive holds the 2.9987 m open-loop run", "no data"))
     else:
         a, r, _ = mid[0]
-        dip = a.column("results/open_loop/min_height_m")[r]
-        dip_time = a.column("results/open_loop/min_height_time_s")[r]
+        dip = a.column(OPEN_LOOP_MIN_HEIGHT)[r]
+        dip_time = a.column(OPEN_LOOP_MIN_HEIGHT_TIME)[r]
         engine = f"lowest height {dip:.4g} m at {dip_time:.3g} s; {_event_text(a, r)}"
         ok = abs(dip - FIG4_DIVERGE_DIP_M) <= FIG4_DIP_AGREEMENT_M and _event(a, r) in ("stall", "diverged")
         rows.append((claim, paper, engine, "agrees" if ok else "differs"))
@@ -227,15 +243,15 @@ def landing_claim(archives):
     paper = "with h-derivatives: touchdown; without: no touchdown"
     outcomes = {}
     for archive in archives:
-        if not (archive.has("results/landing/outcome") and archive.aircraft.name == "ANCE"):
+        if not (archive.has(LANDING_OUTCOME) and archive.aircraft.name == "ANCE"):
             continue
-        outcome = archive.column("results/landing/outcome")
-        levels = archive.levels("results/landing/outcome")
+        outcome = archive.column(LANDING_OUTCOME)
+        levels = archive.levels(LANDING_OUTCOME)
         h = archive.param("h_derivatives")
         for r in np.nonzero(archive.complete)[0]:
             on = True if h is None else bool(h[r] == 1)
             name = "failed" if math.isnan(outcome[r]) else levels[int(outcome[r])]
-            touchdown = archive.column("results/landing/touchdown_time_s")[r]
+            touchdown = archive.column(LANDING_TOUCHDOWN_TIME)[r]
             text = name + (f" at {touchdown:.5g} s" if name == "landed" and np.isfinite(touchdown) else "")
             outcomes.setdefault(on, []).append(text)
     if True not in outcomes or False not in outcomes:

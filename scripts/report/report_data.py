@@ -6,10 +6,17 @@ after the run's values (docs/sweep.md, "Crash safety"), and statuses are read be
 """
 
 import math
+import os
+import sys
 import tomllib
 
 import h5py
 import numpy as np
+
+_LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
+if _LIB not in sys.path:
+    sys.path.insert(0, _LIB)
+import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from schemas/columns.json)
 
 STATUS_PENDING, STATUS_OK, STATUS_FAILED = 0, 1, 2
 
@@ -45,8 +52,14 @@ class Aircraft:
 
 
 REQUIRED_ATTRIBUTES = ("run_count", "design_runs", "first_run", "chunk_runs")
-REQUIRED_DATASETS = ("runs/index", "runs/id", "runs/status", "runs/message")
-PER_RUN_GROUPS = ("runs/", "design/", "results/", "series/")
+REQUIRED_DATASETS = columns.runs_paths()
+PER_RUN_GROUPS = columns.groups()
+RUN_STATUS = columns.runs_path("status")
+
+
+def design_path(name):
+    """The dataset of a parameter the archive lists in /design@parameters."""
+    return f"{columns.DESIGN_GROUP}/{name}"
 
 
 def validate_layout(file, path):
@@ -59,7 +72,7 @@ def validate_layout(file, path):
             raise ValueError(f"{path}: {name}: missing root attribute (a damaged archive, or one not written "
                              f"by gesweep)")
     runs = int(file.attrs["run_count"])
-    for group in ("runs", "design"):
+    for group in (columns.RUNS_GROUP, columns.DESIGN_GROUP):
         if not isinstance(file.get(group), h5py.Group):
             raise ValueError(f"{path}: {group}: missing group /{group} (a damaged archive, or one not written "
                              f"by gesweep)")
@@ -72,7 +85,7 @@ def validate_layout(file, path):
     def visit(name, obj):
         if not isinstance(obj, h5py.Dataset) or not name.startswith(PER_RUN_GROUPS):
             return
-        if name.startswith("series/") and "time_axis" not in obj.attrs:
+        if name.startswith(columns.SERIES_GROUP + "/") and "time_axis" not in obj.attrs:
             return  # a shared time axis
         if obj.ndim not in (1, 2) or obj.shape[0] != runs:
             problems.append(f"{path}: {name} = {obj.shape[0] if obj.ndim else 0} rows: expected one row per run: "
@@ -101,10 +114,10 @@ class Archive:
             raise ValueError(f"{path}: not a gesweep archive")
         validate_layout(self.file, path)
         self.run_count = int(self.attrs.get("run_count", 0))
-        self.status = self.file["runs/status"][...]  # before any value (snapshot safety)
+        self.status = self.file[RUN_STATUS][...]  # before any value (snapshot safety)
         self.complete = self.status != STATUS_PENDING
         self.ok = self.status == STATUS_OK
-        design = self.file["design"]
+        design = self.file[columns.DESIGN_GROUP]
         self.design_attrs = {k: _text(v) for k, v in design.attrs.items()}
         self.design_names = list(self.design_attrs.get("parameters", []))
         names = self.design_attrs.get("unswept_parameter_names", [])
@@ -128,7 +141,7 @@ class Archive:
     def param(self, name):
         """Value of a parameter for every run (swept or fixed), or None when the archive has neither."""
         if name in self.design_names:
-            return self._read("design/" + name)
+            return self._read(design_path(name))
         if name in self.unswept:
             return np.full(self.run_count, float(self.unswept[name]))
         return None
@@ -140,7 +153,7 @@ class Archive:
 
     def level_name(self, name, value):
         """The level name of a choice/boolean parameter value, else the number as text."""
-        levels = self.levels("design/" + name)
+        levels = self.levels(design_path(name))
         if not levels and name in ("h_derivatives",):
             levels = ["false", "true"]
         if levels and float(value).is_integer() and 0 <= int(value) < len(levels):
@@ -180,8 +193,8 @@ class Archive:
         complete = np.nonzero(self.complete)[0]
         if not axes:
             return [({}, complete)]
-        columns = np.stack([self._read("design/" + a)[complete] for a in axes], axis=1)
-        keys, inverse = np.unique(columns, axis=0, return_inverse=True)
+        values = np.stack([self._read(design_path(a))[complete] for a in axes], axis=1)
+        keys, inverse = np.unique(values, axis=0, return_inverse=True)
         inverse = np.asarray(inverse).reshape(-1)
         order = np.argsort(inverse, kind="stable")
         members = np.split(complete[order], np.cumsum(np.bincount(inverse, minlength=len(keys)))[:-1])

@@ -1,8 +1,11 @@
 """The report's figures (docs/report.md, "gesweep report"). Each function draws a figure only when the
 archives hold its data, and returns a list of Figure records (file name, title, caption)."""
 
+import itertools
 import math
 import os
+import re
+import sys
 from dataclasses import dataclass
 
 import matplotlib
@@ -13,6 +16,32 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize, SymLogNorm  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
+
+_LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
+if _LIB not in sys.path:
+    sys.path.insert(0, _LIB)
+import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from schemas/columns.json)
+
+# The columns the figures read (schemas/columns.json; a renamed column fails here, at import).
+SIGMA = columns.path("modes", "stability_margin_per_s")
+SIGMA_UNITS = columns.units("modes", "stability_margin_per_s")
+PHUGOID_RE = columns.path("modes", "phugoid/eigenvalue_re_per_s")
+HEIGHT_RE = columns.path("modes", "height/eigenvalue_re_per_s")
+MODE_EIGENVALUES = {  # (Re, Im) of each mode
+    "short_period": (columns.path("modes", "short_period/eigenvalue_re_per_s"),
+                     columns.path("modes", "short_period/eigenvalue_im_per_s")),
+    "phugoid": (PHUGOID_RE, columns.path("modes", "phugoid/eigenvalue_im_per_s")),
+    "height": (HEIGHT_RE, columns.path("modes", "height/eigenvalue_im_per_s")),
+}
+OPEN_LOOP_HEIGHT = columns.path("open_loop", "height_m", series=True)
+OPEN_LOOP_TIME = columns.time_axis("open_loop")
+LANDING_TIME = columns.time_axis("landing")
+LANDING_SERIES = {
+    "height_m": columns.path("landing", "height_m", series=True),
+    "distance_past_transmitter_m": columns.path("landing", "distance_past_transmitter_m", series=True),
+    "elevator_rad": columns.path("landing", "elevator_rad", series=True),
+    "pitch_rate_radps": columns.path("landing", "pitch_rate_radps", series=True),
+}
 
 
 # The paper's open-loop speed (Section IV): the root locus prefers the runs nearest to it.
@@ -111,7 +140,7 @@ def stability_maps(archives, outdir):
     MAX_MAP_PANELS groups: one per value of any other swept parameter)."""
     figures = []
     for archive in archives:
-        if not (archive.has("results/modes/stability_margin_per_s") and "height_m" in archive.design_names
+        if not (archive.has(SIGMA) and "height_m" in archive.design_names
                 and "speed_mps" in archive.design_names):
             continue
         for number, (key, rows) in enumerate(archive.groups(("height_m", "speed_mps"))[:MAX_MAP_PANELS]):
@@ -136,11 +165,11 @@ def _stability_map(archive, key, rows, outdir, number):
     heights, speeds = np.unique(archive.param("height_m")[rows]), np.unique(archive.param("speed_mps")[rows])
     if len(heights) < 2 or len(speeds) < 2:
         return None
-    sigma = _height_speed_grid(archive, rows, heights, speeds, "results/modes/stability_margin_per_s")
+    sigma = _height_speed_grid(archive, rows, heights, speeds, SIGMA)
     panels = [(sigma, "σ = 0 on the grid", "stability margin σ: the largest Re λ, the exactly neutral height root left out")]
     phugoid = None
-    if archive.has("results/modes/phugoid/eigenvalue_re_per_s"):
-        phugoid = _height_speed_grid(archive, rows, heights, speeds, "results/modes/phugoid/eigenvalue_re_per_s")
+    if archive.has(PHUGOID_RE):
+        phugoid = _height_speed_grid(archive, rows, heights, speeds, PHUGOID_RE)
         zero = "σ = 0 (upper panel), Re λ = 0 (lower panel) on the grid"
         panels = [(sigma, zero, panels[0][2]), (phugoid, zero, "the phugoid's own margin: Re λ of the phugoid")]
     extent = max(max(np.nanmax(np.abs(grid)) for grid, _, _ in panels), 1e-12)
@@ -164,7 +193,7 @@ def _stability_map(archive, key, rows, outdir, number):
     for ax in axes[:-2]:
         ax.set_xlabel("")
     bar = fig.colorbar(mesh, ax=list(axes[:-1]), pad=0.02, aspect=35)
-    bar.set_label("σ, Re λ (1/s): red unstable (> 0), blue stable (< 0)")
+    bar.set_label(f"σ, Re λ ({SIGMA_UNITS}): red unstable (> 0), blue stable (< 0)")
     legend_axis.axis("off")
     legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
     suffix = f" ({_h_derivatives_label(archive, key)})" if key else ""
@@ -249,8 +278,8 @@ def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
             f"model by gesweep boundary --archive.")
     if phugoid is None:
         return text
-    height_root = (_height_speed_grid(archive, rows, heights, speeds, "results/modes/height/eigenvalue_re_per_s")
-                   if archive.has("results/modes/height/eigenvalue_re_per_s") else None)
+    height_root = (_height_speed_grid(archive, rows, heights, speeds, HEIGHT_RE)
+                   if archive.has(HEIGHT_RE) else None)
     stable = np.isfinite(sigma) & (sigma < 0)
     from_height = stable & (sigma == height_root) if height_root is not None else np.zeros_like(stable)
     if np.any(from_height):
@@ -275,34 +304,117 @@ def _map_caption(archive, rows, heights, speeds, sigma, phugoid):
     return text
 
 
-# The MIL-F-8785C levels (docs/model.md §11), best to worst, and their colours on the flying-qualities map.
-FQ_LEVEL_COLOURS = ("#1a9850", "#fee08b", "#f46d43", "#7f0000")
-FQ_MODES = (("phugoid_level", "phugoid", "-", 2.2), ("short_period_level", "short period", (0, (4, 2)), 1.6))
+# Level maps: every rated analysis of the manifest (columns.ratings(): int8 columns whose levels are
+# "level 1", "level 2", ..., a larger code worse; the one named "level" is the analysis's overall
+# rating, the others rate its parts) is drawn over height x speed beside the stability map, with
+# lines where each part loses a level. A new rated analysis appears without an edit here.
+# The levels' colours, best to worst (MIL-F-8785C's Levels 1-3 and worse); more levels than these
+# take evenly spaced colours of RdYlGn_r.
+LEVEL_COLOURS = ("#1a9850", "#fee08b", "#f46d43", "#7f0000")
+# The parts' lines, in the order the parts are drawn (the last-declared part first: the phugoid, then
+# the short period, of flying_qualities): style and width.
+# (Dash-dot before dotted: the last table row's line is dotted.)
+LEVEL_PART_STYLES = (("-", 2.2), ((0, (4, 2)), 1.6), ((0, (6, 2, 1, 2)), 1.6), ((0, (1, 1.5)), 1.6))
+# Wording of the figures of the analyses that have their own (section title, what a part is, the
+# caption's opening with {grid} for "N speeds × M heights (R runs of FILE)"); any other rated
+# analysis is described from its manifest entry.
+LEVEL_MAP_WORDING = {
+    "flying_qualities": ("Flying qualities (MIL-F-8785C, Category C)", "mode",
+                         "Levels of the bare airframe's short period and phugoid over {grid}, rated against "
+                         "MIL-F-8785C for Category C (approach and landing) as docs/model.md §11 states it; the "
+                         "ground-effect height mode has no requirement."),
+}
+# A rating's description: "<standard> level of <subject>: ..." or "<standard> level of <part> (<paragraph>)".
+_RATING_DESCRIPTION = re.compile(r"^(?P<standard>.*?)\s*\blevel of (?P<subject>[^:(]+?)\s*(?::|\(|$)")
+_PARAGRAPH = re.compile(r"\((\d+(?:\.\d+)+)\)")
 
 
-def flying_qualities(archives, outdir):
-    """One figure per group of an archive's runs over height x speed with the flying_qualities
-    analysis: the airplane's MIL-F-8785C Category C level (the worse of its two modes) and, drawn
-    over it, where each mode loses each level."""
+@dataclass
+class RatedAnalysis:
+    """What the level map of one analysis reads: from columns.ratings()."""
+    name: str              # the analysis ("flying_qualities")
+    description: str       # its description in the manifest
+    overall: dict | None   # its overall rating column (manifest entry), if it has one
+    parts: list            # the ratings of its parts, in declaration order
+
+    @property
+    def label(self):
+        return self.name.replace("_", " ")
+
+    def part_label(self, part):
+        return part["name"].removesuffix("_level").replace("_", " ")
+
+    def section_title(self):
+        wording = LEVEL_MAP_WORDING.get(self.name)
+        return wording[0] if wording else f"{self.label[:1].upper()}{self.label[1:]} (levels)"
+
+    def paths(self):
+        return [c["path"] for c in ([self.overall] if self.overall else []) + self.parts]
+
+
+def rated_analyses():
+    """Every analysis of the manifest with rated columns, as RatedAnalysis."""
+    return [RatedAnalysis(entry["name"], entry["description"], overall, parts)
+            for entry, overall, parts in columns.ratings()]
+
+
+def level_maps(archives, outdir, rated=None):
+    """One figure per group of an archive's runs over height x speed for each rated analysis
+    (`rated`: one RatedAnalysis, or all of them): the overall level (or the worst of the parts') and,
+    drawn over it, where each part loses each level."""
     figures = []
-    for archive in archives:
-        if not (archive.has("results/flying_qualities/level") and "height_m" in archive.design_names
-                and "speed_mps" in archive.design_names):
-            continue
-        for number, (key, rows) in enumerate(archive.groups(("height_m", "speed_mps"))[:MAX_MAP_PANELS]):
-            figure = _flying_qualities_map(archive, key, rows[archive.ok[rows]], outdir, number)
-            if figure is not None:
-                figures.append(figure)
+    for analysis in [rated] if rated is not None else rated_analyses():
+        for archive in archives:
+            if not (all(archive.has(p) for p in analysis.paths()) and "height_m" in archive.design_names
+                    and "speed_mps" in archive.design_names):
+                continue
+            for number, (key, rows) in enumerate(archive.groups(("height_m", "speed_mps"))[:MAX_MAP_PANELS]):
+                figure = _level_map(archive, analysis, key, rows[archive.ok[rows]], outdir, number)
+                if figure is not None:
+                    figures.append(figure)
     return figures
 
 
-def _flying_qualities_map(archive, key, rows, outdir, number):
+def _level_colours(count):
+    if count <= len(LEVEL_COLOURS):
+        return matplotlib.colors.ListedColormap(LEVEL_COLOURS[:count])
+    return matplotlib.colors.ListedColormap(plt.get_cmap("RdYlGn_r")(np.linspace(0, 1, count)))
+
+
+def _level_map_title(analysis):
+    """The panel's title: "<subject>'s level: the worse of <part> (<paragraph>) and <part> (...)"."""
+    parts = []
+    for part in analysis.parts:
+        paragraph = _PARAGRAPH.search(part["description"])
+        parts.append(analysis.part_label(part) + (f" ({paragraph.group(1)})" if paragraph else ""))
+    match = _RATING_DESCRIPTION.match(analysis.overall["description"]) if analysis.overall else None
+    subject = match.group("subject") if match else "the"
+    owner = f"{subject}'s level" if match else "the level"
+    worst = "the worse of" if len(parts) == 2 else "the worst of"
+    return f"{owner}: {worst} " + (" and ".join(parts) if len(parts) <= 2 else ", ".join(parts))
+
+
+def _level_map_standard(analysis):
+    """The standard the ratings name ("MIL-F-8785C Category C"), or ""."""
+    for column in ([analysis.overall] if analysis.overall else []) + analysis.parts:
+        match = _RATING_DESCRIPTION.match(column["description"])
+        if match and match.group("standard"):
+            return match.group("standard")
+    return ""
+
+
+def _level_map(archive, analysis, key, rows, outdir, number):
     heights, speeds = np.unique(archive.param("height_m")[rows]), np.unique(archive.param("speed_mps")[rows])
     if len(heights) < 2 or len(speeds) < 2:
         return None
-    names = archive.levels("results/flying_qualities/level")
-    level = _height_speed_grid(archive, rows, heights, speeds, "results/flying_qualities/level")
-    colours = matplotlib.colors.ListedColormap(FQ_LEVEL_COLOURS[:len(names)])
+    first = analysis.overall or analysis.parts[0]
+    names = archive.levels(first["path"]) or first["levels"]
+    grids = {part["name"]: _height_speed_grid(archive, rows, heights, speeds, part["path"]) for part in analysis.parts}
+    if analysis.overall is not None:
+        level = _height_speed_grid(archive, rows, heights, speeds, analysis.overall["path"])
+    else:  # the worst of the parts (a larger code is worse); NaN where any part has none
+        level = np.max(np.stack(list(grids.values())), axis=0)
+    colours = _level_colours(len(names))
     colours.set_bad(MISSING_COLOUR)
     norm = matplotlib.colors.BoundaryNorm(np.arange(len(names) + 1) - 0.5, len(names))
     fig, (ax, legend_axis) = plt.subplots(2, 1, figsize=(8.8, 6.6), layout="constrained",
@@ -311,52 +423,62 @@ def _flying_qualities_map(archive, key, rows, outdir, number):
                          rasterized=True)
     handles = {}
     lost = []
-    for column, mode, style, width in FQ_MODES:
-        grid = _height_speed_grid(archive, rows, heights, speeds, f"results/flying_qualities/{column}")
+    wording = LEVEL_MAP_WORDING.get(analysis.name)
+    for part, (style, width) in zip(analysis.parts[::-1], itertools.cycle(LEVEL_PART_STYLES)):
+        label = analysis.part_label(part)
+        grid = grids[part["name"]]
         present = [code for code in range(len(names) - 1) if np.nanmin(grid) <= code < np.nanmax(grid)]
         if present:
             ax.contour(speeds, heights, grid, levels=[code + 0.5 for code in present], colors="k",
                        linestyles=[style], linewidths=width)
-            handles[mode] = Line2D([], [], color="k", ls=style, lw=width,
-                                   label=f"{mode}: where it loses a level (between the colours)")
-        lost.append(_levels_lost_text(archive, rows, heights, column, mode, names))
+            handles[label] = Line2D([], [], color="k", ls=style, lw=width,
+                                    label=f"{label}: where it loses a level (between the colours)")
+        lost.append(_levels_lost_text(archive, rows, part["path"], label, names))
     # A grid with no sign change: the overlays without a zero contour.
     for handle in _map_overlays(ax, archive, key, heights, speeds, np.zeros_like(level), ""):
         handles.setdefault(handle.get_label(), handle)
     _map_axes(ax, archive, heights, speeds)
-    ax.set_title("the airplane's level: the worse of short period (3.2.2.1.2) and phugoid (3.2.1.2)")
+    ax.set_title(_level_map_title(analysis))
     bar = fig.colorbar(mesh, ax=ax, pad=0.02, aspect=30, ticks=range(len(names)))
     bar.ax.set_yticklabels(names)
     legend_axis.axis("off")
     legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
     suffix = f" ({_h_derivatives_label(archive, key)})" if key else ""
-    fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: MIL-F-8785C Category C flying qualities{suffix}")
-    name = _save(fig, outdir, f"flying_qualities_{_slug(archive.study_name)}_{number}.png")
-    caption = (f"Levels of the bare airframe's short period and phugoid over {len(speeds)} speeds × {len(heights)} "
-               f"heights ({len(rows)} runs of {os.path.basename(archive.path)}), rated against MIL-F-8785C for "
-               f"Category C (approach and landing) as docs/model.md §11 states it; the ground-effect height mode "
-               f"has no requirement. Black lines mark where a mode changes level. " + " ".join(t for t in lost if t))
-    return Figure(name, f"Flying qualities ({archive.study_name}){suffix}", caption)
+    standard = _level_map_standard(analysis)
+    fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: {standard + ' ' if standard else ''}{analysis.label}{suffix}")
+    name = _save(fig, outdir, f"{analysis.name}_{_slug(archive.study_name)}_{number}.png")
+    grid_text = (f"{len(speeds)} speeds × {len(heights)} heights ({len(rows)} runs of "
+                 f"{os.path.basename(archive.path)})")
+    if wording:
+        opening = wording[2].format(grid=grid_text) + f" Black lines mark where a {wording[1]} changes level. "
+    else:
+        labels = [analysis.part_label(p) for p in analysis.parts]
+        parts = labels[0] if len(labels) == 1 else ", ".join(labels[:-1]) + " and " + labels[-1]
+        opening = (f"Levels of {parts} ({analysis.description}) over {grid_text}, from "
+                   f"the {analysis.name} columns of the archive. Black lines mark where each changes level. ")
+    caption = opening + " ".join(t for t in lost if t)
+    title = f"{analysis.label[:1].upper()}{analysis.label[1:]} ({archive.study_name}){suffix}"
+    return Figure(name, title, caption)
 
 
-def _levels_lost_text(archive, rows, heights, column, mode, names):
-    """Where `mode` loses each level along height at the paper's speed (or the speed nearest to it)."""
+def _levels_lost_text(archive, rows, path, part, names):
+    """Where `part` loses each level along height at the paper's speed (or the speed nearest to it)."""
     speed = archive.param("speed_mps")[rows]
     nearest = speed[np.argmin(np.abs(speed - PAPER_SPEED_MPS))]
     along = rows[speed == nearest]
     along = along[np.argsort(archive.param("height_m")[along])]
     height = archive.param("height_m")[along]
-    code = archive.column(f"results/flying_qualities/{column}")[along]
+    code = archive.column(path)[along]
     if not np.all(np.isfinite(code)):
         return ""
     # From the top down: each change of level, between the two grid heights that bracket it.
     changes = np.nonzero(np.diff(code) != 0)[0][::-1]
     if len(changes) == 0:
-        return f"At u0 = {nearest:g} m/s the {mode} is {names[int(code[0])]} at every height of the grid."
+        return f"At u0 = {nearest:g} m/s the {part} is {names[int(code[0])]} at every height of the grid."
     parts = [f"{names[int(code[-1])]} from {height[-1]:.4g} m down to {height[changes[0] + 1]:.4g} m"]
     for i in changes:
         parts.append(f"{names[int(code[i])]} from {height[i]:.4g} m")
-    return f"At u0 = {nearest:g} m/s the {mode} is " + ", ".join(parts) + "."
+    return f"At u0 = {nearest:g} m/s the {part} is " + ", ".join(parts) + "."
 
 
 def _locus_groups(archives):
@@ -364,7 +486,7 @@ def _locus_groups(archives):
     h-derivatives on)."""
     groups = []
     for archive in archives:
-        if not (archive.has("results/modes/short_period/eigenvalue_re_per_s") and "height_m" in archive.design_names):
+        if not (archive.has(MODE_EIGENVALUES["short_period"][0]) and "height_m" in archive.design_names):
             continue
         height = archive.param("height_m")
         speed = archive.param("speed_mps")
@@ -477,8 +599,7 @@ def root_locus(archives, outdir):
         return []
     archive, key, rows, speed, on = source
     height = archive.param("height_m")[rows]
-    modes = {m: (archive.column(f"results/modes/{m}/eigenvalue_re_per_s")[rows],
-                 archive.column(f"results/modes/{m}/eigenvalue_im_per_s")[rows]) for m in ("short_period", "phugoid", "height")}
+    modes = {m: (archive.column(re)[rows], archive.column(im)[rows]) for m, (re, im) in MODE_EIGENVALUES.items()}
     at_paper_speed = abs(speed - PAPER_SPEED_MPS) < SAME_SPEED_MPS
     # The paper's own points: runs at exactly its speed at a few heights (the Table A2 study), if any.
     table_points = None
@@ -486,9 +607,8 @@ def root_locus(archives, outdir):
         if (other is not source and other[4] == on and abs(other[3] - speed) < SAME_SPEED_MPS and at_paper_speed
                 and len(other[2]) <= 30):
             a, _, r, _, _ = other
-            table_points = (a.param("height_m")[r], {m: (a.column(f"results/modes/{m}/eigenvalue_re_per_s")[r],
-                                                         a.column(f"results/modes/{m}/eigenvalue_im_per_s")[r])
-                                                     for m in modes}, a.study_name)
+            table_points = (a.param("height_m")[r], {m: (a.column(re)[r], a.column(im)[r])
+                                                     for m, (re, im) in MODE_EIGENVALUES.items()}, a.study_name)
             break
     b = archive.aircraft.wingspan_m
     norm = LogNorm(height.min(), height.max()) if height.min() > 0 else Normalize(height.min(), height.max())
@@ -598,7 +718,7 @@ def _distinct_styles(n):
 def open_loop(archives, outdir):
     figures = []
     for archive in archives:
-        if not archive.has("series/open_loop/height_m"):
+        if not archive.has(OPEN_LOOP_HEIGHT):
             continue
         height0 = archive.param("height_m")
         rows = np.nonzero(archive.complete)[0]
@@ -607,8 +727,8 @@ def open_loop(archives, outdir):
             continue
         if len(rows) > MAX_OPEN_LOOP_LINES:
             rows = rows[np.linspace(0, len(rows) - 1, MAX_OPEN_LOOP_LINES).round().astype(int)]
-        time = archive.file["series/open_loop/time_s"][...]
-        series = archive.series("series/open_loop/height_m", rows)
+        time = archive.file[OPEN_LOOP_TIME][...]
+        series = archive.series(OPEN_LOOP_HEIGHT, rows)
         groups = {int(r): key for key, members in archive.groups(("height_m",)) for r in members}
         b = archive.aircraft.wingspan_m
         wheel = archive.aircraft.wheel_contact_height_m
@@ -678,14 +798,13 @@ def open_loop(archives, outdir):
 def landing(archives, outdir):
     figures = []
     for archive in archives:
-        if not archive.has("series/landing/height_m"):
+        if not archive.has(LANDING_SERIES["height_m"]):
             continue
         rows = np.nonzero(archive.complete)[0][:MAX_LANDING_LINES]
         if len(rows) == 0:
             continue
-        time = archive.file["series/landing/time_s"][...]
-        data = {name: archive.series("series/landing/" + name, rows)
-                for name in ("height_m", "distance_past_transmitter_m", "elevator_rad", "pitch_rate_radps")}
+        time = archive.file[LANDING_TIME][...]
+        data = {name: archive.series(path, rows) for name, path in LANDING_SERIES.items()}
         groups = {int(r): key for key, members in archive.groups(()) for r in members}
         fig, axes = plt.subplots(2, 2, figsize=(12, 8), layout="constrained")
         styles = ["-", "--", "-.", ":"]

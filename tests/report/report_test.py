@@ -219,7 +219,7 @@ class Figures(unittest.TestCase):
         self.assertIn("at u0 = 31.5 m/s, the nearest of its speeds to the paper's 32.0208 m/s", figures[0].caption)
 
     def test_flying_qualities_say_where_each_level_is_lost(self):
-        figures, described = draw(report_figures.flying_qualities, [FLYING])
+        figures, described = draw(report_figures.level_maps, [FLYING])
         self.assertEqual(len(figures), 1)
         self.assertEqual(len(described[figures[0].file]["maps"]), 1)
         # The caption's heights are the archive's: from the top down at the paper's speed, the first

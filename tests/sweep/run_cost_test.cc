@@ -88,5 +88,42 @@ TEST(RunCost, AStopFlagEndsTheMeasurement) {
   EXPECT_EQ(e.timed_runs, 0) << "set before the start, the flag lets no run be measured";
 }
 
+// SweepSeconds and SteadyWallPerRun against sums done by hand (docs/sweep.md, "Dry run").
+// Double rounding of a few products and sums.
+constexpr double kArithmetic = 1e-12;
+
+TEST(SweepSeconds, OneBatchPassesThroughThePipelineTheOtherRunsGoAtTheSteadyRate) {
+  // 4 ms compute, 1 ms encode, 0.5 ms store per run; 100 ms per sweep; 2 threads on 2 cores.
+  const SweepTimeParts parts{4e-3, 1e-3, 0.5e-3, 0.1};
+  // max(5/2, 0.5, 5.5/min(3, 2)) ms: the workers and the writer share the two cores.
+  EXPECT_NEAR(SteadyWallPerRun(parts, 2, 2), 2.75e-3, kArithmetic);
+  // 100 x (4/2 + 1 + 0.5) ms + 900 x 2.75 ms + 100 ms.
+  EXPECT_NEAR(SweepSeconds(parts, 1000, 100, 2, 2), 0.35 + 2.475 + 0.1, kArithmetic);
+}
+
+TEST(SweepSeconds, ASweepOfOneBatchIsThatBatchThroughThePipelinePlusTheFixedPart) {
+  const SweepTimeParts parts{4e-3, 1e-3, 0.5e-3, 0.1};
+  // 10 x (2 + 1 + 0.5) ms + 100 ms: nothing overlaps.
+  EXPECT_NEAR(SweepSeconds(parts, 10, 100, 2, 2), 0.135, kArithmetic);
+  EXPECT_NEAR(SweepSeconds(parts, 0, 100, 2, 2), 0.1, kArithmetic) << "no run: the fixed part alone";
+}
+
+TEST(SweepSeconds, TheBindingStageSetsTheSteadyRate) {
+  // The writer binds: 10 ms to store a run beside 1 ms of work on 4 threads (8 cores).
+  EXPECT_NEAR(SteadyWallPerRun({1e-3, 0, 10e-3, 0}, 4, 8), 10e-3, kArithmetic);
+  // The workers bind: (8 + 2) ms / 4 threads; the cores (8) do not.
+  EXPECT_NEAR(SteadyWallPerRun({8e-3, 2e-3, 1e-3, 0}, 4, 8), 2.5e-3, kArithmetic);
+  // One core: everything shares it, (8 + 2 + 1) ms.
+  EXPECT_NEAR(SteadyWallPerRun({8e-3, 2e-3, 1e-3, 0}, 4, 1), 11e-3, kArithmetic);
+  // 1000 runs in batches of 10 at the cores' rate, 10 x (2 + 2 + 1) ms for the first batch + 990 x 11 ms.
+  EXPECT_NEAR(SweepSeconds({8e-3, 2e-3, 1e-3, 0.25}, 1000, 10, 4, 1), 0.05 + 10.89 + 0.25, kArithmetic);
+}
+
+TEST(MeasurePipelineStart, RunsNoBatch) {
+  // The sink aborts if called: a pipeline of no batch computes and writes nothing.
+  const SweepPlan plan = ModesPlan();
+  EXPECT_GT(MeasurePipelineStart(plan, 2), 0.0);
+}
+
 }  // namespace
 }  // namespace gesweep

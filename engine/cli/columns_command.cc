@@ -1,0 +1,315 @@
+// gesweep columns: the column manifest, every dataset an archive can hold, with its units, description,
+// type, width, levels, component names and time axis (schemas/archive.md; schemas/columns.json is its
+// --json output, checked by tests/report/columns_manifest_test.py). Each analysis of the registry is
+// built with its default settings and asked for its columns with time series on, so the manifest is
+// what the analyses declare, not a second list.
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "engine/aircraft/aircraft.h"
+#include "engine/analyses/analysis.h"
+#include "engine/analyses/parameter_catalog.h"
+#include "engine/archive/archive_format.h"
+#include "engine/cli/command.h"
+#include "engine/common/errors.h"
+#include "engine/common/toml_reader.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace gesweep::cli {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// Version of the manifest's own layout (not of the archive's, which it names beside it).
+constexpr int kManifestVersion = 1;
+// A column is a rating when it is an int8 code whose first level is named this (any case):
+// "level 1", "level 2", ..., a larger code worse. The one named kOverallRatingName is its analysis's
+// overall rating (the worst of the others, the parts).
+constexpr std::string_view kRatingFirstLevel = "level 1";
+constexpr std::string_view kOverallRatingName = "level";
+// Settings for the analyses that have a required setting (their columns do not depend on it); every
+// other analysis is built from an empty [analyses.<name>] table, i.e. its defaults.
+constexpr std::pair<std::string_view, std::string_view> kRequiredSettings[] = {
+    {"linear", "coefficients = [1.0]"},
+};
+
+// The settings table `name` is built with: its required settings, or none.
+toml::table SettingsOf(std::string_view name) {
+  for (const auto& [analysis, text] : kRequiredSettings) {
+    if (analysis == name)
+      return ParseToml(text, "gesweep columns (its settings of " + std::string(name) + ")");
+  }
+  return toml::table{};
+}
+
+std::string_view TypeName(ColumnType type) {
+  switch (type) {
+    case ColumnType::kFloat64:
+      return "float64";
+    case ColumnType::kInt32:
+      return "int32";
+    case ColumnType::kInt8:
+      return "int8";
+    case ColumnType::kComplex:
+      return "complex128";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::string_view KindName(ParameterKind kind) {
+  switch (kind) {
+    case ParameterKind::kReal:
+      return "real";
+    case ParameterKind::kBoolean:
+      return "boolean";
+    case ParameterKind::kChoice:
+      return "choice";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::string_view GroupName(ParameterGroup group) {
+  switch (group) {
+    case ParameterGroup::kFlight:
+      return "flight";
+    case ParameterGroup::kModel:
+      return "model";
+    case ParameterGroup::kOpenLoop:
+      return "open_loop";
+    case ParameterGroup::kLanding:
+      return "landing";
+    case ParameterGroup::kVerification:
+      return "verification";
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+std::string Lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// The last part of a path: the name a script asks for ("results/modes/phugoid/damping_ratio" under
+// "results/modes/" is "phugoid/damping_ratio").
+std::string NameUnder(const std::string& path, const std::string& prefix) {
+  GESWEEP_DEMAND(path.compare(0, prefix.size(), prefix) == 0);
+  return path.substr(prefix.size());
+}
+
+// "rating", "overall_rating" or "" (see kRatingFirstLevel).
+std::string Role(const OutputColumn& column, const std::string& name) {
+  if (column.type != ColumnType::kInt8 || column.levels.empty() ||
+      Lower(column.levels[0]) != kRatingFirstLevel) {
+    return "";
+  }
+  return name == kOverallRatingName ? "overall_rating" : "rating";
+}
+
+Json ColumnJson(const OutputColumn& column, const std::string& analysis) {
+  const bool series = !column.time_axis.empty();
+  const std::string group = series ? archive::kSeriesGroup : archive::kResultsGroup;
+  const std::string name = NameUnder(column.path, group + "/" + analysis + "/");
+  Json out = {{"path", column.path},
+              {"group", group},
+              {"name", name},
+              {"units", column.units},
+              {"description", column.description},
+              {"type", TypeName(column.type)},
+              {"width", column.width}};
+  out["levels"] = column.levels;
+  out["component_names"] = column.component_names;
+  out["time_axis"] = column.time_axis;
+  if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
+    out["fill"] = column.integer_fill;
+  } else {
+    out["fill"] = nullptr;  // NaN
+  }
+  out["role"] = Role(column, name);
+  return out;
+}
+
+Json AxisJson(const TimeAxis& axis) {
+  GESWEEP_DEMAND(!axis.times_s.empty());
+  const double step = axis.times_s.size() > 1 ? axis.times_s[1] - axis.times_s[0] : 0.0;
+  return {{"path", axis.path},
+          {"description", axis.description},
+          {"units", "s"},
+          {"samples", axis.times_s.size()},
+          {"first_s", axis.times_s.front()},
+          {"step_s", step},
+          {"last_s", axis.times_s.back()}};
+}
+
+// The bookkeeping datasets every archive has (engine/archive/archive_writer.cc writes the same
+// units, descriptions and levels; the manifest test compares them with a real archive).
+Json RunsJson() {
+  Json runs = Json::array();
+  runs.push_back({{"path", archive::kRunIndex},
+                  {"units", "1"},
+                  {"description", "Index of the run in the design (0-based); -1 where not written yet"},
+                  {"type", "int64"},
+                  {"levels", Json::array()}});
+  runs.push_back({{"path", archive::kRunId},
+                  {"units", "1"},
+                  {"description",
+                   "Stable id of the run: FNV-1a hash of its design parameters' names and values (with "
+                   "runs/index, identifies the run across shards and resumes)"},
+                  {"type", "uint64"},
+                  {"levels", Json::array()}});
+  runs.push_back(
+      {{"path", archive::kRunStatus},
+       {"units", "1"},
+       {"description",
+        "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's results, so "
+        "a nonzero status marks a complete run"},
+       {"type", "int8"},
+       {"levels", {"pending", "ok", "failed"}}});
+  runs.push_back(
+      {{"path", archive::kRunMessage},
+       {"units", "1"},
+       {"description",
+        "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
+            std::to_string(kMessageLength) +
+            " bytes (a longer message ends in '...'); empty for most runs, whose chunks are never "
+            "written"},
+       {"type", "string" + std::to_string(kMessageLength)},
+       {"levels", Json::array()}});
+  return runs;
+}
+
+// Every parameter a design can sweep: design/<name> when swept (float64; a boolean 0/1, a choice the
+// index of its level).
+Json DesignJson() {
+  Json design = Json::array();
+  for (const ParameterInfo& info : ParameterCatalog()) {
+    design.push_back({{"path", archive::DesignPath(info.name)},
+                      {"name", info.name},
+                      {"units", info.units},
+                      {"description", info.description},
+                      {"type", "float64"},
+                      {"kind", KindName(info.kind)},
+                      {"group", GroupName(info.group)},
+                      {"levels", info.levels}});
+  }
+  return design;
+}
+
+Json Manifest(const Aircraft& aircraft) {
+  StorageOptions storage;
+  storage.time_series = true;
+  Json analyses = Json::array();
+  for (const AnalysisEntry& entry : AnalysisRegistry()) {
+    GESWEEP_DEMAND(entry.factory != nullptr);
+    const toml::table table = SettingsOf(entry.name);
+    const TomlSection settings(table, "gesweep columns (engine/cli/columns_command.cc, kRequiredSettings)",
+                               "analyses." + std::string(entry.name));
+    std::unique_ptr<Analysis> analysis = entry.factory(settings, entry.needs_model ? &aircraft : nullptr);
+    OutputSchema schema;
+    analysis->DeclareOutputs(schema, storage);
+    Json columns = Json::array();
+    for (const OutputColumn& column : schema.columns)
+      columns.push_back(ColumnJson(column, std::string(entry.name)));
+    Json axes = Json::array();
+    for (const TimeAxis& axis : schema.axes) axes.push_back(AxisJson(axis));
+    Json parameters = Json::array();
+    for (ParameterId id : analysis->parameters_used()) {
+      parameters.push_back(ParameterCatalog()[static_cast<std::size_t>(id)].name);
+    }
+    analyses.push_back({{"name", entry.name},
+                        {"description", entry.description},
+                        {"needs_model", entry.needs_model},
+                        {"parameters_used", parameters},
+                        {"columns", columns},
+                        {"time_axes", axes}});
+  }
+  return {{"format", "gesweep-columns"},
+          {"format_version", kManifestVersion},
+          {"archive_format_version", archive::kFormatVersion},
+          {"generated_by", "gesweep columns --json"},
+          {"note",
+           "Every dataset an archive can hold (schemas/archive.md). Each analysis is built with its default "
+           "settings; series widths are for output.time_series = true at the default output_dt_s and "
+           "durations (a study's own settings change them, not the names). role: 'rating' for an int8 "
+           "column whose levels begin 'level 1', 'overall_rating' for the one named 'level'."},
+          {"storage", {{"time_series", storage.time_series}, {"output_dt_s", storage.output_dt_s}}},
+          {"runs", RunsJson()},
+          {"design", DesignJson()},
+          {"analyses", analyses}};
+}
+
+std::string Text(const Json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_array()) {
+    std::string out;
+    for (const auto& item : value) out += (out.empty() ? "" : ", ") + Text(item);
+    return out;
+  }
+  return value.dump();
+}
+
+void PrintText(const Json& manifest) {
+  auto row = [](const std::string& path, const std::string& type, const std::string& units,
+                const std::string& extra, const std::string& description) {
+    std::cout << std::left << std::setw(58) << path << " " << std::setw(11) << type << " " << std::setw(7)
+              << units << " " << description << (extra.empty() ? "" : "  [" + extra + "]") << "\n";
+  };
+  std::cout << "# The columns of a gesweep archive (format " << Text(manifest["archive_format_version"])
+            << "); `gesweep columns --json` gives schemas/columns.json.\n";
+  std::cout << "\n## runs (every archive)\n";
+  for (const auto& c : manifest["runs"]) {
+    row(Text(c["path"]), Text(c["type"]), Text(c["units"]),
+        c["levels"].empty() ? "" : "levels: " + Text(c["levels"]), Text(c["description"]));
+  }
+  std::cout << "\n## design (one dataset per swept parameter)\n";
+  for (const auto& c : manifest["design"]) {
+    std::string extra = Text(c["kind"]);
+    if (!c["levels"].empty()) extra += "; levels: " + Text(c["levels"]);
+    row(Text(c["path"]), Text(c["type"]), Text(c["units"]), extra, Text(c["description"]));
+  }
+  for (const auto& analysis : manifest["analyses"]) {
+    std::cout << "\n## " << Text(analysis["name"]) << ": " << Text(analysis["description"]) << "\n";
+    for (const auto& c : analysis["columns"]) {
+      std::string type = Text(c["type"]);
+      if (c["width"].get<int>() != 1) type += "[" + Text(c["width"]) + "]";
+      std::vector<std::string> extra;
+      if (!c["levels"].empty()) extra.push_back("levels: " + Text(c["levels"]));
+      if (!c["component_names"].empty()) extra.push_back("components: " + Text(c["component_names"]));
+      if (!Text(c["time_axis"]).empty()) extra.push_back("time axis: " + Text(c["time_axis"]));
+      if (!Text(c["role"]).empty()) extra.push_back("role: " + Text(c["role"]));
+      std::string joined;
+      for (const auto& e : extra) joined += (joined.empty() ? "" : "; ") + e;
+      row(Text(c["path"]), type, Text(c["units"]), joined, Text(c["description"]));
+    }
+    for (const auto& axis : analysis["time_axes"]) {
+      row(Text(axis["path"]), "float64[" + Text(axis["samples"]) + "]", "s",
+          "time axis: " + Text(axis["first_s"]) + " to " + Text(axis["last_s"]) + " s by " +
+              Text(axis["step_s"]),
+          Text(axis["description"]));
+    }
+  }
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "columns", "The column manifest: every dataset an archive can hold (schemas/columns.json is its --json)",
+    [](CLI::App& app) -> std::function<int()> {
+      auto json = std::make_shared<bool>(false);
+      auto aircraft = std::make_shared<std::string>(GESWEEP_COLUMNS_AIRCRAFT_DEFAULT);
+      app.add_flag("--json", *json, "JSON (schemas/columns.json) instead of a text table");
+      app.add_option("--aircraft", *aircraft,
+                     "Aircraft file the analyses that need one are built with (the columns do not depend on "
+                     "it); default: the repository's studies/aircraft/ance.toml");
+      return [json, aircraft] {
+        const Json manifest = Manifest(LoadAircraftFile(*aircraft));
+        if (*json) {
+          std::cout << manifest.dump(2) << "\n";
+        } else {
+          PrintText(manifest);
+        }
+        return 0;
+      };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli
