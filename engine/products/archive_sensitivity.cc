@@ -220,14 +220,8 @@ std::string Plural(std::int64_t count, const std::string& singular, const std::s
 
 }  // namespace
 
-std::string_view ToString(SensitivityMethod method) {
-  return method == SensitivityMethod::kSobol ? "sobol" : "morris";
-}
-
 std::optional<SensitivityMethod> ParseSensitivityMethod(std::string_view text) {
-  if (text == "sobol") return SensitivityMethod::kSobol;
-  if (text == "morris") return SensitivityMethod::kMorris;
-  return std::nullopt;
+  return ParseEnum<SensitivityMethod>(text);
 }
 
 std::int64_t ArchiveSensitivity::n() const {

@@ -32,29 +32,6 @@ struct Entry {
 constexpr std::int64_t kEntryBytes = sizeof(Entry);
 constexpr std::int64_t kHistogramBytes = kHistogramBuckets * sizeof(std::int64_t);
 
-const char* KindName(AggregateKind kind) {
-  switch (kind) {
-    case AggregateKind::kCount:
-      return "count";
-    case AggregateKind::kSum:
-      return "sum";
-    case AggregateKind::kMin:
-      return "min";
-    case AggregateKind::kMax:
-      return "max";
-    case AggregateKind::kMean:
-      return "mean";
-    case AggregateKind::kStd:
-      return "std";
-    case AggregateKind::kMedian:
-      return "median";
-    case AggregateKind::kQuantile:
-      return "quantile";
-  }
-  GESWEEP_DEMAND(false);
-  return "";
-}
-
 bool IsOrderStatistic(AggregateKind kind) {
   return kind == AggregateKind::kMedian || kind == AggregateKind::kQuantile;
 }
@@ -96,7 +73,7 @@ std::optional<double> ParseNumber(const std::string& text) {
 
 std::string Label(const AggregateSpec& spec, const ColumnCatalog& catalog) {
   if (spec.column < 0) return "count";
-  std::string label = std::string(KindName(spec.kind)) + "(" + catalog.column(spec.column).name;
+  std::string label = std::string(ToString(spec.kind)) + "(" + catalog.column(spec.column).name;
   if (spec.kind == AggregateKind::kQuantile) label += ", " + FormatValue(spec.p);
   if (spec.kind == AggregateKind::kStd && spec.ddof != 1) label += ", " + std::to_string(spec.ddof);
   return label + ")";
@@ -115,24 +92,17 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
   if (item.empty()) fail("an empty item; " + kForms);
   const std::size_t open = item.find('(');
   const std::string name = Trim(item.substr(0, open));
-  static const std::pair<const char*, AggregateKind> kKinds[] = {
-      {"count", AggregateKind::kCount},   {"sum", AggregateKind::kSum},          {"min", AggregateKind::kMin},
-      {"max", AggregateKind::kMax},       {"mean", AggregateKind::kMean},        {"std", AggregateKind::kStd},
-      {"median", AggregateKind::kMedian}, {"quantile", AggregateKind::kQuantile}};
-  std::optional<AggregateKind> kind;
-  for (const auto& [word, k] : kKinds) {
-    if (name == word) kind = k;
-  }
+  const std::optional<AggregateKind> kind = ParseEnum<AggregateKind>(name);
   if (!kind) {
     std::vector<std::string> words;
-    for (const auto& entry : kKinds) words.push_back(entry.first);
+    for (const auto& entry : EnumNames<AggregateKind>::kTable) words.emplace_back(entry.name);
     const std::string nearest = NearestName(name, words);
     fail("unknown statistic '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
          "; " + kForms);
   }
   if (open == std::string::npos) {
     if (*kind != AggregateKind::kCount)
-      fail(std::string(KindName(*kind)) + " needs a column: " + name + "(c)");
+      fail(std::string(ToString(*kind)) + " needs a column: " + name + "(c)");
     AggregateSpec spec;
     spec.label = "count";
     return {spec};
@@ -159,7 +129,7 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
       base.ddof = ddof == "0" ? 0 : 1;
     }
   } else if (extra != 0) {
-    fail(std::string(KindName(*kind)) + " takes one column: " + name + "(c)");
+    fail(std::string(ToString(*kind)) + " takes one column: " + name + "(c)");
   }
   const bool wildcard = column_name.find_first_of("*?[") != std::string::npos;
   std::vector<AggregateSpec> specs;
@@ -385,7 +355,7 @@ class Aggregator {
     for (const AggregateSpec& spec : specs_) {
       RunColumn column;
       column.name = spec.label;
-      column.statistic = KindName(spec.kind);
+      column.statistic = ToString(spec.kind);
       if (spec.column >= 0) {
         const RunColumn& source = catalog_.column(spec.column);
         column.path = source.path;
@@ -397,7 +367,7 @@ class Aggregator {
                                 spec.kind == AggregateKind::kSum));
         if (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax)
           column.levels = source.levels;
-        column.description = std::string(KindName(spec.kind)) + " of " + source.path;
+        column.description = std::string(ToString(spec.kind)) + " of " + source.path;
       } else {
         column.integer = true;
         column.description = "runs in the group";
