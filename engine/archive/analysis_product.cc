@@ -4,6 +4,7 @@
 
 #include "engine/archive/hdf5_util.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 
 namespace gesweep {
 namespace {
@@ -131,8 +132,8 @@ ProductGroup ProductGroup::Group(const std::string& name) {
   return ProductGroup(id);
 }
 
-void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path, const std::string& busy_hint,
-                          const std::function<void(ProductGroup&)>& write) {
+void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path,
+                          const std::string& printable, const std::function<void(ProductGroup&)>& write) {
   hdf5::Quiet();
   const std::string shown = archive.string();
   Handle fapl = hdf5::FileAccess();
@@ -140,9 +141,10 @@ void WriteAnalysisProduct(const std::filesystem::path& archive, const std::strin
   if (id < 0) {
     const std::string detail = hdf5::LastError();
     H5Eclear2(H5E_DEFAULT);
-    throw InputError(shown, "", "",
-                     "cannot open the archive for writing (HDF5: " + detail +
-                         "); is another program reading or writing it?" + (busy_hint.empty() ? "" : " " + busy_hint));
+    throw RequestError(shown, "", "",
+                       "cannot open the archive for writing (HDF5: " + detail +
+                           "); is another program reading or writing it?",
+                       printable.empty() ? "" : "no_write", printable);
   }
   Handle file(id);
   hdf5::ReplaceGroup(file.get(), path, [&](const std::string& temporary) {

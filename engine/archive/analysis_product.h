@@ -72,9 +72,10 @@ class ProductGroup {
 /// Writes the product `path` (e.g. "analysis/boundary", "analysis/sensitivity/H_m") of `archive`:
 /// `write` fills a fresh group, which then replaces the old product whole (a failure leaves the old
 /// one as it was). Throws InputError naming the archive when it cannot be opened for writing
-/// (another program reads or writes it; `busy_hint` is added, e.g. "pass --no-write to only print
-/// it"), ArchiveError for an I/O failure.
-void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path, const std::string& busy_hint,
-                          const std::function<void(ProductGroup&)>& write);
+/// (another program reads or writes it; when `printable` names what the caller could print instead,
+/// e.g. "the boundary", the error carries remedy "no_write" with that argument: errors.h),
+/// ArchiveError for an I/O failure.
+void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path,
+                          const std::string& printable, const std::function<void(ProductGroup&)>& write);
 
 }  // namespace gesweep

@@ -9,6 +9,7 @@
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
+#include "engine/common/request_error.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
@@ -193,15 +194,16 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   if (directory.empty()) directory = ".";
   std::error_code ec;
   if (!std::filesystem::is_directory(directory, ec)) {
-    throw InputError("command line", "-o", shown, "the directory " + directory.string() + " does not exist");
+    throw InputError("command line", "output", shown,
+                     "the directory " + directory.string() + " does not exist");
   }
   // The one output check of every command (engine/common/output_guard.h): not an input (the same
   // file, a hard link or a symlink to it), and a regular file when it exists.
   std::vector<NamedInput> named;
   for (const auto& input : inputs) named.push_back({input, "shard archive"});
-  CheckOutputPath(output, OutputKind::kFile, named, "-o", {output.string() + ".partial"});
+  CheckOutputPath(output, OutputKind::kFile, named, "output", {output.string() + ".partial"});
   if (std::filesystem::exists(output, ec) && !force) {
-    throw InputError("command line", "-o", shown, "already exists; pass --force to replace it");
+    throw RequestError("command line", "output", shown, "already exists", "force");
   }
 
   // Open every shard and check it belongs.
@@ -212,11 +214,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
     shard.reader.emplace(ArchiveReader::Open(input));
     ArchiveReader& reader = *shard.reader;
     if (reader.snapshot()) {
-      throw InputError(input.string(), "", "",
-                       "shard " + reader.StringAttribute("shard") +
-                           " is incomplete: its sweep is still writing it or was killed; finish it with "
-                           "`gesweep run ... --shard " +
-                           reader.StringAttribute("shard") + " --resume` first");
+      throw RequestError(input.string(), "", "",
+                         "shard " + reader.StringAttribute("shard") +
+                             " is incomplete: its sweep is still writing it or was killed",
+                         "resume_shard_first", reader.StringAttribute("shard"));
     }
     shard.first = reader.IntegerAttribute("first_run");
     shard.count = reader.run_count();
@@ -302,10 +303,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
       }
     }
     if (pending > 0) {
-      throw InputError(
-          shard.path.string(), "shard", shard.shard,
-          "is incomplete: " + std::to_string(pending) + " of its " + std::to_string(shard.count) +
-              " runs are pending; finish it with `gesweep run ... --shard " + shard.shard + " --resume`");
+      throw RequestError(shard.path.string(), "shard", shard.shard,
+                         "is incomplete: " + std::to_string(pending) + " of its " +
+                             std::to_string(shard.count) + " runs are pending",
+                         "resume_shard", shard.shard);
     }
   }
 
@@ -369,7 +370,7 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
           file.get(), "virtual_note",
           "The per-run datasets of this archive are HDF5 virtual datasets over the shard files listed in "
           "virtual_sources (paths relative to this file's directory): keep them where they are; "
-          "`gesweep merge --copy` makes a self-contained archive");
+          "a merge that copies (gesweep merge in its copy mode) makes a self-contained archive");
     } else {
       hdf5::WriteAttribute(file.get(), "merge_kind", "copy");
     }

@@ -11,6 +11,7 @@
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
+#include "engine/common/request_error.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
@@ -201,10 +202,12 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
       }
     }
     if (truncated) {
-      throw InputError(shown, "", "",
-                       "the file is " + std::to_string(truncated->second - truncated->first) +
-                           " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
-                           "batches are kept: gesweep run STUDY -o " + shown + " --resume repairs it and goes on");
+      throw RequestError(
+          shown, "", "",
+          "the file is " + std::to_string(truncated->second - truncated->first) +
+              " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
+              "batches are kept",
+          "resume_repairs", shown);
     }
     throw InputError(shown, "", "",
                      "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
@@ -244,10 +247,12 @@ void ArchiveReader::CheckVirtualSources() const {
                                                                                     : directory / source;
     std::error_code ec;
     auto refuse = [&](const std::string& why) {
-      throw InputError(shown, "virtual_sources", source,
-                       why + ": a virtual archive (gesweep merge) reads its shard files in place, so they must "
-                             "stay where they were merged (relative to this file); put it back, or merge again "
-                             "(gesweep merge --copy makes a self-contained archive)");
+      throw RequestError(
+          shown, "virtual_sources", source,
+          why +
+              ": a virtual archive (gesweep merge) reads its shard files in place, so they must "
+              "stay where they were merged (relative to this file); put it back, or merge again",
+          "merge_copy");
     };
     if (!std::filesystem::is_regular_file(shard, ec)) refuse("shard file " + shard.string() + " is missing");
     Handle fapl = hdf5::FileAccess();
@@ -429,9 +434,9 @@ std::vector<std::int64_t> ArchiveReader::CompleteBlocks(int chunk_runs) const {
 
 void ArchiveReader::CheckSameSweep(const SweepPlan& plan, const std::string& shown) const {
   auto refuse = [&](const std::string& what, const std::string& theirs, const std::string& ours) {
-    throw InputError("command line", "-o", shown,
-                     "cannot resume: the archive has " + what + " " + theirs + " but this run has " + ours +
-                         "; use --force to replace it, or another -o");
+    throw RequestError("command line", "output", shown,
+                       "cannot resume: the archive has " + what + " " + theirs + " but this run has " + ours,
+                       "force_or_other_output");
   };
   if (StringAttribute("study_fingerprint") != Hex(plan.study().fingerprint)) {
     refuse("study fingerprint",
@@ -464,10 +469,10 @@ void ArchiveReader::VerifyRunIds(const SweepPlan& plan, const std::vector<std::i
     ReadRows(archive::kRunId, local, 1, H5T_NATIVE_UINT64, &id);
     plan.design().Row(plan.first_run() + local, row.data());
     if (index != plan.first_run() + local || id != plan.RunId(row.data())) {
-      throw InputError(
-          "command line", "-o", shown,
-          "cannot resume: run " + std::to_string(plan.first_run() + local) +
-              " of the archive has other parameters than this study gives it; use --force to replace it");
+      throw RequestError("command line", "output", shown,
+                         "cannot resume: run " + std::to_string(plan.first_run() + local) +
+                             " of the archive has other parameters than this study gives it",
+                         "force_use");
     }
   }
 }

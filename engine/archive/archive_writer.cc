@@ -14,6 +14,7 @@
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 
 namespace gesweep {
 namespace {
@@ -212,9 +213,10 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   }
   {
     Handle analysis(H5Gopen2(file, archive::kAnalysisGroup, H5P_DEFAULT), "open analysis group");
-    hdf5::WriteAttribute(analysis.get(), "description",
-                         "Derived products written after the sweep: the stability boundary (gesweep boundary "
-                         "--archive) and sensitivity indices (gesweep sensitivity)");
+    hdf5::WriteAttribute(
+        analysis.get(), "description",
+        "Derived products written after the sweep: the stability boundary (gesweep boundary, "
+        "from the archive) and sensitivity indices (gesweep sensitivity)");
   }
 
   for (const auto& axis : plan_.schema().axes) {
@@ -402,20 +404,20 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   if (directory.empty()) directory = ".";
   std::error_code ec;
   if (!std::filesystem::is_directory(directory, ec)) {
-    throw InputError("command line", "-o", shown, "the directory " + directory.string() + " does not exist");
+    throw InputError("command line", "output", shown,
+                     "the directory " + directory.string() + " does not exist");
   }
   const auto status = std::filesystem::symlink_status(path, ec);
   const bool exists = !ec && std::filesystem::exists(status);
   if (exists && std::filesystem::is_directory(std::filesystem::status(path, ec))) {
-    throw InputError("command line", "-o", shown,
+    throw InputError("command line", "output", shown,
                      "is a directory; expected an archive file name such as out.h5");
   }
   if (exists && mode == ArchiveOpenMode::kCreate) {
-    throw InputError("command line", "-o", shown,
-                     "already exists; pass --resume to continue it or --force to replace it");
+    throw RequestError("command line", "output", shown, "already exists", "resume_or_force");
   }
   if (access(directory.c_str(), W_OK) != 0) {
-    throw InputError("command line", "-o", shown, "cannot write in the directory " + directory.string());
+    throw InputError("command line", "output", shown, "cannot write in the directory " + directory.string());
   }
 
   std::unique_ptr<ArchiveWriter> writer(new ArchiveWriter(path, plan));
@@ -425,7 +427,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   writer->lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (writer->lock_fd_ < 0) throw ArchiveError("cannot create the lock file " + lock_path);
   if (flock(writer->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    throw InputError("command line", "-o", shown,
+    throw InputError("command line", "output", shown,
                      "archive in use: another gesweep process is writing it (" + lock_path + " is locked)");
   }
   writer->lock_held_ = true;
@@ -442,7 +444,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   if (exists && mode == ArchiveOpenMode::kResume) {
     ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
     if (!existing.StringListAttribute("merged_from").empty()) {
-      throw InputError("command line", "-o", shown,
+      throw InputError("command line", "output", shown,
                        "is a merged archive (gesweep merge), not a shard a sweep writes; resume the shards, "
                        "then merge again");
     }

@@ -41,7 +41,8 @@ WriteCostEstimate MeasureWriteCost(SweepPlan& plan, double seconds_per_run_compu
     std::unique_ptr<ArchiveWriter> writer;
     try {
       const auto open_start = Clock::now();
-      writer = ArchiveWriter::Open(directory / "scratch.h5", plan, RunProvenance{"gesweep run --dry-run", 1},
+      writer = ArchiveWriter::Open(directory / "scratch.h5", plan,
+                                   RunProvenance{"gesweep run, dry run: write cost", 1},
                                    ArchiveOpenMode::kCreate, nullptr);
       estimate.open_seconds = std::chrono::duration<double>(Clock::now() - open_start).count();
       const auto start = Clock::now();

@@ -1,7 +1,6 @@
 // The `gesweep` command: builds the CLI11 app from the registered subcommands, runs the chosen one,
 // and turns a person's bad input into one line on stderr and exit code 2.
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <exception>
 #include <functional>
@@ -10,6 +9,7 @@
 #include <string>
 
 #include "engine/cli/command.h"
+#include "engine/cli/request_names.h"
 #include "engine/common/errors.h"
 
 namespace gesweep::cli {
@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
       if (sub->parsed()) return action();
     }
   } catch (const gesweep::InputError& e) {
-    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
+    // The engine names remedies ("force", "no_write"); the command line words them (request_names.h).
+    std::cerr << "gesweep: error: " << EscapeForMessage(gesweep::cli::ForCommandLine(e).what()) << "\n";
     return 2;
   } catch (const std::exception& e) {
     // Not a person's input and not caught by the command (an I/O failure it did not expect): one

@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <atomic>
-#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <mutex>
@@ -21,6 +21,7 @@
 #include "engine/archive/write_cost.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
+#include "engine/cli/request_names.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
@@ -348,6 +349,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   options.command_line = CommandLine(flags) + " --mpi";
   options.cancel = signals.flag();
   options.ranks_per_node = flags.ranks_per_node;
+  options.describe_input_error = [](const InputError& e) { return std::string(ForCommandLine(e).what()); };
   options.merge = flags.merge == "copy" ? MergeKind::kCopy : MergeKind::kVirtual;
   MpiFinalizer finalize_after_printing;
   SweepProgress progress;

@@ -18,11 +18,12 @@
 #include <optional>
 #include <sstream>
 
+#include "engine/archive/archive_error.h"
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/archive_error.h"
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/request_names.h"
 #include "engine/common/errors.h"
 #include "engine/products/archive_sensitivity.h"
 #include "engine/products/sensitivity_group.h"
@@ -273,7 +274,11 @@ int Sensitivity(const SensitivityFlags& flags) {
     const ArchiveSensitivity result = AnalyzeArchiveOutput(reader, flags.output, options);
     reader.Close();
     if (result.status != SensitivityStatus::kOk) {
-      std::cerr << "gesweep: error: " << flags.archive << ": " << result.message << "\n";
+      std::cerr << "gesweep: error: " << flags.archive << ": " << result.message
+                << (result.failed_runs_remedy.empty()
+                        ? ""
+                        : ", or pass --failed-runs drop_blocks to " + result.failed_runs_remedy)
+                << "\n";
       return result.status == SensitivityStatus::kStoppedOnFailedRuns ? 3 : 1;
     }
     if (lock) WriteSensitivityGroup(path, result, CommandLine(flags));
@@ -288,6 +293,9 @@ int Sensitivity(const SensitivityFlags& flags) {
       if (lock)
         std::cout << "# written to " << flags.archive << ": /" << SensitivityGroupPath(result.output) << "\n";
     }
+  } catch (const InputError& e) {
+    // The engine names the request's fields (the source is the archive): this command's flags.
+    throw ForCommandLine(e, {{"output", "--output"}, {"method", "--method"}});
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
     return 1;

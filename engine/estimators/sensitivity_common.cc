@@ -44,24 +44,8 @@ void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string
   }
 }
 
-std::string_view ToString(FailedRunPolicy policy) {
-  return policy == FailedRunPolicy::kDropBlocks ? "drop_blocks" : "error";
-}
-
 std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text) {
-  if (text == "drop_blocks") return FailedRunPolicy::kDropBlocks;
-  if (text == "error") return FailedRunPolicy::kError;
-  return std::nullopt;
-}
-
-std::string_view ToString(SensitivityStatus status) {
-  switch (status) {
-    case SensitivityStatus::kOk: return "ok";
-    case SensitivityStatus::kStoppedOnFailedRuns: return "stopped_on_failed_runs";
-    case SensitivityStatus::kTooFewBlocks: return "too_few_blocks";
-    case SensitivityStatus::kZeroVariance: return "zero_variance";
-  }
-  GESWEEP_UNREACHABLE();
+  return ParseEnum<FailedRunPolicy>(text);
 }
 
 ConfidenceInterval PercentileInterval(std::vector<double> statistics, double confidence_level) {

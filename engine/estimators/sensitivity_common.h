@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/common/enum_names.h"
+
 namespace gesweep {
 
 /// The value at unit coordinate u ∈ [0, 1] of the interval [lower, upper]: lower + u·(upper − lower),
@@ -39,7 +41,11 @@ enum class FailedRunPolicy {
   kDropBlocks,  ///< drop every Saltelli block (Morris trajectory) that holds a failed row; report how many
   kError,       ///< stop: no indices, status kStoppedOnFailedRuns and a message naming the first failure
 };
-std::string_view ToString(FailedRunPolicy policy);
+template <>
+struct EnumNames<FailedRunPolicy> {
+  static constexpr EnumName<FailedRunPolicy> kTable[] = {{FailedRunPolicy::kDropBlocks, "drop_blocks"},
+                                                         {FailedRunPolicy::kError, "error"}};
+};
 /// Parses "drop_blocks" / "error"; nullopt otherwise.
 std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text);
 
@@ -51,7 +57,14 @@ enum class SensitivityStatus {
   kTooFewBlocks,         ///< fewer than two usable blocks (trajectories) remain
   kZeroVariance,         ///< the output does not vary over the usable rows
 };
-std::string_view ToString(SensitivityStatus status);
+template <>
+struct EnumNames<SensitivityStatus> {
+  static constexpr EnumName<SensitivityStatus> kTable[] = {
+      {SensitivityStatus::kOk, "ok"},
+      {SensitivityStatus::kStoppedOnFailedRuns, "stopped_on_failed_runs"},
+      {SensitivityStatus::kTooFewBlocks, "too_few_blocks"},
+      {SensitivityStatus::kZeroVariance, "zero_variance"}};
+};
 
 /// A two-sided interval [lower, upper]; NaN when not computed.
 struct ConfidenceInterval {

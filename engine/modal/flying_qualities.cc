@@ -41,20 +41,6 @@ bool PhugoidSplit(ModeClassification c) {
 
 }  // namespace
 
-std::string_view ToString(FlyingQualitiesLevel level) {
-  switch (level) {
-    case FlyingQualitiesLevel::kLevel1:
-      return "level 1";
-    case FlyingQualitiesLevel::kLevel2:
-      return "level 2";
-    case FlyingQualitiesLevel::kLevel3:
-      return "level 3";
-    case FlyingQualitiesLevel::kWorseThanLevel3:
-      return "worse than level 3";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
 FlyingQualitiesLevel Worst(FlyingQualitiesLevel a, FlyingQualitiesLevel b) {
   return static_cast<int>(a) >= static_cast<int>(b) ? a : b;
 }

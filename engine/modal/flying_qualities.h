@@ -5,6 +5,7 @@
 
 #include <string_view>
 
+#include "engine/common/enum_names.h"
 #include "engine/modal/modal_analysis.h"
 
 namespace gesweep {
@@ -34,8 +35,15 @@ enum class FlyingQualitiesLevel {
   kLevel3 = 3,           ///< the airplane can be controlled safely
   kWorseThanLevel3 = 4,  ///< meets no level's limit
 };
-/// "level 1", "level 2", "level 3", "worse than level 3".
-std::string_view ToString(FlyingQualitiesLevel level);
+/// "level 1", "level 2", "level 3", "worse than level 3" (ToString: enum_names.h).
+template <>
+struct EnumNames<FlyingQualitiesLevel> {
+  static constexpr EnumName<FlyingQualitiesLevel> kTable[] = {
+      {FlyingQualitiesLevel::kLevel1, "level 1"},
+      {FlyingQualitiesLevel::kLevel2, "level 2"},
+      {FlyingQualitiesLevel::kLevel3, "level 3"},
+      {FlyingQualitiesLevel::kWorseThanLevel3, "worse than level 3"}};
+};
 /// The worse of two levels.
 FlyingQualitiesLevel Worst(FlyingQualitiesLevel a, FlyingQualitiesLevel b);
 

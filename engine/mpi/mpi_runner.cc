@@ -21,6 +21,7 @@
 
 #include "engine/archive/archive_layout.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/sweep/study.h"
 
 namespace gesweep {
@@ -467,10 +468,11 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       const std::string out = options.output.string();
       std::error_code ec;
       if (std::filesystem::is_directory(options.output, ec)) {
-        throw InputError("command line", "-o", out, "is a directory; expected an archive file name such as out.h5");
+        throw InputError("command line", "output", out,
+                         "is a directory; expected an archive file name such as out.h5");
       }
       if (options.mode == ArchiveOpenMode::kCreate && std::filesystem::exists(options.output, ec)) {
-        throw InputError("command line", "-o", out, "already exists; pass --resume to continue it or --force to replace it");
+        throw RequestError("command line", "output", out, "already exists", "resume_or_force");
       }
       // Node shards of another node count: they cannot be resumed by this layout.
       std::filesystem::path directory = options.output.parent_path();
@@ -487,18 +489,20 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
           if (options.mode == ArchiveOpenMode::kForce) {
             std::filesystem::remove(entry.path(), ec);
           } else {
-            throw InputError("command line", "-o", out,
-                             "has node shards of a run on " + match[1].str() + " nodes (" + entry.path().string() +
-                                 "), this run has " + std::to_string(t.nodes) +
-                                 (options.mode == ArchiveOpenMode::kResume
-                                      ? "; resume with as many nodes (GESWEEP_RANKS_PER_NODE or the same allocation)"
-                                      : "; pass --force to replace them or --resume with as many nodes"));
+            const bool resuming = options.mode == ArchiveOpenMode::kResume;
+            throw RequestError(
+                "command line", "output", out,
+                "has node shards of a run on " + match[1].str() + " nodes (" + entry.path().string() +
+                    "), this run has " + std::to_string(t.nodes) +
+                    (resuming ? "; resume with as many nodes (GESWEEP_RANKS_PER_NODE or the same allocation)"
+                              : ""),
+                resuming ? "" : "force_or_resume_nodes");
           }
         }
       }
     } catch (const InputError& e) {
       code = 2;
-      error = e.what();
+      error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
     }
   }
   if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
@@ -521,7 +525,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       writer = ArchiveWriter::Open(NodeArchivePath(options.output, t.node, t.nodes), *node_plan, provenance,
                                    options.mode, &opened);
       if (node_plan->chunk_runs() != plan.chunk_runs()) {
-        throw InputError("command line", "-o", NodeArchivePath(options.output, t.node, t.nodes).string(),
+        throw InputError("command line", "output", NodeArchivePath(options.output, t.node, t.nodes).string(),
                          "cannot resume: it has batches of " + std::to_string(node_plan->chunk_runs()) +
                              " runs, this run " + std::to_string(plan.chunk_runs()));
       }
@@ -529,7 +533,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       for (const std::int64_t local : opened.pending_blocks) pending_mine.push_back(range.first + local);
     } catch (const InputError& e) {
       code = 2;
-      error = e.what();
+      error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
     } catch (const ArchiveError& e) {
       code = 1;
       error = e.what();
@@ -835,7 +839,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
         merged = 1;
       } catch (const InputError& e) {
         code = 2;
-        error = e.what();
+        error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
       } catch (const ArchiveError& e) {
         code = 1;
         error = e.what();

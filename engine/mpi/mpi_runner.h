@@ -30,6 +30,7 @@
 
 #include "engine/archive/archive_merge.h"
 #include "engine/archive/archive_writer.h"
+#include "engine/common/errors.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -50,6 +51,10 @@ struct MpiRunOptions {
   /// that share memory (MPI_Comm_split_type SHARED). Lets 4 ranks on one machine act as 2 nodes.
   int ranks_per_node = 0;
   MergeKind merge = MergeKind::kVirtual;  ///< how the node shards become ARCHIVE
+  /// The line of a person's bad input that the ranks agree on and report (MpiSweepReport::error):
+  /// the front end's wording of the error (its flags for the request's fields, its hints for a
+  /// RequestError's remedy); empty: what().
+  std::function<std::string(const InputError&)> describe_input_error;
 };
 
 struct MpiSweepReport;

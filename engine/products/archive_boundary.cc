@@ -6,14 +6,15 @@
 #include <map>
 #include <sstream>
 
-#include "engine/archive/archive_format.h"
 #include "engine/archive/analysis_product.h"
+#include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/modal/modal_analysis.h"
-#include "engine/query/run_columns.h"
 #include "engine/products/run_model.h"
+#include "engine/query/run_columns.h"
 
 namespace gesweep {
 namespace {
@@ -86,15 +87,15 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
   for (const std::string& name : options.by) {
     const auto c = catalog.FindPath(archive::DesignPath(name));
     if (c == height_column) {
-      throw InputError("command line", "--by", name,
-                       "the boundary is located along height_m; --by names the other swept parameters");
+      throw RequestError("command line", "by", name, "the boundary is located along height_m",
+                         "by_other_parameters");
     }
     if (!c || std::find(catalog.design_columns().begin(), catalog.design_columns().end(), *c) ==
                   catalog.design_columns().end()) {
       std::string list;
       for (const auto& s : swept) list += (list.empty() ? "" : ", ") + s;
       throw InputError(
-          "command line", "--by", name,
+          "command line", "by", name,
           "expected a parameter the design sweeps besides height_m" +
               (list.empty() ? std::string(" (it sweeps none: one boundary)") : " (" + list + ")"));
     }
@@ -245,7 +246,7 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
 
 void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBoundary& boundary,
                         const std::string& command_line) {
-  WriteAnalysisProduct(archive, kBoundaryGroup, "pass --no-write to only print the boundary", [&](ProductGroup& g) {
+  WriteAnalysisProduct(archive, kBoundaryGroup, "the boundary", [&](ProductGroup& g) {
     std::string keys_text;
     for (const auto& name : boundary.key_names) keys_text += (keys_text.empty() ? "" : ", ") + name;
     g.Attribute("description",

@@ -5,10 +5,11 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/archive/archive_format.h"
 #include "engine/archive/archive_error.h"
+#include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/common/toml_reader.h"
 
 namespace gesweep {
@@ -91,10 +92,10 @@ void RequireCompleteDesign(const ArchiveReader& archive, const std::vector<std::
   }
   const auto pending = std::count(status.begin(), status.end(), kStatusPending);
   if (pending > 0) {
-    throw InputError(
-        source, "runs/status", std::to_string(pending) + " pending",
-        "expected every run complete: " + std::to_string(pending) + " of " + std::to_string(status.size()) +
-            " runs have not run yet; finish the sweep with `gesweep run STUDY -o " + source + " --resume`");
+    throw RequestError(source, "runs/status", std::to_string(pending) + " pending",
+                       "expected every run complete: " + std::to_string(pending) + " of " +
+                           std::to_string(status.size()) + " runs have not run yet",
+                       "finish_sweep", source);
   }
   const std::vector<std::int64_t> index = archive.ReadIntegers(archive::kRunIndex, 0, archive.run_count());
   for (std::size_t r = 0; r < index.size(); ++r) {
@@ -219,14 +220,8 @@ std::string Plural(std::int64_t count, const std::string& singular, const std::s
 
 }  // namespace
 
-std::string_view ToString(SensitivityMethod method) {
-  return method == SensitivityMethod::kSobol ? "sobol" : "morris";
-}
-
 std::optional<SensitivityMethod> ParseSensitivityMethod(std::string_view text) {
-  if (text == "sobol") return SensitivityMethod::kSobol;
-  if (text == "morris") return SensitivityMethod::kMorris;
-  return std::nullopt;
+  return ParseEnum<SensitivityMethod>(text);
 }
 
 std::int64_t ArchiveSensitivity::n() const {
@@ -273,7 +268,7 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
   if (matches.size() > 1) {
     std::vector<std::string> paths;
     for (const auto* m : matches) paths.push_back(m->path);
-    throw InputError(source, "--output", name,
+    throw InputError(source, "output", name,
                      "ambiguous: matches " + Join(paths) + "; give one of these paths");
   }
   // Not a scalar output: say why when the dataset exists, else suggest the nearest name.
@@ -284,12 +279,12 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
   }
   if (!not_scalar.empty()) {
     throw InputError(
-        source, "--output", name,
+        source, "output", name,
         Join(not_scalar) + (not_scalar.size() == 1 ? " is" : " are") +
             " not a scalar result column (one number per run under results/); sensitivity needs one");
   }
   if (outputs.empty()) {
-    throw InputError(source, "--output", name,
+    throw InputError(source, "output", name,
                      "the archive has no scalar result column (its study ran no analysis "
                      "with scalar results)");
   }
@@ -301,7 +296,7 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
   const std::string nearest = NearestName(wanted, names);
   std::vector<std::string> listed;
   for (const auto& output : outputs) listed.push_back(output.name);
-  throw InputError(source, "--output", name,
+  throw InputError(source, "output", name,
                    (nearest.empty() ? std::string() : "did you mean " + nearest + "? ") +
                        "expected a scalar result column: " + Join(listed));
 }
@@ -323,10 +318,10 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
   const auto design_method = ParseSensitivityMethod(result.design_kind);
   if (options.method && design_method != options.method) {
     const std::string needed = *options.method == SensitivityMethod::kSobol ? "sobol" : "morris";
-    throw InputError(
-        source, "--method", std::string(ToString(*options.method)),
-        "needs a " + needed + " design, but this archive's design is " + result.design_kind +
-            (design_method ? " (use --method " + std::string(ToString(*design_method)) + ")" : ""));
+    throw RequestError(source, "method", std::string(ToString(*options.method)),
+                       "needs a " + needed + " design, but this archive's design is " + result.design_kind,
+                       design_method ? "use_method" : "",
+                       design_method ? std::string(ToString(*design_method)) : "");
   }
   if (!design_method) {
     throw InputError(source, "design", result.design_kind,
@@ -406,7 +401,7 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
     }
   }
   if (result.status == SensitivityStatus::kStoppedOnFailedRuns) {
-    // Say it in the CLI's terms, with both kinds of missing value.
+    // Both kinds of missing value; the other remedy, dropping blocks, in failed_runs_remedy.
     const std::int64_t missing = result.runs_failed + result.runs_without_value;
     result.message =
         Plural(missing, "run", "runs") + " of " + std::to_string(result.run_count) + " have no value of " +
@@ -414,9 +409,9 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
         std::to_string(result.runs_without_value) + " ok without a finite value; first: row " +
         std::to_string(result.first_missing_row) +
         (result.first_missing_message.empty() ? "" : ", \"" + result.first_missing_message + "\"") +
-        "); rerun them, or pass --failed-runs drop_blocks to leave out the " +
-        std::to_string(result.blocks_with_missing) + " of " + std::to_string(result.n()) + " " + block_word +
-        " that hold them";
+        "); rerun them";
+    result.failed_runs_remedy = "leave out the " + std::to_string(result.blocks_with_missing) + " of " +
+                                std::to_string(result.n()) + " " + block_word + " that hold them";
   }
   return result;
 }

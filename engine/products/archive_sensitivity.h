@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/common/enum_names.h"
 #include "engine/estimators/morris_effects.h"
 #include "engine/estimators/sensitivity_common.h"
 #include "engine/estimators/sobol_indices.h"
@@ -23,8 +24,12 @@ enum class SensitivityMethod {
   kSobol,   ///< Sobol' indices from a `sobol` (Saltelli) design
   kMorris,  ///< Morris elementary effects from a `morris` design
 };
-/// "sobol" / "morris".
-std::string_view ToString(SensitivityMethod method);
+/// "sobol" / "morris" (ToString, ParseEnum: enum_names.h).
+template <>
+struct EnumNames<SensitivityMethod> {
+  static constexpr EnumName<SensitivityMethod> kTable[] = {{SensitivityMethod::kSobol, "sobol"},
+                                                           {SensitivityMethod::kMorris, "morris"}};
+};
 /// Parses "sobol" / "morris"; nullopt otherwise.
 std::optional<SensitivityMethod> ParseSensitivityMethod(std::string_view text);
 
@@ -77,7 +82,10 @@ struct ArchiveSensitivity {
 
   FailedRunPolicy failed_runs = FailedRunPolicy::kDropBlocks;
   SensitivityStatus status = SensitivityStatus::kOk;
-  std::string message;  ///< why status is not kOk, in terms of the CLI's flags
+  std::string message;  ///< why status is not kOk
+  /// With kStoppedOnFailedRuns: what FailedRunPolicy::kDropBlocks would do instead ("leave out the 3
+  /// of 40 blocks that hold them"); a front end offers it in its own terms.
+  std::string failed_runs_remedy;
 
   SobolIndices sobol;       ///< when method is kSobol
   MorrisIndices morris;     ///< when method is kMorris

@@ -162,7 +162,7 @@ std::string SensitivityGroupPath(const ArchiveOutput& output) {
 void WriteSensitivityGroup(const std::filesystem::path& archive, const ArchiveSensitivity& result,
                            const std::string& command_line) {
   GESWEEP_DEMAND(result.status == SensitivityStatus::kOk);
-  WriteAnalysisProduct(archive, SensitivityGroupPath(result.output), "pass --no-write to only print the result",
+  WriteAnalysisProduct(archive, SensitivityGroupPath(result.output), "the result",
                        [&](ProductGroup& group) { WriteGroup(group, result, command_line); });
 }
 

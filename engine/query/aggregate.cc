@@ -13,6 +13,7 @@
 
 #include "engine/archive/archive_reader.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/common/toml_reader.h"
 #include "engine/query/expression.h"
 
@@ -30,29 +31,6 @@ struct Entry {
 };
 constexpr std::int64_t kEntryBytes = sizeof(Entry);
 constexpr std::int64_t kHistogramBytes = kHistogramBuckets * sizeof(std::int64_t);
-
-const char* KindName(AggregateKind kind) {
-  switch (kind) {
-    case AggregateKind::kCount:
-      return "count";
-    case AggregateKind::kSum:
-      return "sum";
-    case AggregateKind::kMin:
-      return "min";
-    case AggregateKind::kMax:
-      return "max";
-    case AggregateKind::kMean:
-      return "mean";
-    case AggregateKind::kStd:
-      return "std";
-    case AggregateKind::kMedian:
-      return "median";
-    case AggregateKind::kQuantile:
-      return "quantile";
-  }
-  GESWEEP_DEMAND(false);
-  return "";
-}
 
 bool IsOrderStatistic(AggregateKind kind) {
   return kind == AggregateKind::kMedian || kind == AggregateKind::kQuantile;
@@ -95,7 +73,7 @@ std::optional<double> ParseNumber(const std::string& text) {
 
 std::string Label(const AggregateSpec& spec, const ColumnCatalog& catalog) {
   if (spec.column < 0) return "count";
-  std::string label = std::string(KindName(spec.kind)) + "(" + catalog.column(spec.column).name;
+  std::string label = std::string(ToString(spec.kind)) + "(" + catalog.column(spec.column).name;
   if (spec.kind == AggregateKind::kQuantile) label += ", " + FormatValue(spec.p);
   if (spec.kind == AggregateKind::kStd && spec.ddof != 1) label += ", " + std::to_string(spec.ddof);
   return label + ")";
@@ -114,24 +92,17 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
   if (item.empty()) fail("an empty item; " + kForms);
   const std::size_t open = item.find('(');
   const std::string name = Trim(item.substr(0, open));
-  static const std::pair<const char*, AggregateKind> kKinds[] = {
-      {"count", AggregateKind::kCount},   {"sum", AggregateKind::kSum},          {"min", AggregateKind::kMin},
-      {"max", AggregateKind::kMax},       {"mean", AggregateKind::kMean},        {"std", AggregateKind::kStd},
-      {"median", AggregateKind::kMedian}, {"quantile", AggregateKind::kQuantile}};
-  std::optional<AggregateKind> kind;
-  for (const auto& [word, k] : kKinds) {
-    if (name == word) kind = k;
-  }
+  const std::optional<AggregateKind> kind = ParseEnum<AggregateKind>(name);
   if (!kind) {
     std::vector<std::string> words;
-    for (const auto& entry : kKinds) words.push_back(entry.first);
+    for (const auto& entry : EnumNames<AggregateKind>::kTable) words.emplace_back(entry.name);
     const std::string nearest = NearestName(name, words);
     fail("unknown statistic '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
          "; " + kForms);
   }
   if (open == std::string::npos) {
     if (*kind != AggregateKind::kCount)
-      fail(std::string(KindName(*kind)) + " needs a column: " + name + "(c)");
+      fail(std::string(ToString(*kind)) + " needs a column: " + name + "(c)");
     AggregateSpec spec;
     spec.label = "count";
     return {spec};
@@ -158,7 +129,7 @@ std::vector<AggregateSpec> ParseItem(const std::string& raw, const ColumnCatalog
       base.ddof = ddof == "0" ? 0 : 1;
     }
   } else if (extra != 0) {
-    fail(std::string(KindName(*kind)) + " takes one column: " + name + "(c)");
+    fail(std::string(ToString(*kind)) + " takes one column: " + name + "(c)");
   }
   const bool wildcard = column_name.find_first_of("*?[") != std::string::npos;
   std::vector<AggregateSpec> specs;
@@ -343,23 +314,23 @@ class Aggregator {
   // Checks every name before any row is read.
   void Prepare() {
     for (const std::string& name : request_.group_by) {
-      for (int c : catalog_.Expand(name, "command line", "--group-by")) {
+      for (int c : catalog_.Expand(name, "command line", "group_by")) {
         if (std::find(group_columns_.begin(), group_columns_.end(), c) == group_columns_.end())
           group_columns_.push_back(c);
       }
     }
     specs_ = ParseAggregates(
         request_.aggregates.empty() ? std::vector<std::string>{"count"} : request_.aggregates, catalog_);
-    if (!request_.where.empty()) filter_.emplace(RowFilter::Parse(request_.where, catalog_, "--where"));
+    if (!request_.where.empty()) filter_.emplace(RowFilter::Parse(request_.where, catalog_, "where"));
     GESWEEP_DEMAND(request_.chunk_rows > 0);
     if (request_.max_groups < 1) {
-      throw InputError("command line", "--max-groups", std::to_string(request_.max_groups),
+      throw InputError("command line", "max_groups", std::to_string(request_.max_groups),
                        "expected a count >= 1");
     }
     // The budget holds at least one histogram, so every pass makes progress.
     if (request_.memory_bytes < kHistogramBytes + kEntryBytes) {
-      throw InputError("command line", "--memory-mb", std::to_string(request_.memory_bytes / (1 << 20)),
-                       "expected at least 1 (MB)");
+      throw InputError("command line", "memory_bytes", std::to_string(request_.memory_bytes),
+                       "expected at least " + std::to_string(kHistogramBytes + kEntryBytes) + " bytes");
     }
     moment_slot_.assign(specs_.size(), -1);
     for (std::size_t s = 0; s < specs_.size(); ++s) {
@@ -384,7 +355,7 @@ class Aggregator {
     for (const AggregateSpec& spec : specs_) {
       RunColumn column;
       column.name = spec.label;
-      column.statistic = KindName(spec.kind);
+      column.statistic = ToString(spec.kind);
       if (spec.column >= 0) {
         const RunColumn& source = catalog_.column(spec.column);
         column.path = source.path;
@@ -396,7 +367,7 @@ class Aggregator {
                                 spec.kind == AggregateKind::kSum));
         if (spec.kind == AggregateKind::kMin || spec.kind == AggregateKind::kMax)
           column.levels = source.levels;
-        column.description = std::string(KindName(spec.kind)) + " of " + source.path;
+        column.description = std::string(ToString(spec.kind)) + " of " + source.path;
       } else {
         column.integer = true;
         column.description = "runs in the group";
@@ -444,9 +415,8 @@ class Aggregator {
     if (static_cast<std::int64_t>(groups_.size()) >= request_.max_groups) {
       std::string names;
       for (int c : group_columns_) names += (names.empty() ? "" : ",") + catalog_.column(c).name;
-      throw InputError("command line", "--group-by", names,
-                       "more than " + std::to_string(request_.max_groups) +
-                           " groups; group by fewer columns, narrow --where, or raise --max-groups");
+      throw RequestError("command line", "group_by", names,
+                         "more than " + std::to_string(request_.max_groups) + " groups", "fewer_groups");
     }
     Group group;
     for (int c : group_columns_) {
@@ -827,7 +797,7 @@ class Aggregator {
       if (it != group_columns_.end()) return static_cast<std::size_t>(it - group_columns_.begin());
     }
     try {
-      const std::vector<AggregateSpec> parsed = ParseAggregates({name}, catalog_, "--sort");
+      const std::vector<AggregateSpec> parsed = ParseAggregates({name}, catalog_, "sort");
       if (parsed.size() == 1) {
         for (std::size_t s = 0; s < specs_.size(); ++s) {
           if (specs_[s] == parsed[0]) return group_columns_.size() + s;
@@ -838,8 +808,8 @@ class Aggregator {
     }
     std::string names;
     for (const RunColumn* column : output_) names += (names.empty() ? "" : ", ") + column->name;
-    throw InputError("command line", "--sort", name,
-                     "with --group-by/--aggregate, sort by an output column: one of " + names);
+    throw RequestError("command line", "sort", name, "sort by an output column: one of " + names,
+                       "aggregate_sort");
   }
 
   void Emit(QueryRowSink& sink) {

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/enum_names.h"
 #include "engine/query/query.h"
 #include "engine/query/run_columns.h"
 
@@ -39,6 +40,14 @@ class ArchiveReader;
 
 /// What one --aggregate item computes.
 enum class AggregateKind { kCount, kSum, kMin, kMax, kMean, kStd, kMedian, kQuantile };
+/// The statistics' names in --aggregate items and output columns (ToString, ParseEnum: enum_names.h).
+template <>
+struct EnumNames<AggregateKind> {
+  static constexpr EnumName<AggregateKind> kTable[] = {
+      {AggregateKind::kCount, "count"},   {AggregateKind::kSum, "sum"},          {AggregateKind::kMin, "min"},
+      {AggregateKind::kMax, "max"},       {AggregateKind::kMean, "mean"},        {AggregateKind::kStd, "std"},
+      {AggregateKind::kMedian, "median"}, {AggregateKind::kQuantile, "quantile"}};
+};
 
 /// One statistic of the output.
 struct AggregateSpec {
@@ -57,7 +66,7 @@ struct AggregateSpec {
 /// once. Throws InputError(source "command line", key `flag`) naming the item at fault.
 std::vector<AggregateSpec> ParseAggregates(const std::vector<std::string>& texts,
                                            const ColumnCatalog& catalog,
-                                           const std::string& flag = "--aggregate");
+                                           const std::string& flag = "aggregates");
 
 /// What to compute.
 struct AggregateRequest {

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 
 namespace gesweep {
 
@@ -106,12 +107,13 @@ class Parser {
   }
 
  private:
-  [[noreturn]] void Fail(int position, const std::string& what) const {
+  [[noreturn]] void Fail(int position, const std::string& what, const std::string& remedy = "") const {
     const std::string shown =
         text_.size() <= kEchoedLength
             ? "'" + text_ + "'"
             : "'" + text_.substr(0, kEchoedLength) + "...' (" + std::to_string(text_.size()) + " characters)";
-    throw InputError("command line", flag_, shown, "at column " + std::to_string(position) + ": " + what);
+    throw RequestError("command line", flag_, shown, "at column " + std::to_string(position) + ": " + what,
+                       remedy);
   }
 
   // One more level of nesting for as long as it lives; refuses the level past kMaxNesting.
@@ -603,9 +605,9 @@ class Parser {
     if (name == "in" || name == "contains" || name == "matches") {
       Fail(token.position, "'" + name + "' needs a column before it, e.g. status in (\"ok\", \"failed\")");
     }
-    std::string problem;
-    const auto column = catalog_.Resolve(name, &problem);
-    if (!column) Fail(token.position, problem);
+    std::string problem, remedy;
+    const auto column = catalog_.Resolve(name, &problem, &remedy);
+    if (!column) Fail(token.position, problem, remedy);
     auto node =
         Make(Kind::kColumn, catalog_.column(*column).kind == ColumnKind::kText ? Type::kText : Type::kNumber,
              token.position);

@@ -1,5 +1,5 @@
 #pragma once
-/// The --where language of `gesweep query` (docs/report.md, "--where"): a boolean expression over
+/// The condition language of `gesweep query --where` (docs/report.md, "--where"): a boolean expression over
 /// the per-run columns of an archive.
 ///
 ///   condition  := or
@@ -48,7 +48,7 @@ class RowFilter {
   /// Parses `text` against `catalog`. Throws InputError(source "command line", key `flag`, value
   /// the expression) whose message starts "at column N:" for any syntax, name or type error.
   static RowFilter Parse(const std::string& text, const ColumnCatalog& catalog,
-                         const std::string& flag = "--where");
+                         const std::string& flag = "where");
 
   RowFilter(RowFilter&&) noexcept;
   RowFilter& operator=(RowFilter&&) noexcept;

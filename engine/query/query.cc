@@ -94,14 +94,14 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   // Everything a person typed is checked before the first row is read.
   std::vector<int> output;
   for (const std::string& name : request.columns) {
-    for (int c : catalog.Expand(name, "command line", "--columns")) {
+    for (int c : catalog.Expand(name, "command line", "columns")) {
       if (std::find(output.begin(), output.end(), c) == output.end()) output.push_back(c);
     }
   }
   std::optional<RowFilter> filter;
-  if (!request.where.empty()) filter.emplace(RowFilter::Parse(request.where, catalog, "--where"));
+  if (!request.where.empty()) filter.emplace(RowFilter::Parse(request.where, catalog, "where"));
   std::optional<int> sort_column;
-  if (!request.sort.empty()) sort_column = catalog.Require(request.sort, "command line", "--sort");
+  if (!request.sort.empty()) sort_column = catalog.Require(request.sort, "command line", "sort");
   if (output.empty()) {
     output = DefaultColumns(catalog);
     auto add = [&](int c) {

@@ -67,7 +67,7 @@ class QueryRowSink {
 std::vector<int> DefaultColumns(const ColumnCatalog& catalog);
 
 /// Runs a query. Checks every name and the condition before reading any row: InputError (source
-/// "command line", key the flag: --columns, --where, --sort, --limit). ArchiveError on I/O failure.
+/// "command line", key the request field: columns, where, sort). ArchiveError on I/O failure.
 QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog, const QueryRequest& request,
                       QueryRowSink& sink);
 

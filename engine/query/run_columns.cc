@@ -12,6 +12,7 @@
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/column_reader.h"
 #include "engine/common/errors.h"
+#include "engine/common/request_error.h"
 #include "engine/common/toml_reader.h"
 
 namespace gesweep {
@@ -163,7 +164,8 @@ std::optional<int> ColumnCatalog::Find(const std::string& raw) const {
   return std::nullopt;
 }
 
-std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* problem) const {
+std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* problem,
+                                          std::string* remedy) const {
   if (const auto index = Find(name)) return index;
   const std::vector<std::string> candidates = Candidates(name);
   if (candidates.size() > 1) {
@@ -183,15 +185,15 @@ std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* 
   std::vector<std::string> names;
   for (const auto& column : columns_) names.push_back(column.name);
   const std::string nearest = NearestName(name, names);
-  *problem = "unknown column '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
-             "; gesweep query ARCHIVE --describe lists the columns";
+  *problem = "unknown column '" + name + "'" + (nearest.empty() ? "" : " (did you mean " + nearest + "?)");
+  if (remedy != nullptr) *remedy = "describe_columns";
   return std::nullopt;
 }
 
 int ColumnCatalog::Require(const std::string& name, const std::string& source, const std::string& key) const {
-  std::string problem;
-  const auto index = Resolve(name, &problem);
-  if (!index) throw InputError(source, key, name, problem);
+  std::string problem, remedy;
+  const auto index = Resolve(name, &problem, &remedy);
+  if (!index) throw RequestError(source, key, name, problem, remedy);
   return *index;
 }
 
@@ -234,8 +236,7 @@ std::vector<int> ColumnCatalog::Expand(const std::string& name, const std::strin
     if (hit) matches.push_back(c);
   }
   if (matches.empty()) {
-    throw InputError(source, key, name,
-                     "the pattern matches no column; gesweep query ARCHIVE --describe lists the columns");
+    throw RequestError(source, key, name, "the pattern matches no column", "describe_columns");
   }
   return matches;
 }

@@ -84,8 +84,10 @@ class ColumnCatalog {
   std::optional<int> Find(const std::string& name) const;
   /// Resolves `name` or explains why it does not resolve: "unknown column 'x' (did you mean y?)",
   /// "ambiguous: ... matches a, b; write one of them", "is not a per-run scalar column (...)".
-  /// Returns the index, or nullopt with `*problem` set.
-  std::optional<int> Resolve(const std::string& name, std::string* problem) const;
+  /// Returns the index, or nullopt with `*problem` set (and `*remedy` to "describe_columns" for an
+  /// unknown name: the front end says how to list the columns; errors.h, InputError::remedy).
+  std::optional<int> Resolve(const std::string& name, std::string* problem,
+                             std::string* remedy = nullptr) const;
   /// Like Resolve, throwing InputError(source, key, name, problem) when it does not resolve.
   int Require(const std::string& name, const std::string& source, const std::string& key) const;
 
@@ -94,7 +96,7 @@ class ColumnCatalog {
   /// column of which some tail, the full path included, matches it (a pattern that starts with "/"
   /// matches full paths only): "phugoid/*" gives every phugoid column, "*" every column, "*_m"
   /// every column in metres. The columns come in natural order (NaturalOrder). Throws
-  /// InputError(source, key, name, ...) when `name` resolves to nothing.
+  /// InputError(source, key, name, ...) when `name` resolves to nothing (remedy "describe_columns").
   std::vector<int> Expand(const std::string& name, const std::string& source, const std::string& key) const;
   /// Every column: runs/index, the design columns in design order, runs/status, the results in
   /// archive order, then the other runs/ columns (id, message).

@@ -103,7 +103,7 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
   }
   ShardRange(design_runs_, batch_runs, shard_, &first_run_, &run_count_);
   if (run_count_ < 1) {
-    throw InputError("command line", "--shard",
+    throw InputError("command line", "shard",
                      std::to_string(shard_.index) + "/" + std::to_string(shard_.count),
                      "shard has no runs: the design has only " + std::to_string(design_runs_) +
                          " runs; use at most that many shards");

@@ -18,6 +18,22 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// Event-located against sampled every output interval: a few sample intervals apart at most.
+constexpr double kSamplingIntervals = 10;
+/// Touchdown and stall are located events (bracketed in time to 1e-10 s by default): the height (m) or speed
+/// (m/s) there is exact to far below 1e-6.
+constexpr double kLocatedEventTolerance = 1e-6;
+/// A quantity the engine computes by the same closed form as the test (reference path, flare exponential,
+/// tracking error, nominal time): agreement to rounding of values up to ~1e3.
+constexpr double kClosedFormTolerance = 1e-9;
+/// On the glide path the height tracks H0 − u0·γ·t to centimetres; 0.1 m is the path error the default
+/// landing test allows at the flare.
+constexpr double kGlidePathHeightTolerance_m = 0.1;
+/// Distance past the transmitter by the engine's closed form from the reported touchdown time: rounding of a
+/// few-kilometre value, with margin.
+constexpr double kDistanceRoundingTolerance_m = 1e-6;
+
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 /// The acceptance threshold for the touchdown sink rate.
 constexpr double kMaxTouchdownSinkRate_mps = 1.5;
@@ -47,7 +63,7 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
   EXPECT_LT(r.touchdown_sink_rate_mps, kMaxTouchdownSinkRate_mps);
   EXPECT_LT(r.saturated_time_s, kMaxSaturation_s);
   EXPECT_LT(r.longest_saturation_s, kMaxSaturation_s);
-  EXPECT_NEAR(r.final_height_m, model.aircraft().wheel_contact_height_m, 1e-6);
+  EXPECT_NEAR(r.final_height_m, model.aircraft().wheel_contact_height_m, kLocatedEventTolerance);
 
   // Kinematics of the reference: the glide path descends at u0·γ (γ in rad, Eq. (1)'s small angle) and
   // reaches Ho after (H0 − Ho)/(u0·γ); the flare's H_ref = Ho·e^(−t/τ) reaches the wheels after τ·ln(Ho/Hc).
@@ -63,16 +79,18 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
   EXPECT_NEAR(r.touchdown_time_s, ideal_touchdown_s, kFlareTrackingTolerance_s);
   // The transmitter is where the glide path meets H = 0: touchdown past it by u0·(t − H0/(u0·γ)).
   EXPECT_NEAR(r.touchdown_distance_past_transmitter_m,
-              config.start_speed_mps * r.touchdown_time_s - config.start_height_m / gamma_rad, 1e-6);
+              config.start_speed_mps * r.touchdown_time_s - config.start_height_m / gamma_rad,
+              kDistanceRoundingTolerance_m);
 
   // The series: steady glide at u0·γ, the reference written out, the phase switch at the flare event.
   ASSERT_FALSE(r.series.empty());
   bool checked_glide = false;
   for (const LandingSample& s : r.series) {
-    EXPECT_NEAR(s.tracking_error_m, s.height_m - s.reference_height_m, 1e-9);
+    EXPECT_NEAR(s.tracking_error_m, s.height_m - s.reference_height_m, kClosedFormTolerance);
     if (s.phase == LandingPhase::kGlideSlope) {
       EXPECT_LE(s.time_s, r.flare_start_time_s + 1e-9);
-      EXPECT_NEAR(s.reference_height_m, config.start_height_m - glide_sink_mps * s.time_s, 1e-9);
+      EXPECT_NEAR(s.reference_height_m, config.start_height_m - glide_sink_mps * s.time_s,
+                  kClosedFormTolerance);
       if (s.time_s > 100.0 && s.time_s < 200.0) {
         EXPECT_NEAR(s.sink_rate_mps, glide_sink_mps, kGlideSinkRelativeTolerance * glide_sink_mps) << s.time_s;
         checked_glide = true;
@@ -80,7 +98,8 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
     } else {
       EXPECT_GE(s.time_s, r.flare_start_time_s - 1e-9);
       EXPECT_NEAR(s.reference_height_m,
-                  config.flare_height_m * std::exp(-(s.time_s - r.flare_start_time_s) / tau_s), 1e-9);
+                  config.flare_height_m * std::exp(-(s.time_s - r.flare_start_time_s) / tau_s),
+                  kClosedFormTolerance);
     }
   }
   EXPECT_TRUE(checked_glide);
@@ -105,7 +124,7 @@ TEST(LandingSimulation, SaturatedTimeMatchesTheSeries) {
   }
   ASSERT_GT(sampled_s, 0.05);
   // Event-located vs sampled every 2 ms: a few sample intervals apart at most.
-  EXPECT_NEAR(r.saturated_time_s, sampled_s, 10 * config.output_interval_s);
+  EXPECT_NEAR(r.saturated_time_s, sampled_s, kSamplingIntervals * config.output_interval_s);
   EXPECT_LE(r.longest_saturation_s, r.saturated_time_s + 1e-12);
   EXPECT_LE(r.max_abs_elevator_deg, config.elevator_max_deg + 1e-9);
   EXPECT_GT(r.max_abs_elevator_command_deg, config.elevator_max_deg);
@@ -122,7 +141,7 @@ TEST(LandingSimulation, TimeLimitInFlightIsNoTouchdown) {
   EXPECT_DOUBLE_EQ(r.final_time_s, 100.0);
   EXPECT_TRUE(std::isnan(r.touchdown_time_s));
   // On the glide path: H0 − u0·γ·t, within the path error.
-  EXPECT_NEAR(r.final_height_m, 500.0 - 52.21 * 2.5 * kRadPerDeg * 100.0, 0.1);
+  EXPECT_NEAR(r.final_height_m, 500.0 - 52.21 * 2.5 * kRadPerDeg * 100.0, kGlidePathHeightTolerance_m);
 }
 
 TEST(LandingSimulation, StallIsLocatedAtTheStallSpeed) {
@@ -135,7 +154,7 @@ TEST(LandingSimulation, StallIsLocatedAtTheStallSpeed) {
   config.design_height_m = std::numeric_limits<double>::infinity();
   const LandingResult r = SimulateLanding(model, config);
   ASSERT_EQ(r.outcome, LandingOutcome::kStall) << r.message;
-  EXPECT_NEAR(r.min_speed_mps, model.aircraft().stall_speed_mps, 1e-6);
+  EXPECT_NEAR(r.min_speed_mps, model.aircraft().stall_speed_mps, kLocatedEventTolerance);
   EXPECT_GT(r.saturated_time_s, 0.0);
 }
 
@@ -171,8 +190,10 @@ TEST(LandingSimulation, DefaultTimeLimitIsTwiceTheReferenceTrajectory) {
   const double tau_s = FlareTimeConstant(config);
   const double nominal_s = (config.start_height_m - config.flare_height_m) / (config.start_speed_mps * gamma_rad) +
                            tau_s * std::log(config.flare_height_m / model.aircraft().wheel_contact_height_m);
-  EXPECT_NEAR(NominalLandingTime(config, model.aircraft().wheel_contact_height_m), nominal_s, 1e-9);
-  EXPECT_NEAR(LandingTimeLimit(config, model.aircraft().wheel_contact_height_m), 2 * nominal_s, 1e-9);
+  EXPECT_NEAR(NominalLandingTime(config, model.aircraft().wheel_contact_height_m), nominal_s,
+              kClosedFormTolerance);
+  EXPECT_NEAR(LandingTimeLimit(config, model.aircraft().wheel_contact_height_m), 2 * nominal_s,
+              kClosedFormTolerance);
   config.time_limit_s = 42.0;
   EXPECT_EQ(LandingTimeLimit(config, model.aircraft().wheel_contact_height_m), 42.0);
 }

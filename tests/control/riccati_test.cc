@@ -11,6 +11,10 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// An eigenvalue that is exactly 0 comes back from LAPACK as rounding of an O(1) matrix.
+constexpr double kEigenvalueRoundingTolerance = 1e-12;
+
 using Eigen::MatrixXd;
 
 /// Analytic solutions are exact; SB02OD's backward-stable solve leaves a few ulps times the condition.
@@ -136,7 +140,7 @@ TEST(Lqr, TwoIntegratorsOfTheSameSignalAreNotStabilizable) {
   const MatrixXd B = Mat({{1}, {0}, {0}});
   const LqrResult result = Lqr(A, B, MatrixXd::Identity(3, 3), Mat({{1}}));
   EXPECT_EQ(result.status, RiccatiStatus::kNotStabilizable);
-  EXPECT_NEAR(std::abs(CheckStabilizable(A, B).failing_eigenvalue), 0.0, 1e-12);
+  EXPECT_NEAR(std::abs(CheckStabilizable(A, B).failing_eigenvalue), 0.0, kEigenvalueRoundingTolerance);
 }
 
 TEST(Lqr, UndetectableUnstableModeFailsCleanly) {

@@ -10,6 +10,13 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// A coefficient scaled by 1.2 or 2 against the scaled unscaled value: one rounding of an O(1e-3) number.
+constexpr double kScalingTolerance = 1e-15;
+/// The hand values of CDh (row 0 and row 5) that set the scale of their relative tolerance.
+constexpr double kHandValueCDh0 = 8.601892e-4;
+constexpr double kHandValueCDh5 = 5.995829e-5;
+
 // Interpolating data that is itself linear in H must reproduce it to rounding.
 constexpr double kRoundingTolerance = 1e-12;
 
@@ -92,8 +99,8 @@ TEST(CoefficientTable, PolarCdhMatchesHandComputation) {
   const Aircraft ance = LoadAircraftFile(testing::AnceAircraftPath());
   const CoefficientTable table(ance, ModelOptions{});
   constexpr double kHandPrecision = 1e-6;  // relative: the hand values carry 7 significant digits
-  EXPECT_NEAR(table.rows()[0][Index(Coefficient::CDh)], 8.601892e-4, 8.6e-4 * kHandPrecision);
-  EXPECT_NEAR(table.rows()[5][Index(Coefficient::CDh)], 5.995829e-5, 6e-5 * kHandPrecision);
+  EXPECT_NEAR(table.rows()[0][Index(Coefficient::CDh)], kHandValueCDh0, kHandValueCDh0 * kHandPrecision);
+  EXPECT_NEAR(table.rows()[5][Index(Coefficient::CDh)], kHandValueCDh5, kHandValueCDh5 * kHandPrecision);
   ModelOptions zero;
   zero.cdh = CdhMode::kZero;
   EXPECT_EQ(CoefficientTable(ance, zero).At(1.0)[Index(Coefficient::CDh)], 0.0);
@@ -107,16 +114,18 @@ TEST(CoefficientTable, ScaleFactorsAndCgShiftApply) {
   options.coefficient_scale[Index(Coefficient::k)] = 2.0;
   const CoefficientTable scaled(ance, options);
   const double h = 1.7;
-  EXPECT_NEAR(scaled.At(h)[Index(Coefficient::CLh)], 1.2 * base.At(h)[Index(Coefficient::CLh)], 1e-15);
+  EXPECT_NEAR(scaled.At(h)[Index(Coefficient::CLh)], 1.2 * base.At(h)[Index(Coefficient::CLh)],
+              kScalingTolerance);
   // CDh = d(k·CLo²)/dh is linear in k, so doubling k doubles CDh.
-  EXPECT_NEAR(scaled.At(h)[Index(Coefficient::CDh)], 2.0 * base.At(h)[Index(Coefficient::CDh)], 1e-15);
+  EXPECT_NEAR(scaled.At(h)[Index(Coefficient::CDh)], 2.0 * base.At(h)[Index(Coefficient::CDh)],
+              kScalingTolerance);
 
   ModelOptions aft;
   aft.cg_shift_over_chord = 0.1;
   const CoefficientTable shifted(ance, aft);
   // Transfer of moments to a CG 0.1 c aft: CMα' = CMα + 0.1·CLα, e.g. at the first row
   // −4.057 + 0.1·5.953 = −3.4617.
-  EXPECT_NEAR(shifted.rows()[0][Index(Coefficient::CMalpha)], -3.4617, 1e-12);
+  EXPECT_NEAR(shifted.rows()[0][Index(Coefficient::CMalpha)], -3.4617, kRoundingTolerance);
 }
 
 TEST(CoefficientTable, PchipNeedsFourRows) {

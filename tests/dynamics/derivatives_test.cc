@@ -6,11 +6,19 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// Absolute floor of ExpectRelNear for an expected value of zero.
+constexpr double kAbsoluteFloor = 1e-15;
+/// The hand value of the ISA density carries 10 significant digits.
+constexpr double kDensityTolerance_kgpm3 = 1e-9;
+/// Xh comes from CDh, whose hand value carries 7 digits: 1e-8 of an O(1e-3) derivative.
+constexpr double kXhTolerance = 1e-8;
+
 // The hand values below carry about 10 significant digits.
 constexpr double kRelativeTolerance = 1e-9;
 
 void ExpectRelNear(double actual, double expected, const char* name) {
-  EXPECT_NEAR(actual, expected, std::abs(expected) * kRelativeTolerance + 1e-15) << name;
+  EXPECT_NEAR(actual, expected, std::abs(expected) * kRelativeTolerance + kAbsoluteFloor) << name;
 }
 
 TEST(Derivatives, MatchHandComputationAtOneTableRow) {
@@ -32,11 +40,11 @@ TEST(Derivatives, MatchHandComputationAtOneTableRow) {
   //  Mẇ  = −11.03·(c/2u)·QS·c/(Iy·u)       = −0.009649479619
   //  Mδe = −2.699·QS·c/Iy                  = −8.016571648
   const LongitudinalModel model(LoadAircraftFile(testing::AnceAircraftPath()), ModelOptions{});
-  EXPECT_NEAR(model.DensityAt(2.5935), 1.224695024, 1e-9);
+  EXPECT_NEAR(model.DensityAt(2.5935), 1.224695024, kDensityTolerance_kgpm3);
   const DimensionalDerivatives d = model.DerivativesAt(2.5935, 32.0208);
   ExpectRelNear(d.Xu, -0.01795087777, "Xu");
   ExpectRelNear(d.Xw, 0.05378514881, "Xw");
-  EXPECT_NEAR(d.Xh, -0.001072552519, 1e-8);  // CDh's hand value carries 7 digits
+  EXPECT_NEAR(d.Xh, -0.001072552519, kXhTolerance);  // CDh's hand value carries 7 digits
   ExpectRelNear(d.Zu, -0.2222264681, "Zu");
   ExpectRelNear(d.Zw, -1.857207262, "Zw");
   ExpectRelNear(d.Zh, 0.01252181655, "Zh");

@@ -10,6 +10,10 @@
 3. No tracked file of the product cites or reads ../shared, or cites MODEL.md / STYLE.md (the
    project's model is docs/model.md).
 4. Only engine/archive includes HDF5 (hdf5.h or an H5*.h header).
+5. No string literal of an engine file outside engine/cli names a CLI flag (`--word`): below the CLI
+   errors name request fields and remedies, which engine/cli/request_names.cc spells as flags and
+   hints (docs/architecture.md, "Names of the command line"). Comments are not checked: a comment
+   may say which flag fills a field.
 Lists every offender; exit 1 when there is one.
 """
 import pathlib
@@ -67,6 +71,53 @@ for path in sorted((root / "engine").rglob("*")):
         if hdf5_include.match(line):
             problems.append(f"{path.relative_to(root)}:{number}: includes HDF5 outside engine/archive: {line.strip()}")
 
+# 5. No CLI flag below engine/cli: string literals only (comments, char literals and code skipped).
+def string_literals(text):
+    """(line, literal body) of each string literal of C++ source `text`, raw strings included."""
+    i, n, line = 0, len(text), 1
+    while i < n:
+        c = text[i]
+        if c == "\n":
+            line += 1
+            i += 1
+        elif text.startswith("//", i):
+            i = text.find("\n", i)
+            i = n if i < 0 else i
+        elif text.startswith("/*", i):
+            end = text.find("*/", i + 2)
+            end = n if end < 0 else end + 2
+            line += text.count("\n", i, end)
+            i = end
+        elif c == "R" and text.startswith('R"', i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            open_paren = text.find("(", i + 2)
+            delimiter = text[i + 2:open_paren]
+            end = text.find(")" + delimiter + '"', open_paren)
+            end = n if end < 0 else end
+            yield line, text[open_paren + 1:end]
+            line += text.count("\n", i, end)
+            i = end + len(delimiter) + 2
+        elif c in "\"'":
+            j = i + 1
+            while j < n and text[j] != c and text[j] != "\n":
+                j += 2 if text[j] == "\\" else 1
+            if c == '"':
+                yield line, text[i + 1:j]
+            i = j + 1
+        else:
+            i += 1
+
+
+flag = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
+for path in sorted((root / "engine").rglob("*")):
+    if path.suffix not in (".cc", ".h") or "cli" in path.relative_to(root / "engine").parts[:1]:
+        continue
+    for number, literal in string_literals(path.read_text(errors="replace")):
+        m = flag.search(literal)
+        if m:
+            problems.append(f"{path.relative_to(root)}:{number}: names the CLI flag {m.group(0)} below engine/cli "
+                            f"(name the request field or a remedy; engine/cli/request_names.cc spells it): "
+                            f'"{literal[:80]}"')
+
 # 3. Standing alone: every tracked file (this test names the patterns, so it is left out).
 tracked = subprocess.run(["git", "-C", str(root), "ls-files"], capture_output=True, text=True)
 files = tracked.stdout.split() if tracked.returncode == 0 else [
@@ -92,4 +143,4 @@ if problems:
         print("  " + p)
     sys.exit(1)
 print(f"layout: {len(folders)} engine folders as docs/architecture.md lists them; includes point down; "
-      f"only engine/archive includes HDF5; {len(files)} tracked files cite nothing outside the repository")
+      f"only engine/archive includes HDF5; no CLI flag below engine/cli; {len(files)} tracked files cite nothing outside the repository")

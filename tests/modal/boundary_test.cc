@@ -11,6 +11,12 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// Two searches that bracket the same crossing agree to their root-finding tolerance, well below 1e-9 m.
+constexpr double kSameSearchTolerance_m = 1e-9;
+/// Frequencies and slopes of affine blocks are read back from a linear family: exact but for rounding.
+constexpr double kAffineBlockTolerance = 1e-9;
+
 constexpr double kPaperSpeed_mps = 32.0208;  // 1.3 × stall speed, the paper's open-loop cases
 constexpr double kMillimetre = 1e-3;         // the required accuracy of H*
 
@@ -121,7 +127,7 @@ TEST_F(AnceBoundary, FreeFlightAboveTheTableIsNeutralNotACrossing) {
   options.upper_height_m = 40.0;
   const BoundaryResult result = FindBoundary(model, kPaperSpeed_mps, options);
   ASSERT_TRUE(result.height_m);
-  EXPECT_NEAR(*result.height_m, *FindBoundary(model, kPaperSpeed_mps).height_m, 1e-9);
+  EXPECT_NEAR(*result.height_m, *FindBoundary(model, kPaperSpeed_mps).height_m, kSameSearchTolerance_m);
   EXPECT_EQ(result.crossings.size(), 1u);
   EXPECT_TRUE(result.certified) << result.certificate;
 }
@@ -192,12 +198,12 @@ TEST(CrossingSearch, FindsAClosePairTheSampledSearchMisses) {
   EXPECT_EQ(found.crossings[0].kind, CrossingKind::kHopf);
   EXPECT_EQ(found.crossings[1].kind, CrossingKind::kHopf);
   EXPECT_EQ(found.crossings[2].kind, CrossingKind::kReal);
-  EXPECT_NEAR(std::abs(found.crossings[0].eigenvalue.imag()), 3.2, 1e-9);
-  EXPECT_NEAR(std::abs(found.crossings[1].eigenvalue.imag()), 0.27, 1e-9);
+  EXPECT_NEAR(std::abs(found.crossings[0].eigenvalue.imag()), 3.2, kAffineBlockTolerance);
+  EXPECT_NEAR(std::abs(found.crossings[1].eigenvalue.imag()), 0.27, kAffineBlockTolerance);
   // Directions: dRe λ/dH is the slope of each block.
-  EXPECT_NEAR(found.crossings[0].eigenvalue_height_derivative.real(), -0.05, 1e-9);
-  EXPECT_NEAR(found.crossings[1].eigenvalue_height_derivative.real(), 0.02, 1e-9);
-  EXPECT_NEAR(found.crossings[2].eigenvalue_height_derivative.real(), 0.01, 1e-9);
+  EXPECT_NEAR(found.crossings[0].eigenvalue_height_derivative.real(), -0.05, kAffineBlockTolerance);
+  EXPECT_NEAR(found.crossings[1].eigenvalue_height_derivative.real(), 0.02, kAffineBlockTolerance);
+  EXPECT_NEAR(found.crossings[2].eigenvalue_height_derivative.real(), 0.01, kAffineBlockTolerance);
   EXPECT_TRUE(found.crossings[0].mode_stable_above);
   EXPECT_FALSE(found.crossings[1].mode_stable_above);
   // Stability: unstable below 3.10, stable in the window, unstable above 3.15.

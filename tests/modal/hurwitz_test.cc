@@ -8,6 +8,23 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// FromRoots multiplies five factors: a coefficient's rounding grows with their count and sizes.
+constexpr double kFromRootsMargin = 20;
+/// Two algorithms for the characteristic coefficients agree to ~1e-13 of ‖A‖^k (Faddeev–LeVerrier loses a
+/// digit or two).
+constexpr double kCharacteristicRelative = 1e-13;
+/// The expanded path for Eq. (1) and the Hessenberg reduction agree to a few ulps of ‖A‖^k.
+constexpr double kReducedRelative = 1e-14;
+/// Δ₄ is a sum of products of four coefficients: its rounding, relative to the scale of the root products.
+constexpr double kDelta4Relative = 1e-11;
+/// A coefficient that is exactly 0 (a root at the origin): rounding of O(1) products.
+constexpr double kLeadingZeroTolerance = 1e-15;
+/// Hurwitz determinants and frequencies of O(1) coefficients: rounding, with margin.
+constexpr double kHurwitzRoundingTolerance = 1e-12;
+/// Δ₄ of O(1–10) coefficients is a longer sum: a decade above kHurwitzRoundingTolerance.
+constexpr double kDelta4RoundingTolerance = 1e-11;
+
 // Coefficients of a monic polynomial from its roots, by expanding Π (s − rᵢ) in complex arithmetic.
 CharacteristicCoefficients FromRoots(const std::array<std::complex<double>, 5>& roots) {
   std::array<std::complex<double>, 6> c{};
@@ -48,7 +65,10 @@ TEST(CharacteristicPolynomial, ReproducesTheCoefficientsOfAKnownSpectrum) {
   const CharacteristicCoefficients expected =
       FromRoots({{{-1.3, 3.2}, {-1.3, -3.2}, {0.01, 0.27}, {0.01, -0.27}, {-0.005, 0}}});
   const CharacteristicCoefficients a = CharacteristicPolynomial(A);
-  for (int k = 0; k < 6; ++k) EXPECT_NEAR(a[static_cast<std::size_t>(k)], expected[static_cast<std::size_t>(k)], kCoefficientTolerance * 20) << k;
+  for (int k = 0; k < 6; ++k)
+    EXPECT_NEAR(a[static_cast<std::size_t>(k)], expected[static_cast<std::size_t>(k)],
+                kCoefficientTolerance * kFromRootsMargin)
+        << k;
 }
 
 TEST(CharacteristicPolynomial, AgreesWithFaddeevLeVerrierOnRandomMatrices) {
@@ -61,7 +81,9 @@ TEST(CharacteristicPolynomial, AgreesWithFaddeevLeVerrierOnRandomMatrices) {
     const auto b = FaddeevLeVerrier<double>(A);
     for (int k = 1; k < 6; ++k) {
       const double scale = std::pow(A.norm(), k) * 10;
-      EXPECT_NEAR(a[static_cast<std::size_t>(k)], b[static_cast<std::size_t>(k)], 1e-13 * scale) << trial << " " << k;
+      EXPECT_NEAR(a[static_cast<std::size_t>(k)], b[static_cast<std::size_t>(k)],
+                  kCharacteristicRelative * scale)
+          << trial << " " << k;
     }
   }
 }
@@ -86,8 +108,12 @@ TEST(CharacteristicPolynomial, TheExpansionForEquation1AgreesWithTheReduction) {
     const auto flv = FaddeevLeVerrier<double>(A);
     for (int k = 1; k < 6; ++k) {
       const double scale = std::pow(A.norm(), k) * 10;
-      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], reduced[static_cast<std::size_t>(k)], 1e-14 * scale) << k;
-      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], flv[static_cast<std::size_t>(k)], 1e-13 * scale) << k;
+      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], reduced[static_cast<std::size_t>(k)],
+                  kReducedRelative * scale)
+          << k;
+      EXPECT_NEAR(fast[static_cast<std::size_t>(k)], flv[static_cast<std::size_t>(k)],
+                  kCharacteristicRelative * scale)
+          << k;
     }
   }
 }
@@ -109,7 +135,7 @@ TEST(HurwitzDelta4, IsOrlandosProductOfRootSums) {
         scale *= std::abs(lambda[i]) + std::abs(lambda[j]);
       }
     const double delta4 = HurwitzDelta4(CharacteristicPolynomial(A));
-    EXPECT_NEAR(delta4, product.real(), 1e-11 * scale) << trial;
+    EXPECT_NEAR(delta4, product.real(), kDelta4Relative * scale) << trial;
   }
 }
 
@@ -117,18 +143,18 @@ TEST(HurwitzDelta3, VanishesWithAPairOnTheAxisOfTheQuartic) {
   // s·(s² + ω²)(s² + 2s + 5): the quartic factor has ±iω, so its Δ₃ = 0 and ω² = a₃/a₁.
   const double omega = 0.7;
   const CharacteristicCoefficients a = FromRoots({{{0, omega}, {0, -omega}, {-1, 2}, {-1, -2}, {0, 0}}});
-  EXPECT_NEAR(a[5], 0.0, 1e-15);
-  EXPECT_NEAR(HurwitzDelta3(a), 0.0, 1e-12);
-  EXPECT_NEAR(DeflatedHopfFrequencySquared(a), omega * omega, 1e-12);
+  EXPECT_NEAR(a[5], 0.0, kLeadingZeroTolerance);
+  EXPECT_NEAR(HurwitzDelta3(a), 0.0, kHurwitzRoundingTolerance);
+  EXPECT_NEAR(DeflatedHopfFrequencySquared(a), omega * omega, kHurwitzRoundingTolerance);
 }
 
 TEST(HopfFrequencySquared, TellsAnAxisPairFromAnOppositeRealPair) {
   const CharacteristicCoefficients hopf = FromRoots({{{0, 0.4}, {0, -0.4}, {-1, 3}, {-1, -3}, {-0.2, 0}}});
-  EXPECT_NEAR(HurwitzDelta4(hopf), 0.0, 1e-11);
-  EXPECT_NEAR(HopfFrequencySquared(hopf), 0.16, 1e-12);
+  EXPECT_NEAR(HurwitzDelta4(hopf), 0.0, kDelta4RoundingTolerance);
+  EXPECT_NEAR(HopfFrequencySquared(hopf), 0.16, kHurwitzRoundingTolerance);
   const CharacteristicCoefficients opposite = FromRoots({{{0.5, 0}, {-0.5, 0}, {-1, 3}, {-1, -3}, {-0.2, 0}}});
-  EXPECT_NEAR(HurwitzDelta4(opposite), 0.0, 1e-11);
-  EXPECT_NEAR(HopfFrequencySquared(opposite), -0.25, 1e-12);
+  EXPECT_NEAR(HurwitzDelta4(opposite), 0.0, kDelta4RoundingTolerance);
+  EXPECT_NEAR(HopfFrequencySquared(opposite), -0.25, kHurwitzRoundingTolerance);
 }
 
 TEST(HurwitzStable, MatchesTheEigenvaluesOnRandomMatrices) {

@@ -15,6 +15,12 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// Period 2π/ω of a ~25 s phugoid from roots good to kRootTolerance: T·Δω/ω ≈ 1e-7 s, with margin.
+constexpr double kPeriodTolerance_s = 1e-6;
+/// ln2/|σ| with σ = 0.004 amplifies the roots' 1e-9 error by ln2/σ² ≈ 4e4: 4e-5 s, with margin.
+constexpr double kTimeToDoubleTolerance_s = 1e-4;
+
 using Complex = std::complex<double>;
 
 // Eigenvalues of a companion matrix of a well-conditioned quintic are accurate to ~1e-12·|λ|max.
@@ -53,10 +59,10 @@ TEST(AnalyzeModes, ReproducesCompanionMatrixRootsAndIdentifiesModes) {
   ExpectRoot(modal.eigenvalues[3], std::conj(ph));
   ExpectRoot(modal.eigenvalues[4], height);
   // Mode properties from their definitions (docs/model.md §6).
-  EXPECT_NEAR(modal.short_period.natural_frequency_radps, std::abs(sp), 1e-9);
-  EXPECT_NEAR(modal.short_period.damping_ratio, 1.3 / std::abs(sp), 1e-9);
-  EXPECT_NEAR(modal.phugoid.period_s, 2 * M_PI / 0.25, 1e-6);
-  EXPECT_NEAR(modal.phugoid.time_to_half_or_double_s, std::log(2.0) / 0.004, 1e-4);
+  EXPECT_NEAR(modal.short_period.natural_frequency_radps, std::abs(sp), kRootTolerance);
+  EXPECT_NEAR(modal.short_period.damping_ratio, 1.3 / std::abs(sp), kRootTolerance);
+  EXPECT_NEAR(modal.phugoid.period_s, 2 * M_PI / 0.25, kPeriodTolerance_s);
+  EXPECT_NEAR(modal.phugoid.time_to_half_or_double_s, std::log(2.0) / 0.004, kTimeToDoubleTolerance_s);
   EXPECT_NEAR(modal.stability_margin_per_s, -0.004, kRootTolerance);
   EXPECT_TRUE(modal.stable);
 }

@@ -14,6 +14,25 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// The leading term of RK4's error predicts it to a few per cent at λh = 0.0325 (the next term is O(λh)
+/// smaller).
+constexpr double kLeadingTermAgreement = 0.05;
+/// The local tolerance is 1e-8 relative; over a few dozen steps the global error stays within 1e-7.
+constexpr double kGlobalRelativeTolerance = 1e-7;
+/// Output times are start + j·interval: rounding of times up to 10 s.
+constexpr double kGridTimeTolerance_s = 1e-12;
+/// An event located on dense output inherits the method's state error over ω: ~1e-8 s here, with margin.
+constexpr double kEventTimeTolerance_s = 1e-7;
+/// RK4 at h = 0.05, ω = 2: state error ≈ t·ω(ωh)^4/120 ≈ 1.3e-6, time error half that.
+constexpr double kRk4EventTimeTolerance_s = 2e-6;
+/// The state at that event: the 1.3e-6 state error plus the slope times the time error, with margin.
+constexpr double kRk4EventStateTolerance = 1e-5;
+/// A few additions of O(0.1) numbers: rounding.
+constexpr double kSumRoundingTolerance = 1e-13;
+/// RK4's error at h = 0.01 over 0.1 s is far below 1e-8.
+constexpr double kStoppedStateTolerance = 1e-8;
+
 // Piecewise-linear solutions are exact for every Runge–Kutta method; what remains is the event
 // bracket (1e-10 s by default) times a slope of 2, plus rounding.
 constexpr double kPiecewiseLinearTolerance = 1e-9;
@@ -151,7 +170,7 @@ TEST(Rk4Test, DecayMatchesTheExponentialAndConvergesAtFourthOrder) {
   // The leading error term of RK4 on ẋ = λx over [0, T]: T·(λh)^4·λ e^{λT}/120 in magnitude.
   const double lambda = -1.3;
   const double predicted = 2.0 * std::pow(lambda * 0.025, 4) * std::abs(lambda) * std::exp(lambda * 2.0) / 120.0;
-  EXPECT_NEAR(e3 / predicted, 1.0, 0.05);
+  EXPECT_NEAR(e3 / predicted, 1.0, kLeadingTermAgreement);
 }
 
 TEST(Rk4Test, CountsFourEvaluationsPerStepPlusTheStart) {
@@ -170,7 +189,7 @@ TEST(Dopri5Test, DecayMeetsItsTolerance) {
   EXPECT_EQ(result.status, IntegrationStatus::kReachedEnd);
   const double exact = std::exp(problem.lambda * 2.0);
   // The local tolerance is 1e-8 relative; over a few dozen steps the global error stays within 1e-7.
-  EXPECT_NEAR(result.final_state[0], exact, 1e-7 * exact);
+  EXPECT_NEAR(result.final_state[0], exact, kGlobalRelativeTolerance * exact);
   EXPECT_GT(result.accepted_steps, 5);
   EXPECT_LT(result.accepted_steps, 200);
 }
@@ -198,7 +217,7 @@ TEST(OscillatorTest, BothMethodsFollowTheClosedFormAndSampleOnTheGrid) {
     EXPECT_NEAR(result.final_state[1], -problem.omega * std::sin(problem.omega * kEnd), kStateTolerance);
     ASSERT_EQ(problem.times.size(), 41u);  // 0, 0.25, …, 10
     for (std::size_t j = 0; j < problem.times.size(); ++j) {
-      EXPECT_NEAR(problem.times[j], 0.25 * static_cast<double>(j), 1e-12);
+      EXPECT_NEAR(problem.times[j], 0.25 * static_cast<double>(j), kGridTimeTolerance_s);
       // Interpolated samples (dense output / cubic Hermite) keep the method's accuracy.
       EXPECT_NEAR(problem.positions[j], std::cos(problem.omega * problem.times[j]), kStateTolerance);
     }
@@ -206,7 +225,7 @@ TEST(OscillatorTest, BothMethodsFollowTheClosedFormAndSampleOnTheGrid) {
     ASSERT_EQ(problem.event_times.size(), 3u);
     for (std::size_t k = 0; k < 3; ++k) {
       const double exact = (std::numbers::pi / 2 + 2 * std::numbers::pi * static_cast<double>(k)) / problem.omega;
-      EXPECT_NEAR(problem.event_times[k], exact, 1e-7);
+      EXPECT_NEAR(problem.event_times[k], exact, kEventTimeTolerance_s);
       // The located state is on the far side of the crossing, within the time tolerance of it.
       EXPECT_LE(problem.event_values[k], 0.0);
       EXPECT_GT(problem.event_values[k], -1e-9);
@@ -223,9 +242,9 @@ TEST(EventTest, StopEndsTheRunAtTheLocatedTimeNotAtTheStepEnd) {
     EXPECT_EQ(result.stopping_event, 0);
     const double exact = std::numbers::pi / 4;  // 0.785…, inside the RK4 step [0.75, 0.8]
     // RK4 at h = 0.05, ω = 2: state error ≈ t·ω(ωh)^4/120 ≈ 1.3e-6, time error half that.
-    EXPECT_NEAR(result.end_time_s, exact, 2e-6);
+    EXPECT_NEAR(result.end_time_s, exact, kRk4EventTimeTolerance_s);
     EXPECT_EQ(result.final_state[0], problem.event_values[0]);
-    EXPECT_NEAR(result.final_state[1], -problem.omega, 1e-5);
+    EXPECT_NEAR(result.final_state[1], -problem.omega, kRk4EventStateTolerance);
   }
 }
 
@@ -265,7 +284,7 @@ TEST(BreakpointTest, HonouredBreakpointsMakeAPulseExact) {
   for (const IntegratorOptions& base : {Rk4(0.15), Dopri5(1e-3, 1e-6)}) {
     PiecewiseInput problem{{0.0, 1.0, 0.0}, {}};
     const auto result = Integrate(problem, OdeState<1>{0.0}, 0.0, 1.0, breakpoints, base);
-    EXPECT_NEAR(result.final_state[0], 0.2, 1e-13);  // a few additions of rounding
+    EXPECT_NEAR(result.final_state[0], 0.2, kSumRoundingTolerance);  // a few additions of rounding
     // A step ending at a breakpoint evaluates its last stage with the left segment.
     for (const auto& [t, segment] : problem.calls) {
       EXPECT_TRUE((t < 0.1 && segment == 0) || (t == 0.1) || (t > 0.1 && t < 0.3 && segment == 1) || t == 0.3 ||
@@ -286,7 +305,7 @@ TEST(BreakpointTest, StraddlingStepsAreInexactLikeThePapersPlainRk4) {
   const auto result = Integrate(problem, OdeState<1>{0.0}, 0.0, 1.0, breakpoints, options);
   // Step [0, 0.15]: stages at 0 (0), 0.075 (0), 0.075 (0), 0.15 (1) → 0.15/6. Step [0.15, 0.3]:
   // 1, 1, 1, and at 0.3 the segment is 2 (0) → 0.15·5/6. Then 0. Total 0.15.
-  EXPECT_NEAR(result.final_state[0], 0.15 / 6 + 0.15 * 5 / 6, 1e-13);
+  EXPECT_NEAR(result.final_state[0], 0.15 / 6 + 0.15 * 5 / 6, kSumRoundingTolerance);
 }
 
 TEST(FailureTest, BlowUpIsReportedAsNonFiniteWithTheLastFiniteState) {
@@ -366,7 +385,8 @@ TEST(CancellationTest, AFlagSetDuringTheRunStopsItAtTheNextStep) {
     EXPECT_LT(result.end_time_s, 10.0);
     // The final state is the state where it stopped: e^{λt} there (RK4's error at h = 0.01 is far
     // below 1e-8 over 0.1 s).
-    EXPECT_NEAR(result.final_state[0], std::exp(problem.lambda * result.end_time_s), 1e-8) << ToString(kind);
+    EXPECT_NEAR(result.final_state[0], std::exp(problem.lambda * result.end_time_s), kStoppedStateTolerance)
+        << ToString(kind);
   }
 }
 

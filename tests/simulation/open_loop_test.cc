@@ -18,6 +18,20 @@
 namespace gesweep {
 namespace {
 
+// Tolerances: each says where it comes from.
+/// Piecewise-linear motion is integrated exactly: heights and speeds at a located event to rounding and the
+/// 1e-10 s bracket.
+constexpr double kPiecewiseExactTolerance = 1e-9;
+/// The requirement on event times (the engine locates to 1e-10 s).
+constexpr double kStallEventTolerance_s = 1e-6;
+/// Height after a linear climb at 0.1·u0 ≈ 3 m/s: the 1e-10 s bracket times the climb rate, plus rounding of
+/// ~10 m.
+constexpr double kClimbHeightTolerance_m = 1e-8;
+/// Output times are j·interval: rounding of times of a few seconds.
+constexpr double kGridTimeTolerance_s = 1e-12;
+/// The minimum's time against a 1 ms sampling: one sample interval.
+constexpr double kSampledMinimumTolerance_s = 1e-3;
+
 constexpr double kPaperSpeed_mps = 32.0208;
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
@@ -198,8 +212,8 @@ TEST(OpenLoopKinematicsTest, ConstantSinkTouchesDownAtTheAnalyticTime) {
     EXPECT_EQ(s.end_event, OpenLoopEndEvent::kTouchdown);
     constexpr double kEventTolerance_s = 1e-6;  // the requirement (we locate to 1e-10)
     EXPECT_NEAR(s.end_time_s, exact_s, kEventTolerance_s);
-    EXPECT_NEAR(s.final_height_m, 0.788, 1e-9);
-    EXPECT_NEAR(s.min_height_m, 0.788, 1e-9);
+    EXPECT_NEAR(s.final_height_m, 0.788, kPiecewiseExactTolerance);
+    EXPECT_NEAR(s.min_height_m, 0.788, kPiecewiseExactTolerance);
     EXPECT_NEAR(s.min_height_time_s, exact_s, kEventTolerance_s);
   }
 }
@@ -216,9 +230,9 @@ TEST(OpenLoopKinematicsTest, ConstantDecelerationStallsAtTheAnalyticTime) {
   const OpenLoopSummary s = SimulateOpenLoop(model, config).summary;
   const double exact_s = (kPaperSpeed_mps + 3.0 - 24.6314) / (0.1 * kGravity_mps2);
   EXPECT_EQ(s.end_event, OpenLoopEndEvent::kStall);
-  EXPECT_NEAR(s.end_time_s, exact_s, 1e-6);
-  EXPECT_NEAR(s.final_speed_mps, 24.6314, 1e-9);
-  EXPECT_NEAR(s.final_height_m, 2.0 + 0.1 * kPaperSpeed_mps * exact_s, 1e-8);
+  EXPECT_NEAR(s.end_time_s, exact_s, kStallEventTolerance_s);
+  EXPECT_NEAR(s.final_speed_mps, 24.6314, kPiecewiseExactTolerance);
+  EXPECT_NEAR(s.final_height_m, 2.0 + 0.1 * kPaperSpeed_mps * exact_s, kClimbHeightTolerance_m);
 }
 
 TEST(OpenLoopKinematicsTest, FreeFlightWithoutInputStaysAtRest) {
@@ -324,7 +338,8 @@ TEST(OpenLoopRunTest, SeriesIsSampledOnTheGridAndEndsAtTheSummary) {
   const OpenLoopSeries& s = result.series;
   ASSERT_EQ(result.summary.end_event, OpenLoopEndEvent::kTouchdown);
   ASSERT_GE(s.time_s.size(), 3u);
-  for (std::size_t j = 0; j + 1 < s.time_s.size(); ++j) EXPECT_NEAR(s.time_s[j], 0.015 * static_cast<double>(j), 1e-12);
+  for (std::size_t j = 0; j + 1 < s.time_s.size(); ++j)
+    EXPECT_NEAR(s.time_s[j], 0.015 * static_cast<double>(j), kGridTimeTolerance_s);
   EXPECT_EQ(s.time_s.back(), result.summary.end_time_s);
   EXPECT_EQ(s.height_m.back(), result.summary.final_height_m);
   EXPECT_EQ(s.delta_height_m.back(), result.summary.final_state[kDeltaH]);
@@ -351,7 +366,7 @@ TEST(OpenLoopRunTest, MinimumHeightIsLocatedInsideTheStep) {
   EXPECT_LE(result.summary.min_height_m, *lowest);
   // Within 1 ms of the minimum the height differs from it by ½·Ḧ·(1 ms)² ≈ 1e-7 m.
   EXPECT_GT(result.summary.min_height_m, *lowest - 1e-6);
-  EXPECT_NEAR(result.summary.min_height_time_s, sampled_time, 1e-3);
+  EXPECT_NEAR(result.summary.min_height_time_s, sampled_time, kSampledMinimumTolerance_s);
 }
 
 TEST(OpenLoopBreakpointTest, StepsThatStraddleThePulseEndLoseAccuracy) {

@@ -1,0 +1,77 @@
+#include "engine/cli/request_names.h"
+
+namespace gesweep::cli {
+
+namespace {
+
+// Each remedy as the command line words it: `before` what was expected, then `after`, in which "{}"
+// stands for the remedy's argument.
+struct Wording {
+  const char* remedy;
+  const char* before;
+  const char* after;
+};
+constexpr Wording kWordings[] = {
+    {"describe_columns", "", "; gesweep query ARCHIVE --describe lists the columns"},
+    {"fewer_groups", "", "; group by fewer columns, narrow --where, or raise --max-groups"},
+    {"aggregate_sort", "with --group-by/--aggregate, ", ""},
+    {"by_other_parameters", "", "; --by names the other swept parameters"},
+    {"force", "", "; pass --force to replace it"},
+    {"force_use", "", "; use --force to replace it"},
+    {"force_or_other_output", "", "; use --force to replace it, or another -o"},
+    {"resume_or_force", "", "; pass --resume to continue it or --force to replace it"},
+    {"force_or_resume_nodes", "", "; pass --force to replace them or --resume with as many nodes"},
+    {"resume_shard_first", "", "; finish it with `gesweep run ... --shard {} --resume` first"},
+    {"resume_shard", "", "; finish it with `gesweep run ... --shard {} --resume`"},
+    {"resume_repairs", "", ": gesweep run STUDY -o {} --resume repairs it and goes on"},
+    {"finish_sweep", "", "; finish the sweep with `gesweep run STUDY -o {} --resume`"},
+    {"merge_copy", "", " (gesweep merge --copy makes a self-contained archive)"},
+    {"use_method", "", " (use --method {})"},
+    {"no_write", "", " pass --no-write to only print {}"},
+};
+
+}  // namespace
+
+std::optional<std::string> WordRemedy(const RequestError& error) {
+  for (const Wording& w : kWordings) {
+    if (error.remedy() != w.remedy) continue;
+    std::string after = w.after;
+    if (const auto at = after.find("{}"); at != std::string::npos)
+      after.replace(at, 2, error.remedy_argument());
+    return w.before + error.expected() + after;
+  }
+  return std::nullopt;
+}
+
+const FlagNames& CommandLineFlags() {
+  static const FlagNames flags = {
+      {"where", "--where"},
+      {"columns", "--columns"},
+      {"sort", "--sort"},
+      {"group_by", "--group-by"},
+      {"aggregates", "--aggregate"},
+      {"max_groups", "--max-groups"},
+      {"by", "--by"},
+      {"shard", "--shard"},
+      {"output", "-o"},
+  };
+  return flags;
+}
+
+InputError ForCommandLine(const InputError& error) {
+  static const FlagNames none;
+  return ForCommandLine(error, error.source() == "command line" ? CommandLineFlags() : none);
+}
+
+InputError ForCommandLine(const InputError& error, const FlagNames& flags) {
+  const auto flag = flags.find(error.key());
+  const auto* request = dynamic_cast<const RequestError*>(&error);
+  const std::optional<std::string> worded = request == nullptr ? std::nullopt : WordRemedy(*request);
+  const bool renamed = flag != flags.end();
+  if (!renamed && !worded) return error;
+  // A plain InputError: worded once, it has no remedy left to word again.
+  return InputError(error.source(), renamed ? flag->second : error.key(), error.value(),
+                    worded ? *worded : error.expected(), error.line());
+}
+
+}  // namespace gesweep::cli
