@@ -27,8 +27,8 @@ struct Aircraft {
   double pitch_inertia_kgm2 = 0;
   double cg_over_chord = 0;  ///< CG position as a fraction of the mean chord (Table A1: 0.25)
 
-  double CDo = 0;   ///< parasite drag coefficient
-  double CDu = 0;   ///< speed derivatives: zero for a low-speed, incompressible aircraft (docs/model.md §2)
+  double CDo = 0;  ///< parasite drag coefficient
+  double CDu = 0;  ///< speed derivatives: zero for a low-speed, incompressible aircraft (docs/model.md §2)
   double CLu = 0;
   double CMu = 0;
   double CDde = 0;  ///< elevator drag derivative (not tabulated; zero by default)

@@ -35,8 +35,8 @@ inline constexpr int kTabulatedCount = 15;
 
 /// Names as they appear in aircraft files, study keys (`scale.CLh`) and archives.
 inline constexpr std::array<std::string_view, kCoefficientCount> kCoefficientNames = {
-    "k",     "CLo",     "CMo",        "CDalpha", "CLalpha", "CLalphadot", "CLq", "CLde",
-    "CMalpha", "CMalphadot", "CMq", "CMde", "ho_over_c", "CLh", "CMh", "CDh"};
+    "k",       "CLo",        "CMo", "CDalpha", "CLalpha",   "CLalphadot", "CLq", "CLde",
+    "CMalpha", "CMalphadot", "CMq", "CMde",    "ho_over_c", "CLh",        "CMh", "CDh"};
 
 /// The column of a name, or nullopt.
 std::optional<Coefficient> CoefficientFromName(std::string_view name);

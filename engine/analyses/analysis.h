@@ -14,10 +14,10 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/analyses/parameter_catalog.h"
 #include "engine/common/describe.h"
 #include "engine/common/toml_reader.h"
 #include "engine/dynamics/longitudinal_model.h"
-#include "engine/analyses/parameter_catalog.h"
 
 namespace gesweep {
 

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/modal/boundary.h"
 #include "engine/analyses/analysis_adapters.h"
+#include "engine/modal/boundary.h"
 
 namespace gesweep {
 namespace {
@@ -42,9 +42,9 @@ class BoundaryAnalysis final : public Analysis {
         ColumnType::kInt32, "results/boundary/crossing_count", "1",
         "Number of crossings found in the scanned range: of the imaginary axis by any eigenvalue "
         "(method hurwitz), of sigma through 0 (method sampled)"));
-    lowest_ = schema.Add(OutputColumn::Real(
-        "results/boundary/lowest_crossing_height_m", "m",
-        "Lowest crossing found (equals H* when there is one crossing); NaN when none"));
+    lowest_ = schema.Add(
+        OutputColumn::Real("results/boundary/lowest_crossing_height_m", "m",
+                           "Lowest crossing found (equals H* when there is one crossing); NaN when none"));
     evaluations_ = schema.Add(OutputColumn::Integer(ColumnType::kInt32, "results/boundary/margin_evaluations",
                                                     "1", "Eigen-analyses spent locating it"));
     certified_ = schema.Add(OutputColumn::Integer(
@@ -81,26 +81,30 @@ class BoundaryAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, const Aircraft* aircraft) {
-  settings.RejectUnknownKeys({"lower_height_m", "upper_height_m", "tolerance_m", "samples_per_segment", "method"});
+  settings.RejectUnknownKeys(
+      {"lower_height_m", "upper_height_m", "tolerance_m", "samples_per_segment", "method"});
   BoundaryOptions options;
   if (settings.Has("method")) {
     const std::string method = settings.String("method");
     if (method == "sampled") {
       options.method = BoundaryMethod::kSampled;
     } else if (method != "hurwitz") {
-      settings.Fail("method", method, "expected \"hurwitz\" (certified, the default) or \"sampled\" (the former search)");
+      settings.Fail("method", method,
+                    "expected \"hurwitz\" (certified, the default) or \"sampled\" (the former search)");
     }
   }
-  if (const auto lower = settings.OptionalLimitedNumber("lower_height_m", "height_m")) options.lower_height_m = *lower;
-  if (const auto upper = settings.OptionalLimitedNumber("upper_height_m", "height_m")) options.upper_height_m = *upper;
+  if (const auto lower = settings.OptionalLimitedNumber("lower_height_m", "height_m"))
+    options.lower_height_m = *lower;
+  if (const auto upper = settings.OptionalLimitedNumber("upper_height_m", "height_m"))
+    options.upper_height_m = *upper;
   const double lower =
       std::isnan(options.lower_height_m) ? aircraft->wheel_contact_height_m : options.lower_height_m;
   const double upper =
       std::isnan(options.upper_height_m) ? aircraft->table_heights_m.back() : options.upper_height_m;
   if (lower < aircraft->wheel_contact_height_m) {
     settings.Fail("lower_height_m", ShortNumber(lower),
-                  "expected a height >= the wheel-contact height " + ShortNumber(aircraft->wheel_contact_height_m) +
-                      " m of " + aircraft->source_path);
+                  "expected a height >= the wheel-contact height " +
+                      ShortNumber(aircraft->wheel_contact_height_m) + " m of " + aircraft->source_path);
   }
   if (!(upper > lower)) {
     settings.Fail(settings.Has("upper_height_m") ? "upper_height_m" : "lower_height_m", ShortNumber(lower),

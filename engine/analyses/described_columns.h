@@ -84,7 +84,6 @@ struct ColumnFiller {
   }
 };
 
-
 }  // namespace describe_detail
 
 /// The columns of one described result type `T`, declared once and filled per run.

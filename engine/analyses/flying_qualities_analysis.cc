@@ -4,8 +4,8 @@
 // than reading the `modes` columns, so it stands alone in a study.
 #include <sstream>
 
-#include "engine/modal/flying_qualities.h"
 #include "engine/analyses/analysis_adapters.h"
+#include "engine/modal/flying_qualities.h"
 
 namespace gesweep {
 namespace {

@@ -6,8 +6,8 @@
 #include <numbers>
 #include <sstream>
 
-#include "engine/control/landing_simulation.h"
 #include "engine/analyses/analysis_adapters.h"
+#include "engine/control/landing_simulation.h"
 
 namespace gesweep {
 namespace {
@@ -259,8 +259,8 @@ std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const
     if (!parsed) settings.Fail("plant_height_reference", "\"" + *reference + "\"", "expected path or fixed");
     config.plant_height_reference = *parsed;
   }
-  if (const auto value =
-          settings.OptionalLimitedNumber("plant_fixed_reference_height_m", "landing.plant_fixed_reference_height_m")) {
+  if (const auto value = settings.OptionalLimitedNumber("plant_fixed_reference_height_m",
+                                                        "landing.plant_fixed_reference_height_m")) {
     config.plant_fixed_reference_height_m = *value;
   }
   if (const auto value = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "engine/modal/modal_analysis.h"
 #include "engine/analyses/analysis_adapters.h"
+#include "engine/modal/modal_analysis.h"
 
 namespace gesweep {
 namespace {

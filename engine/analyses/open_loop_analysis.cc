@@ -5,11 +5,11 @@
 #include <numbers>
 #include <sstream>
 
+#include "engine/analyses/analysis_adapters.h"
 #include "engine/analyses/described_columns.h"
 #include "engine/common/describe_toml.h"
 #include "engine/common/input_limits.h"
 #include "engine/simulation/open_loop.h"
-#include "engine/analyses/analysis_adapters.h"
 
 namespace gesweep {
 namespace {
@@ -138,8 +138,8 @@ std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, cons
     // Bounded work: refused here, before the first run, not as a failed run later.
     const bool rk4 = config.integrator.kind == IntegratorKind::kRk4;
     const double& step_s = rk4 ? config.integrator.step_s : config.integrator.max_step_s;
-    CheckStepCount(config.duration_s, step_s, settings.source(), std::string(KeyOf(config, &config.duration_s)),
-                   std::string(KeyOf(config, &step_s)));
+    CheckStepCount(config.duration_s, step_s, settings.source(),
+                   std::string(KeyOf(config, &config.duration_s)), std::string(KeyOf(config, &step_s)));
   } catch (const InputError& e) {
     settings.Fail(e.key(), e.value(), e.expected());
   }

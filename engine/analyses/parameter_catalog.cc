@@ -58,8 +58,8 @@ std::vector<ParameterInfo> BuildCatalog() {
   // Model switches (docs/model.md §2-§4).
   c.push_back(Levels("h_derivatives", "Whether Xh, Zh and Mh are in the model (docs/model.md §4)",
                      ParameterKind::kBoolean, 1.0, {"false", "true"}));
-  c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)", ParameterKind::kChoice,
-                     0.0, {"polar", "zero"}));
+  c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)",
+                     ParameterKind::kChoice, 0.0, {"polar", "zero"}));
   c.push_back(Levels("interpolation", "Table interpolation in height: linear or pchip (docs/model.md §2)",
                      ParameterKind::kChoice, 0.0, {"linear", "pchip"}));
 
@@ -69,16 +69,18 @@ std::vector<ParameterInfo> BuildCatalog() {
                      "Multiplicative factor on the coefficient " + std::string(name) + " at every height",
                      G::kModel, 1.0, "scale_factor"));
   }
-  c.push_back(Real("scale.CDo", "1", "Multiplicative factor on the parasite drag coefficient CDo", G::kModel, 1.0,
-                   "scale_factor"));
+  c.push_back(Real("scale.CDo", "1", "Multiplicative factor on the parasite drag coefficient CDo", G::kModel,
+                   1.0, "scale_factor"));
 
   // Mass properties; the defaults are the aircraft's (DefaultValue).
   c.push_back(Real("mass_kg", "kg", "Airplane mass m (default: the aircraft file's)", G::kModel, std::nullopt,
                    "mass_kg"));
-  c.push_back(Real("pitch_inertia_kgm2", "kg m^2", "Pitching moment of inertia Iy (default: the aircraft file's)",
-                   G::kModel, std::nullopt, "pitch_inertia_kgm2"));
-  c.push_back(Real("cg_shift_over_chord", "1", "CG moved aft by this fraction of the mean chord (negative: forward)",
-                   G::kModel, 0.0, "cg_shift_over_chord"));
+  c.push_back(Real("pitch_inertia_kgm2", "kg m^2",
+                   "Pitching moment of inertia Iy (default: the aircraft file's)", G::kModel, std::nullopt,
+                   "pitch_inertia_kgm2"));
+  c.push_back(Real("cg_shift_over_chord", "1",
+                   "CG moved aft by this fraction of the mean chord (negative: forward)", G::kModel, 0.0,
+                   "cg_shift_over_chord"));
 
   // Open-loop perturbation (docs/model.md §7).
   c.push_back(Real("pulse_amplitude_deg", "deg",
@@ -91,8 +93,8 @@ std::vector<ParameterInfo> BuildCatalog() {
   // default means "automatic": the controller's own rule.
   {
     c.push_back(Real("glide_slope_deg", "deg",
-                     "Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)", G::kLanding, 2.5,
-                     "glide_slope_deg"));
+                     "Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)", G::kLanding,
+                     2.5, "glide_slope_deg"));
     c.push_back(Real("flare_height_m", "m", "Height Ho at which the flare starts", G::kLanding, 10.0,
                      "flare_height_m"));
     c.push_back(Real("flare_tau_s", "s",
@@ -107,15 +109,16 @@ std::vector<ParameterInfo> BuildCatalog() {
                            " of the paper's Eq. (14) (diagonal of Q; the paper: identity)",
                        G::kLanding, 1.0, "lqr.q"));
     }
-    c.push_back(Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0, "lqr.r"));
+    c.push_back(
+        Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0, "lqr.r"));
   }
 
   // Inputs of the verification models (Ishigami, linear): dimensionless, no default meaning.
   for (int i = 1; i <= 8; ++i) {
     std::string name = "x";
     name += std::to_string(i);
-    c.push_back(
-        Real(name, "1", "Input " + name + " of the verification models", G::kVerification, 0.0, "verification_input"));
+    c.push_back(Real(name, "1", "Input " + name + " of the verification models", G::kVerification, 0.0,
+                     "verification_input"));
   }
   return c;
 }
@@ -175,8 +178,8 @@ std::string DescribeAllowedValues(ParameterId id) {
 std::string CheckParameterValue(ParameterId id, double value, const Aircraft* aircraft) {
   const ParameterInfo& info = ParameterCatalog().at(id);
   if (info.kind != ParameterKind::kReal) {
-    const bool is_level = std::isfinite(value) && value >= 0 && value < static_cast<double>(info.levels.size()) &&
-                          value == std::floor(value);
+    const bool is_level = std::isfinite(value) && value >= 0 &&
+                          value < static_cast<double>(info.levels.size()) && value == std::floor(value);
     return is_level ? "" : "expected " + DescribeAllowedValues(id);
   }
   const InputLimit& limit = RequireInputLimit(info.limit);

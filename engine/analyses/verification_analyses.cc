@@ -7,8 +7,8 @@
 //  - linear: f = intercept + Σ cᵢ xᵢ; Morris' μ* of xᵢ over [0, 1] is |cᵢ|.
 #include <cmath>
 
-#include "engine/estimators/ishigami.h"
 #include "engine/analyses/analysis_adapters.h"
+#include "engine/estimators/ishigami.h"
 
 namespace gesweep {
 namespace {

@@ -17,49 +17,70 @@ using hdf5::Handle;
 template <typename T>
 hid_t FileType();
 template <>
-hid_t FileType<double>() { return H5T_IEEE_F64LE; }
+hid_t FileType<double>() {
+  return H5T_IEEE_F64LE;
+}
 template <>
-hid_t FileType<std::int8_t>() { return H5T_STD_I8LE; }
+hid_t FileType<std::int8_t>() {
+  return H5T_STD_I8LE;
+}
 template <>
-hid_t FileType<std::int32_t>() { return H5T_STD_I32LE; }
+hid_t FileType<std::int32_t>() {
+  return H5T_STD_I32LE;
+}
 template <>
-hid_t FileType<std::int64_t>() { return H5T_STD_I64LE; }
+hid_t FileType<std::int64_t>() {
+  return H5T_STD_I64LE;
+}
 
 template <typename T>
 hid_t MemoryType();
 template <>
-hid_t MemoryType<double>() { return H5T_NATIVE_DOUBLE; }
+hid_t MemoryType<double>() {
+  return H5T_NATIVE_DOUBLE;
+}
 template <>
-hid_t MemoryType<std::int8_t>() { return H5T_NATIVE_INT8; }
+hid_t MemoryType<std::int8_t>() {
+  return H5T_NATIVE_INT8;
+}
 template <>
-hid_t MemoryType<std::int32_t>() { return H5T_NATIVE_INT32; }
+hid_t MemoryType<std::int32_t>() {
+  return H5T_NATIVE_INT32;
+}
 template <>
-hid_t MemoryType<std::int64_t>() { return H5T_NATIVE_INT64; }
+hid_t MemoryType<std::int64_t>() {
+  return H5T_NATIVE_INT64;
+}
 
 }  // namespace
 
-#define GESWEEP_PRODUCT_ATTRIBUTES(Class)                                                                   \
-  void Class::Attribute(const std::string& name, const std::string& value) {                              \
-    hdf5::WriteAttribute(id_, name, value);                                                               \
-  }                                                                                                       \
-  void Class::Attribute(const std::string& name, const char* value) { hdf5::WriteAttribute(id_, name, value); } \
-  void Class::Attribute(const std::string& name, std::int64_t value) { hdf5::WriteAttribute(id_, name, value); } \
-  void Class::Attribute(const std::string& name, double value) { hdf5::WriteAttribute(id_, name, value); }       \
-  void Class::Attribute(const std::string& name, const std::vector<std::string>& values) {                \
-    hdf5::WriteAttribute(id_, name, values);                                                              \
-  }                                                                                                       \
-  void Class::Attribute(const std::string& name, const std::vector<double>& values) {                     \
-    hdf5::WriteAttribute(id_, name, values);                                                              \
-  }                                                                                                       \
-  void Class::Attribute(const std::string& name, const std::vector<std::int64_t>& values) {               \
-    hdf5::WriteAttribute(id_, name, values);                                                              \
+#define GESWEEP_PRODUCT_ATTRIBUTES(Class)                                                                  \
+  void Class::Attribute(const std::string& name, const std::string& value) {                               \
+    hdf5::WriteAttribute(id_, name, value);                                                                \
+  }                                                                                                        \
+  void Class::Attribute(const std::string& name, const char* value) {                                      \
+    hdf5::WriteAttribute(id_, name, value);                                                                \
+  }                                                                                                        \
+  void Class::Attribute(const std::string& name, std::int64_t value) {                                     \
+    hdf5::WriteAttribute(id_, name, value);                                                                \
+  }                                                                                                        \
+  void Class::Attribute(const std::string& name, double value) { hdf5::WriteAttribute(id_, name, value); } \
+  void Class::Attribute(const std::string& name, const std::vector<std::string>& values) {                 \
+    hdf5::WriteAttribute(id_, name, values);                                                               \
+  }                                                                                                        \
+  void Class::Attribute(const std::string& name, const std::vector<double>& values) {                      \
+    hdf5::WriteAttribute(id_, name, values);                                                               \
+  }                                                                                                        \
+  void Class::Attribute(const std::string& name, const std::vector<std::int64_t>& values) {                \
+    hdf5::WriteAttribute(id_, name, values);                                                               \
   }
 
 GESWEEP_PRODUCT_ATTRIBUTES(ProductDataset)
 GESWEEP_PRODUCT_ATTRIBUTES(ProductGroup)
 #undef GESWEEP_PRODUCT_ATTRIBUTES
 
-ProductGroup::ProductGroup(ProductGroup&& other) noexcept : id_(other.id_), datasets_(std::move(other.datasets_)) {
+ProductGroup::ProductGroup(ProductGroup&& other) noexcept
+    : id_(other.id_), datasets_(std::move(other.datasets_)) {
   other.id_ = H5I_INVALID_HID;
   other.datasets_.clear();
 }
@@ -70,8 +91,9 @@ ProductGroup::~ProductGroup() {
 }
 
 template <typename T>
-ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<T>& values, const std::string& units,
-                                     const std::string& description, const std::vector<std::size_t>& dims) {
+ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<T>& values,
+                                     const std::string& units, const std::string& description,
+                                     const std::vector<std::size_t>& dims) {
   std::vector<hsize_t> shape;
   std::size_t count = 1;
   for (const std::size_t d : dims) {
@@ -83,11 +105,14 @@ ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<
     count = values.size();
   }
   GESWEEP_DEMAND(count == values.size());
-  Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), "dataspace of " + name);
-  const hid_t id = H5Dcreate2(id_, name.c_str(), FileType<T>(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr),
+               "dataspace of " + name);
+  const hid_t id =
+      H5Dcreate2(id_, name.c_str(), FileType<T>(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   Check(id, "create " + name);
   datasets_.push_back(id);
-  if (count > 0) Check(H5Dwrite(id, MemoryType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
+  if (count > 0)
+    Check(H5Dwrite(id, MemoryType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
   ProductDataset dataset(id);
   dataset.Attribute("units", units);
   dataset.Attribute("description", description);
@@ -97,13 +122,16 @@ ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<
 template ProductDataset ProductGroup::Numbers<double>(const std::string&, const std::vector<double>&,
                                                       const std::string&, const std::string&,
                                                       const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int8_t>(const std::string&, const std::vector<std::int8_t>&,
+template ProductDataset ProductGroup::Numbers<std::int8_t>(const std::string&,
+                                                           const std::vector<std::int8_t>&,
                                                            const std::string&, const std::string&,
                                                            const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int32_t>(const std::string&, const std::vector<std::int32_t>&,
+template ProductDataset ProductGroup::Numbers<std::int32_t>(const std::string&,
+                                                            const std::vector<std::int32_t>&,
                                                             const std::string&, const std::string&,
                                                             const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int64_t>(const std::string&, const std::vector<std::int64_t>&,
+template ProductDataset ProductGroup::Numbers<std::int64_t>(const std::string&,
+                                                            const std::vector<std::int64_t>&,
                                                             const std::string&, const std::string&,
                                                             const std::vector<std::size_t>&);
 
@@ -116,10 +144,12 @@ ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<
   for (const auto& value : values) pointers.push_back(value.c_str());
   const hsize_t dims[1] = {values.size()};
   Handle space(H5Screate_simple(1, dims, nullptr), "dataspace of " + name);
-  const hid_t id = H5Dcreate2(id_, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  const hid_t id =
+      H5Dcreate2(id_, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   Check(id, "create " + name);
   datasets_.push_back(id);
-  if (!values.empty()) Check(H5Dwrite(id, type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data()), "write " + name);
+  if (!values.empty())
+    Check(H5Dwrite(id, type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data()), "write " + name);
   ProductDataset dataset(id);
   dataset.Attribute("units", "1");
   dataset.Attribute("description", description);

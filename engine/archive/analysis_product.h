@@ -65,8 +65,8 @@ class ProductGroup {
   friend void WriteAnalysisProduct(const std::filesystem::path&, const std::string&, const std::string&,
                                    const std::function<void(ProductGroup&)>&);
   explicit ProductGroup(std::int64_t id) : id_(id) {}
-  std::int64_t id_;                      // the open group (an HDF5 identifier)
-  std::vector<std::int64_t> datasets_;   // datasets made here, closed with the group
+  std::int64_t id_;                     // the open group (an HDF5 identifier)
+  std::vector<std::int64_t> datasets_;  // datasets made here, closed with the group
 };
 
 /// Writes the product `path` (e.g. "analysis/boundary", "analysis/sensitivity/H_m") of `archive`:

@@ -55,7 +55,8 @@ ThreadFilter& LocalFilter() {
 int SeriesChunkRows(int chunk_runs, int samples) {
   int best = 1;
   for (int d = 1; d <= chunk_runs; ++d) {
-    if (chunk_runs % d == 0 && static_cast<std::int64_t>(d) * samples * 8 <= kMaximumSeriesChunkBytes) best = d;
+    if (chunk_runs % d == 0 && static_cast<std::int64_t>(d) * samples * 8 <= kMaximumSeriesChunkBytes)
+      best = d;
   }
   return best;
 }
@@ -94,7 +95,7 @@ ArchiveLayout::ArchiveLayout(const SweepPlan& plan) : chunk_runs_(plan.chunk_run
     d.width = column.width;
     d.integer_fill = column.integer_fill;
     d.chunk_rows = column.width > 1 && !column.time_axis.empty() ? SeriesChunkRows(chunk_runs_, column.width)
-                                                                  : chunk_runs_;
+                                                                 : chunk_runs_;
     switch (column.type) {
       case ColumnType::kFloat64:
         d.kind = ElementKind::kFloat64;
@@ -200,7 +201,8 @@ void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t fi
       break;
     case ValueSource::kResult: {
       const std::vector<double>& values = block.results[static_cast<std::size_t>(d.column)];
-      const std::size_t per_row = static_cast<std::size_t>(d.width) * (d.kind == ElementKind::kComplex ? 2 : 1);
+      const std::size_t per_row =
+          static_cast<std::size_t>(d.width) * (d.kind == ElementKind::kComplex ? 2 : 1);
       const double* src = values.data() + from * per_row;
       const std::size_t elements = n * static_cast<std::size_t>(d.width);
       switch (d.kind) {
@@ -229,11 +231,13 @@ void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t fi
   // Rows past the batch's end (the last, partial chunk of the shard): the fill value, as HDF5 fills
   // a chunk before writing part of it.
   unsigned char* tail = at + n * row_bytes;
-  const std::size_t tail_elements = static_cast<std::size_t>(count - present) * static_cast<std::size_t>(d.width);
+  const std::size_t tail_elements =
+      static_cast<std::size_t>(count - present) * static_cast<std::size_t>(d.width);
   if (d.fill.empty()) {
     std::memset(tail, 0, tail_elements * d.element_size);
   } else {
-    for (std::size_t e = 0; e < tail_elements; ++e) std::memcpy(tail + e * d.element_size, d.fill.data(), d.element_size);
+    for (std::size_t e = 0; e < tail_elements; ++e)
+      std::memcpy(tail + e * d.element_size, d.fill.data(), d.element_size);
   }
 }
 

@@ -34,13 +34,13 @@ struct StoredDataset {
   std::string path;
   ElementKind kind = ElementKind::kFloat64;
   ValueSource source = ValueSource::kResult;
-  int column = 0;                 ///< design column or result column
-  int width = 1;                  ///< elements per run (1: a 1-D dataset, else N × width)
-  std::size_t element_size = 8;   ///< bytes per element
-  std::int64_t chunk_rows = 1;    ///< runs per chunk (divides the batch size)
+  int column = 0;                   ///< design column or result column
+  int width = 1;                    ///< elements per run (1: a 1-D dataset, else N × width)
+  std::size_t element_size = 8;     ///< bytes per element
+  std::int64_t chunk_rows = 1;      ///< runs per chunk (divides the batch size)
   std::vector<unsigned char> fill;  ///< one element's fill value; empty: none set (reads as zeros)
   FilterPipeline filters;
-  std::int32_t integer_fill = -1;   ///< NaN of an integer result column is stored as this
+  std::int32_t integer_fill = -1;  ///< NaN of an integer result column is stored as this
 
   std::size_t row_bytes() const { return element_size * static_cast<std::size_t>(width); }
   std::size_t chunk_bytes() const { return row_bytes() * static_cast<std::size_t>(chunk_rows); }

@@ -60,7 +60,8 @@ std::int64_t ChunkRows(hid_t dataset) {
 std::string SourceName(const std::filesystem::path& shard, const std::filesystem::path& output) {
   std::error_code ec;
   const auto shard_path = std::filesystem::weakly_canonical(std::filesystem::absolute(shard), ec);
-  const auto directory = std::filesystem::weakly_canonical(std::filesystem::absolute(output), ec).parent_path();
+  const auto directory =
+      std::filesystem::weakly_canonical(std::filesystem::absolute(output), ec).parent_path();
   const auto relative = shard_path.lexically_relative(directory);
   if (relative.empty()) return shard_path.string();
   return relative.string();
@@ -97,8 +98,9 @@ void WriteVirtual(hid_t file, const std::string& path, const std::vector<Shard>&
     std::vector<hsize_t> shard_dims{static_cast<hsize_t>(shard.count)};
     if (rank == 2) shard_dims.push_back(out_dims[1]);
     Handle source_space(H5Screate_simple(rank, shard_dims.data(), nullptr), "source space");
-    Check(H5Pset_virtual(dcpl.get(), virtual_space.get(), sources[i].c_str(), path.c_str(), source_space.get()),
-          "map " + path + " of " + shard.path.string());
+    Check(
+        H5Pset_virtual(dcpl.get(), virtual_space.get(), sources[i].c_str(), path.c_str(), source_space.get()),
+        "map " + path + " of " + shard.path.string());
   }
   Handle space(H5Screate_simple(rank, out_dims.data(), nullptr), "dataspace");
   Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
@@ -108,8 +110,8 @@ void WriteVirtual(hid_t file, const std::string& path, const std::vector<Shard>&
 
 // The merged dataset `path` by raw chunk copy where the shards' chunks coincide with the merged
 // file's, through HDF5 (decoded, written, filtered again) elsewhere.
-void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& shards, std::int64_t design_runs,
-               MergeReport& report) {
+void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& shards,
+               std::int64_t design_runs, MergeReport& report) {
   std::vector<Handle> sources;
   std::vector<std::int64_t> chunk_rows;
   std::size_t widest = 0;
@@ -129,7 +131,8 @@ void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& sh
   // mishandles direct chunk writes).
   std::vector<hsize_t> max_dims = out_dims;
   if (out_dims[0] <= static_cast<hsize_t>(chunk_rows[widest])) max_dims[0] = H5S_UNLIMITED;
-  Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), max_dims.data()), "dataspace");
+  Handle space(H5Screate_simple(static_cast<int>(out_dims.size()), out_dims.data(), max_dims.data()),
+               "dataspace");
   Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
                 "create " + path);
   hdf5::CopyAttributes(reference, target.get());
@@ -173,7 +176,8 @@ void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& sh
       if (a >= b) continue;
       piece.resize(static_cast<std::size_t>(b - a) * row_bytes);
       shards[i].reader->ReadRows(path, a - shards[i].first, b - a, type.get(), piece.data());
-      std::copy(piece.begin(), piece.end(), buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
+      std::copy(piece.begin(), piece.end(),
+                buffer.begin() + static_cast<std::ptrdiff_t>((a - first) * row_bytes));
     }
     Handle memory;
     Handle file_space = hdf5::SelectRows(target.get(), first, end - first, &memory);
@@ -185,8 +189,9 @@ void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& sh
 
 }  // namespace
 
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
-                          bool force, const std::string& command_line, MergeKind kind, const MergeScope& scope) {
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line,
+                          MergeKind kind, const MergeScope& scope) {
   hdf5::Quiet();
   const std::string shown = output.string();
   if (inputs.empty()) throw InputError("command line", "ARCHIVES", "", "expected one or more shard archives");
@@ -248,7 +253,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
   const std::int64_t shard_count = reference.IntegerAttribute("shard_count");
   std::int64_t batch_runs = 1;
-  for (const auto& shard : shards) batch_runs = std::max(batch_runs, shard.reader->IntegerAttribute("chunk_runs"));
+  for (const auto& shard : shards)
+    batch_runs = std::max(batch_runs, shard.reader->IntegerAttribute("chunk_runs"));
   const bool node_files = hdf5::ReadIntegerAttribute(reference.file(), "node_count").has_value();
   auto missing = [&](std::int64_t from, std::int64_t to) {
     // Name the shards of an N-way split that would cover the gap (the split of ShardRange, whose
@@ -256,8 +262,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
     std::string names;
     for (std::int64_t i = 0; i < shard_count && !node_files; ++i) {
       std::int64_t a = 0, n = 0;
-      ShardRange(design_runs, static_cast<int>(batch_runs), ShardSpec{static_cast<int>(i), static_cast<int>(shard_count)},
-                 &a, &n);
+      ShardRange(design_runs, static_cast<int>(batch_runs),
+                 ShardSpec{static_cast<int>(i), static_cast<int>(shard_count)}, &a, &n);
       if (a < to && a + n > from)
         names += (names.empty() ? "" : ", ") + std::to_string(i) + "/" + std::to_string(shard_count);
     }
@@ -283,8 +289,9 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
   }
   if (covered < origin + total) missing(covered, origin + total);
   if (covered > origin + total) {
-    throw InputError(shards.back().path.string(), "shard", shards.back().shard,
-                     "reaches past run " + std::to_string(origin + total - 1) + ", the end of what is merged");
+    throw InputError(
+        shards.back().path.string(), "shard", shards.back().shard,
+        "reaches past run " + std::to_string(origin + total - 1) + ", the end of what is merged");
   }
 
   // Complete: no pending run in any shard.
@@ -328,7 +335,8 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, cons
                 "create " + temporary.string());
     hdf5::CopyAttributes(reference.file(), file.get());
     for (const char* node_attribute : {"node_index", "node_count"}) {
-      if (H5Aexists(file.get(), node_attribute) > 0) Check(H5Adelete(file.get(), node_attribute), "drop the node attribute");
+      if (H5Aexists(file.get(), node_attribute) > 0)
+        Check(H5Adelete(file.get(), node_attribute), "drop the node attribute");
     }
     std::vector<std::string> merged_from, shard_notes;
     std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");

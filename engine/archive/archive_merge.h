@@ -54,8 +54,8 @@ struct MergeScope {
 /// Merges `inputs` into `output` (written under OUTPUT.partial, then renamed). Throws InputError
 /// naming the offending shard (missing, overlapping, incomplete, from another study or engine) and
 /// nothing is left under `output`; refuses an existing `output` unless `force`.
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
-                          bool force, const std::string& command_line, MergeKind kind = MergeKind::kVirtual,
-                          const MergeScope& scope = MergeScope{});
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line,
+                          MergeKind kind = MergeKind::kVirtual, const MergeScope& scope = MergeScope{});
 
 }  // namespace gesweep

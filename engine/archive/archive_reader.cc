@@ -83,7 +83,8 @@ void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_coun
   }
   for (const char* group : {archive::kRunsGroup, archive::kDesignGroup}) {
     H5O_info_t info{};
-    if (!hdf5::Exists(file, group) || H5Oget_info_by_name2(file, group, &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0 ||
+    if (!hdf5::Exists(file, group) ||
+        H5Oget_info_by_name2(file, group, &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0 ||
         info.type != H5O_TYPE_GROUP) {
       H5Eclear2(H5E_DEFAULT);
       refuse(group, "", "missing group /" + std::string(group));
@@ -124,7 +125,8 @@ void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_coun
     hsize_t dims[2] = {0, 0};
     if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
       H5Eclear2(H5E_DEFAULT);
-      refuse(path, "", "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
+      refuse(path, "",
+             "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
     }
     if (static_cast<std::int64_t>(dims[0]) != runs) {
       refuse(path, std::to_string(dims[0]) + " rows",
@@ -243,8 +245,8 @@ void ArchiveReader::CheckVirtualSources() const {
   const std::filesystem::path directory = path_.parent_path();
   const std::string fingerprint = StringAttribute("study_fingerprint");
   for (const std::string& source : StringListAttribute("virtual_sources")) {
-    const std::filesystem::path shard = std::filesystem::path(source).is_absolute() ? std::filesystem::path(source)
-                                                                                    : directory / source;
+    const std::filesystem::path shard =
+        std::filesystem::path(source).is_absolute() ? std::filesystem::path(source) : directory / source;
     std::error_code ec;
     auto refuse = [&](const std::string& why) {
       throw RequestError(
@@ -262,7 +264,8 @@ void ArchiveReader::CheckVirtualSources() const {
     Handle file(id);
     if (hdf5::ReadStringAttribute(id, "study_fingerprint").value_or("") != fingerprint ||
         hdf5::ReadIntegerAttribute(id, "complete").value_or(0) != 1) {
-      refuse("shard file " + shard.string() + " has changed since the merge (another study, or not complete)");
+      refuse("shard file " + shard.string() +
+             " has changed since the merge (another study, or not complete)");
     }
   }
 }
@@ -293,7 +296,8 @@ Handle OpenObject(hid_t file, const std::string& path) {
 
 }  // namespace
 
-std::optional<std::string> ArchiveReader::StringAttributeOf(const std::string& object, const std::string& name) const {
+std::optional<std::string> ArchiveReader::StringAttributeOf(const std::string& object,
+                                                            const std::string& name) const {
   Handle o = OpenObject(file_.get(), object);
   if (!o) return std::nullopt;
   return hdf5::ReadStringAttribute(o.get(), name);
@@ -306,7 +310,8 @@ std::optional<std::int64_t> ArchiveReader::IntegerAttributeOf(const std::string&
   return hdf5::ReadIntegerAttribute(o.get(), name);
 }
 
-std::optional<double> ArchiveReader::DoubleAttributeOf(const std::string& object, const std::string& name) const {
+std::optional<double> ArchiveReader::DoubleAttributeOf(const std::string& object,
+                                                       const std::string& name) const {
   Handle o = OpenObject(file_.get(), object);
   if (!o) return std::nullopt;
   return hdf5::ReadDoubleAttribute(o.get(), name);
@@ -319,7 +324,8 @@ std::vector<std::string> ArchiveReader::StringListAttributeOf(const std::string&
   return hdf5::ReadStringListAttribute(o.get(), name);
 }
 
-std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& object, const std::string& name) const {
+std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& object,
+                                                         const std::string& name) const {
   Handle o = OpenObject(file_.get(), object);
   if (!o || H5Aexists(o.get(), name.c_str()) <= 0) return {};
   Handle attribute(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT), "open attribute " + name);
@@ -342,11 +348,21 @@ ArchiveReader::DatasetInfo ArchiveReader::Describe(const std::string& path) cons
   Handle type(H5Dget_type(dataset.get()), "type of " + path);
   DatasetInfo info;
   switch (H5Tget_class(type.get())) {
-    case H5T_FLOAT: info.kind = DatasetInfo::Kind::kFloat; break;
-    case H5T_INTEGER: info.kind = DatasetInfo::Kind::kInteger; break;
-    case H5T_COMPOUND: info.kind = DatasetInfo::Kind::kCompound; break;
-    case H5T_STRING: info.kind = DatasetInfo::Kind::kString; break;
-    default: info.kind = DatasetInfo::Kind::kOther; break;
+    case H5T_FLOAT:
+      info.kind = DatasetInfo::Kind::kFloat;
+      break;
+    case H5T_INTEGER:
+      info.kind = DatasetInfo::Kind::kInteger;
+      break;
+    case H5T_COMPOUND:
+      info.kind = DatasetInfo::Kind::kCompound;
+      break;
+    case H5T_STRING:
+      info.kind = DatasetInfo::Kind::kString;
+      break;
+    default:
+      info.kind = DatasetInfo::Kind::kOther;
+      break;
   }
   info.dims = hdf5::Dimensions(dataset.get());
   return info;

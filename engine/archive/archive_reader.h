@@ -26,9 +26,9 @@ class ArchiveReader {
   /// (run_count, design_runs, first_run, chunk_runs), runs/ or design/ missing, a per-run dataset
   /// (runs/, design/, results/, the series) without one row per run or of a type its readers cannot
   /// convert; and when it is a virtual merged archive one of whose shard files is
-  /// missing, unreadable or changed. Every reader (query, boundary, report, sensitivity, merge, resume) goes through it.
-  /// A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size limit)
-  /// is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
+  /// missing, unreadable or changed. Every reader (query, boundary, report, sensitivity, merge, resume) goes
+  /// through it. A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size
+  /// limit) is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
   /// with zeros to its recorded size and opened as a snapshot, whose complete batches the resume
   /// copies into a fresh archive.
   static ArchiveReader Open(const std::filesystem::path& path, bool repair_truncated = false);
@@ -68,7 +68,8 @@ class ArchiveReader {
   DatasetInfo Describe(const std::string& path) const;
 
   /// Rows [first, first + count) of an integer per-run dataset (e.g. runs/index) as int64.
-  std::vector<std::int64_t> ReadIntegers(const std::string& path, std::int64_t first, std::int64_t count) const;
+  std::vector<std::int64_t> ReadIntegers(const std::string& path, std::int64_t first,
+                                         std::int64_t count) const;
 
   /// Runs in this archive (the length of every per-run dataset).
   std::int64_t run_count() const { return run_count_; }

@@ -237,20 +237,35 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   for (const archive::StoredDataset& stored : layout_.datasets()) {
     hid_t type = H5T_IEEE_F64LE;
     switch (stored.kind) {
-      case archive::ElementKind::kFloat64: type = H5T_IEEE_F64LE; break;
-      case archive::ElementKind::kInt64: type = H5T_STD_I64LE; break;
-      case archive::ElementKind::kUInt64: type = H5T_STD_U64LE; break;
-      case archive::ElementKind::kInt32: type = H5T_STD_I32LE; break;
-      case archive::ElementKind::kInt8: type = H5T_STD_I8LE; break;
-      case archive::ElementKind::kComplex: type = complex_type.get(); break;
-      case archive::ElementKind::kString: type = message_type.get(); break;
+      case archive::ElementKind::kFloat64:
+        type = H5T_IEEE_F64LE;
+        break;
+      case archive::ElementKind::kInt64:
+        type = H5T_STD_I64LE;
+        break;
+      case archive::ElementKind::kUInt64:
+        type = H5T_STD_U64LE;
+        break;
+      case archive::ElementKind::kInt32:
+        type = H5T_STD_I32LE;
+        break;
+      case archive::ElementKind::kInt8:
+        type = H5T_STD_I8LE;
+        break;
+      case archive::ElementKind::kComplex:
+        type = complex_type.get();
+        break;
+      case archive::ElementKind::kString:
+        type = message_type.get();
+        break;
     }
     // The fill value is given in the stored type (little-endian, as the layout holds it).
     Handle dcpl = Creation(stored, type);
     std::vector<hsize_t> dims{rows};
     if (stored.width > 1) dims.push_back(static_cast<hsize_t>(stored.width));
     hdf5::CreateGroups(file, stored.path.substr(0, stored.path.rfind('/')));
-    Handle d = CreateDataset(file, stored.path, type, dims, dcpl.get(), static_cast<hsize_t>(stored.chunk_rows));
+    Handle d =
+        CreateDataset(file, stored.path, type, dims, dcpl.get(), static_cast<hsize_t>(stored.chunk_rows));
     switch (stored.source) {
       case archive::ValueSource::kDesign: {
         const DesignParameter& parameter = parameters[static_cast<std::size_t>(stored.column)];
@@ -311,8 +326,9 @@ void ArchiveWriter::OpenDatasets() {
   for (const archive::StoredDataset& stored : layout_.datasets()) {
     Handle dataset(H5Dopen2(file_.get(), stored.path.c_str(), H5P_DEFAULT), "open dataset " + stored.path);
     const auto dims = hdf5::Dimensions(dataset.get());
-    const bool shape_ok = !dims.empty() && dims[0] == plan_.run_count() &&
-                          (stored.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == stored.width);
+    const bool shape_ok =
+        !dims.empty() && dims[0] == plan_.run_count() &&
+        (stored.width == 1 ? dims.size() == 1 : dims.size() == 2 && dims[1] == stored.width);
     if (!shape_ok) throw ArchiveError(path_.string() + ": dataset " + stored.path + " has the wrong shape");
     datasets_.push_back(std::move(dataset));
   }
@@ -327,8 +343,8 @@ void ArchiveWriter::WriteChunks(const ResultBlock& block) {
   auto store = [&](const StoredChunk& chunk) {
     const archive::StoredDataset& stored = layout_.datasets()[static_cast<std::size_t>(chunk.dataset)];
     const hsize_t offset[2] = {static_cast<hsize_t>(first + chunk.row), 0};
-    Check(H5Dwrite_chunk(datasets_[static_cast<std::size_t>(chunk.dataset)].get(), H5P_DEFAULT, chunk.filter_mask,
-                         offset, chunk.bytes.size(), chunk.bytes.data()),
+    Check(H5Dwrite_chunk(datasets_[static_cast<std::size_t>(chunk.dataset)].get(), H5P_DEFAULT,
+                         chunk.filter_mask, offset, chunk.bytes.size(), chunk.bytes.data()),
           "write " + stored.path + " of " + path_.string());
   };
   for (int c = 0; c < block.chunk_count; ++c) {

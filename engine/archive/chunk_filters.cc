@@ -146,15 +146,17 @@ std::uint32_t ChunkFilter::Apply(const FilterPipeline& pipeline, const unsigned 
   return mask;
 }
 
-bool ChunkFilter::Reverse(const FilterPipeline& pipeline, std::uint32_t filter_mask, const unsigned char* data,
-                          std::size_t stored_size, std::size_t size, std::vector<unsigned char>& out) {
+bool ChunkFilter::Reverse(const FilterPipeline& pipeline, std::uint32_t filter_mask,
+                          const unsigned char* data, std::size_t stored_size, std::size_t size,
+                          std::vector<unsigned char>& out) {
   const int fletcher_bit = pipeline.filter_count() - 1;
   std::size_t length = stored_size;
   if (pipeline.fletcher32 && !(filter_mask & (1u << fletcher_bit))) {
     if (length < 4) return false;
     length -= 4;
     std::uint32_t stored = 0;
-    for (int b = 0; b < 4; ++b) stored |= static_cast<std::uint32_t>(data[length + static_cast<std::size_t>(b)]) << (8 * b);
+    for (int b = 0; b < 4; ++b)
+      stored |= static_cast<std::uint32_t>(data[length + static_cast<std::size_t>(b)]) << (8 * b);
     if (stored != Fletcher32(data, length)) return false;
   }
   const int deflate_bit = pipeline.shuffle ? 1 : 0;

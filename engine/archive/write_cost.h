@@ -14,12 +14,12 @@ namespace gesweep {
 
 /// What MeasureWriteCost measured.
 struct WriteCostEstimate {
-  double seconds_per_run = 0;  ///< the writer thread's time per run, storing (0 when not measured)
-  double seconds_per_run_low = 0;   ///< 95 % interval of it (equal to it with fewer than 3 batches)
+  double seconds_per_run = 0;      ///< the writer thread's time per run, storing (0 when not measured)
+  double seconds_per_run_low = 0;  ///< 95 % interval of it (equal to it with fewer than 3 batches)
   double seconds_per_run_high = 0;
   double encode_seconds_per_run = 0;  ///< a worker's time per run encoding its batch (0 when not measured)
   std::int64_t runs_written = 0;
-  bool measured = false;       ///< false: skipped (`compute_budget_s` too small for one real batch)
+  bool measured = false;  ///< false: skipped (`compute_budget_s` too small for one real batch)
   /// Once per sweep: ArchiveWriter::Open of a new archive for the plan (create, skeleton, reopen in
   /// SWMR mode, rename), s; and ArchiveWriter::Finish (statuses counted, end attributes, flush,
   /// close), s. Measured whenever the scratch archive could be written, batch or not.

@@ -11,19 +11,19 @@
 #include <optional>
 #include <sstream>
 
-#include "engine/estimators/boundary_curve.h"
-#include "engine/estimators/local_sensitivity.h"
-#include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_error.h"
+#include "engine/archive/archive_lock.h"
+#include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
+#include "engine/estimators/boundary_curve.h"
+#include "engine/estimators/local_sensitivity.h"
 #include "engine/modal/boundary.h"
 #include "engine/products/archive_boundary.h"
-#include "engine/archive/archive_lock.h"
-#include "engine/query/run_columns.h"
 #include "engine/products/run_model.h"
+#include "engine/query/run_columns.h"
 
 namespace gesweep::cli {
 namespace {
@@ -34,9 +34,9 @@ struct BoundaryFlags {
   std::string speeds;
   std::string format = "table";
   bool sensitivities = false;
-  std::string archive;          // --archive: the boundary of a sweep's results
-  std::vector<std::string> by;  // --by: order of the curve's axes
-  bool no_write = false;        // --no-write: print only
+  std::string archive;             // --archive: the boundary of a sweep's results
+  std::vector<std::string> by;     // --by: order of the curve's axes
+  bool no_write = false;           // --no-write: print only
   std::string method = "hurwitz";  // --method: hurwitz (certified) or sampled (the former search)
 };
 
@@ -284,15 +284,18 @@ nlohmann::json CurveJson(const BoundaryCurve& curve) {
 
 void PrintCurveSummary(const BoundaryCurve& curve) {
   std::cout << "# curve traced from " << FormatNumber(curve.lower_speed_mps, 6) << " to "
-            << FormatNumber(curve.upper_speed_mps, 6) << " m/s by continuation on the crossing criterion: "
-            << curve.points.size() << " points, " << curve.rejected_steps << " steps rejected, " << curve.finder_calls
-            << " certified checks\n";
+            << FormatNumber(curve.upper_speed_mps, 6)
+            << " m/s by continuation on the crossing criterion: " << curve.points.size() << " points, "
+            << curve.rejected_steps << " steps rejected, " << curve.finder_calls << " certified checks\n";
   for (const auto& e : curve.events) {
     std::cout << "#   at " << FormatNumber(e.speed_mps, 7) << " m/s the boundary " << e.what;
-    if (e.what == "appears") std::cout << " at H* = " << FormatNumber(e.height_above_m, 6) << " m (below: " << e.reason << ")";
-    if (e.what == "ends") std::cout << " at H* = " << FormatNumber(e.height_below_m, 6) << " m (above: " << e.reason << ")";
+    if (e.what == "appears")
+      std::cout << " at H* = " << FormatNumber(e.height_above_m, 6) << " m (below: " << e.reason << ")";
+    if (e.what == "ends")
+      std::cout << " at H* = " << FormatNumber(e.height_below_m, 6) << " m (above: " << e.reason << ")";
     if (e.what == "jumps")
-      std::cout << " from " << FormatNumber(e.height_below_m, 6) << " to " << FormatNumber(e.height_above_m, 6) << " m";
+      std::cout << " from " << FormatNumber(e.height_below_m, 6) << " to "
+                << FormatNumber(e.height_above_m, 6) << " m";
     std::cout << "\n";
   }
 }
@@ -341,7 +344,8 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
     // archive's speeds, beside the per-point boundary (the report draws it on the stability map).
     std::optional<BoundaryCurve> curve;
     if (boundary.key_names == std::vector<std::string>{"speed_mps"} && boundary.points.size() >= 2) {
-      const double lower = boundary.points.front().key_values[0], upper = boundary.points.back().key_values[0];
+      const double lower = boundary.points.front().key_values[0],
+                   upper = boundary.points.back().key_values[0];
       if (upper > lower && lower > 0) {
         curve = TraceBoundary(models.Model(boundary.points.front().parameters), lower, upper);
       }
@@ -368,7 +372,8 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
     PrintArchiveBoundary(boundary, flags, sensitivities, !flags.no_write);
     if (curve && flags.format == "table") {
       PrintCurveSummary(*curve);
-      if (!flags.no_write) std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
+      if (!flags.no_write)
+        std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
     }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << e.what() << "\n";
@@ -399,7 +404,8 @@ int RunBoundary(const BoundaryFlags& flags) {
     const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
     const double lower = ends[0], upper = ends[1];
     RequireWithinLimit(ends, "speed_mps", "--speeds-mps");
-    if (!(upper > lower)) throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
+    if (!(upper > lower))
+      throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
     BoundaryCurveOptions options;
     options.search = SearchOptions(flags);
     curve = TraceBoundary(model, lower, upper, options);
@@ -472,8 +478,8 @@ int RunBoundary(const BoundaryFlags& flags) {
         std::string numbers;
         for (double h : others) numbers += (numbers.empty() ? "" : " ") + FormatNumber(h, 6);
         std::cout << FormatNumber(speed) << "," << (result.height_m ? FormatNumber(*result.height_m) : "")
-                  << "," << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\""
-                  << numbers << "\",\"" << result.reason << "\"\n";
+                  << "," << (result.height_m ? FormatNumber(*result.height_m / span) : "") << ",\"" << numbers
+                  << "\",\"" << result.reason << "\"\n";
       } else {
         std::cout << std::setw(12) << FormatNumber(speed, 6) << std::setw(12) << h_text << std::setw(10)
                   << ratio_text << "  " << other_text << (other_text.empty() ? "" : " ") << result.reason
@@ -498,10 +504,12 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<BoundaryFlags>();
       flags->model.AddTo(app, /*aircraft_required=*/false);
-      auto* speed = AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s");
-      auto* speeds = app.add_option("--speeds-mps", flags->speeds,
-                                    "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
-                                    "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
+      auto* speed =
+          AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s");
+      auto* speeds =
+          app.add_option("--speeds-mps", flags->speeds,
+                         "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
+                         "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
       speed->excludes(speeds);
       auto* archive =
           app.add_option("--archive", flags->archive,

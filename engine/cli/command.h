@@ -4,7 +4,6 @@
 /// registry. Subcommands parse, call the engine and print; they hold no physics.
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <string>
 #include <vector>

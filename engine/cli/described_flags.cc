@@ -12,7 +12,8 @@ std::string FlagName(std::string_view key) {
 }
 
 DescribedFlags::Entry& DescribedFlags::NewEntry(std::string_view key) {
-  GESWEEP_DEMAND(std::none_of(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; }));
+  GESWEEP_DEMAND(
+      std::none_of(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; }));
   return entries_.emplace_back(Entry{std::string(key), {}, {}});
 }
 
@@ -24,7 +25,8 @@ std::vector<std::string> DescribedFlags::AliasesOf(std::string_view key) const {
   return names;
 }
 
-std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::string& default_text, bool required) {
+std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::string& default_text,
+                                 bool required) {
   std::string help(attributes.doc);
   if (!required) help += "; default " + default_text;
   return help;
@@ -32,7 +34,8 @@ std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::s
 
 CLI::Option* DescribedFlags::AddNumber(CLI::App& app, const std::string& flag, double& slot,
                                        const FieldAttributes& attributes, const std::string& help) {
-  if (!attributes.limit.empty()) return AddLimitedOption(app, flag, slot, std::string(attributes.limit), help);
+  if (!attributes.limit.empty())
+    return AddLimitedOption(app, flag, slot, std::string(attributes.limit), help);
   return app.add_option(flag, slot, help);
 }
 

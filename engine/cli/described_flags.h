@@ -9,7 +9,6 @@
 /// (FlagAlias); messages name the flag the person typed.
 
 #include <CLI/CLI.hpp>
-
 #include <deque>
 #include <functional>
 #include <string>
@@ -64,8 +63,8 @@ class DescribedFlags {
   };
   Entry& NewEntry(std::string_view key);
   std::vector<std::string> AliasesOf(std::string_view key) const;
-  CLI::Option* AddNumber(CLI::App& app, const std::string& flag, double& slot, const FieldAttributes& attributes,
-                         const std::string& help);
+  CLI::Option* AddNumber(CLI::App& app, const std::string& flag, double& slot,
+                         const FieldAttributes& attributes, const std::string& help);
   CLI::Option* AddChoice(CLI::App& app, const std::string& flag, std::string& slot, const std::string& help,
                          std::function<bool(const std::string&)> known, const std::string& choices);
   static std::string Help(const FieldAttributes& attributes, const std::string& default_text, bool required);
@@ -102,8 +101,9 @@ class DescribedFlags {
         const bool default_value = *value;
         bool& given = self->switches_.emplace_back(false);
         const std::string flag = (default_value ? "--no-" : "--") + FlagName(a.key).substr(2);
-        const std::string help = default_value ? "Sets " + std::string(a.key) + " false; " + std::string(a.doc)
-                                               : std::string(a.doc);
+        const std::string help = default_value
+                                     ? "Sets " + std::string(a.key) + " false; " + std::string(a.doc)
+                                     : std::string(a.doc);
         entry.options.push_back(app->add_flag(flag, given, help));
         entry.names.push_back(flag);
         for (const std::string& alias : self->AliasesOf(a.key)) {
@@ -120,7 +120,8 @@ class DescribedFlags {
         entry.options.push_back(self->AddChoice(*app, FlagName(a.key), slot, help, known, EnumChoices<U>()));
         entry.names.push_back(FlagName(a.key));
         for (const std::string& alias : self->AliasesOf(a.key)) {
-          entry.options.push_back(self->AddChoice(*app, alias, slot, help, known, EnumChoices<U>())->group(""));
+          entry.options.push_back(
+              self->AddChoice(*app, alias, slot, help, known, EnumChoices<U>())->group(""));
           entry.names.push_back(alias);
         }
         self->appliers_.push_back([value, &slot] { *value = *ParseEnum<U>(slot); });
@@ -130,7 +131,8 @@ class DescribedFlags {
         entry.options.push_back(self->AddNumber(*app, FlagName(a.key), slot, a, help));
         entry.names.push_back(FlagName(a.key));
         for (const std::string& alias : self->AliasesOf(a.key)) {
-          entry.options.push_back(self->AddNumber(*app, alias, slot, a, "same as " + FlagName(a.key))->group(""));
+          entry.options.push_back(
+              self->AddNumber(*app, alias, slot, a, "same as " + FlagName(a.key))->group(""));
           entry.names.push_back(alias);
         }
         const double scale = a.scale;

@@ -6,7 +6,6 @@
 /// component (prefix + component name).
 
 #include <nlohmann/json.hpp>
-
 #include <string>
 
 #include "engine/cli/json_util.h"
@@ -83,7 +82,6 @@ struct CsvRowWriter {
     }
   }
 };
-
 
 }  // namespace describe_detail
 

@@ -1,9 +1,8 @@
 #pragma once
 /// JSON helpers for the CLI: non-finite numbers become null (JSON has no NaN), +∞ heights "inf".
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 namespace gesweep::cli {
 

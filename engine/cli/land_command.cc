@@ -5,11 +5,10 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
@@ -125,24 +124,24 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
   }
   const double time_limit_s = LandingTimeLimit(config, model.aircraft().wheel_contact_height_m);
   if (config.output_interval_s > 0.0 && time_limit_s / config.output_interval_s > 1e7) {
-    throw InputError("command line", "--output-dt-s", Number(config.output_interval_s), "expected at most 1e7 samples");
+    throw InputError("command line", "--output-dt-s", Number(config.output_interval_s),
+                     "expected at most 1e7 samples");
   }
   return config;
 }
 
 Json DesignJson(const LandingDesign& design) {
   Json gain = Json::object();
-  for (int i = 0; i < kLandingStateCount; ++i) gain[std::string(LandingStateNames()[i])] = JsonNumber(design.gain[i]);
+  for (int i = 0; i < kLandingStateCount; ++i)
+    gain[std::string(LandingStateNames()[i])] = JsonNumber(design.gain[i]);
   Json eigenvalues = Json::array();
   for (Eigen::Index i = 0; i < design.closed_loop_eigenvalues.size(); ++i) {
-    eigenvalues.push_back({design.closed_loop_eigenvalues(i).real(), design.closed_loop_eigenvalues(i).imag()});
+    eigenvalues.push_back(
+        {design.closed_loop_eigenvalues(i).real(), design.closed_loop_eigenvalues(i).imag()});
   }
-  return {{"status", std::string(ToString(design.status))},
-          {"message", design.message},
-          {"design_height_m", design.design_height_m},
-          {"design_speed_mps", design.design_speed_mps},
-          {"h_derivatives", design.design_h_derivatives},
-          {"gain", design.ok() ? gain : Json(nullptr)},
+  return {{"status", std::string(ToString(design.status))}, {"message", design.message},
+          {"design_height_m", design.design_height_m},      {"design_speed_mps", design.design_speed_mps},
+          {"h_derivatives", design.design_h_derivatives},   {"gain", design.ok() ? gain : Json(nullptr)},
           {"closed_loop_eigenvalues_per_s", eigenvalues}};
 }
 
@@ -196,28 +195,28 @@ Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalM
   Json weights = Json::object();
   for (int i = 0; i < kLandingStateCount; ++i) weights[std::string(LandingStateNames()[i])] = c.q_weights[i];
   Json run = {{"aircraft", model.aircraft().name},
-                        {"start_height_m", c.start_height_m},
-                        {"start_speed_mps", c.start_speed_mps},
-                        {"start_pitch_deg", c.start_pitch_deg},
-                        {"start_glide_path_offset_m", c.start_glide_path_offset_m},
-                        {"glide_slope_deg", r.glide_slope_deg},
-                        {"flare_height_m", r.flare_height_m},
-                        {"flare_time_constant_s", r.flare_time_constant_s},
-                        {"q_weights", weights},
-                        {"r_weight", c.r_weight},
-                        {"actuator_pole_per_s", c.actuator_pole_per_s},
-                        {"compensator_pole_per_s", c.compensator_pole_per_s},
-                        {"elevator_min_deg", c.elevator_min_deg},
-                        {"elevator_max_deg", c.elevator_max_deg},
-                        {"plant_height_reference", std::string(ToString(c.plant_height_reference))},
-                        {"h_derivatives", model.options().h_derivatives},
-                        {"cdh", std::string(ToString(model.options().cdh))},
-                        {"interpolation", std::string(ToString(model.options().interpolation))},
-                        {"integrator", "dopri5"},
-                        {"rtol", c.relative_tolerance},
-                        {"atol", c.absolute_tolerance},
-                        {"max_step_s", c.max_step_s},
-                        {"time_limit_s", r.time_limit_s}};
+              {"start_height_m", c.start_height_m},
+              {"start_speed_mps", c.start_speed_mps},
+              {"start_pitch_deg", c.start_pitch_deg},
+              {"start_glide_path_offset_m", c.start_glide_path_offset_m},
+              {"glide_slope_deg", r.glide_slope_deg},
+              {"flare_height_m", r.flare_height_m},
+              {"flare_time_constant_s", r.flare_time_constant_s},
+              {"q_weights", weights},
+              {"r_weight", c.r_weight},
+              {"actuator_pole_per_s", c.actuator_pole_per_s},
+              {"compensator_pole_per_s", c.compensator_pole_per_s},
+              {"elevator_min_deg", c.elevator_min_deg},
+              {"elevator_max_deg", c.elevator_max_deg},
+              {"plant_height_reference", std::string(ToString(c.plant_height_reference))},
+              {"h_derivatives", model.options().h_derivatives},
+              {"cdh", std::string(ToString(model.options().cdh))},
+              {"interpolation", std::string(ToString(model.options().interpolation))},
+              {"integrator", "dopri5"},
+              {"rtol", c.relative_tolerance},
+              {"atol", c.absolute_tolerance},
+              {"max_step_s", c.max_step_s},
+              {"time_limit_s", r.time_limit_s}};
   if (c.plant_height_reference == PlantHeightReference::kFixedHeight) {
     run["plant_reference_height_m"] = r.plant_fixed_reference_height_m;
   }
@@ -233,8 +232,8 @@ int RunLand(const LandFlags& flags) {
   const SignalCancellation signals;
   const LandingResult result = SimulateLanding(model, config, signals.flag());
   if (result.cancelled) {
-    std::cerr << "gesweep: land stopped by signal " << signals.signal() << " at t = "
-              << Number(result.final_time_s) << " s; nothing written\n";
+    std::cerr << "gesweep: land stopped by signal " << signals.signal()
+              << " at t = " << Number(result.final_time_s) << " s; nothing written\n";
     return signals.exit_code();
   }
   const int exit_code = result.outcome == LandingOutcome::kDesignFailed ? 3 : 0;
@@ -253,8 +252,8 @@ int RunLand(const LandFlags& flags) {
       series["phase"] = std::move(phase);
     }
     std::cout << Json{{"run", RunJson(config, result, model)},
-                                {"summary", SummaryJson(result)},
-                                {"series", series}}
+                      {"summary", SummaryJson(result)},
+                      {"series", series}}
                      .dump(1)
               << "\n";
     return exit_code;
@@ -288,7 +287,8 @@ int RunLand(const LandFlags& flags) {
     }
   }
   std::cout << out;
-  if (result.outcome == LandingOutcome::kDesignFailed) std::cerr << "gesweep land: " << result.message << "\n";
+  if (result.outcome == LandingOutcome::kDesignFailed)
+    std::cerr << "gesweep land: " << result.message << "\n";
   return exit_code;
 }
 
@@ -306,17 +306,21 @@ const CommandRegistrar kRegistrar{Command{
                        "Start speed, also the reference speed u0 of the plant, m/s; default 52.21");
       AddLimitedOption(app, "--start-pitch-deg", c.start_pitch_deg, "landing.start_pitch_deg",
                        "Start pitch angle (reference: level), deg; default 0");
-      AddLimitedOption(app, "--start-offset-m", c.start_glide_path_offset_m, "landing.start_glide_path_offset_m",
+      AddLimitedOption(app, "--start-offset-m", c.start_glide_path_offset_m,
+                       "landing.start_glide_path_offset_m",
                        "Start deviation d from the glide path, m, positive above; default 0");
       AddLimitedOption(app, "--glide-slope-deg", c.glide_slope_deg, "glide_slope_deg",
                        "Glide-slope angle, deg, positive down; default 2.5");
-      AddLimitedOption(app, "--flare-height-m", c.flare_height_m, "flare_height_m", "Flare height Ho, m; default 10");
-      AddLimitedOption(app, "--tau-s", flags->flare_time_constant_s, "flare_tau_s",
-                       "Flare time constant, s; default Ho/(u0 sin(glide slope)), continuous sink rate at Ho");
+      AddLimitedOption(app, "--flare-height-m", c.flare_height_m, "flare_height_m",
+                       "Flare height Ho, m; default 10");
+      AddLimitedOption(
+          app, "--tau-s", flags->flare_time_constant_s, "flare_tau_s",
+          "Flare time constant, s; default Ho/(u0 sin(glide slope)), continuous sink rate at Ho");
       app.add_option("--q-weights", flags->q_weights,
                      "9 comma-separated LQR output weights on delta_u,delta_w,pitch_rate,delta_theta,delta_h,"
                      "elevator,deviation,compensator,error_integral (SI units, rad); default all 1");
-      AddLimitedOption(app, "--r-weight", c.r_weight, "lqr.r", "LQR weight on the elevator command (rad^2); default 1");
+      AddLimitedOption(app, "--r-weight", c.r_weight, "lqr.r",
+                       "LQR weight on the elevator command (rad^2); default 1");
       AddLimitedOption(app, "--design-height-m", flags->design_height_m, "landing.design_height_m",
                        "Height of the linear model used for the gain, m; default the wheel-contact height");
       AddLimitedOption(app, "--design-speed-mps", flags->design_speed_mps, "speed_mps",
@@ -325,8 +329,8 @@ const CommandRegistrar kRegistrar{Command{
                    "Leave Xh, Zh, Mh out of the design model (the plant follows --no-h-derivatives)");
       AddLimitedOption(app, "--actuator-pole-per-s", c.actuator_pole_per_s, "landing.actuator_pole_per_s",
                        "Elevator actuator pole, 1/s; default 10");
-      AddLimitedOption(app, "--compensator-pole-per-s", c.compensator_pole_per_s, "landing.compensator_pole_per_s",
-                       "Compensator pole S_d, 1/s; default 10");
+      AddLimitedOption(app, "--compensator-pole-per-s", c.compensator_pole_per_s,
+                       "landing.compensator_pole_per_s", "Compensator pole S_d, 1/s; default 10");
       AddLimitedOption(app, "--elevator-min-deg", c.elevator_min_deg, "landing.elevator_min_deg",
                        "Lower elevator limit, deg; default -25");
       AddLimitedOption(app, "--elevator-max-deg", c.elevator_max_deg, "landing.elevator_max_deg",
@@ -334,22 +338,25 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("--plant-height-reference", flags->plant_height_reference,
                      "What the plant's h-derivative terms measure dH from: path (default, the reference "
                      "trajectory) or fixed (--plant-reference-height-m)");
-      AddLimitedOption(app, "--plant-reference-height-m", flags->plant_reference_height_m,
-                       "landing.plant_fixed_reference_height_m",
-                       "Fixed reference height for --plant-height-reference fixed, m; default the top table height");
+      AddLimitedOption(
+          app, "--plant-reference-height-m", flags->plant_reference_height_m,
+          "landing.plant_fixed_reference_height_m",
+          "Fixed reference height for --plant-height-reference fixed, m; default the top table height");
       AddLimitedOption(app, "--rtol", c.relative_tolerance, "relative_tolerance",
                        "Dormand-Prince relative tolerance; default 1e-3 (ode45)");
       AddLimitedOption(app, "--atol", c.absolute_tolerance, "absolute_tolerance",
                        "Dormand-Prince absolute tolerance; default 1e-6");
       AddLimitedOption(app, "--max-step-s", c.max_step_s, "landing.max_step_s", "Largest step, s; default 1");
-      AddLimitedOption(app, "--time-limit-s", flags->time_limit_s, "landing.time_limit_s",
-                       "Time limit, s (outcome no_touchdown); default twice the reference trajectory's time to the "
-                       "wheels");
+      AddLimitedOption(
+          app, "--time-limit-s", flags->time_limit_s, "landing.time_limit_s",
+          "Time limit, s (outcome no_touchdown); default twice the reference trajectory's time to the "
+          "wheels");
       AddLimitedOption(app, "--divergence-pitch-deg", c.divergence_pitch_deg, "landing.divergence_pitch_deg",
                        "|pitch| that ends the run as diverged, deg; default 60");
       auto* output_dt = AddLimitedOption(app, "--output-dt-s", c.output_interval_s, "output_dt_s",
                                          "Series sampling interval, s; default 0.1");
-      auto* summary = app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
+      auto* summary =
+          app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       output_dt->excludes(summary);
       app.add_option("--format", flags->format,
                      "csv (default: the series; with --summary-only one summary row) or json "

@@ -21,16 +21,17 @@ std::vector<Command>& CommandRegistry() {
 
 int main(int argc, char** argv) {
   using gesweep::cli::CommandRegistry;
-  CLI::App app{"gesweep: batch parametric and sensitivity studies of airplane longitudinal dynamics "
-               "in ground effect"};
+  CLI::App app{
+      "gesweep: batch parametric and sensitivity studies of airplane longitudinal dynamics "
+      "in ground effect"};
   app.require_subcommand(1);
   app.footer(
       "Every number a flag or a study file takes has one allowed range, with its reason: gesweep limits "
       "prints the table (docs/limits.md); each flag's range also shows beside it in SUBCOMMAND --help.");
-  app.set_version_flag("--version", std::string("gesweep ") + GESWEEP_VERSION + " (" + GESWEEP_GIT_COMMIT + ")");
+  app.set_version_flag("--version",
+                       std::string("gesweep ") + GESWEEP_VERSION + " (" + GESWEEP_GIT_COMMIT + ")");
   auto& registry = CommandRegistry();
-  std::sort(registry.begin(), registry.end(),
-            [](const auto& a, const auto& b) { return a.name < b.name; });
+  std::sort(registry.begin(), registry.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
   std::vector<std::pair<CLI::App*, std::function<int()>>> actions;
   for (auto& command : registry) {
     CLI::App* sub = app.add_subcommand(command.name, command.description);

@@ -31,15 +31,16 @@ int Merge(const MergeFlags& flags) {
                                              flags.copy ? MergeKind::kCopy : MergeKind::kVirtual);
     if (!flags.quiet) {
       std::cerr << "gesweep: merged " << report.shards << " shard" << (report.shards > 1 ? "s" : "") << ": "
-                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed << " failed) -> "
-                << flags.output;
+                << report.runs << " runs (" << report.runs_ok << " ok, " << report.runs_failed
+                << " failed) -> " << flags.output;
       if (report.kind == MergeKind::kVirtual) {
-        std::cerr << " (virtual)\ngesweep: " << flags.output << " reads the shard files in place: keep them where "
+        std::cerr << " (virtual)\ngesweep: " << flags.output
+                  << " reads the shard files in place: keep them where "
                   << "they are (moving the directory with them is fine); `gesweep merge --copy` makes a "
                   << "self-contained archive\n";
       } else {
-        std::cerr << " (" << report.chunks_copied << " chunks copied raw, " << std::fixed << std::setprecision(1)
-                  << report.bytes_copied / 1e6 << " MB";
+        std::cerr << " (" << report.chunks_copied << " chunks copied raw, " << std::fixed
+                  << std::setprecision(1) << report.bytes_copied / 1e6 << " MB";
         if (report.chunks_rewritten) std::cerr << "; " << report.chunks_rewritten << " rewritten";
         std::cerr << ")\n";
       }
@@ -60,9 +61,10 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("archives", flags->inputs, "Shard archives (from gesweep run --shard i/N)")->required();
       app.add_option("-o,--output", flags->output, "Merged archive to write")->required();
       app.add_flag("--force", flags->force, "Replace an existing output archive");
-      app.add_flag("--copy", flags->copy,
-                   "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
-                   "files, which must then stay where they are)");
+      app.add_flag(
+          "--copy", flags->copy,
+          "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
+          "files, which must then stay where they are)");
       app.add_flag("-q,--quiet", flags->quiet, "No summary line");
       return [flags] { return Merge(*flags); };
     }}};

@@ -52,7 +52,8 @@ double ParseNumber(const std::string& token, const std::string& flag, bool allow
 }  // namespace
 
 void ModelFlags::AddTo(CLI::App& app, bool aircraft_required) {
-  auto* option = app.add_option("--aircraft", aircraft_path, "Aircraft file (TOML), e.g. studies/aircraft/ance.toml");
+  auto* option =
+      app.add_option("--aircraft", aircraft_path, "Aircraft file (TOML), e.g. studies/aircraft/ance.toml");
   if (aircraft_required) option->required();
   app.add_option("--cdh", cdh, "CDh model: polar (default, d(k CLo^2)/dh) or zero");
   app.add_flag("--no-h-derivatives", no_h_derivatives, "Leave out Xh, Zh and Mh");
@@ -65,7 +66,8 @@ ModelOptions ModelFlags::Options() const {
   if (!cdh_mode) throw InputError("command line", "--cdh", "'" + cdh + "'", "expected polar or zero");
   auto interpolation_kind = ParseInterpolation(interpolation);
   if (!interpolation_kind) {
-    throw InputError("command line", "--interpolation", "'" + interpolation + "'", "expected linear or pchip");
+    throw InputError("command line", "--interpolation", "'" + interpolation + "'",
+                     "expected linear or pchip");
   }
   options.cdh = *cdh_mode;
   options.interpolation = *interpolation_kind;
@@ -106,7 +108,8 @@ std::vector<double> ParseRange(const std::string& text, const std::string& flag)
   return values;
 }
 
-void RequireWithinLimit(const std::vector<double>& values, const std::string& limit, const std::string& flag) {
+void RequireWithinLimit(const std::vector<double>& values, const std::string& limit,
+                        const std::string& flag) {
   for (double value : values) CheckInputLimit(limit, value, "command line", flag);
 }
 

@@ -3,7 +3,6 @@
 /// docs/model.md (--cdh, --no-h-derivatives, --interpolation).
 
 #include <CLI/CLI.hpp>
-
 #include <string>
 #include <vector>
 

@@ -68,11 +68,13 @@ int RunModes(const ModesFlags& flags) {
               << ", " << ToString(model.options().interpolation) << " interpolation\n";
     std::cout << std::setw(9) << "H_m" << std::setw(8) << "H/b" << std::setw(24) << "short period λ"
               << std::setw(8) << "ζ_sp" << std::setw(22) << "phugoid λ" << std::setw(9) << "ζ_ph"
-              << std::setw(13) << "height λ" << std::setw(12) << "σ_per_s" << "  stable\n";
+              << std::setw(13) << "height λ" << std::setw(12) << "σ_per_s"
+              << "  stable\n";
   } else if (flags.format == "csv") {
-    std::cout << "height_m,height_over_span,short_period_re,short_period_im,short_period_natural_frequency_radps,"
-                 "short_period_damping_ratio,phugoid_re,phugoid_im,phugoid_natural_frequency_radps,"
-                 "phugoid_damping_ratio,height_re,height_im,stability_margin_per_s,stable,classification\n";
+    std::cout
+        << "height_m,height_over_span,short_period_re,short_period_im,short_period_natural_frequency_radps,"
+           "short_period_damping_ratio,phugoid_re,phugoid_im,phugoid_natural_frequency_radps,"
+           "phugoid_damping_ratio,height_re,height_im,stability_margin_per_s,stable,classification\n";
   }
   for (double h : heights) {
     const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(h, flags.speed_mps));
@@ -93,13 +95,15 @@ int RunModes(const ModesFlags& flags) {
     } else if (flags.format == "csv") {
       const auto& sp = modal.short_period;
       const auto& ph = modal.phugoid;
-      std::cout << FormatNumber(h) << "," << FormatNumber(h_over_b) << "," << FormatNumber(sp.eigenvalue.real())
-                << "," << FormatNumber(sp.eigenvalue.imag()) << "," << FormatNumber(sp.natural_frequency_radps)
-                << "," << FormatNumber(sp.damping_ratio) << "," << FormatNumber(ph.eigenvalue.real()) << ","
-                << FormatNumber(ph.eigenvalue.imag()) << "," << FormatNumber(ph.natural_frequency_radps) << ","
-                << FormatNumber(ph.damping_ratio) << "," << FormatNumber(modal.height.eigenvalue.real()) << ","
-                << FormatNumber(modal.height.eigenvalue.imag()) << "," << FormatNumber(modal.stability_margin_per_s)
-                << "," << (modal.stable ? "true" : "false") << "," << ToString(modal.classification) << "\n";
+      std::cout << FormatNumber(h) << "," << FormatNumber(h_over_b) << ","
+                << FormatNumber(sp.eigenvalue.real()) << "," << FormatNumber(sp.eigenvalue.imag()) << ","
+                << FormatNumber(sp.natural_frequency_radps) << "," << FormatNumber(sp.damping_ratio) << ","
+                << FormatNumber(ph.eigenvalue.real()) << "," << FormatNumber(ph.eigenvalue.imag()) << ","
+                << FormatNumber(ph.natural_frequency_radps) << "," << FormatNumber(ph.damping_ratio) << ","
+                << FormatNumber(modal.height.eigenvalue.real()) << ","
+                << FormatNumber(modal.height.eigenvalue.imag()) << ","
+                << FormatNumber(modal.stability_margin_per_s) << "," << (modal.stable ? "true" : "false")
+                << "," << ToString(modal.classification) << "\n";
     } else {
       std::ostringstream sigma;
       sigma << std::scientific << std::setprecision(3) << modal.stability_margin_per_s;
@@ -111,11 +115,13 @@ int RunModes(const ModesFlags& flags) {
                 << (modal.stable ? "yes" : "NO") << "\n";
       std::cout.unsetf(std::ios::floatfield);
       if (modal.classification != ModeClassification::kStandard) {
-        std::cout << "#   note: " << ToString(modal.classification) << " at H = " << FormatNumber(h) << " m\n";
+        std::cout << "#   note: " << ToString(modal.classification) << " at H = " << FormatNumber(h)
+                  << " m\n";
       }
     }
   }
-  if (flags.format == "json") std::cout << nlohmann::json{{"speed_mps", flags.speed_mps}, {"rows", rows}}.dump(2) << "\n";
+  if (flags.format == "json")
+    std::cout << nlohmann::json{{"speed_mps", flags.speed_mps}, {"rows", rows}}.dump(2) << "\n";
   return 0;
 }
 
@@ -124,9 +130,12 @@ const CommandRegistrar kRegistrar{Command{
     [](CLI::App& app) -> std::function<int()> {
       auto flags = std::make_shared<ModesFlags>();
       flags->model.AddTo(app);
-      AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s")->required();
-      auto* heights = app.add_option("--heights-m", flags->heights, "Comma-separated heights H, m (inf: free flight)");
-      auto* table = app.add_flag("--table-heights", flags->table_heights, "The aircraft's table heights and free flight");
+      AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s")
+          ->required();
+      auto* heights =
+          app.add_option("--heights-m", flags->heights, "Comma-separated heights H, m (inf: free flight)");
+      auto* table = app.add_flag("--table-heights", flags->table_heights,
+                                 "The aircraft's table heights and free flight");
       heights->excludes(table);
       app.add_option("--format", flags->format, "table (default), csv or json");
       app.callback([heights, table] {

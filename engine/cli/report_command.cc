@@ -12,12 +12,12 @@
 #include <filesystem>
 #include <iostream>
 
-#include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_error.h"
+#include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
+#include "engine/cli/report_script.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
-#include "engine/cli/report_script.h"
 
 extern char** environ;
 

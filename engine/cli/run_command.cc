@@ -224,15 +224,15 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
         {"design_storage_bytes", storage.design_bytes},
         {"seconds_per_run", cost.seconds_per_run},
         {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
-        {"write_seconds_per_run", write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
+        {"write_seconds_per_run",
+         write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
         {"encode_seconds_per_run",
          write.measured ? nlohmann::json(write.encode_seconds_per_run) : nlohmann::json(nullptr)},
         {"fixed_seconds", fixed_measured ? nlohmann::json(fixed_s) : nlohmann::json(nullptr)},
-        {"fixed_parts_seconds",
-         fixed_measured ? nlohmann::json{{"archive_open", write.open_seconds},
-                                         {"pipeline", pipeline_s},
-                                         {"archive_close", write.close_seconds}}
-                        : nlohmann::json(nullptr)},
+        {"fixed_parts_seconds", fixed_measured ? nlohmann::json{{"archive_open", write.open_seconds},
+                                                                {"pipeline", pipeline_s},
+                                                                {"archive_close", write.close_seconds}}
+                                               : nlohmann::json(nullptr)},
         {"calibration_runs", cost.timed_runs},
         {"warmup_runs", cost.warmup_runs},
         {"measured_seconds", cost.measured_s},
@@ -262,24 +262,27 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
                               : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
                                          : ShortNumber(std::round(us / 1e4) / 100) + " s";
   if (cost.lower_bound) {
-    std::cout << "time         more than " << FormatDuration(estimate_s) << " on " << threads
-              << " thread" << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
+    std::cout << "time         more than " << FormatDuration(estimate_s) << " on " << threads << " thread"
+              << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
               << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
               << " per run); --dry-run-budget-s measures longer\n";
   } else {
-    std::cout << "time         about " << FormatDuration(estimate_s) << " (" << FormatDuration(low_s) << " to "
-              << FormatDuration(high_s) << ", 95 %) on " << threads << " thread" << (threads > 1 ? "s" : "") << " ("
-              << per_run << " per run on a thread, from " << cost.timed_runs << " sample run"
-              << (cost.timed_runs == 1 ? "" : "s") << " after " << cost.warmup_runs << " warm-up";
+    std::cout << "time         about " << FormatDuration(estimate_s) << " (" << FormatDuration(low_s)
+              << " to " << FormatDuration(high_s) << ", 95 %) on " << threads << " thread"
+              << (threads > 1 ? "s" : "") << " (" << per_run << " per run on a thread, from "
+              << cost.timed_runs << " sample run" << (cost.timed_runs == 1 ? "" : "s") << " after "
+              << cost.warmup_runs << " warm-up";
     if (write.measured) {
       std::cout << "; encoding " << ShortNumber(std::round(write.encode_seconds_per_run * 1e8) / 100)
-                << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100) << " us per run";
+                << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100)
+                << " us per run";
     } else {
       std::cout << "; writing not measured";
     }
     if (fixed_measured) {
-      std::cout << "; per sweep " << Milliseconds(fixed_s) << ": archive set-up " << Milliseconds(write.open_seconds)
-                << ", pipeline " << Milliseconds(pipeline_s) << ", close " << Milliseconds(write.close_seconds);
+      std::cout << "; per sweep " << Milliseconds(fixed_s) << ": archive set-up "
+                << Milliseconds(write.open_seconds) << ", pipeline " << Milliseconds(pipeline_s) << ", close "
+                << Milliseconds(write.close_seconds);
     } else {
       std::cout << "; fixed per-sweep part not measured";
     }
@@ -314,8 +317,8 @@ void CheckFreeSpace(const RunFlags& flags, const SweepPlan& plan) {
   const std::uintmax_t needed = std::max(kMinimumFreeBytes, 2 * batch_bytes);
   if (space.available >= needed) return;
   throw ArchiveError("not enough space for the archive " + flags.output + ": " +
-                         FormatBytes(static_cast<double>(space.available)) + " free on its file system, at least " +
-                         FormatBytes(static_cast<double>(needed)) +
+                         FormatBytes(static_cast<double>(space.available)) +
+                         " free on its file system, at least " + FormatBytes(static_cast<double>(needed)) +
                          " needed to start safely; free some space and rerun (nothing was written)",
                      "no space left on device");
 }
@@ -324,7 +327,8 @@ void CheckFreeSpace(const RunFlags& flags, const SweepPlan& plan) {
 // the cause, what is kept and how to go on.
 std::string WriteFailure(const RunFlags& flags, const std::string& cause, std::int64_t runs_kept) {
   return "cannot write the archive " + flags.output + ": " + cause + "; the " + std::to_string(runs_kept) +
-         " runs of complete batches are kept; free the space or fix the cause, then continue with gesweep run " +
+         " runs of complete batches are kept; free the space or fix the cause, then continue with gesweep "
+         "run " +
          flags.study + " -o " + flags.output + " --resume";
 }
 
@@ -382,7 +386,9 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   if (report.error_code != 0) {
     if (speaks) {
       std::cerr << "gesweep: error: " << report.error;
-      if (report.error_code == 1) std::cerr << " (the runs written so far are kept in the node shards; fix the cause and rerun with --resume)";
+      if (report.error_code == 1)
+        std::cerr << " (the runs written so far are kept in the node shards; fix the cause and rerun with "
+                     "--resume)";
       std::cerr << "\n";
     }
     return report.error_code;
@@ -392,11 +398,12 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
     for (const std::int64_t r : report.runs_per_rank) ran += r;
     std::ostringstream line;
     line << "gesweep: " << ran << " runs in " << FormatDuration(report.seconds) << " (" << std::fixed
-         << std::setprecision(1) << (report.seconds > 0 ? ran / report.seconds : 0.0) << " runs/s) on " << report.ranks
-         << " ranks (runs per rank:";
+         << std::setprecision(1) << (report.seconds > 0 ? ran / report.seconds : 0.0) << " runs/s) on "
+         << report.ranks << " ranks (runs per rank:";
     for (const std::int64_t r : report.runs_per_rank) line << " " << r;
     line << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
-         << " pending in " << report.node_archives.size() << " node shard" << (report.node_archives.size() > 1 ? "s" : "");
+         << " pending in " << report.node_archives.size() << " node shard"
+         << (report.node_archives.size() > 1 ? "s" : "");
     if (report.merged) {
       line << " -> " << flags.output << " ("
            << (report.merge.kind == MergeKind::kVirtual ? "virtual: keep the node shards beside it"
@@ -406,7 +413,8 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
     std::cerr << line.str() << "\n";
   }
   if (report.cancelled) {
-    if (speaks) std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
+    if (speaks)
+      std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
     return signals.exit_code();
   }
   if (report.runs_failed > 0) {
@@ -511,13 +519,15 @@ int Run(const RunFlags& flags) {
     } catch (const ArchiveError& e) {
       printer.Stop();  // ends its line on a terminal, so the error is one line of its own
       std::cerr << "gesweep: error: "
-                << EscapeForMessage(WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
+                << EscapeForMessage(
+                       WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
                 << "\n";
       return 1;
     } catch (const std::exception& e) {
       printer.Stop();
       std::cerr << "gesweep: error: "
-                << EscapeForMessage(WriteFailure(flags, e.what(), opened.runs_complete + progress.runs_written.load()))
+                << EscapeForMessage(
+                       WriteFailure(flags, e.what(), opened.runs_complete + progress.runs_written.load()))
                 << "\n";
       return 1;
     }
@@ -526,7 +536,8 @@ int Run(const RunFlags& flags) {
     writer->Finish();
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: "
-              << EscapeForMessage(WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
+              << EscapeForMessage(
+                     WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
               << "\n";
     return 1;
   }
@@ -556,7 +567,8 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<RunFlags>();
       app.add_option("study", flags->study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
       app.add_option("-o,--output", flags->output, "Archive to write (HDF5), e.g. results/stability_map.h5");
-      app.add_option("--threads", flags->threads, "Worker threads, 1 to 4096 (default, when left out: all cores)")
+      app.add_option("--threads", flags->threads,
+                     "Worker threads, 1 to 4096 (default, when left out: all cores)")
           ->each([flags](const std::string&) { flags->threads_given = true; });
       app.add_option("--shard", flags->shard,
                      "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
@@ -571,12 +583,14 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
       app.add_flag("-q,--quiet", flags->quiet, "No progress output");
       app.add_flag("--mpi", flags->mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
-      app.add_option("--ranks-per-node", flags->ranks_per_node,
-                     "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
-                     "the ranks sharing a machine)");
-      app.add_option("--merge", flags->merge,
-                     "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
-                     "or copy (self-contained)");
+      app.add_option(
+          "--ranks-per-node", flags->ranks_per_node,
+          "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
+          "the ranks sharing a machine)");
+      app.add_option(
+          "--merge", flags->merge,
+          "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
+          "or copy (self-contained)");
       return [flags] { return Run(*flags); };
     }}};
 

@@ -46,14 +46,16 @@ OpenLoopConfig BuildConfig(const SimulateFlags& flags, const LongitudinalModel& 
   if (!flags.summary_only) {
     const double output_dt = std::isnan(flags.output_dt_s) ? config.integrator.step_s : flags.output_dt_s;
     if (config.duration_s / output_dt > 1e7) {
-      throw InputError("command line", "--output-dt-s", FormatNumber(output_dt), "expected at most 1e7 samples");
+      throw InputError("command line", "--output-dt-s", FormatNumber(output_dt),
+                       "expected at most 1e7 samples");
     }
     config.series_interval_s = output_dt;
   }
   try {
     ValidateOpenLoopConfig(model, config, "command line");  // the step count among others
   } catch (const InputError& e) {
-    if (e.key() == "series_interval_s") throw InputError("command line", "--output-dt-s", e.value(), e.expected());
+    if (e.key() == "series_interval_s")
+      throw InputError("command line", "--output-dt-s", e.value(), e.expected());
     flags.described.Rethrow(e);
   }
   return config;
@@ -89,9 +91,9 @@ int RunSimulate(const SimulateFlags& flags) {
   const SignalCancellation signals;
   const OpenLoopResult result = SimulateOpenLoop(model, config, signals.flag());
   if (result.summary.cancelled) {
-    std::cerr << "gesweep: simulate stopped by signal " << signals.signal() << " at t = "
-              << ShortNumber(result.summary.end_time_s) << " s of " << ShortNumber(config.duration_s)
-              << " s; nothing written\n";
+    std::cerr << "gesweep: simulate stopped by signal " << signals.signal()
+              << " at t = " << ShortNumber(result.summary.end_time_s) << " s of "
+              << ShortNumber(config.duration_s) << " s; nothing written\n";
     return signals.exit_code();
   }
 
@@ -111,8 +113,9 @@ int RunSimulate(const SimulateFlags& flags) {
     run["h_derivatives"] = model.options().h_derivatives;
     run["cdh"] = std::string(ToString(model.options().cdh));
     run["interpolation"] = std::string(ToString(model.options().interpolation));
-    std::cout << nlohmann::json{{"run", run}, {"summary", FieldsJson(result.summary)}, {"series", series}}.dump(1)
-              << "\n";
+    std::cout
+        << nlohmann::json{{"run", run}, {"summary", FieldsJson(result.summary)}, {"series", series}}.dump(1)
+        << "\n";
     return 0;
   }
 
@@ -124,7 +127,8 @@ int RunSimulate(const SimulateFlags& flags) {
     for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + std::string(columns[c].first);
     out += "\n";
     for (std::size_t row = 0; row < result.series.time_s.size(); ++row) {
-      for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + Number((*columns[c].second)[row]);
+      for (std::size_t c = 0; c < columns.size(); ++c)
+        out += (c ? "," : "") + Number((*columns[c].second)[row]);
       out += "\n";
     }
   }
@@ -140,9 +144,11 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<SimulateFlags>();
       flags->model.AddTo(app);
       flags->described.Add(app, flags->config, {"height_m", "speed_mps"});
-      auto* output_dt = AddLimitedOption(app, "--output-dt-s", flags->output_dt_s, "output_dt_s",
-                                         "Series sampling interval, s (interpolated inside steps); default --step-s");
-      auto* summary = app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
+      auto* output_dt =
+          AddLimitedOption(app, "--output-dt-s", flags->output_dt_s, "output_dt_s",
+                           "Series sampling interval, s (interpolated inside steps); default --step-s");
+      auto* summary =
+          app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       output_dt->excludes(summary);
       app.add_option("--format", flags->format,
                      "csv (default: the time series; with --summary-only one summary row) or json "

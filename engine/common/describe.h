@@ -66,14 +66,14 @@ struct FieldComponent {
 
 /// What one field is, apart from where its value lives.
 struct FieldAttributes {
-  std::string_view key;        ///< study key, flag (mechanically), column leaf, CSV/JSON name
-  std::string_view unit = "1"; ///< the key's unit ("s", "m/s", "deg"); "1" for a ratio, count or name
-  std::string_view doc;        ///< one line: what it is
-  std::string_view limit;      ///< entry of the limits table (input_limits.h), "" for none
-  double scale = 1.0;          ///< struct value = key value × scale (kRadiansPerDegree for a key in deg)
+  std::string_view key;         ///< study key, flag (mechanically), column leaf, CSV/JSON name
+  std::string_view unit = "1";  ///< the key's unit ("s", "m/s", "deg"); "1" for a ratio, count or name
+  std::string_view doc;         ///< one line: what it is
+  std::string_view limit;       ///< entry of the limits table (input_limits.h), "" for none
+  double scale = 1.0;           ///< struct value = key value × scale (kRadiansPerDegree for a key in deg)
   FieldScope scope = FieldScope::kEverywhere;
   StoredAs stored = StoredAs::kFloat64;
-  bool in_output = true;       ///< a result field: in CSV/JSON output
+  bool in_output = true;  ///< a result field: in CSV/JSON output
   /// An array field: its components; CSV columns and archive columns are prefix + name
   std::span<const FieldComponent> components;
   /// An array field: the components stored in the archive, in archive order (empty: all)
@@ -148,7 +148,7 @@ class Field {
 
 /// A fixed-size array of doubles (Eigen vector or std::array): `size()` and `operator[]`.
 template <class T>
-concept DoubleArray = !std::is_arithmetic_v<T> && requires(T& t, int i) {
+concept DoubleArray = !std::is_arithmetic_v<T> && requires(T & t, int i) {
   { t[i] } -> std::convertible_to<double&>;
   t.size();
 };
@@ -253,7 +253,8 @@ struct Recorder {
       r.kind = FieldKind::kText;
       r.default_text = v;
     } else {
-      static_assert(DoubleArray<U>, "a described field is a number, integer, bool, named enum, string or array");
+      static_assert(DoubleArray<U>,
+                    "a described field is a number, integer, bool, named enum, string or array");
       r.kind = FieldKind::kArray;
     }
     records->push_back(std::move(r));
@@ -278,8 +279,8 @@ void CheckFieldRanges(const T& object, const std::string& source);
 
 /// The scope test of a visitor that reads study files (`study` true) or flags.
 constexpr bool InScope(const FieldAttributes& a, bool study) {
-  return a.scope == FieldScope::kEverywhere || (study ? a.scope == FieldScope::kStudyOnly
-                                                      : a.scope == FieldScope::kCommandLineOnly);
+  return a.scope == FieldScope::kEverywhere ||
+         (study ? a.scope == FieldScope::kStudyOnly : a.scope == FieldScope::kCommandLineOnly);
 }
 
 /// The check of one number against a limits-table entry (input_limits.h), in the key's unit.

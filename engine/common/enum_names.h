@@ -35,7 +35,9 @@ struct EnumNames;
 
 /// An enum with a names table.
 template <class E>
-concept NamedEnum = std::is_enum_v<E> && requires { EnumNames<E>::kTable; };
+concept NamedEnum = std::is_enum_v<E> && requires {
+  EnumNames<E>::kTable;
+};
 
 /// The name of `value`. Every value is in the table (GESWEEP_UNREACHABLE otherwise: a broken table).
 template <NamedEnum E>

@@ -105,8 +105,7 @@ std::string EscapeForMessage(std::string_view text) {
   return out;
 }
 
-InputError::InputError(std::string source, std::string key, std::string value, std::string expected,
-                       int line)
+InputError::InputError(std::string source, std::string key, std::string value, std::string expected, int line)
     : std::runtime_error(Compose(source, key, value, expected, line)),
       source_(std::move(source)),
       key_(std::move(key)),

@@ -48,23 +48,22 @@ std::string ShortNumber(double value);
 std::string EscapeForMessage(std::string_view text);
 
 /// Aborts with file, line and message when an internal invariant is broken (Drake's DEMAND).
-#define GESWEEP_DEMAND(condition)                                                              \
-  do {                                                                                         \
-    if (!(condition)) {                                                                        \
-      std::fprintf(stderr, "gesweep: internal error at %s:%d: failed %s\n", __FILE__, __LINE__, \
-                   #condition);                                                                \
-      std::abort();                                                                            \
-    }                                                                                          \
+#define GESWEEP_DEMAND(condition)                                                                            \
+  do {                                                                                                       \
+    if (!(condition)) {                                                                                      \
+      std::fprintf(stderr, "gesweep: internal error at %s:%d: failed %s\n", __FILE__, __LINE__, #condition); \
+      std::abort();                                                                                          \
+    }                                                                                                        \
   } while (false)
 
 /// Marks a point the code cannot reach, such as the end of a switch that covers every value of an
 /// enum: aborts with file and line instead of returning a made-up value. A value outside the enum
 /// (a cast from a corrupt integer) is a broken invariant, not bad input.
-#define GESWEEP_UNREACHABLE()                                                                 \
-  do {                                                                                        \
+#define GESWEEP_UNREACHABLE()                                                                      \
+  do {                                                                                             \
     std::fprintf(stderr, "gesweep: internal error at %s:%d: reached unreachable code\n", __FILE__, \
-                 __LINE__);                                                                   \
-    std::abort();                                                                             \
+                 __LINE__);                                                                        \
+    std::abort();                                                                                  \
   } while (false)
 
 }  // namespace gesweep

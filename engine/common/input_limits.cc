@@ -9,7 +9,7 @@ namespace gesweep {
 namespace {
 
 // Bounds shared by several entries, so that they cannot drift apart.
-constexpr double kMaximumHeight_m = 11000.0;   // top of the ISA troposphere the density model uses
+constexpr double kMaximumHeight_m = 11000.0;  // top of the ISA troposphere the density model uses
 constexpr double kMinimumSpeed_mps = 1.0;
 constexpr double kMaximumSpeed_mps = 300.0;
 constexpr double kMaximumRunDuration_s = 1e5;  // a day of flight: longer is a typo
@@ -100,7 +100,8 @@ std::vector<InputLimit> BuildTable() {
                      "an offset within the speed range"));
   t.push_back(Closed("open_loop.initial_pitch_rate_degps", "deg/s", -360.0, 360.0,
                      "a turn a second is far outside the small-perturbation model"));
-  t.push_back(Closed("open_loop.initial_pitch_deg", "deg", -90.0, 90.0, "the pitch angle of a flying airplane"));
+  t.push_back(
+      Closed("open_loop.initial_pitch_deg", "deg", -90.0, 90.0, "the pitch angle of a flying airplane"));
   t.push_back(Closed("open_loop.initial_delta_h_m", "m", -kMaximumHeight_m, kMaximumHeight_m,
                      "an offset within the height range"));
 
@@ -173,8 +174,9 @@ bool WithinLimit(const InputLimit& limit, double value) {
 }
 
 std::string DescribeLimit(const InputLimit& limit) {
-  std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") + Bound(limit.minimum) +
-                     ", " + Bound(limit.maximum) + (limit.maximum_exclusive ? ")" : "]");
+  std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") +
+                     Bound(limit.minimum) + ", " + Bound(limit.maximum) +
+                     (limit.maximum_exclusive ? ")" : "]");
   if (limit.units != "1") text += " " + std::string(limit.units);
   if (limit.allows_infinity) text += ", or inf";
   return text;
@@ -185,20 +187,21 @@ std::string LimitProblem(const InputLimit& limit, double value) {
   return "expected " + DescribeLimit(limit) + " (" + std::string(limit.reason) + ")";
 }
 
-void CheckInputLimit(std::string_view limit_name, double value, const std::string& source, const std::string& key) {
+void CheckInputLimit(std::string_view limit_name, double value, const std::string& source,
+                     const std::string& key) {
   const std::string problem = LimitProblem(RequireInputLimit(limit_name), value);
   if (!problem.empty()) throw InputError(source, key, ShortNumber(value), problem);
 }
 
-void CheckStepCount(double duration_s, double step_s, const std::string& source, const std::string& duration_key,
-                    const std::string& step_key) {
+void CheckStepCount(double duration_s, double step_s, const std::string& source,
+                    const std::string& duration_key, const std::string& step_key) {
   if (!(step_s > 0.0) || !std::isfinite(step_s) || !std::isfinite(duration_s)) return;
   const double steps = duration_s / step_s;
   if (steps <= kMaximumStepsPerRun) return;
   throw InputError(source, step_key, ShortNumber(step_s),
-                   "expected at most " + ShortNumber(kMaximumStepsPerRun) + " integration steps per run, but " +
-                       duration_key + " = " + ShortNumber(duration_s) + " s / " + step_key + " = " +
-                       ShortNumber(step_s) + " s = " + ShortNumber(steps) +
+                   "expected at most " + ShortNumber(kMaximumStepsPerRun) +
+                       " integration steps per run, but " + duration_key + " = " + ShortNumber(duration_s) +
+                       " s / " + step_key + " = " + ShortNumber(step_s) + " s = " + ShortNumber(steps) +
                        " steps; take a larger step or a shorter run (docs/limits.md)");
 }
 

@@ -57,13 +57,14 @@ std::string LimitProblem(const InputLimit& limit, double value);
 /// Throws InputError(source, key, ShortNumber(value), LimitProblem(...)) unless `value` is allowed
 /// by the entry `limit_name` (which must exist). `key` is what the person wrote: a flag
 /// ("--speed-mps") or a study key ("parameters.speed_mps").
-void CheckInputLimit(std::string_view limit_name, double value, const std::string& source, const std::string& key);
+void CheckInputLimit(std::string_view limit_name, double value, const std::string& source,
+                     const std::string& key);
 
 /// Throws InputError unless duration_s / step_s is at most kMaximumStepsPerRun, naming both values
 /// and both keys: "<step_key> = 1e-09: expected at most 1e8 steps per run: <duration_key> = 30 s /
 /// <step_key> = 1e-09 s = 3e+10 steps". Does nothing when step_s <= 0 (no bound to check: an
 /// adaptive method without a largest step) or either value is not finite (checked elsewhere).
-void CheckStepCount(double duration_s, double step_s, const std::string& source, const std::string& duration_key,
-                    const std::string& step_key);
+void CheckStepCount(double duration_s, double step_s, const std::string& source,
+                    const std::string& duration_key, const std::string& step_key);
 
 }  // namespace gesweep

@@ -38,23 +38,25 @@ std::string DescribeFileType(const std::filesystem::path& path) {
   return TypeOf(info.st_mode);
 }
 
-void CheckOutputPath(const std::filesystem::path& output, OutputKind kind, const std::vector<NamedInput>& inputs,
-                     const std::string& flag, const std::vector<std::filesystem::path>& sidecars) {
+void CheckOutputPath(const std::filesystem::path& output, OutputKind kind,
+                     const std::vector<NamedInput>& inputs, const std::string& flag,
+                     const std::vector<std::filesystem::path>& sidecars) {
   const std::string shown = output.string();
   for (const NamedInput& input : inputs) {
     if (input.path.empty()) continue;
     if (SameFile(output, input.path)) {
       const bool literal = output.lexically_normal() == input.path.lexically_normal();
-      throw InputError("command line", flag, shown,
-                       "is the " + input.role + " " + input.path.string() +
-                           (literal ? "" : " (the same file: a hard link or a symlink to it)") +
-                           ", an input of this command; an output never replaces an input: choose another path");
+      throw InputError(
+          "command line", flag, shown,
+          "is the " + input.role + " " + input.path.string() +
+              (literal ? "" : " (the same file: a hard link or a symlink to it)") +
+              ", an input of this command; an output never replaces an input: choose another path");
     }
     for (const auto& sidecar : sidecars) {
       if (SameFile(sidecar, input.path)) {
         throw InputError("command line", flag, shown,
-                         "writing it would replace " + sidecar.string() + ", which is the " + input.role + " " +
-                             input.path.string() + "; choose another path");
+                         "writing it would replace " + sidecar.string() + ", which is the " + input.role +
+                             " " + input.path.string() + "; choose another path");
       }
     }
   }
@@ -70,15 +72,17 @@ void CheckOutputPath(const std::filesystem::path& output, OutputKind kind, const
   }
   if (kind == OutputKind::kFile && !S_ISREG(info.st_mode)) {
     if (S_ISDIR(info.st_mode)) {
-      throw InputError("command line", flag, shown, "is a directory; expected an archive file name such as out.h5");
+      throw InputError("command line", flag, shown,
+                       "is a directory; expected an archive file name such as out.h5");
     }
     throw InputError("command line", flag, shown,
                      "exists and is " + TypeOf(info.st_mode) +
                          ", not a regular file; an output is only ever written to a regular file");
   }
   if (kind == OutputKind::kDirectory && !S_ISDIR(info.st_mode)) {
-    throw InputError("command line", flag, shown,
-                     "exists and is " + TypeOf(info.st_mode) + "; expected a directory (or a new name) to write into");
+    throw InputError(
+        "command line", flag, shown,
+        "exists and is " + TypeOf(info.st_mode) + "; expected a directory (or a new name) to write into");
   }
 }
 

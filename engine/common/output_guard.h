@@ -39,8 +39,9 @@ std::string DescribeFileType(const std::filesystem::path& path);
 ///  - `output` exists and is not what `kind` wants (a FIFO, a device, a socket, a directory for a
 ///    file, a file for a directory), or is a symlink that cannot be followed (a loop).
 /// Nothing is created or changed.
-void CheckOutputPath(const std::filesystem::path& output, OutputKind kind, const std::vector<NamedInput>& inputs,
-                     const std::string& flag, const std::vector<std::filesystem::path>& sidecars = {});
+void CheckOutputPath(const std::filesystem::path& output, OutputKind kind,
+                     const std::vector<NamedInput>& inputs, const std::string& flag,
+                     const std::vector<std::filesystem::path>& sidecars = {});
 
 /// Throws InputError(path, "", "", ...) unless `path` exists and is a regular file (symlinks followed):
 /// "no such file", "is a directory", "is a FIFO, not a regular file" (a FIFO or a device could block

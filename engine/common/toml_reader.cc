@@ -65,14 +65,13 @@ std::string ReadTextFile(const std::filesystem::path& path, std::string_view wha
   }
   if (!std::filesystem::is_regular_file(status)) {
     // A FIFO or a device could block or never end: refuse it at once.
-    throw InputError(path.string(), "", "",
-                     "expected " + article + noun + ", found " + DescribeFileType(path) +
-                         " (not a regular file)");
+    throw InputError(
+        path.string(), "", "",
+        "expected " + article + noun + ", found " + DescribeFileType(path) + " (not a regular file)");
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw InputError(path.string(), "", "",
-                     "cannot open the " + noun + " (permission denied?)");
+    throw InputError(path.string(), "", "", "cannot open the " + noun + " (permission denied?)");
   }
   std::ostringstream text;
   text << in.rdbuf();
@@ -175,7 +174,8 @@ std::optional<double> TomlSection::OptionalNumber(std::string_view key) const {
   return value;
 }
 
-std::optional<double> TomlSection::OptionalLimitedNumber(std::string_view key, std::string_view limit_name) const {
+std::optional<double> TomlSection::OptionalLimitedNumber(std::string_view key,
+                                                         std::string_view limit_name) const {
   const auto value = OptionalNumber(key);
   if (!value) return value;
   const std::string problem = LimitProblem(RequireInputLimit(limit_name), *value);

@@ -16,7 +16,7 @@ std::string Text(double value) { return ShortNumber(value); }
 
 const std::array<std::string_view, kLandingStateCount>& LandingStateNames() {
   static const std::array<std::string_view, kLandingStateCount> kNames = {
-      "delta_u", "delta_w", "pitch_rate", "delta_theta", "delta_h",
+      "delta_u",  "delta_w",   "pitch_rate",  "delta_theta",   "delta_h",
       "elevator", "deviation", "compensator", "error_integral"};
   return kNames;
 }
@@ -46,7 +46,8 @@ double NominalLandingTime(const LandingConfig& config, double wheel_contact_heig
 }
 
 double LandingTimeLimit(const LandingConfig& config, double wheel_contact_height_m) {
-  return config.time_limit_s ? *config.time_limit_s : 2.0 * NominalLandingTime(config, wheel_contact_height_m);
+  return config.time_limit_s ? *config.time_limit_s
+                             : 2.0 * NominalLandingTime(config, wheel_contact_height_m);
 }
 
 void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, const std::string& source) {
@@ -101,15 +102,15 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   limit("absolute_tolerance", "absolute_tolerance", c.absolute_tolerance);
   limit("landing.max_step_s", "max_step_s", c.max_step_s);
   if (c.time_limit_s) limit("landing.time_limit_s", "time_limit_s", *c.time_limit_s);
-  require(std::isfinite(c.output_interval_s) && c.output_interval_s >= 0.0, "output_interval_s", c.output_interval_s,
-          "expected an interval >= 0 s (0: no series)");
+  require(std::isfinite(c.output_interval_s) && c.output_interval_s >= 0.0, "output_interval_s",
+          c.output_interval_s, "expected an interval >= 0 s (0: no series)");
   if (c.output_interval_s > 0.0) limit("output_dt_s", "output_interval_s", c.output_interval_s);
   // The fewest steps the run can take: its time limit over the largest step.
   const double time_limit_s = LandingTimeLimit(c, wheel_contact_height_m);
   require(std::isfinite(time_limit_s) && time_limit_s > 0.0, "time_limit_s", time_limit_s,
           "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
-  CheckStepCount(time_limit_s, c.max_step_s, source, c.time_limit_s ? "time_limit_s" : "time_limit_s (automatic)",
-                 "max_step_s");
+  CheckStepCount(time_limit_s, c.max_step_s, source,
+                 c.time_limit_s ? "time_limit_s" : "time_limit_s (automatic)", "max_step_s");
 }
 
 }  // namespace gesweep

@@ -37,11 +37,11 @@ std::optional<PlantHeightReference> ParsePlantHeightReference(std::string_view t
 /// interface (they are written by people); the engine converts once.
 struct LandingConfig {
   // --- Start state (the paper's Eq. (30): [u0 0 0 0 H0 0 0 0 0]) ---
-  double start_height_m = 500.0;          ///< H at t = 0, m (> flare height)
+  double start_height_m = 500.0;  ///< H at t = 0, m (> flare height)
   /// u at t = 0, m/s; also the plant's reference speed u0 (Δu = u − u0, kinematic entries of Eq. (1)).
   double start_speed_mps = 52.21;
-  double start_pitch_deg = 0.0;           ///< Δθ at t = 0, deg (the reference flight is level, θ0 = 0)
-  double start_glide_path_offset_m = 0.0; ///< d at t = 0, m, positive above the glide path
+  double start_pitch_deg = 0.0;            ///< Δθ at t = 0, deg (the reference flight is level, θ0 = 0)
+  double start_glide_path_offset_m = 0.0;  ///< d at t = 0, m, positive above the glide path
 
   // --- Glide path ---
   /// Glide-slope angle γ, deg, positive for a descent; the reference flight-path angle is γr = −γ.
@@ -59,17 +59,17 @@ struct LandingConfig {
   /// Diagonal of the output weight Q on the 9 states of Eq. (14) (order: LandingStateNames()); ≥ 0.
   /// The ΔH weight adds to the deviation weight, since the design model measures both as one state.
   std::array<double, kLandingStateCount> q_weights = {1, 1, 1, 1, 1, 1, 1, 1, 1};
-  double r_weight = 1.0;                     ///< weight R on the elevator command ηe (rad²); > 0
-  double actuator_pole_per_s = 10.0;         ///< Sδ of Tf3 = Sδ/(s + Sδ) (paper Eq. (29)); > 0
-  double compensator_pole_per_s = 10.0;      ///< S_d of Tf2 = 1/(s + S_d) (paper Eq. (29)); > 0
+  double r_weight = 1.0;                 ///< weight R on the elevator command ηe (rad²); > 0
+  double actuator_pole_per_s = 10.0;     ///< Sδ of Tf3 = Sδ/(s + Sδ) (paper Eq. (29)); > 0
+  double compensator_pole_per_s = 10.0;  ///< S_d of Tf2 = 1/(s + S_d) (paper Eq. (29)); > 0
 
   // --- Flare (paper Eq. (22)–(27)) ---
-  double flare_height_m = 10.0;              ///< Ho: the flare starts when H falls to it, m
+  double flare_height_m = 10.0;  ///< Ho: the flare starts when H falls to it, m
   /// τ of Ḣ_ref = −H_ref/τ, s. Unset: Ho/(u0·sin γ), so the commanded sink rate is continuous at Ho.
   std::optional<double> flare_time_constant_s;
 
   // --- Elevator (positive trailing edge down) ---
-  double elevator_min_deg = -25.0;           ///< the command ηe is clipped to [min, max], deg
+  double elevator_min_deg = -25.0;  ///< the command ηe is clipped to [min, max], deg
   double elevator_max_deg = 25.0;
 
   // --- Plant ---
@@ -79,13 +79,13 @@ struct LandingConfig {
   std::optional<double> plant_fixed_reference_height_m;
 
   // --- Integration (adaptive Dormand–Prince 5(4), as the paper's ode45) ---
-  double relative_tolerance = 1e-3;          ///< ode45's default, the paper's value
-  double absolute_tolerance = 1e-6;          ///< ode45's default
-  double max_step_s = 1.0;                   ///< bounds the step so that no event is stepped over
+  double relative_tolerance = 1e-3;  ///< ode45's default, the paper's value
+  double absolute_tolerance = 1e-6;  ///< ode45's default
+  double max_step_s = 1.0;           ///< bounds the step so that no event is stepped over
   /// Outcome no_touchdown when reached in flight, s. Unset: twice NominalLandingTime, so that a sweep over
   /// the glide slope or the start height needs no retuning.
   std::optional<double> time_limit_s;
-  double output_interval_s = 0.1;            ///< series sampling, s; 0: no series
+  double output_interval_s = 0.1;  ///< series sampling, s; 0: no series
   /// |Δθ| beyond this ends the run as diverged, deg: the small-angle model no longer means anything.
   double divergence_pitch_deg = 60.0;
 };

@@ -2,8 +2,8 @@
 
 namespace gesweep {
 
-LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, double u0, double actuator_pole_per_s,
-                                           double compensator_pole_per_s) {
+LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, double u0,
+                                           double actuator_pole_per_s, double compensator_pole_per_s) {
   const Matrix5d A5 = AssembleStateMatrix(d, u0);
   const Vector5d B5 = AssembleInputMatrix(d);
   LandingDesignModel m;
@@ -23,9 +23,9 @@ LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, doub
   m.A(kDesignCompensator, kDesignErrorIntegral) = 1.0;
   m.A(kDesignErrorIntegral, kDesignTrackingError) = -1.0;
   // Outputs: the 9 states of Eq. (14); ΔH and d both read e.
-  constexpr int kSource[kLandingStateCount] = {kDesignDeltaU,        kDesignDeltaW,    kDesignPitchRate,
-                                               kDesignDeltaTheta,    kDesignTrackingError, kDesignElevator,
-                                               kDesignTrackingError, kDesignCompensator, kDesignErrorIntegral};
+  constexpr int kSource[kLandingStateCount] = {
+      kDesignDeltaU,   kDesignDeltaW,        kDesignPitchRate,   kDesignDeltaTheta,   kDesignTrackingError,
+      kDesignElevator, kDesignTrackingError, kDesignCompensator, kDesignErrorIntegral};
   m.C.setZero();
   for (int i = 0; i < kLandingStateCount; ++i) m.C(i, kSource[i]) = 1.0;
   return m;
@@ -54,9 +54,9 @@ LandingDesign DesignLandingController(const LongitudinalModel& model, const Land
   design.design_speed_mps = config.design_speed_mps.value_or(config.start_speed_mps);
   design.design_h_derivatives = config.design_h_derivatives;
   // The table's derivatives with the h-derivatives in, whatever the plant's option says.
-  DimensionalDerivatives d = ComputeDerivatives(model.CoefficientsAt(design.design_height_m),
-                                                model.mass_geometry(), model.DensityAt(design.design_height_m),
-                                                design.design_speed_mps);
+  DimensionalDerivatives d =
+      ComputeDerivatives(model.CoefficientsAt(design.design_height_m), model.mass_geometry(),
+                         model.DensityAt(design.design_height_m), design.design_speed_mps);
   if (!design.design_h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
   design.model = BuildLandingDesignModel(d, design.design_speed_mps, config.actuator_pole_per_s,
                                          config.compensator_pole_per_s);
@@ -77,9 +77,9 @@ LandingDesign DesignLandingController(const LongitudinalModel& model, const Land
   design.closed_loop_eigenvalues = lqr.closed_loop_eigenvalues;
   // Back to the paper's 9 states: K_ΔH = 0, the rest read off ζ.
   const auto& k = design.design_gain;
-  design.gain = {k(kDesignDeltaU), k(kDesignDeltaW),       k(kDesignPitchRate),
-                 k(kDesignDeltaTheta), 0.0,                 k(kDesignElevator),
-                 k(kDesignTrackingError), k(kDesignCompensator), k(kDesignErrorIntegral)};
+  design.gain = {
+      k(kDesignDeltaU),   k(kDesignDeltaW),        k(kDesignPitchRate),   k(kDesignDeltaTheta),   0.0,
+      k(kDesignElevator), k(kDesignTrackingError), k(kDesignCompensator), k(kDesignErrorIntegral)};
   return design;
 }
 

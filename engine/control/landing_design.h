@@ -15,7 +15,6 @@
 /// docs/landing.md §2 has the derivation.
 
 #include <Eigen/Core>
-
 #include <array>
 #include <string>
 
@@ -59,21 +58,23 @@ LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, doub
 
 /// The paper's 9-state augmented system of Eq. (16) (exogenous inputs left out): A 9×9, B 9×1 in the
 /// state order of Eq. (14). Kept to document, and test, why the design is not done on it.
-void BuildAugmentedSystem(const DimensionalDerivatives& d, double reference_speed_mps, double actuator_pole_per_s,
-                          double compensator_pole_per_s, Eigen::MatrixXd& A, Eigen::MatrixXd& B);
+void BuildAugmentedSystem(const DimensionalDerivatives& d, double reference_speed_mps,
+                          double actuator_pole_per_s, double compensator_pole_per_s, Eigen::MatrixXd& A,
+                          Eigen::MatrixXd& B);
 
 /// The result of the design: one constant gain for both phases.
 struct LandingDesign {
   RiccatiStatus status = RiccatiStatus::kSolverFailed;
-  std::string message;               ///< empty when ok
-  double design_height_m = 0;        ///< what was used (config's or the default)
+  std::string message;         ///< empty when ok
+  double design_height_m = 0;  ///< what was used (config's or the default)
   double design_speed_mps = 0;
   bool design_h_derivatives = true;
   LandingDesignModel model;
   /// K on the states of Eq. (14), ηe = −K·z, K_ΔH = 0 (units: rad per unit of each state).
   std::array<double, kLandingStateCount> gain{};
   /// The design model's K on ζ, 1×8.
-  Eigen::Matrix<double, 1, kDesignStateCount> design_gain = Eigen::Matrix<double, 1, kDesignStateCount>::Zero();
+  Eigen::Matrix<double, 1, kDesignStateCount> design_gain =
+      Eigen::Matrix<double, 1, kDesignStateCount>::Zero();
   /// Eigenvalues of A − BK of the design model, largest real part first (empty unless ok).
   Eigen::VectorXcd closed_loop_eigenvalues;
   Eigen::MatrixXd riccati_solution;  ///< S (8×8), empty unless ok

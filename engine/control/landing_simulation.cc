@@ -173,7 +173,9 @@ class LandingProblem {
   LandingPhase phase() const { return phase_; }
 
  private:
-  bool IsSaturated(double command) const { return command > elevator_max_rad_ || command < elevator_min_rad_; }
+  bool IsSaturated(double command) const {
+    return command > elevator_max_rad_ || command < elevator_min_rad_;
+  }
 
   void UpdateSaturation(double t, bool saturated) {
     if (saturated == saturated_) return;
@@ -187,10 +189,12 @@ class LandingProblem {
   }
 
   void Monitor(double t, const State& x) {
-    result_.max_abs_elevator_deg = std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
+    result_.max_abs_elevator_deg =
+        std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
     result_.max_abs_elevator_command_deg =
         std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x)) * kDegPerRad);
-    result_.max_abs_pitch_rate_degps = std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
+    result_.max_abs_pitch_rate_degps =
+        std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
     const double speed = u0_ + x[kSimDu];
     result_.min_speed_mps = std::min(result_.min_speed_mps, speed);
     result_.max_speed_mps = std::max(result_.max_speed_mps, speed);
@@ -231,11 +235,16 @@ std::string Format(double value, int precision = 4) {
 
 std::string_view ToString(LandingOutcome outcome) {
   switch (outcome) {
-    case LandingOutcome::kLanded: return "landed";
-    case LandingOutcome::kNoTouchdown: return "no_touchdown";
-    case LandingOutcome::kStall: return "stall";
-    case LandingOutcome::kDiverged: return "diverged";
-    case LandingOutcome::kDesignFailed: return "design_failed";
+    case LandingOutcome::kLanded:
+      return "landed";
+    case LandingOutcome::kNoTouchdown:
+      return "no_touchdown";
+    case LandingOutcome::kStall:
+      return "stall";
+    case LandingOutcome::kDiverged:
+      return "diverged";
+    case LandingOutcome::kDesignFailed:
+      return "design_failed";
   }
   GESWEEP_UNREACHABLE();
 }
@@ -257,9 +266,10 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
       config.plant_fixed_reference_height_m.value_or(aircraft.table_heights_m.back());
   result.plant_h_derivatives = plant.options().h_derivatives;
   result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
-  for (double* field : {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
-                        &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
-                        &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
+  for (double* field :
+       {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
+        &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
+        &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
     *field = kNaN;
   }
   result.min_speed_mps = std::numeric_limits<double>::infinity();
@@ -268,7 +278,8 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   result.design = DesignLandingController(plant, config);
   if (!result.design.ok()) {
     result.outcome = LandingOutcome::kDesignFailed;
-    result.message = "LQR design failed (" + std::string(ToString(result.design.status)) + "): " + result.design.message;
+    result.message =
+        "LQR design failed (" + std::string(ToString(result.design.status)) + "): " + result.design.message;
     result.final_height_m = config.start_height_m;
     result.min_speed_mps = result.max_speed_mps = config.start_speed_mps;
     return result;

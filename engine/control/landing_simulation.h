@@ -38,50 +38,50 @@ std::string_view ToString(LandingPhase phase);
 struct LandingSample {
   double time_s = 0;
   LandingPhase phase = LandingPhase::kGlideSlope;
-  double height_m = 0;               ///< H of the mean chord above ground
-  double reference_height_m = 0;     ///< the glide path's height, or H_ref in the flare
-  double tracking_error_m = 0;       ///< e = H − reference: d before the flare, H − H_ref after
-  double speed_mps = 0;              ///< u = u0 + Δu
-  double delta_w_mps = 0;            ///< Δw, positive down
-  double pitch_rate_radps = 0;       ///< q
-  double pitch_rad = 0;              ///< θ = Δθ (the reference flight is level)
-  double sink_rate_mps = 0;          ///< −Ḣ = Δw − u0·Δθ, positive down
-  double elevator_rad = 0;           ///< δe, the actuator's position
-  double elevator_command_rad = 0;   ///< ηe = −K·z before the limits
-  double compensator = 0;            ///< x_c, m·s
-  double error_integral = 0;         ///< ε_c, m·s
+  double height_m = 0;              ///< H of the mean chord above ground
+  double reference_height_m = 0;    ///< the glide path's height, or H_ref in the flare
+  double tracking_error_m = 0;      ///< e = H − reference: d before the flare, H − H_ref after
+  double speed_mps = 0;             ///< u = u0 + Δu
+  double delta_w_mps = 0;           ///< Δw, positive down
+  double pitch_rate_radps = 0;      ///< q
+  double pitch_rad = 0;             ///< θ = Δθ (the reference flight is level)
+  double sink_rate_mps = 0;         ///< −Ḣ = Δw − u0·Δθ, positive down
+  double elevator_rad = 0;          ///< δe, the actuator's position
+  double elevator_command_rad = 0;  ///< ηe = −K·z before the limits
+  double compensator = 0;           ///< x_c, m·s
+  double error_integral = 0;        ///< ε_c, m·s
 };
 
 /// The result of one landing. Quantities that did not occur (no touchdown, no flare) are NaN.
 struct LandingResult {
   LandingOutcome outcome = LandingOutcome::kDesignFailed;
-  std::string message;                 ///< one sentence on how the run ended
-  LandingDesign design;                ///< the gain and what it was designed on
-  double flare_time_constant_s = 0;    ///< τ used
-  double flare_height_m = 0;           ///< Ho used
-  double glide_slope_deg = 0;          ///< γ used
+  std::string message;                        ///< one sentence on how the run ended
+  LandingDesign design;                       ///< the gain and what it was designed on
+  double flare_time_constant_s = 0;           ///< τ used
+  double flare_height_m = 0;                  ///< Ho used
+  double glide_slope_deg = 0;                 ///< γ used
   double plant_fixed_reference_height_m = 0;  ///< ΔH reference used with PlantHeightReference::kFixedHeight
-  bool plant_h_derivatives = true;     ///< the plant's option
-  double time_limit_s = 0;             ///< the time limit used (LandingTimeLimit)
+  bool plant_h_derivatives = true;            ///< the plant's option
+  double time_limit_s = 0;                    ///< the time limit used (LandingTimeLimit)
 
   double touchdown_time_s = 0;
   /// Along-track distance from the glide-slope transmitter (where the glide path meets H = 0) to the
   /// touchdown point, m, positive past it; along-track motion at u0, as in the kinematics of Eq. (1).
   double touchdown_distance_past_transmitter_m = 0;
-  double touchdown_sink_rate_mps = 0;  ///< −Ḣ at touchdown, positive down
-  double touchdown_pitch_deg = 0;      ///< θ at touchdown
-  double touchdown_speed_mps = 0;      ///< u at touchdown
-  double flare_start_time_s = 0;       ///< when H fell to Ho
-  double glide_path_error_at_flare_m = 0;  ///< d at the flare switch, positive above the path
-  double max_abs_elevator_deg = 0;     ///< max |δe| (actuator position) over steps and samples
+  double touchdown_sink_rate_mps = 0;       ///< −Ḣ at touchdown, positive down
+  double touchdown_pitch_deg = 0;           ///< θ at touchdown
+  double touchdown_speed_mps = 0;           ///< u at touchdown
+  double flare_start_time_s = 0;            ///< when H fell to Ho
+  double glide_path_error_at_flare_m = 0;   ///< d at the flare switch, positive above the path
+  double max_abs_elevator_deg = 0;          ///< max |δe| (actuator position) over steps and samples
   double max_abs_elevator_command_deg = 0;  ///< max |ηe| before the limits
-  double max_abs_pitch_rate_degps = 0; ///< max |q| over steps and samples
-  double saturated_time_s = 0;         ///< total time the command was beyond a limit (located events)
-  double longest_saturation_s = 0;     ///< longest single interval of saturation
-  double min_speed_mps = 0;            ///< lowest u over steps and samples
-  double max_speed_mps = 0;            ///< highest u over steps and samples
-  double final_time_s = 0;             ///< end of the run
-  double final_height_m = 0;           ///< H at the end
+  double max_abs_pitch_rate_degps = 0;      ///< max |q| over steps and samples
+  double saturated_time_s = 0;              ///< total time the command was beyond a limit (located events)
+  double longest_saturation_s = 0;          ///< longest single interval of saturation
+  double min_speed_mps = 0;                 ///< lowest u over steps and samples
+  double max_speed_mps = 0;                 ///< highest u over steps and samples
+  double final_time_s = 0;                  ///< end of the run
+  double final_height_m = 0;                ///< H at the end
 
   long accepted_steps = 0;
   long rejected_steps = 0;

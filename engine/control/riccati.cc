@@ -3,7 +3,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -18,12 +17,11 @@ extern "C" void sb02od_(const char* dico, const char* jobb, const char* fact, co
                         const char* jobl, const char* sort, const int* n, const int* m, const int* p,
                         const double* a, const int* lda, const double* b, const int* ldb, const double* q,
                         const int* ldq, const double* r, const int* ldr, const double* l, const int* ldl,
-                        double* rcond, double* x, const int* ldx, double* alfar, double* alfai,
-                        double* beta, double* s, const int* lds, double* t, const int* ldt, double* u,
-                        const int* ldu, const double* tol, int* iwork, double* dwork, const int* ldwork,
-                        int* bwork, int* info, std::size_t dico_len, std::size_t jobb_len,
-                        std::size_t fact_len, std::size_t uplo_len, std::size_t jobl_len,
-                        std::size_t sort_len);
+                        double* rcond, double* x, const int* ldx, double* alfar, double* alfai, double* beta,
+                        double* s, const int* lds, double* t, const int* ldt, double* u, const int* ldu,
+                        const double* tol, int* iwork, double* dwork, const int* ldwork, int* bwork,
+                        int* info, std::size_t dico_len, std::size_t jobb_len, std::size_t fact_len,
+                        std::size_t uplo_len, std::size_t jobl_len, std::size_t sort_len);
 
 namespace gesweep {
 namespace {
@@ -99,11 +97,16 @@ LqrResult Failure(RiccatiStatus status, std::string message) {
 
 std::string_view ToString(RiccatiStatus status) {
   switch (status) {
-    case RiccatiStatus::kOk: return "ok";
-    case RiccatiStatus::kInvalidWeights: return "invalid_weights";
-    case RiccatiStatus::kNotStabilizable: return "not_stabilizable";
-    case RiccatiStatus::kNotDetectable: return "not_detectable";
-    case RiccatiStatus::kSolverFailed: return "solver_failed";
+    case RiccatiStatus::kOk:
+      return "ok";
+    case RiccatiStatus::kInvalidWeights:
+      return "invalid_weights";
+    case RiccatiStatus::kNotStabilizable:
+      return "not_stabilizable";
+    case RiccatiStatus::kNotDetectable:
+      return "not_detectable";
+    case RiccatiStatus::kSolverFailed:
+      return "solver_failed";
   }
   GESWEEP_UNREACHABLE();
 }
@@ -145,8 +148,8 @@ double RiccatiResidual(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, 
   return (A.transpose() * S + S * A - SB_N * R.ldlt().solve(SB_N.transpose()) + Q).norm();
 }
 
-LqrResult Lqr(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const MatrixXd& R,
-              const MatrixXd& N, const RiccatiTolerances& tolerances) {
+LqrResult Lqr(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const MatrixXd& R, const MatrixXd& N,
+              const RiccatiTolerances& tolerances) {
   const Eigen::Index n = A.rows();
   const Eigen::Index m = B.cols();
   GESWEEP_DEMAND(A.cols() == n && B.rows() == n && Q.rows() == n && Q.cols() == n);
@@ -176,21 +179,22 @@ LqrResult Lqr(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const Mat
   const Eigen::VectorXd q_eigen = Eigen::SelfAdjointEigenSolver<MatrixXd>(Q_bar).eigenvalues();
   if (q_eigen.minCoeff() < -kSemidefiniteTolerance * std::max(1.0, q_eigen.cwiseAbs().maxCoeff())) {
     std::ostringstream message;
-    message << "Q - N R^-1 N' is not positive semi-definite (smallest eigenvalue " << q_eigen.minCoeff() << ")";
+    message << "Q - N R^-1 N' is not positive semi-definite (smallest eigenvalue " << q_eigen.minCoeff()
+            << ")";
     return Failure(RiccatiStatus::kInvalidWeights, message.str());
   }
 
   const PbhTest stabilizable = CheckStabilizable(A, B, tolerances);
   if (!stabilizable.holds) {
-    return Failure(RiccatiStatus::kNotStabilizable,
-                   "(A, B) is not stabilizable: the mode at lambda = " +
-                       FormatComplex(stabilizable.failing_eigenvalue) + " is uncontrollable");
+    return Failure(RiccatiStatus::kNotStabilizable, "(A, B) is not stabilizable: the mode at lambda = " +
+                                                        FormatComplex(stabilizable.failing_eigenvalue) +
+                                                        " is uncontrollable");
   }
   const PbhTest detectable = CheckDetectable(A_bar, SymmetricSqrt(Q_bar), tolerances);
   if (!detectable.holds) {
-    return Failure(RiccatiStatus::kNotDetectable,
-                   "(Q, A) is not detectable: the mode at lambda = " + FormatComplex(detectable.failing_eigenvalue) +
-                       " is unweighted by Q and not stable");
+    return Failure(RiccatiStatus::kNotDetectable, "(Q, A) is not detectable: the mode at lambda = " +
+                                                      FormatComplex(detectable.failing_eigenvalue) +
+                                                      " is unweighted by Q and not stable");
   }
 
   // SB02OD, continuous time, B and R given, Q and R unfactored (upper triangles read), L = N, stable

@@ -9,7 +9,6 @@
 /// on or right of the imaginary axis. A failure is data: a status and a message, never an exception.
 
 #include <Eigen/Core>
-
 #include <complex>
 #include <string>
 #include <string_view>
@@ -18,11 +17,11 @@ namespace gesweep {
 
 /// Outcome of a Riccati/LQR solve.
 enum class RiccatiStatus {
-  kOk,                ///< S found, A − BK Hurwitz
-  kInvalidWeights,    ///< a weight is not finite, R is not positive definite or Q − NR⁻¹Nᵀ not ≥ 0
-  kNotStabilizable,   ///< (A, B) fails the PBH test at an eigenvalue with Re λ ≥ 0
-  kNotDetectable,     ///< (Q̄^{1/2}, Ā) fails the PBH test at an eigenvalue with Re λ ≥ 0
-  kSolverFailed,      ///< SB02OD returned INFO ≠ 0, or its S did not stabilise A − BK
+  kOk,               ///< S found, A − BK Hurwitz
+  kInvalidWeights,   ///< a weight is not finite, R is not positive definite or Q − NR⁻¹Nᵀ not ≥ 0
+  kNotStabilizable,  ///< (A, B) fails the PBH test at an eigenvalue with Re λ ≥ 0
+  kNotDetectable,    ///< (Q̄^{1/2}, Ā) fails the PBH test at an eigenvalue with Re λ ≥ 0
+  kSolverFailed,     ///< SB02OD returned INFO ≠ 0, or its S did not stabilise A − BK
 };
 
 /// "ok", "invalid_weights", "not_stabilizable", "not_detectable", "solver_failed".

@@ -51,10 +51,12 @@ double PchipEndSlope(double h0, double h1, double m0, double m1) {
 void TransferToCg(CoefficientRow& row, double shift) {
   if (shift == 0.0) return;
   // Moment about a CG `shift` chords aft of the reference: CM' = CM + CL·shift.
-  const std::pair<Coefficient, Coefficient> pairs[] = {
-      {Coefficient::CMo, Coefficient::CLo},       {Coefficient::CMalpha, Coefficient::CLalpha},
-      {Coefficient::CMalphadot, Coefficient::CLalphadot}, {Coefficient::CMq, Coefficient::CLq},
-      {Coefficient::CMde, Coefficient::CLde},     {Coefficient::CMh, Coefficient::CLh}};
+  const std::pair<Coefficient, Coefficient> pairs[] = {{Coefficient::CMo, Coefficient::CLo},
+                                                       {Coefficient::CMalpha, Coefficient::CLalpha},
+                                                       {Coefficient::CMalphadot, Coefficient::CLalphadot},
+                                                       {Coefficient::CMq, Coefficient::CLq},
+                                                       {Coefficient::CMde, Coefficient::CLde},
+                                                       {Coefficient::CMh, Coefficient::CLh}};
   for (const auto& [moment, lift] : pairs) row[Index(moment)] += row[Index(lift)] * shift;
 }
 
@@ -101,7 +103,8 @@ CoefficientTable::CoefficientTable(const Aircraft& aircraft, const ModelOptions&
       const std::size_t n = x.size();
       auto secant = [&](std::size_t i) { return (y[i + 1] - y[i]) / (x[i + 1] - x[i]); };
       const double left = PchipEndSlope(x[1] - x[0], x[2] - x[1], secant(0), secant(1));
-      const double right = PchipEndSlope(x[n - 1] - x[n - 2], x[n - 2] - x[n - 3], secant(n - 2), secant(n - 3));
+      const double right =
+          PchipEndSlope(x[n - 1] - x[n - 2], x[n - 2] - x[n - 3], secant(n - 2), secant(n - 3));
       pchip_->columns.emplace_back(std::move(x), std::move(y), left, right);
     }
   }

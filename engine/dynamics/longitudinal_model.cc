@@ -51,8 +51,8 @@ Vector5d AssembleInputMatrix(const DimensionalDerivatives& d) {
   return B;
 }
 
-Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double u0, const Vector5d& x, double elevator_rad,
-                               const AirVelocity& air) {
+Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double u0, const Vector5d& x,
+                               double elevator_rad, const AirVelocity& air) {
   // Written in the order of Equation1Derivative (derivative_kernel.h) so that still air gives the
   // same doubles: Δu − 0 and Δw − 0 are exact, and the gust terms of row q are added only when present.
   const double du_a = x[kDeltaU] - air.u_g_mps;
@@ -115,9 +115,10 @@ Vector5d LongitudinalModel::InputMatrix(double height_m, double speed_mps) const
   return AssembleInputMatrix(DerivativesAt(height_m, speed_mps));
 }
 
-Vector5d LongitudinalModel::StateDerivative(double start_height_m, double u0, const Vector5d& x, double elevator_rad,
-                                            const AirVelocity& air) const {
-  const DimensionalDerivatives d = DerivativesAt(start_height_m + x[kDeltaH], u0 + (x[kDeltaU] - air.u_g_mps));
+Vector5d LongitudinalModel::StateDerivative(double start_height_m, double u0, const Vector5d& x,
+                                            double elevator_rad, const AirVelocity& air) const {
+  const DimensionalDerivatives d =
+      DerivativesAt(start_height_m + x[kDeltaH], u0 + (x[kDeltaU] - air.u_g_mps));
   return AirRelativeDerivative(d, u0, x, elevator_rad, air);
 }
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "engine/common/errors.h"
 #include "engine/estimators/local_sensitivity.h"
 #include "engine/estimators/model_parameter.h"
-#include "engine/common/errors.h"
 #include "engine/modal/hurwitz.h"
 
 namespace gesweep {
@@ -66,7 +66,8 @@ double SpeedDerivative(const LongitudinalModel& model, double u, double h, const
 
 class Tracer {
  public:
-  Tracer(const LongitudinalModel& model, const BoundaryCurveOptions& options) : model_(model), options_(options) {}
+  Tracer(const LongitudinalModel& model, const BoundaryCurveOptions& options)
+      : model_(model), options_(options) {}
 
   BoundaryCurve Run(double lower, double upper) {
     curve_.lower_speed_mps = lower;
@@ -96,7 +97,8 @@ class Tracer {
       const double predicted = h_ + slope_ * (un - u);
       const std::optional<double> corrected = Correct(model_, un, predicted, root_);
       const BoundaryResult check = Find(un);
-      const bool same = corrected && check.height_m && std::abs(*check.height_m - *corrected) <= kSameBranch_m;
+      const bool same =
+          corrected && check.height_m && std::abs(*check.height_m - *corrected) <= kSameBranch_m;
       if (same) {
         const double error = std::abs(*corrected - predicted);
         if (error > 4 * options_.predictor_tolerance_m && du > options_.min_step_mps) {
@@ -198,17 +200,19 @@ BoundaryCurve TraceBoundary(const LongitudinalModel& model, double lower_speed_m
   return Tracer(model, options).Run(lower_speed_mps, upper_speed_mps);
 }
 
-std::optional<double> BoundaryOnCurve(const LongitudinalModel& model, const BoundaryCurve& curve, double speed_mps) {
+std::optional<double> BoundaryOnCurve(const LongitudinalModel& model, const BoundaryCurve& curve,
+                                      double speed_mps) {
   const auto& p = curve.points;
   for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-    if (p[i].branch != p[i + 1].branch || speed_mps < p[i].speed_mps || speed_mps > p[i + 1].speed_mps) continue;
+    if (p[i].branch != p[i + 1].branch || speed_mps < p[i].speed_mps || speed_mps > p[i + 1].speed_mps)
+      continue;
     // Cubic Hermite between the two points, then Newton on the criterion.
     const double h = p[i + 1].speed_mps - p[i].speed_mps;
     const double t = h > 0 ? (speed_mps - p[i].speed_mps) / h : 0.0;
     const double h00 = (1 + 2 * t) * (1 - t) * (1 - t), h10 = t * (1 - t) * (1 - t);
     const double h01 = t * t * (3 - 2 * t), h11 = t * t * (t - 1);
-    const double guess = h00 * p[i].height_m + h10 * h * p[i].height_speed_derivative + h01 * p[i + 1].height_m +
-                         h11 * h * p[i + 1].height_speed_derivative;
+    const double guess = h00 * p[i].height_m + h10 * h * p[i].height_speed_derivative +
+                         h01 * p[i + 1].height_m + h11 * h * p[i + 1].height_speed_derivative;
     const Root root{p[i].kind != CrossingKind::kReal, p[i].deflated};
     return Correct(model, speed_mps, guess, root);
   }

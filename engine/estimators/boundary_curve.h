@@ -34,10 +34,10 @@ struct BoundaryCurvePoint {
   double height_over_span = 0;
   double height_speed_derivative = 0;  ///< dH*/du0, m/(m/s), by the implicit-function theorem
   CrossingKind kind = CrossingKind::kHopf;
-  bool deflated = false;  ///< the criterion is that of the quartic factor (a₅ ≡ 0)
-  std::string mode;    ///< the crossing mode
+  bool deflated = false;   ///< the criterion is that of the quartic factor (a₅ ≡ 0)
+  std::string mode;        ///< the crossing mode
   bool certified = false;  ///< the certified finder's verdict at this speed
-  int branch = 0;      ///< index of the branch (a new one after each event)
+  int branch = 0;          ///< index of the branch (a new one after each event)
 };
 
 /// Where the curve changes branch.
@@ -47,7 +47,7 @@ struct BoundaryCurveEvent {
   /// to another crossing).
   std::string what;
   double height_below_m = 0, height_above_m = 0;  ///< H* on each side (NaN where there is none)
-  std::string reason;  ///< the finder's reason on the side without a boundary
+  std::string reason;                             ///< the finder's reason on the side without a boundary
 };
 
 /// The traced curve over [lower, upper] speeds, ascending.
@@ -64,6 +64,7 @@ BoundaryCurve TraceBoundary(const LongitudinalModel& model, double lower_speed_m
 
 /// H* at `speed_mps` on the traced curve: Newton on the criterion from the curve's cubic Hermite
 /// interpolant between its neighbouring points of one branch; nullopt where the curve has no branch.
-std::optional<double> BoundaryOnCurve(const LongitudinalModel& model, const BoundaryCurve& curve, double speed_mps);
+std::optional<double> BoundaryOnCurve(const LongitudinalModel& model, const BoundaryCurve& curve,
+                                      double speed_mps);
 
 }  // namespace gesweep

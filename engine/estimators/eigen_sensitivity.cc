@@ -53,8 +53,9 @@ EigenSystem ComputeEigenSystem(const Eigen::MatrixXd& A) {
   system.condition_numbers.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double overlap = std::abs(system.left.col(i).dot(system.right.col(i)));  // |yᴴ x|
-    system.condition_numbers[i] = overlap > 0.0 ? system.left.col(i).norm() * system.right.col(i).norm() / overlap
-                                                : std::numeric_limits<double>::infinity();
+    system.condition_numbers[i] = overlap > 0.0
+                                      ? system.left.col(i).norm() * system.right.col(i).norm() / overlap
+                                      : std::numeric_limits<double>::infinity();
   }
   return system;
 }

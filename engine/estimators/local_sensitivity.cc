@@ -5,8 +5,8 @@
 #include <limits>
 #include <tuple>
 
-#include "engine/estimators/eigen_sensitivity.h"
 #include "engine/common/errors.h"
+#include "engine/estimators/eigen_sensitivity.h"
 #include "engine/modal/hurwitz.h"
 
 namespace gesweep {
@@ -43,7 +43,8 @@ bool IsNeutral(std::complex<double> z) {
 
 /// The eigenvalue derivatives in modal order; exactly real for real eigenvalues (the imaginary part of
 /// the derivative of a simple real eigenvalue of a real matrix is rounding).
-std::array<std::complex<double>, 5> InModalOrder(const ModalAnalysis& modal, const std::array<Eigen::Index, 5>& match,
+std::array<std::complex<double>, 5> InModalOrder(const ModalAnalysis& modal,
+                                                 const std::array<Eigen::Index, 5>& match,
                                                  const Eigen::VectorXcd& derivatives) {
   std::array<std::complex<double>, 5> ordered{};
   for (int slot = 0; slot < 5; ++slot) {
@@ -55,7 +56,8 @@ std::array<std::complex<double>, 5> InModalOrder(const ModalAnalysis& modal, con
 
 }  // namespace
 
-EigenSensitivities ComputeEigenSensitivities(const LongitudinalModel& model, double height_m, double speed_mps,
+EigenSensitivities ComputeEigenSensitivities(const LongitudinalModel& model, double height_m,
+                                             double speed_mps,
                                              const std::vector<ModelParameter>& parameters) {
   EigenSensitivities result;
   result.height_m = height_m;
@@ -151,15 +153,20 @@ double ImplicitBoundaryDerivative(const Matrix5d& A, const Matrix5d& dA_dp, cons
 std::string HeightDerivativeUnit(const ModelParameter& p) {
   switch (p.kind) {
     case ModelParameterKind::kCoefficientScale:
-    case ModelParameterKind::kCDoScale: return "m";
-    case ModelParameterKind::kMass: return "m/kg";
-    case ModelParameterKind::kPitchInertia: return "m/(kg m^2)";
-    case ModelParameterKind::kSpeed: return "m/(m/s)";
+    case ModelParameterKind::kCDoScale:
+      return "m";
+    case ModelParameterKind::kMass:
+      return "m/kg";
+    case ModelParameterKind::kPitchInertia:
+      return "m/(kg m^2)";
+    case ModelParameterKind::kSpeed:
+      return "m/(m/s)";
   }
   return "";
 }
 
-BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& model, const BoundaryResult& boundary,
+BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& model,
+                                                   const BoundaryResult& boundary,
                                                    const std::vector<ModelParameter>& parameters) {
   BoundarySensitivities result;
   result.speed_mps = boundary.speed_mps;
@@ -176,15 +183,18 @@ BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& mode
   }
   result.mode = m < 2 ? "short_period" : (m < 4 ? "phugoid" : "height");
   result.margin_height_derivative_per_s_per_m = result.eigen.margin_height_derivative_per_s_per_m;
-  if (!std::isfinite(result.margin_height_derivative_per_s_per_m) || result.margin_height_derivative_per_s_per_m == 0.0) {
-    result.reason = "the stability margin is stationary in H at H* (dσ/dH = 0): H* does not move to first order";
+  if (!std::isfinite(result.margin_height_derivative_per_s_per_m) ||
+      result.margin_height_derivative_per_s_per_m == 0.0) {
+    result.reason =
+        "the stability margin is stationary in H at H* (dσ/dH = 0): H* does not move to first order";
     return result;
   }
   result.valid = true;
   // The boundary's crossing, for the implicit-function form.
   const BoundaryCrossing* crossing = nullptr;
   for (const auto& c : boundary.crossings) {
-    if (c.height_m == result.height_m && (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal)) crossing = &c;
+    if (c.height_m == result.height_m && (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal))
+      crossing = &c;
   }
   const Matrix5d A = model.StateMatrix(result.height_m, boundary.speed_mps);
   for (const auto& row : result.eigen.parameters) {

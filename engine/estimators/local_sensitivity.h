@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/estimators/model_parameter.h"
 #include "engine/dynamics/longitudinal_model.h"
+#include "engine/estimators/model_parameter.h"
 #include "engine/modal/boundary.h"
 #include "engine/modal/modal_analysis.h"
 
@@ -49,21 +49,22 @@ struct EigenSensitivities {
   /// ∂λ_i/∂H, 1/(s·m), and ∂σ/∂H (NaN at H = ∞).
   std::array<std::complex<double>, 5> height_derivatives{};
   double margin_height_derivative_per_s_per_m = 0;
-  HeightDerivative height_step;  ///< how ∂A/∂H was taken
+  HeightDerivative height_step;                       ///< how ∂A/∂H was taken
   std::vector<ParameterEigenSensitivity> parameters;  ///< in the order asked for
 };
 
 /// ∂λ/∂p and ∂σ/∂p for every parameter in `parameters` at height H (> 0, may be +∞) and speed u (> 0),
 /// and ∂λ/∂H, ∂σ/∂H when H is finite.
-EigenSensitivities ComputeEigenSensitivities(const LongitudinalModel& model, double height_m, double speed_mps,
-                                             const std::vector<ModelParameter>& parameters = LocalSensitivityParameters());
+EigenSensitivities ComputeEigenSensitivities(
+    const LongitudinalModel& model, double height_m, double speed_mps,
+    const std::vector<ModelParameter>& parameters = LocalSensitivityParameters());
 
 /// ∂H*/∂p for one parameter.
 struct BoundaryParameterSensitivity {
   ModelParameter parameter;
-  double value = 0;                  ///< p, in parameter.Unit()
-  double margin_derivative = 0;      ///< ∂σ/∂p at (H*, u0), 1/s per unit of p
-  double height_derivative = 0;      ///< ∂H*/∂p, m per unit of p (HeightDerivativeUnit)
+  double value = 0;                         ///< p, in parameter.Unit()
+  double margin_derivative = 0;             ///< ∂σ/∂p at (H*, u0), 1/s per unit of p
+  double height_derivative = 0;             ///< ∂H*/∂p, m per unit of p (HeightDerivativeUnit)
   double relative_height_derivative_m = 0;  ///< p·∂H*/∂p, m: the change of H* per unit relative change of p
   /// ∂H*/∂p by the implicit-function theorem on the crossing criterion c(H*, p) = 0 of the boundary
   /// (Δ₄ for a Hopf crossing, a₅ for a real one; Δ₃, a₄ where a₅ ≡ 0): −(∂c/∂p)/(∂c/∂H), without
@@ -84,8 +85,9 @@ struct BoundarySensitivities {
   double speed_mps = 0;
   /// The mode whose eigenvalue sets σ at H*: "short_period", "phugoid" or "height".
   std::string mode;
-  double margin_height_derivative_per_s_per_m = 0;  ///< ∂σ/∂H at H*, 1/(s·m); < 0 at a boundary (stable above)
-  EigenSensitivities eigen;             ///< everything at (H*, u0)
+  double margin_height_derivative_per_s_per_m =
+      0;                     ///< ∂σ/∂H at H*, 1/(s·m); < 0 at a boundary (stable above)
+  EigenSensitivities eigen;  ///< everything at (H*, u0)
   std::vector<BoundaryParameterSensitivity> parameters;  ///< in the order asked for
 };
 
@@ -100,8 +102,9 @@ double ImplicitBoundaryDerivative(const Matrix5d& A, const Matrix5d& dA_dp, cons
 
 /// ∂H*/∂p = −(∂σ/∂p)/(∂σ/∂H) at the boundary of `boundary` (found by FindBoundary on `model`).
 /// Not valid (with a reason) when the boundary has no H* or ∂σ/∂H is zero or not finite.
-BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& model, const BoundaryResult& boundary,
-                                                   const std::vector<ModelParameter>& parameters = LocalSensitivityParameters());
+BoundarySensitivities ComputeBoundarySensitivities(
+    const LongitudinalModel& model, const BoundaryResult& boundary,
+    const std::vector<ModelParameter>& parameters = LocalSensitivityParameters());
 
 /// The parameters that enter A, ranked by |p·∂H*/∂p| (largest first): the relative form is the one
 /// comparable across parameters of different units.

@@ -12,10 +12,14 @@ std::string ModelParameter::Name() const {
   switch (kind) {
     case ModelParameterKind::kCoefficientScale:
       return "scale." + std::string(kCoefficientNames[Index(coefficient)]);
-    case ModelParameterKind::kCDoScale: return "scale.CDo";
-    case ModelParameterKind::kMass: return "mass_kg";
-    case ModelParameterKind::kPitchInertia: return "pitch_inertia_kgm2";
-    case ModelParameterKind::kSpeed: return "speed_mps";
+    case ModelParameterKind::kCDoScale:
+      return "scale.CDo";
+    case ModelParameterKind::kMass:
+      return "mass_kg";
+    case ModelParameterKind::kPitchInertia:
+      return "pitch_inertia_kgm2";
+    case ModelParameterKind::kSpeed:
+      return "speed_mps";
   }
   return "unknown";
 }
@@ -23,10 +27,14 @@ std::string ModelParameter::Name() const {
 std::string_view ModelParameter::Unit() const {
   switch (kind) {
     case ModelParameterKind::kCoefficientScale:
-    case ModelParameterKind::kCDoScale: return "1";
-    case ModelParameterKind::kMass: return "kg";
-    case ModelParameterKind::kPitchInertia: return "kg m^2";
-    case ModelParameterKind::kSpeed: return "m/s";
+    case ModelParameterKind::kCDoScale:
+      return "1";
+    case ModelParameterKind::kMass:
+      return "kg";
+    case ModelParameterKind::kPitchInertia:
+      return "kg m^2";
+    case ModelParameterKind::kSpeed:
+      return "m/s";
   }
   return "";
 }
@@ -52,11 +60,16 @@ std::optional<ModelParameter> ModelParameterFromName(std::string_view name) {
 
 double ParameterValue(const LongitudinalModel& model, double speed_mps, const ModelParameter& p) {
   switch (p.kind) {
-    case ModelParameterKind::kCoefficientScale: return model.options().coefficient_scale[Index(p.coefficient)];
-    case ModelParameterKind::kCDoScale: return model.options().CDo_scale;
-    case ModelParameterKind::kMass: return model.mass_geometry().mass_kg;
-    case ModelParameterKind::kPitchInertia: return model.mass_geometry().pitch_inertia_kgm2;
-    case ModelParameterKind::kSpeed: return speed_mps;
+    case ModelParameterKind::kCoefficientScale:
+      return model.options().coefficient_scale[Index(p.coefficient)];
+    case ModelParameterKind::kCDoScale:
+      return model.options().CDo_scale;
+    case ModelParameterKind::kMass:
+      return model.mass_geometry().mass_kg;
+    case ModelParameterKind::kPitchInertia:
+      return model.mass_geometry().pitch_inertia_kgm2;
+    case ModelParameterKind::kSpeed:
+      return speed_mps;
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
@@ -65,11 +78,20 @@ LongitudinalModel WithParameter(const LongitudinalModel& model, const ModelParam
   GESWEEP_DEMAND(p.kind != ModelParameterKind::kSpeed);
   ModelOptions options = model.options();
   switch (p.kind) {
-    case ModelParameterKind::kCoefficientScale: options.coefficient_scale[Index(p.coefficient)] = value; break;
-    case ModelParameterKind::kCDoScale: options.CDo_scale = value; break;
-    case ModelParameterKind::kMass: options.mass_kg = value; break;
-    case ModelParameterKind::kPitchInertia: options.pitch_inertia_kgm2 = value; break;
-    case ModelParameterKind::kSpeed: break;
+    case ModelParameterKind::kCoefficientScale:
+      options.coefficient_scale[Index(p.coefficient)] = value;
+      break;
+    case ModelParameterKind::kCDoScale:
+      options.CDo_scale = value;
+      break;
+    case ModelParameterKind::kMass:
+      options.mass_kg = value;
+      break;
+    case ModelParameterKind::kPitchInertia:
+      options.pitch_inertia_kgm2 = value;
+      break;
+    case ModelParameterKind::kSpeed:
+      break;
   }
   return LongitudinalModel(model.aircraft(), options);
 }
@@ -91,8 +113,9 @@ DerivativeMethod StateMatrixDerivativeMethod(const LongitudinalModel& model, con
 Matrix5d StateMatrixDerivative(const LongitudinalModel& model, double height_m, double speed_mps,
                                const ModelParameter& p, double relative_step) {
   if (relative_step <= 0.0) {
-    relative_step = StateMatrixDerivativeMethod(model, p) == DerivativeMethod::kExact ? kExactRelativeStep
-                                                                                      : kCentralDifferenceRelativeStep;
+    relative_step = StateMatrixDerivativeMethod(model, p) == DerivativeMethod::kExact
+                        ? kExactRelativeStep
+                        : kCentralDifferenceRelativeStep;
   }
   const double value = ParameterValue(model, speed_mps, p);
   switch (p.kind) {
@@ -100,7 +123,8 @@ Matrix5d StateMatrixDerivative(const LongitudinalModel& model, double height_m, 
       // Q = ½ρu² over powers of u in Table 1 and the kinematic u0 make every entry of A a polynomial
       // of degree ≤ 2 in u (Mẇ ∝ u⁰, Zh ∝ u²): the symmetric difference is exact.
       const double du = relative_step * value;
-      return (model.StateMatrix(height_m, speed_mps + du) - model.StateMatrix(height_m, speed_mps - du)) / (2.0 * du);
+      return (model.StateMatrix(height_m, speed_mps + du) - model.StateMatrix(height_m, speed_mps - du)) /
+             (2.0 * du);
     }
     case ModelParameterKind::kMass:
     case ModelParameterKind::kPitchInertia: {
@@ -125,7 +149,8 @@ Matrix5d StateMatrixDerivative(const LongitudinalModel& model, double height_m, 
   return Matrix5d::Constant(std::numeric_limits<double>::quiet_NaN());
 }
 
-HeightDerivative StateMatrixHeightDerivative(const LongitudinalModel& model, double height_m, double speed_mps) {
+HeightDerivative StateMatrixHeightDerivative(const LongitudinalModel& model, double height_m,
+                                             double speed_mps) {
   GESWEEP_DEMAND(std::isfinite(height_m));
   // Below this distance to a table height, H is taken to sit on it: a symmetric step would be so small
   // that rounding (~1e-16/step relative) would dominate.
@@ -154,7 +179,9 @@ HeightDerivative StateMatrixHeightDerivative(const LongitudinalModel& model, dou
   result.one_sided = true;
   result.step_m = std::min(kHeightStep_m, 0.25 * above);
   const double h = result.step_m;
-  result.dA_dH = (-3.0 * A(height_m + kOnKnot_m) + 4.0 * A(height_m + kOnKnot_m + h) - A(height_m + kOnKnot_m + 2 * h)) / (2.0 * h);
+  result.dA_dH =
+      (-3.0 * A(height_m + kOnKnot_m) + 4.0 * A(height_m + kOnKnot_m + h) - A(height_m + kOnKnot_m + 2 * h)) /
+      (2.0 * h);
   return result;
 }
 

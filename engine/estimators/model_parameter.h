@@ -94,6 +94,7 @@ struct HeightDerivative {
 inline constexpr double kHeightStep_m = 1e-3;
 
 /// ∂A/∂H at (H, u); steps never straddle a table height. Precondition: H finite.
-HeightDerivative StateMatrixHeightDerivative(const LongitudinalModel& model, double height_m, double speed_mps);
+HeightDerivative StateMatrixHeightDerivative(const LongitudinalModel& model, double height_m,
+                                             double speed_mps);
 
 }  // namespace gesweep

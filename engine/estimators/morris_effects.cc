@@ -32,8 +32,9 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
                      "expected one column per parameter (" + std::to_string(D) + ")");
   }
   if (design.rows() == 0 || design.rows() % (D + 1) != 0) {
-    throw InputError(options.source, "design", std::to_string(design.rows()) + " rows",
-                     "expected r·(D+1) rows: whole Morris trajectories of " + std::to_string(D + 1) + " rows");
+    throw InputError(
+        options.source, "design", std::to_string(design.rows()) + " rows",
+        "expected r·(D+1) rows: whole Morris trajectories of " + std::to_string(D + 1) + " rows");
   }
   if (outputs.size() != static_cast<std::size_t>(design.rows())) {
     throw InputError(options.source, "outputs", std::to_string(outputs.size()) + " rows",
@@ -71,9 +72,10 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
         }
       }
       if (changed_count != 1) {
-        throw InputError(options.source, "design rows " + std::to_string(row) + " to " + std::to_string(row + 1),
-                         std::to_string(changed_count) + " parameters change",
-                         "expected exactly one parameter to change between consecutive rows of a Morris trajectory");
+        throw InputError(
+            options.source, "design rows " + std::to_string(row) + " to " + std::to_string(row + 1),
+            std::to_string(changed_count) + " parameters change",
+            "expected exactly one parameter to change between consecutive rows of a Morris trajectory");
       }
       steps[t].push_back({changed, unit_step});
     }
@@ -145,7 +147,8 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
     }
     std::vector<double> squares(D, 0.0);
     for (int t : trajectories) {
-      for (const Effect& e : effects[t]) squares[e.parameter] += (e.value - m.mu[e.parameter]) * (e.value - m.mu[e.parameter]);
+      for (const Effect& e : effects[t])
+        squares[e.parameter] += (e.value - m.mu[e.parameter]) * (e.value - m.mu[e.parameter]);
     }
     for (int i = 0; i < D; ++i) {
       if (m.count[i] >= 2) m.sigma[i] = std::sqrt(squares[i] / (m.count[i] - 1));

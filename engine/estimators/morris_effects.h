@@ -33,16 +33,16 @@ struct MorrisIndices {
   SensitivityStatus status = SensitivityStatus::kOk;
   std::string message;
 
-  int parameter_count = 0;         ///< D
-  int trajectories = 0;            ///< r in the design
+  int parameter_count = 0;  ///< D
+  int trajectories = 0;     ///< r in the design
   int trajectories_used = 0;
-  int trajectories_dropped = 0;    ///< held a failed row
+  int trajectories_dropped = 0;  ///< held a failed row
   int failed_rows = 0;
 
-  std::vector<double> mu;          ///< mean of EE_i
-  std::vector<double> mu_star;     ///< mean of |EE_i|
-  std::vector<double> sigma;       ///< sample standard deviation of EE_i (n−1; NaN with one effect)
-  std::vector<int> effects;        ///< number of elementary effects of each parameter
+  std::vector<double> mu;       ///< mean of EE_i
+  std::vector<double> mu_star;  ///< mean of |EE_i|
+  std::vector<double> sigma;    ///< sample standard deviation of EE_i (n−1; NaN with one effect)
+  std::vector<int> effects;     ///< number of elementary effects of each parameter
   std::vector<ConfidenceInterval> mu_star_ci;  ///< percentile bootstrap over trajectories
 
   BootstrapOptions bootstrap;

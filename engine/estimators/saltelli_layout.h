@@ -23,10 +23,11 @@ constexpr std::int64_t SaltelliBlockRows(int parameter_count, bool second_order)
 /// block holds B_j's coordinate (true) or A_j's (false).
 constexpr bool SaltelliTakesB(int parameter_count, bool second_order, std::int64_t row_in_block, int column) {
   const std::int64_t D = parameter_count;
-  if (row_in_block == 0) return false;                                              // A_j
-  if (row_in_block <= D) return column == row_in_block - 1;                         // AB_j^(i), i = row − 1
-  if (second_order && row_in_block <= 2 * D) return column != row_in_block - D - 1;  // BA_j^(i), i = row − D − 1
-  return true;                                                                      // B_j
+  if (row_in_block == 0) return false;                       // A_j
+  if (row_in_block <= D) return column == row_in_block - 1;  // AB_j^(i), i = row − 1
+  if (second_order && row_in_block <= 2 * D)
+    return column != row_in_block - D - 1;  // BA_j^(i), i = row − D − 1
+  return true;                              // B_j
 }
 
 /// A whole Saltelli design as the estimators hold it in memory (N fits an int there): the row of each
@@ -43,7 +44,9 @@ struct SaltelliLayout {
     return static_cast<std::size_t>(base_samples) * static_cast<std::size_t>(BlockSize());
   }
   /// Row of A_j.
-  std::size_t RowA(int j) const { return static_cast<std::size_t>(j) * static_cast<std::size_t>(BlockSize()); }
+  std::size_t RowA(int j) const {
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(BlockSize());
+  }
   /// Row of AB_j^(i): A_j with parameter i from B_j.
   std::size_t RowAB(int j, int i) const { return RowA(j) + 1 + static_cast<std::size_t>(i); }
   /// Row of BA_j^(i): B_j with parameter i from A_j. Precondition: second_order.
@@ -53,7 +56,9 @@ struct SaltelliLayout {
   /// Row of B_j.
   std::size_t RowB(int j) const { return RowA(j) + static_cast<std::size_t>(BlockSize()) - 1; }
   /// The block (base sample) a row belongs to.
-  int BlockOfRow(std::size_t row) const { return static_cast<int>(row / static_cast<std::size_t>(BlockSize())); }
+  int BlockOfRow(std::size_t row) const {
+    return static_cast<int>(row / static_cast<std::size_t>(BlockSize()));
+  }
 };
 
 }  // namespace gesweep

@@ -29,16 +29,19 @@ void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string
   if (ranges.empty()) throw InputError(source, "parameters", "", "expected at least one sampled parameter");
   std::set<std::string> names;
   for (const auto& range : ranges) {
-    if (range.name.empty()) throw InputError(source, "parameters", "''", "expected a non-empty parameter name");
+    if (range.name.empty())
+      throw InputError(source, "parameters", "''", "expected a non-empty parameter name");
     if (!names.insert(range.name).second) {
       throw InputError(source, range.name, "", "parameter listed twice; expected distinct names");
     }
     if (!std::isfinite(range.lower) || !std::isfinite(range.upper) || !(range.lower < range.upper)) {
-      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
+      throw InputError(source, range.name,
+                       "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
                        "expected finite bounds with lower < upper");
     }
     if (range.log_uniform && !(range.lower > 0.0)) {
-      throw InputError(source, range.name, "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
+      throw InputError(source, range.name,
+                       "[" + ShortNumber(range.lower) + ", " + ShortNumber(range.upper) + "]",
                        "expected 0 < lower for a log-uniform parameter");
     }
   }

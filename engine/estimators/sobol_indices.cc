@@ -88,15 +88,17 @@ void FillNaN(SobolIndices& result) {
 SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<bool>& succeeded,
                           const SaltelliLayout& layout, const SobolOptions& options) {
   if (layout.parameter_count < 1 || layout.base_samples < 1) {
-    throw InputError(options.source, "design",
-                     "D = " + std::to_string(layout.parameter_count) + ", N = " + std::to_string(layout.base_samples),
-                     "expected a Saltelli design with D >= 1 parameters and N >= 1 base samples");
+    throw InputError(
+        options.source, "design",
+        "D = " + std::to_string(layout.parameter_count) + ", N = " + std::to_string(layout.base_samples),
+        "expected a Saltelli design with D >= 1 parameters and N >= 1 base samples");
   }
   if (outputs.size() != layout.RowCount()) {
     throw InputError(options.source, "outputs", std::to_string(outputs.size()) + " rows",
-                     "expected N·(" + std::string(layout.second_order ? "2D+2" : "D+2") + ") = " +
-                         std::to_string(layout.RowCount()) + " rows for D = " +
-                         std::to_string(layout.parameter_count) + ", N = " + std::to_string(layout.base_samples) +
+                     "expected N·(" + std::string(layout.second_order ? "2D+2" : "D+2") +
+                         ") = " + std::to_string(layout.RowCount()) +
+                         " rows for D = " + std::to_string(layout.parameter_count) +
+                         ", N = " + std::to_string(layout.base_samples) +
                          (layout.second_order ? " with" : " without") + " second order");
   }
   if (!succeeded.empty() && succeeded.size() != outputs.size()) {
@@ -136,7 +138,8 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
                      " runs failed (first: row " + std::to_string(first_failed) + ", base sample " +
                      std::to_string(layout.BlockOfRow(first_failed)) +
                      "); rerun them, or choose failed_runs = drop_blocks to drop the " +
-                     std::to_string(N - static_cast<int>(used_blocks.size())) + " Saltelli blocks that hold them";
+                     std::to_string(N - static_cast<int>(used_blocks.size())) +
+                     " Saltelli blocks that hold them";
     return result;
   }
   if (result.blocks_used < 2) {
@@ -167,8 +170,7 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
   // and second-order numerators are not invariant to a shift in a finite sample, and centring keeps
   // their variance small.
   const double mean = 0.5 * (data.a.mean() + data.b.mean());
-  const double variance =
-      0.5 * ((data.a - mean).square().mean() + (data.b - mean).square().mean());
+  const double variance = 0.5 * ((data.a - mean).square().mean() + (data.b - mean).square().mean());
   result.output_mean = mean;
   result.output_variance = variance;
   if (!(variance > 0.0)) {

@@ -26,12 +26,12 @@ struct SobolIndices {
   SensitivityStatus status = SensitivityStatus::kOk;
   std::string message;  ///< empty when kOk
 
-  SaltelliLayout layout;        ///< D, N and second order as analysed
-  int blocks_used = 0;          ///< base samples that entered the estimates
-  int blocks_dropped = 0;       ///< blocks left out because they held a failed row
-  int failed_rows = 0;          ///< rows that failed (not succeeded, or a non-finite output)
-  double output_mean = 0;       ///< mean of the output over the A and B rows of the used blocks
-  double output_variance = 0;   ///< population variance over the same rows (the estimators' V)
+  SaltelliLayout layout;       ///< D, N and second order as analysed
+  int blocks_used = 0;         ///< base samples that entered the estimates
+  int blocks_dropped = 0;      ///< blocks left out because they held a failed row
+  int failed_rows = 0;         ///< rows that failed (not succeeded, or a non-finite output)
+  double output_mean = 0;      ///< mean of the output over the A and B rows of the used blocks
+  double output_variance = 0;  ///< population variance over the same rows (the estimators' V)
 
   std::vector<double> first_order;  ///< S_i
   std::vector<double> total;        ///< S_Ti

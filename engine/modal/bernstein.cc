@@ -65,7 +65,8 @@ struct CosineTables {
       auto& t = table[static_cast<std::size_t>(m)];
       t.resize(static_cast<std::size_t>(m * m));
       for (int k = 0; k < m; ++k)
-        for (int i = 0; i < m; ++i) t[static_cast<std::size_t>(k * m + i)] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
+        for (int i = 0; i < m; ++i)
+          t[static_cast<std::size_t>(k * m + i)] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
     }
   }
 };
@@ -177,7 +178,8 @@ BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const std::vector<
   return FromChebyshevSamples(values.data(), static_cast<int>(values.size()), degree, tail);
 }
 
-BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* values, int m, int degree, double* tail) {
+BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* values, int m, int degree,
+                                                              double* tail) {
   GESWEEP_DEMAND(m >= 1 && degree >= 0 && degree < m && degree <= kMaxConversionDegree && m <= kMaxNodes);
   const FitMatrix& fit = Fit(m, degree);
   BernsteinPolynomial p;
@@ -229,7 +231,8 @@ BernsteinPolynomial BernsteinPolynomial::Derivative() const {
   if (degree_ == 0) return Constant(0.0);
   d.degree_ = degree_ - 1;
   for (int k = 0; k < degree_; ++k) {
-    d.b_[static_cast<std::size_t>(k)] = degree_ * (b_[static_cast<std::size_t>(k + 1)] - b_[static_cast<std::size_t>(k)]);
+    d.b_[static_cast<std::size_t>(k)] =
+        degree_ * (b_[static_cast<std::size_t>(k + 1)] - b_[static_cast<std::size_t>(k)]);
   }
   return d;
 }
@@ -248,7 +251,8 @@ BernsteinPolynomial BernsteinPolynomial::DividedByT() const {
   // t·q(t) in degree n has coefficients q_{j−1}·j/n (j ≥ 1) and 0.
   BernsteinPolynomial q;
   q.degree_ = degree_ - 1;
-  for (int j = 1; j <= degree_; ++j) q.b_[static_cast<std::size_t>(j - 1)] = b_[static_cast<std::size_t>(j)] * degree_ / j;
+  for (int j = 1; j <= degree_; ++j)
+    q.b_[static_cast<std::size_t>(j - 1)] = b_[static_cast<std::size_t>(j)] * degree_ / j;
   return q;
 }
 
@@ -257,7 +261,8 @@ BernsteinPolynomial BernsteinPolynomial::DividedByOneMinusT() const {
   // (1 − t)·q(t) in degree n has coefficients q_j·(n − j)/n (j < n) and 0.
   BernsteinPolynomial q;
   q.degree_ = degree_ - 1;
-  for (int j = 0; j < degree_; ++j) q.b_[static_cast<std::size_t>(j)] = b_[static_cast<std::size_t>(j)] * degree_ / (degree_ - j);
+  for (int j = 0; j < degree_; ++j)
+    q.b_[static_cast<std::size_t>(j)] = b_[static_cast<std::size_t>(j)] * degree_ / (degree_ - j);
   return q;
 }
 
@@ -270,7 +275,8 @@ void BernsteinPolynomial::Split(BernsteinPolynomial& left, BernsteinPolynomial& 
   right.b_[static_cast<std::size_t>(n)] = work[static_cast<std::size_t>(n)];
   for (int r = 1; r <= n; ++r) {
     for (int k = 0; k <= n - r; ++k) {
-      work[static_cast<std::size_t>(k)] = 0.5 * (work[static_cast<std::size_t>(k)] + work[static_cast<std::size_t>(k + 1)]);
+      work[static_cast<std::size_t>(k)] =
+          0.5 * (work[static_cast<std::size_t>(k)] + work[static_cast<std::size_t>(k + 1)]);
     }
     left.b_[static_cast<std::size_t>(r)] = work[0];
     right.b_[static_cast<std::size_t>(n - r)] = work[static_cast<std::size_t>(n - r)];
@@ -288,7 +294,9 @@ BernsteinPolynomial operator*(const BernsteinPolynomial& p, const BernsteinPolyn
   r.degree_ = m + n;
   for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] = 0.0;
   for (int i = 0; i <= m; ++i) {
-    for (int j = 0; j <= n; ++j) r.b_[static_cast<std::size_t>(i + j)] += ps[static_cast<std::size_t>(i)] * qs[static_cast<std::size_t>(j)];
+    for (int j = 0; j <= n; ++j)
+      r.b_[static_cast<std::size_t>(i + j)] +=
+          ps[static_cast<std::size_t>(i)] * qs[static_cast<std::size_t>(j)];
   }
   const auto& inverse = Binomial().inverse[m + n];
   for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] *= inverse[k];
@@ -347,7 +355,8 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
     const double stop_width = at_end_of_range ? std::max(resolution, 0x1p-24) : resolution;
     // Where every coefficient is within the allowance of 0, p is indistinguishable from 0: stop.
     bool all_unknown = true;
-    for (int k = 0; k <= n && all_unknown; ++k) all_unknown = SignOf(piece.poly.coefficient(k), allowance) == 0;
+    for (int k = 0; k <= n && all_unknown; ++k)
+      all_unknown = SignOf(piece.poly.coefficient(k), allowance) == 0;
     if (width <= stop_width || all_unknown || result.subdivisions >= max_subdivisions) {
       undecided.push_back({piece.lower, piece.upper, s0, s1});
       continue;
@@ -360,7 +369,8 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
     stack.push_back(std::move(left));
   }
   // Adjacent undecided pieces form one undecided interval; its sign change is that of its ends.
-  std::sort(undecided.begin(), undecided.end(), [](const auto& a, const auto& b) { return a.lower < b.lower; });
+  std::sort(undecided.begin(), undecided.end(),
+            [](const auto& a, const auto& b) { return a.lower < b.lower; });
   for (std::size_t i = 0; i < undecided.size();) {
     Undecided merged = undecided[i];
     std::size_t j = i + 1;
@@ -369,7 +379,8 @@ RootIsolation IsolateRoots(const BernsteinPolynomial& p, double allowance, doubl
       merged.sign_upper = undecided[j].sign_upper;
       ++j;
     }
-    const bool differ = merged.sign_lower != 0 && merged.sign_upper != 0 && merged.sign_lower != merged.sign_upper;
+    const bool differ =
+        merged.sign_lower != 0 && merged.sign_upper != 0 && merged.sign_lower != merged.sign_upper;
     result.intervals.push_back({merged.lower, merged.upper, false, differ});
     i = j;
   }

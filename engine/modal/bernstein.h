@@ -31,7 +31,8 @@ class BernsteinPolynomial {
   /// polynomial, up to rounding) truncated to `degree` and converted to the Bernstein basis.
   /// `tail` receives |the first Chebyshev coefficient| dropped by the truncation (rounding-level
   /// when the degree bound holds).
-  static BernsteinPolynomial FromChebyshevSamples(const std::vector<double>& values, int degree, double* tail);
+  static BernsteinPolynomial FromChebyshevSamples(const std::vector<double>& values, int degree,
+                                                  double* tail);
   /// The same from m values in an array.
   static BernsteinPolynomial FromChebyshevSamples(const double* values, int m, int degree, double* tail);
   /// The m Chebyshev points of the first kind on [0, 1], ascending.
@@ -61,7 +62,8 @@ class BernsteinPolynomial {
 
  private:
   void CopyFrom(const BernsteinPolynomial& other) {
-    for (int k = 0; k <= degree_; ++k) b_[static_cast<std::size_t>(k)] = other.b_[static_cast<std::size_t>(k)];
+    for (int k = 0; k <= degree_; ++k)
+      b_[static_cast<std::size_t>(k)] = other.b_[static_cast<std::size_t>(k)];
   }
   int degree_ = 0;
   std::array<double, kMaxDegree + 1> b_;  // b_[0…degree_] are meaningful, the rest undefined

@@ -50,9 +50,9 @@ void SampledSearch(const LongitudinalModel& model, double speed_mps, const Bound
     if (h > result.lower_height_m && h < result.upper_height_m) knots.push_back(h);
   }
   knots.push_back(result.upper_height_m);
-  SampledSearchResult search = SampledCrossingSearch([&](double h) { return model.StateMatrix(h, speed_mps); },
-                                                     knots, options.samples_per_segment, options.tolerance_m,
-                                                     options.eigenvalue_solver);
+  SampledSearchResult search =
+      SampledCrossingSearch([&](double h) { return model.StateMatrix(h, speed_mps); }, knots,
+                            options.samples_per_segment, options.tolerance_m, options.eigenvalue_solver);
   result.margin_evaluations = search.margin_evaluations;
   if (!search.finite) {
     result.reason = search.non_finite_reason;
@@ -73,7 +73,7 @@ struct SegmentPolynomials {
   BernsteinPolynomial hopf, real;        // Δ₄ and a₅, or Δ₃ and a₄ when deflated
   double hopf_scale = 0, real_scale = 0;
   std::array<double, 6> scale{};  // of each aₖ: its largest Bernstein coefficient, floored at rounding
-  bool hopf_excluded = false;  // interval arithmetic showed Δ has no root here
+  bool hopf_excluded = false;     // interval arithmetic showed Δ has no root here
   bool hopf_built = false;
 };
 
@@ -150,14 +150,15 @@ class Search {
           }
           if (!interval.certified) {
             Uncertify("an unresolved cluster of roots of " + CriterionName(hopf, s) + " within " +
-                      FormatMetres((interval.upper_t - interval.lower_t) * Length(s)) + " of H = " +
-                      FormatMetres(HeightAt(s, interval.lower_t)) +
-                      (interval.sign_change ? " (an odd number: one crossing reported)"
-                                            : " (an even number: a tangency or a close pair, none reported)"));
+                      FormatMetres((interval.upper_t - interval.lower_t) * Length(s)) +
+                      " of H = " + FormatMetres(HeightAt(s, interval.lower_t)) +
+                      (interval.sign_change
+                           ? " (an odd number: one crossing reported)"
+                           : " (an even number: a tangency or a close pair, none reported)"));
             if (!interval.sign_change) continue;
           }
-          candidates.push_back({HeightAt(s, interval.lower_t), HeightAt(s, interval.upper_t), hopf, s,
-                                interval.certified});
+          candidates.push_back(
+              {HeightAt(s, interval.lower_t), HeightAt(s, interval.upper_t), hopf, s, interval.certified});
         }
       }
     }
@@ -174,7 +175,8 @@ class Search {
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       for (int c = 0; c < 2; ++c) {
         if (lower_zone[s][c] >= 0) check_zone_width(s, c, lower_zone[s][c], segments_[s].lower_height_m);
-        if (upper_zone[s][c] >= 0) check_zone_width(s, c, 1.0 - upper_zone[s][c], segments_[s].upper_height_m);
+        if (upper_zone[s][c] >= 0)
+          check_zone_width(s, c, 1.0 - upper_zone[s][c], segments_[s].upper_height_m);
       }
     }
     for (std::size_t s = 0; s + 1 < segments_.size(); ++s) {
@@ -191,8 +193,10 @@ class Search {
         const double below_t = std::min(upper_zone[s][c] < 0 ? 1.0 : upper_zone[s][c], 1.0 - kKnotOffset);
         const double above_t = std::max(lower_zone[s + 1][c] < 0 ? 0.0 : lower_zone[s + 1][c], kKnotOffset);
         const double below = HeightAt(s, below_t), above = HeightAt(s + 1, above_t);
-        const double fb = ExactCriterion(s, below, hopf, mixed), fa = ExactCriterion(s + 1, above, hopf, mixed);
-        if ((fb < 0) != (fa < 0) && fb != 0 && fa != 0) candidates.push_back({below, above, hopf, s, true, mixed});
+        const double fb = ExactCriterion(s, below, hopf, mixed),
+                     fa = ExactCriterion(s + 1, above, hopf, mixed);
+        if ((fb < 0) != (fa < 0) && fb != 0 && fa != 0)
+          candidates.push_back({below, above, hopf, s, true, mixed});
       }
     }
 
@@ -239,7 +243,8 @@ class Search {
   bool BuildPolynomials(std::size_t s) {
     const MatrixSegment& segment = segments_[s];
     int degree = 0;
-    for (int k = 1; k <= 5; ++k) degree = std::max(degree, segment.coefficient_degrees[static_cast<std::size_t>(k)]);
+    for (int k = 1; k <= 5; ++k)
+      degree = std::max(degree, segment.coefficient_degrees[static_cast<std::size_t>(k)]);
     // One node more than the degree needs: the tail of every coefficient checks its degree bound.
     const int m = degree + 2;
     const std::vector<double>& nodes = Nodes(m);
@@ -258,7 +263,8 @@ class Search {
       }
       entry_scale = std::max(entry_scale, largest);
       const CharacteristicCoefficients a = CharacteristicPolynomial(A);
-      for (int k = 1; k <= 5; ++k) values[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] = a[static_cast<std::size_t>(k)];
+      for (int k = 1; k <= 5; ++k)
+        values[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] = a[static_cast<std::size_t>(k)];
     }
     SegmentPolynomials& p = polynomials_[s];
     std::array<double, 6> scale{};
@@ -273,9 +279,10 @@ class Search {
       entry_power *= entry_scale;
       const double floor = 1e-14 * entry_power;
       if (tail > kTailTolerance * scale[static_cast<std::size_t>(k)] + floor) {
-        Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " + FormatMetres(segment.upper_height_m) +
-                  ": a" + std::to_string(k) + " is not a polynomial of degree " + std::to_string(dk) +
-                  " (Chebyshev tail " + std::to_string(tail) + ")");
+        Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " +
+                  FormatMetres(segment.upper_height_m) + ": a" + std::to_string(k) +
+                  " is not a polynomial of degree " + std::to_string(dk) + " (Chebyshev tail " +
+                  std::to_string(tail) + ")");
       }
       scale[static_cast<std::size_t>(k)] = std::max(scale[static_cast<std::size_t>(k)], floor);
     }
@@ -287,16 +294,19 @@ class Search {
     const CharacteristicCoefficients exact = Exact(s, HeightAt(s, kCheckT));
     double worst = 0;
     for (int k = 1; k <= 5; ++k) {
-      const double error = std::abs(a[static_cast<std::size_t>(k)](kCheckT) - exact[static_cast<std::size_t>(k)]);
+      const double error =
+          std::abs(a[static_cast<std::size_t>(k)](kCheckT) - exact[static_cast<std::size_t>(k)]);
       worst = std::max(worst, error / S[static_cast<std::size_t>(k)]);
     }
     if (!(worst <= kFaithfulness)) {
-      Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " + FormatMetres(segment.upper_height_m) +
+      Uncertify("segment " + FormatMetres(segment.lower_height_m) + " to " +
+                FormatMetres(segment.upper_height_m) +
                 ": the fitted coefficients do not reproduce the exact model (relative error " +
                 std::to_string(worst) + ")");
     }
     if (!segment.deflated) {
-      p.hopf_scale = (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
+      p.hopf_scale =
+          (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
       p.real_scale = S[5];
       // An exact zero of a₅ at an end (column 4 of A vanishes there) is divided out: the quotient
       // has the other roots, and its sign at that end is a₅'s just inside.
@@ -315,11 +325,13 @@ class Search {
     CharacteristicCoefficients lower_end{}, upper_end{};
     for (int k = 1; k <= 5; ++k) {
       lower_end[static_cast<std::size_t>(k)] = a[static_cast<std::size_t>(k)].coefficient(0);
-      upper_end[static_cast<std::size_t>(k)] = a[static_cast<std::size_t>(k)].coefficient(a[static_cast<std::size_t>(k)].degree());
+      upper_end[static_cast<std::size_t>(k)] =
+          a[static_cast<std::size_t>(k)].coefficient(a[static_cast<std::size_t>(k)].degree());
     }
     const double hopf_lower = HopfCriterion(lower_end, segment.deflated);
     const double hopf_upper = HopfCriterion(upper_end, segment.deflated);
-    const bool root_certain = (hopf_lower > margin && hopf_upper < -margin) || (hopf_lower < -margin && hopf_upper > margin);
+    const bool root_certain =
+        (hopf_lower > margin && hopf_upper < -margin) || (hopf_lower < -margin && hopf_upper > margin);
     if (root_certain) {
       BuildHopf(s, -1.0);
       return true;
@@ -358,8 +370,8 @@ class Search {
       p.hopf = f * g - e * e;
     } else {
       const BernsteinPolynomial a1_squared = a[1] * a[1];
-      if (exclusion_margin >= 0 &&
-          (Range::Of(f) * Range::Of(a[3]) - Range::Of(a1_squared) * Range::Of(a[4])).ExcludesZero(exclusion_margin)) {
+      if (exclusion_margin >= 0 && (Range::Of(f) * Range::Of(a[3]) - Range::Of(a1_squared) * Range::Of(a[4]))
+                                       .ExcludesZero(exclusion_margin)) {
         return false;
       }
       p.hopf = f * a[3] - a1_squared * a[4];
@@ -387,8 +399,8 @@ class Search {
     double width = upper - lower;
     if (f_lower != 0.0 && f_upper != 0.0 && (f_lower < 0) != (f_upper < 0)) {
       std::uintmax_t iterations = 100;
-      auto [low, high] = boost::math::tools::toms748_solve(f, lower, upper, f_lower, f_upper,
-                                                           boost::math::tools::eps_tolerance<double>(50), iterations);
+      auto [low, high] = boost::math::tools::toms748_solve(
+          f, lower, upper, f_lower, f_upper, boost::math::tools::eps_tolerance<double>(50), iterations);
       root = 0.5 * (low + high);
       width = high - low;
     } else if (f_lower == 0.0 || f_upper == 0.0) {
@@ -406,7 +418,8 @@ class Search {
         ((poly(tm) > 0) == rising ? tu : tl) = tm;
       }
       root = HeightAt(c.segment, 0.5 * (tl + tu));
-      Uncertify("the exact model does not change sign across the polynomial's root near H = " + FormatMetres(root));
+      Uncertify("the exact model does not change sign across the polynomial's root near H = " +
+                FormatMetres(root));
     }
     const std::size_t s = segment_of(root);
     const bool deflated = segments_[s].deflated && !c.undeflated;
@@ -427,7 +440,8 @@ class Search {
       std::complex<double> value = 0;
       for (int k = 0; k <= n; ++k) {
         double coefficient = a[static_cast<std::size_t>(k)];
-        if (derivative_in_H) coefficient = k == 0 ? 0.0 : p.a[static_cast<std::size_t>(k)].Derivative()(t) * dt_dH;
+        if (derivative_in_H)
+          coefficient = k == 0 ? 0.0 : p.a[static_cast<std::size_t>(k)].Derivative()(t) * dt_dH;
         const int power = n - k;
         if (derivative_in_s) {
           if (power == 0) continue;
@@ -447,7 +461,8 @@ class Search {
     } else {
       crossing.kind = CrossingKind::kReal;
     }
-    crossing.eigenvalue_height_derivative = -polynomial_at(lambda, true, false) / polynomial_at(lambda, false, true);
+    crossing.eigenvalue_height_derivative =
+        -polynomial_at(lambda, true, false) / polynomial_at(lambda, false, true);
     crossing.mode_stable_above = crossing.eigenvalue_height_derivative.real() < 0.0;
     // One eigen-analysis at the root names the mode.
     ++result_.eigen_analyses;
@@ -592,8 +607,8 @@ double QuadraticDensityErrorBound(double lower_altitude_m, double length_m) {
 }
 
 // ρ·((1 − t)·a + t·b), derivative by derivative.
-DimensionalDerivatives InterpolatedDerivatives(const DimensionalDerivatives& a, const DimensionalDerivatives& b,
-                                               double t, double density) {
+DimensionalDerivatives InterpolatedDerivatives(const DimensionalDerivatives& a,
+                                               const DimensionalDerivatives& b, double t, double density) {
   auto lerp = [&](double x, double y) { return density * (x + t * (y - x)); };
   DimensionalDerivatives d;
   d.Xu = lerp(a.Xu, b.Xu);
@@ -649,14 +664,18 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
     }
     auto coefficients = [&table, source](double h) {
       switch (source) {
-        case Source::kHeld: return table.rows().front();
-        case Source::kFreeFlight: return table.free_flight();
-        case Source::kTable: return table.At(h);
+        case Source::kHeld:
+          return table.rows().front();
+        case Source::kFreeFlight:
+          return table.free_flight();
+        case Source::kTable:
+          return table.At(h);
       }
       return table.At(h);
     };
     const double altitude = model.aircraft().field_elevation_m;
-    const double rho_lo = knot_density[i], rho_mid = model.DensityAt(0.5 * (lo + hi)), rho_hi = knot_density[i + 1];
+    const double rho_lo = knot_density[i], rho_mid = model.DensityAt(0.5 * (lo + hi)),
+                 rho_hi = knot_density[i + 1];
     const double bound = QuadraticDensityErrorBound(altitude + lo, hi - lo) / std::min(rho_lo, rho_hi);
     *density_bound = std::max(*density_bound, bound);
     const MassGeometry mg = model.mass_geometry();
@@ -696,7 +715,9 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
     // Column 4 (ΔH) of A, ρ·(Xh, Zh, Mh + ρ·Mẇ·Zh, 0, 0) per unit density, is zero at an end exactly
     // where Xh = Zh = Mh = 0 there (ρ > 0); zero at both ends, it is zero throughout (entries affine
     // in the coefficients).
-    auto column_zero = [](const DimensionalDerivatives& d) { return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0; };
+    auto column_zero = [](const DimensionalDerivatives& d) {
+      return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0;
+    };
     const bool zero_lo = column_zero(d_lo);
     const bool zero_hi = column_zero(d_hi);
     segment.real_root_at_lower = zero_lo;
@@ -765,10 +786,14 @@ SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>&
 
 std::string_view ToString(CrossingKind kind) {
   switch (kind) {
-    case CrossingKind::kHopf: return "hopf";
-    case CrossingKind::kReal: return "real";
-    case CrossingKind::kDiscontinuity: return "table_row";
-    case CrossingKind::kSigma: return "sigma";
+    case CrossingKind::kHopf:
+      return "hopf";
+    case CrossingKind::kReal:
+      return "real";
+    case CrossingKind::kDiscontinuity:
+      return "table_row";
+    case CrossingKind::kSigma:
+      return "sigma";
   }
   GESWEEP_UNREACHABLE();
 }
@@ -779,13 +804,16 @@ CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, 
   return Search(segments, wingspan_m, solver).Run();
 }
 
-BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, const BoundaryOptions& options) {
+BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps,
+                            const BoundaryOptions& options) {
   const Aircraft& aircraft = model.aircraft();
   BoundaryResult result;
   result.speed_mps = speed_mps;
   result.method = options.method;
-  result.lower_height_m = std::isnan(options.lower_height_m) ? aircraft.wheel_contact_height_m : options.lower_height_m;
-  result.upper_height_m = std::isnan(options.upper_height_m) ? aircraft.table_heights_m.back() : options.upper_height_m;
+  result.lower_height_m =
+      std::isnan(options.lower_height_m) ? aircraft.wheel_contact_height_m : options.lower_height_m;
+  result.upper_height_m =
+      std::isnan(options.upper_height_m) ? aircraft.table_heights_m.back() : options.upper_height_m;
   GESWEEP_DEMAND(result.upper_height_m > result.lower_height_m);
 
   bool all_stable = false, all_unstable = false;
@@ -812,11 +840,13 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
       // std::to_chars, not printf: the formatting was 3 % of a search.
       auto general = [](double value, int precision) {
         char text[32];
-        const auto end = std::to_chars(text, text + sizeof text, value, std::chars_format::general, precision).ptr;
+        const auto end =
+            std::to_chars(text, text + sizeof text, value, std::chars_format::general, precision).ptr;
         return std::string(text, end);
       };
       result.certificate = "every root of Delta4 and a5 in " + general(result.lower_height_m, 7) + " m to " +
-                           general(result.upper_height_m, 7) + " m isolated on " + std::to_string(segments.size()) +
+                           general(result.upper_height_m, 7) + " m isolated on " +
+                           std::to_string(segments.size()) +
                            " segments (Descartes' rule on the Bernstein basis); rho(H) by its quadratic "
                            "interpolant per segment, relative error <= " +
                            general(result.density_interpolation_bound, 2);
@@ -845,7 +875,8 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, co
     }
   }
   if (!result.height_m) {
-    const std::string range = FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
+    const std::string range =
+        FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
     if (all_stable) {
       result.reason = "stable at every height from " + range;
     } else if (all_unstable) {

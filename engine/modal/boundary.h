@@ -50,10 +50,10 @@ struct BoundaryOptions {
 
 /// What crosses the imaginary axis.
 enum class CrossingKind {
-  kHopf,          ///< a complex pair ±iω (Δ₄ = 0 with ω² > 0)
-  kReal,          ///< a real root through 0 (a₅ = 0)
-  kDiscontinuity, ///< stability changes across the jump of the table at its last row (no root)
-  kSigma,         ///< a sign change of σ found by BoundaryMethod::kSampled (not classified)
+  kHopf,           ///< a complex pair ±iω (Δ₄ = 0 with ω² > 0)
+  kReal,           ///< a real root through 0 (a₅ = 0)
+  kDiscontinuity,  ///< stability changes across the jump of the table at its last row (no root)
+  kSigma,          ///< a sign change of σ found by BoundaryMethod::kSampled (not classified)
 };
 std::string_view ToString(CrossingKind kind);
 
@@ -105,14 +105,15 @@ struct BoundaryResult {
   std::string certificate;
   /// Relative bound on |ρ − ρ̂|/ρ over the range, ρ̂ the per-segment quadratic interpolant of ρ(H).
   double density_interpolation_bound = 0;
-  int segments = 0;            ///< table segments searched (kHurwitz)
-  int margin_evaluations = 0;  ///< full eigen-analyses spent
+  int segments = 0;                ///< table segments searched (kHurwitz)
+  int margin_evaluations = 0;      ///< full eigen-analyses spent
   int polynomial_evaluations = 0;  ///< characteristic polynomials spent (kHurwitz)
 };
 
 /// Finds H*(u0). Non-finite A anywhere (e.g. a density outside the ISA range) gives no boundary and
 /// a reason. Precondition: upper > lower.
-BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps, const BoundaryOptions& options = {});
+BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps,
+                            const BoundaryOptions& options = {});
 
 // --- The engine of the Hurwitz finder, on any family of 5×5 matrices (also for tests) ---
 

@@ -399,23 +399,32 @@ template <int L, int I, int M, int K>
 
 template <int L, int I, int M>
 void SweepFrom(Square h, double v[3]) {
-  [&]<int... steps>(std::integer_sequence<int, steps...>) {
-    (SweepStep<L, I, M, M + steps>(h, v), ...);
-  }(std::make_integer_sequence<int, I - M>{});
+  [&]<int... steps>(std::integer_sequence<int, steps...>) { (SweepStep<L, I, M, M + steps>(h, v), ...); }
+  (std::make_integer_sequence<int, I - M>{});
 }
 
 void Sweep(Square h, int l, int i, int m, double v[3]) {
   switch (100 * i + 10 * l + m) {
-    case 400: return SweepFrom<0, 4, 0>(h, v);
-    case 401: return SweepFrom<0, 4, 1>(h, v);
-    case 402: return SweepFrom<0, 4, 2>(h, v);
-    case 411: return SweepFrom<1, 4, 1>(h, v);
-    case 412: return SweepFrom<1, 4, 2>(h, v);
-    case 422: return SweepFrom<2, 4, 2>(h, v);
-    case 300: return SweepFrom<0, 3, 0>(h, v);
-    case 301: return SweepFrom<0, 3, 1>(h, v);
-    case 311: return SweepFrom<1, 3, 1>(h, v);
-    case 200: return SweepFrom<0, 2, 0>(h, v);
+    case 400:
+      return SweepFrom<0, 4, 0>(h, v);
+    case 401:
+      return SweepFrom<0, 4, 1>(h, v);
+    case 402:
+      return SweepFrom<0, 4, 2>(h, v);
+    case 411:
+      return SweepFrom<1, 4, 1>(h, v);
+    case 412:
+      return SweepFrom<1, 4, 2>(h, v);
+    case 422:
+      return SweepFrom<2, 4, 2>(h, v);
+    case 300:
+      return SweepFrom<0, 3, 0>(h, v);
+    case 301:
+      return SweepFrom<0, 3, 1>(h, v);
+    case 311:
+      return SweepFrom<1, 3, 1>(h, v);
+    case 200:
+      return SweepFrom<0, 2, 0>(h, v);
   }
   GESWEEP_DEMAND(false && "a double-shift sweep needs a block of at least 3 rows");
 }
@@ -510,7 +519,8 @@ void FrancisInPlace(Square h, int max_iterations, FrancisResult& result) {
       for (;; --m) {
         const double inverse_s0 = 1.0 / (std::abs(h[m][m] - rt2r) + std::abs(rt2i) + std::abs(h[m + 1][m]));
         const double h21s = h[m + 1][m] * inverse_s0;
-        v[0] = h21s * h[m][m + 1] + (h[m][m] - rt1r) * ((h[m][m] - rt2r) * inverse_s0) - rt1i * (rt2i * inverse_s0);
+        v[0] = h21s * h[m][m + 1] + (h[m][m] - rt1r) * ((h[m][m] - rt2r) * inverse_s0) -
+               rt1i * (rt2i * inverse_s0);
         v[1] = h21s * (h[m][m] + h[m + 1][m + 1] - rt1r - rt2r);
         v[2] = h21s * h[m + 2][m + 1];
         const double inverse = 1.0 / (std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2]));
@@ -519,7 +529,8 @@ void FrancisInPlace(Square h, int max_iterations, FrancisResult& result) {
         v[2] *= inverse;
         if (m == l) break;
         const double h00 = std::abs(h[m][m - 1]) * (std::abs(v[1]) + std::abs(v[2]));
-        const double h01 = std::abs(v[0]) * (std::abs(h[m - 1][m - 1]) + std::abs(h[m][m]) + std::abs(h[m + 1][m + 1]));
+        const double h01 =
+            std::abs(v[0]) * (std::abs(h[m - 1][m - 1]) + std::abs(h[m][m]) + std::abs(h[m + 1][m + 1]));
         if (h00 <= kUlp * h01) break;
       }
       // The double-shift sweep on rows and columns l…i, from row m.
@@ -532,7 +543,8 @@ void FrancisInPlace(Square h, int max_iterations, FrancisResult& result) {
     if (l == i) {
       result.values[static_cast<std::size_t>(i)] = {h[i][i], 0.0};
     } else {
-      StandardisedPair(h[i - 1][i - 1], h[i - 1][i], h[i][i - 1], h[i][i], result.values[static_cast<std::size_t>(i - 1)],
+      StandardisedPair(h[i - 1][i - 1], h[i - 1][i], h[i][i - 1], h[i][i],
+                       result.values[static_cast<std::size_t>(i - 1)],
                        result.values[static_cast<std::size_t>(i)]);
     }
     kdefl = 0;

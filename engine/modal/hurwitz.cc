@@ -33,8 +33,9 @@ CharacteristicCoefficients Equation1Polynomial(const Matrix5d& A) {
          a00 * a14 - a24 * a43;
   a[4] = a00 * (a14 * a22 - a12 * a24 + a24 * a43) + a03 * (a11 * a20 - a10 * a21) +
          a04 * (a12 * a20 - a10 * a22 - a20 * a43) + a43 * (a11 * a24 - a14 * a21);
-  a[5] = a43 * (a00 * (a14 * a21 - a11 * a24) + a01 * (a10 * a24 - a14 * a20) + a04 * (a11 * a20 - a10 * a21)) +
-         a03 * (a10 * a24 - a14 * a20);
+  a[5] =
+      a43 * (a00 * (a14 * a21 - a11 * a24) + a01 * (a10 * a24 - a14 * a20) + a04 * (a11 * a20 - a10 * a21)) +
+      a03 * (a10 * a24 - a14 * a20);
   return a;
 }
 

@@ -1,4 +1,3 @@
-#include "engine/common/errors.h"
 #include "engine/modal/modal_analysis.h"
 
 #include <Eigen/Eigenvalues>
@@ -8,6 +7,8 @@
 #include <limits>
 #include <numbers>
 #include <span>
+
+#include "engine/common/errors.h"
 
 // LAPACK (reference or OpenBLAS), Fortran calling convention.
 extern "C" void dgebal_(const char* job, const int* n, double* a, const int* lda, int* ilo, int* ihi,
@@ -78,8 +79,8 @@ std::atomic<std::uint64_t> fixed_size_fallbacks{0};
 
 std::uint64_t FixedSizeSolverFallbacks() { return fixed_size_fallbacks.load(std::memory_order_relaxed); }
 
-std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver, EigenvalueReport* report,
-                                                 int max_iterations) {
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver,
+                                                 EigenvalueReport* report, int max_iterations) {
   EigenvalueReport local;
   EigenvalueReport& r = report ? *report : local;
   r = EigenvalueReport{};
@@ -98,7 +99,8 @@ std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSo
       r.solver_fallback = true;
       return EigenSolverEigenvalues(A);
     }
-    case EigenvalueSolver::kEigen: return EigenSolverEigenvalues(A);
+    case EigenvalueSolver::kEigen:
+      return EigenSolverEigenvalues(A);
   }
   GESWEEP_DEMAND(false && "unknown EigenvalueSolver");
   return {};
@@ -106,10 +108,14 @@ std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSo
 
 std::string_view ToString(ModeClassification classification) {
   switch (classification) {
-    case ModeClassification::kStandard: return "standard";
-    case ModeClassification::kPhugoidSplit: return "phugoid_split";
-    case ModeClassification::kShortPeriodSplit: return "short_period_split";
-    case ModeClassification::kAllReal: return "all_real";
+    case ModeClassification::kStandard:
+      return "standard";
+    case ModeClassification::kPhugoidSplit:
+      return "phugoid_split";
+    case ModeClassification::kShortPeriodSplit:
+      return "short_period_split";
+    case ModeClassification::kAllReal:
+      return "all_real";
   }
   GESWEEP_UNREACHABLE();
 }

@@ -75,7 +75,8 @@ struct EigenvalueReport {
 
 /// The five eigenvalues of A (balanced first), in the solver's order. A must be finite.
 /// `max_iterations` bounds kFixedSize's sweeps per block (tests of the fallback set it low).
-std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSolver solver = EigenvalueSolver::kFixedSize,
+std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A,
+                                                 EigenvalueSolver solver = EigenvalueSolver::kFixedSize,
                                                  EigenvalueReport* report = nullptr,
                                                  int max_iterations = kFrancisMaxIterations);
 

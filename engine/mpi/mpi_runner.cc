@@ -28,9 +28,9 @@ namespace gesweep {
 namespace {
 
 // Message tags (docs/cluster.md, "MPI").
-constexpr int kTagRequest = 1;   // rank -> 0: int64[3] {batches wanted (0: I am done), runs done, runs failed}
-constexpr int kTagGrant = 2;     // 0 -> rank: int64[n] batch numbers (n = 0: no more)
-constexpr int kTagResult = 3;    // rank -> the owning node's writer: one filtered batch (PackBlock)
+constexpr int kTagRequest = 1;  // rank -> 0: int64[3] {batches wanted (0: I am done), runs done, runs failed}
+constexpr int kTagGrant = 2;    // 0 -> rank: int64[n] batch numbers (n = 0: no more)
+constexpr int kTagResult = 3;   // rank -> the owning node's writer: one filtered batch (PackBlock)
 constexpr int kTagFinished = 4;  // rank -> each writer: int64, the batches it sent that writer
 constexpr int kTagError = 5;     // rank -> 0: char[], why it cannot go on (stop handing out batches)
 
@@ -50,7 +50,8 @@ void CheckMpi(int code, const char* what) {
   char text[MPI_MAX_ERROR_STRING];
   int length = 0;
   MPI_Error_string(code, text, &length);
-  throw MpiError(std::string("MPI error in ") + what + ": " + std::string(text, static_cast<std::size_t>(length)));
+  throw MpiError(std::string("MPI error in ") + what + ": " +
+                 std::string(text, static_cast<std::size_t>(length)));
 }
 
 // MPI for the runner: initialised here when the caller has not (FUNNELED: only the main thread
@@ -69,8 +70,8 @@ void EnsureMpi() {
 
 struct Topology {
   int rank = 0, ranks = 1;
-  int node = 0, nodes = 1;  // node index: the order of the nodes' writers by world rank
-  bool writer = false;      // lowest rank of its node
+  int node = 0, nodes = 1;       // node index: the order of the nodes' writers by world rank
+  bool writer = false;           // lowest rank of its node
   std::vector<int> writer_rank;  // by node
   std::vector<int> node_of;      // by world rank
 };
@@ -159,8 +160,13 @@ std::vector<std::int64_t> PlanSignature(const SweepPlan& plan) {
   for (const auto& column : plan.schema().columns) doubles += column.doubles_per_run();
   std::int64_t fingerprint = 0;
   std::memcpy(&fingerprint, &plan.study().fingerprint, sizeof fingerprint);
-  return {fingerprint,      plan.design_runs(), plan.first_run(), plan.run_count(),
-          plan.chunk_runs(), plan.design().column_count(), static_cast<std::int64_t>(plan.schema().columns.size()),
+  return {fingerprint,
+          plan.design_runs(),
+          plan.first_run(),
+          plan.run_count(),
+          plan.chunk_runs(),
+          plan.design().column_count(),
+          static_cast<std::int64_t>(plan.schema().columns.size()),
           doubles};
 }
 
@@ -207,7 +213,8 @@ int AgreeOnError(int code, const std::string& text, const Topology& t, std::stri
 
 void PackBlock(const ResultBlock& block, std::vector<char>& out) {
   std::size_t bytes = 5 * 8;
-  for (int c = 0; c < block.chunk_count; ++c) bytes += 4 * 8 + block.chunks[static_cast<std::size_t>(c)].bytes.size();
+  for (int c = 0; c < block.chunk_count; ++c)
+    bytes += 4 * 8 + block.chunks[static_cast<std::size_t>(c)].bytes.size();
   out.resize(bytes);
   char* at = out.data();
   auto put = [&](std::int64_t value) {
@@ -256,7 +263,8 @@ void UnpackBlock(const SweepPlan& plan, const archive::ArchiveLayout& layout, co
   block.runs_failed = static_cast<int>(get());
   get();
   block.chunk_count = static_cast<int>(count);
-  if (block.chunks.size() < static_cast<std::size_t>(count)) block.chunks.resize(static_cast<std::size_t>(count));
+  if (block.chunks.size() < static_cast<std::size_t>(count))
+    block.chunks.resize(static_cast<std::size_t>(count));
   std::vector<std::int64_t> sizes(static_cast<std::size_t>(count));
   for (std::int64_t c = 0; c < count; ++c) {
     StoredChunk& chunk = block.chunks[static_cast<std::size_t>(c)];
@@ -342,7 +350,8 @@ class TransportSink final : public ResultSink {
 // Rank 0's book of the batches still to hand out, one queue per node.
 class Dispatcher {
  public:
-  Dispatcher(std::vector<std::deque<std::int64_t>> pending, int ranks) : pending_(std::move(pending)), ranks_(ranks) {
+  Dispatcher(std::vector<std::deque<std::int64_t>> pending, int ranks)
+      : pending_(std::move(pending)), ranks_(ranks) {
     for (const auto& queue : pending_) remaining_ += static_cast<std::int64_t>(queue.size());
   }
   // Up to `want` batches for a rank of `node`: its node's first, then (once they are gone) from the
@@ -396,7 +405,8 @@ std::string ErrorText(const std::exception_ptr& error) {
 std::filesystem::path NodeArchivePath(const std::filesystem::path& output, int node, int nodes) {
   std::filesystem::path stem = output;
   if (stem.extension() == ".h5") stem.replace_extension();
-  return std::filesystem::path(stem.string() + ".node" + std::to_string(node) + "-of-" + std::to_string(nodes) + ".h5");
+  return std::filesystem::path(stem.string() + ".node" + std::to_string(node) + "-of-" +
+                               std::to_string(nodes) + ".h5");
 }
 
 std::int64_t BatchMessageBytes(const SweepPlan& plan, int rows) {
@@ -433,7 +443,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
   report.node = t.node;
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   const int prefetch = options.prefetch_batches > 0 ? options.prefetch_batches : threads;
-  const std::int64_t target = 2 * threads + prefetch;  // batches a rank holds: the pipeline's tokens + prefetch
+  const std::int64_t target =
+      2 * threads + prefetch;  // batches a rank holds: the pipeline's tokens + prefetch
 
   // 1. Every rank must have built the same plan (a study file that differs between nodes would
   //    otherwise mix two studies in one archive).
@@ -441,13 +452,16 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
     const std::vector<std::int64_t> mine = PlanSignature(plan);
     std::vector<std::int64_t> lowest(mine.size()), highest(mine.size());
     const int n = static_cast<int>(mine.size());
-    CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD), "MPI_Allreduce");
-    CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+    CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD),
+             "MPI_Allreduce");
+    CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD),
+             "MPI_Allreduce");
     if (lowest != highest) {
       report.error_code = 2;
-      report.error = "the " + std::to_string(t.ranks) +
-                     " MPI ranks did not build the same sweep (study fingerprint, design, shard or batch size "
-                     "differ): every node must see the same study and aircraft files";
+      report.error =
+          "the " + std::to_string(t.ranks) +
+          " MPI ranks did not build the same sweep (study fingerprint, design, shard or batch size "
+          "differ): every node must see the same study and aircraft files";
       return report;
     }
   }
@@ -479,8 +493,9 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       if (directory.empty()) directory = ".";
       std::filesystem::path stem = options.output.filename();
       if (stem.extension() == ".h5") stem.replace_extension();
-      const std::regex pattern(std::regex_replace(stem.string(), std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
-                               R"(\.node\d+-of-(\d+)\.h5)");
+      const std::regex pattern(
+          std::regex_replace(stem.string(), std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
+          R"(\.node\d+-of-(\d+)\.h5)");
       if (std::filesystem::is_directory(directory, ec)) {
         for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
           std::smatch match;
@@ -556,7 +571,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
                          MPI_INT64_T, 0, MPI_COMM_WORLD),
              "MPI_Gatherv");
     std::int64_t complete_runs = writes ? opened.runs_complete : 0, all_complete = 0;
-    CheckMpi(MPI_Allreduce(&complete_runs, &all_complete, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    CheckMpi(MPI_Allreduce(&complete_runs, &all_complete, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD),
+             "MPI_Allreduce");
     report.runs_complete_at_start = all_complete;
     report.runs_to_do = plan.run_count() - all_complete;
     shown.runs_skipped.store(all_complete);
@@ -594,20 +610,21 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       compute_done.store(true);
     });
 
-    std::int64_t granted = 0;          // batches this rank was given
-    bool request_pending = false;      // a request to rank 0 awaits its grant (ranks > 0)
-    bool ended = false;                // this rank got its last (empty) grant
-    bool source_closed = false;        // -1 pushed to the pipeline
-    int ranks_ended = 0;               // rank 0: other ranks that got their last grant
+    std::int64_t granted = 0;      // batches this rank was given
+    bool request_pending = false;  // a request to rank 0 awaits its grant (ranks > 0)
+    bool ended = false;            // this rank got its last (empty) grant
+    bool source_closed = false;    // -1 pushed to the pipeline
+    int ranks_ended = 0;           // rank 0: other ranks that got their last grant
     std::vector<std::int64_t> sent_to(static_cast<std::size_t>(t.nodes), 0);
     bool finished_sent = false;
     std::vector<std::int64_t> received_from(static_cast<std::size_t>(t.ranks), 0);
     std::vector<std::int64_t> expected_from(static_cast<std::size_t>(t.ranks), -1);
-    std::vector<std::int64_t> done_of(static_cast<std::size_t>(t.ranks), 0), failed_of(static_cast<std::size_t>(t.ranks), 0);
+    std::vector<std::int64_t> done_of(static_cast<std::size_t>(t.ranks), 0),
+        failed_of(static_cast<std::size_t>(t.ranks), 0);
     std::list<std::unique_ptr<TransportSink::Outgoing>> in_flight;
     std::vector<char> buffer;
     ResultBlock received;
-    std::string fatal;                 // this rank's reason to stop (an I/O error of its writer, a bug)
+    std::string fatal;  // this rank's reason to stop (an I/O error of its writer, a bug)
     bool fatal_reported = false;
     const BatchRange my_range = ranges[static_cast<std::size_t>(t.node)];
     auto fail = [&](const std::string& why) {
@@ -627,8 +644,9 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
         if (t.rank == 0) {
           dispatcher.Stop();
         } else {
-          CheckMpi(MPI_Send(fatal.data(), static_cast<int>(fatal.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD),
-                   "MPI_Send error");
+          CheckMpi(
+              MPI_Send(fatal.data(), static_cast<int>(fatal.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD),
+              "MPI_Send error");
         }
       }
       if (t.rank == 0 && Cancelled(options) && !dispatcher.stopped()) {
@@ -652,8 +670,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
           if (ended) close_source();
         }
       } else if (!ended && !request_pending && (outstanding < target || compute_done.load())) {
-        const std::int64_t request[3] = {compute_done.load() ? 0 : target - outstanding, computed.runs_done.load(),
-                                         computed.runs_failed.load()};
+        const std::int64_t request[3] = {compute_done.load() ? 0 : target - outstanding,
+                                         computed.runs_done.load(), computed.runs_failed.load()};
         CheckMpi(MPI_Send(request, 3, MPI_INT64_T, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send request");
         request_pending = true;
         progressed = true;
@@ -666,8 +684,9 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
           int count = 0;
           MPI_Get_count(&status, MPI_INT64_T, &count);
           std::vector<std::int64_t> grant(static_cast<std::size_t>(count));
-          CheckMpi(MPI_Recv(grant.data(), count, MPI_INT64_T, 0, kTagGrant, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-                   "MPI_Recv grant");
+          CheckMpi(
+              MPI_Recv(grant.data(), count, MPI_INT64_T, 0, kTagGrant, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+              "MPI_Recv grant");
           request_pending = false;
           for (const std::int64_t batch : grant) source.Push(batch);
           granted += count;
@@ -681,7 +700,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
 
       // Rank 0: requests of the others, and their errors.
       if (t.rank == 0) {
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe request");
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status),
+                 "MPI_Iprobe request");
         if (ready) {
           std::int64_t request[3] = {0, 0, 0};
           const int from = status.MPI_SOURCE;
@@ -691,7 +711,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
           failed_of[static_cast<std::size_t>(from)] = request[2];
           const std::vector<std::int64_t> grant =
               dispatcher.Grant(t.node_of[static_cast<std::size_t>(from)], request[0]);
-          CheckMpi(MPI_Send(grant.data(), static_cast<int>(grant.size()), MPI_INT64_T, from, kTagGrant, MPI_COMM_WORLD),
+          CheckMpi(MPI_Send(grant.data(), static_cast<int>(grant.size()), MPI_INT64_T, from, kTagGrant,
+                            MPI_COMM_WORLD),
                    "MPI_Send grant");
           if (grant.empty()) ++ranks_ended;
           progressed = true;
@@ -721,8 +742,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       std::unique_ptr<TransportSink::Outgoing> message;
       while (sink.TryTake(message)) {
         const int to = t.writer_rank[static_cast<std::size_t>(message->node)];
-        CheckMpi(MPI_Isend(message->bytes.data(), static_cast<int>(message->bytes.size()), MPI_BYTE, to, kTagResult,
-                           MPI_COMM_WORLD, &message->request),
+        CheckMpi(MPI_Isend(message->bytes.data(), static_cast<int>(message->bytes.size()), MPI_BYTE, to,
+                           kTagResult, MPI_COMM_WORLD, &message->request),
                  "MPI_Isend result");
         ++sent_to[static_cast<std::size_t>(message->node)];
         in_flight.push_back(std::move(message));
@@ -742,7 +763,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
         for (int k = 0; k < t.nodes; ++k) {
           const int to = t.writer_rank[static_cast<std::size_t>(k)];
           if (ranges[static_cast<std::size_t>(k)].count == 0 || to == t.rank) continue;
-          CheckMpi(MPI_Send(&sent_to[static_cast<std::size_t>(k)], 1, MPI_INT64_T, to, kTagFinished, MPI_COMM_WORLD),
+          CheckMpi(MPI_Send(&sent_to[static_cast<std::size_t>(k)], 1, MPI_INT64_T, to, kTagFinished,
+                            MPI_COMM_WORLD),
                    "MPI_Send finished");
         }
         finished_sent = true;
@@ -752,14 +774,16 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       // The node's writer: batches from the other ranks.
       bool writer_complete = !writes;
       if (writes) {
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe result");
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status),
+                 "MPI_Iprobe result");
         if (ready) {
           int bytes = 0;
           MPI_Get_count(&status, MPI_BYTE, &bytes);
           buffer.resize(static_cast<std::size_t>(bytes));
           const int from = status.MPI_SOURCE;
-          CheckMpi(MPI_Recv(buffer.data(), bytes, MPI_BYTE, from, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-                   "MPI_Recv result");
+          CheckMpi(
+              MPI_Recv(buffer.data(), bytes, MPI_BYTE, from, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+              "MPI_Recv result");
           ++received_from[static_cast<std::size_t>(from)];
           if (fatal.empty()) {
             try {
@@ -772,10 +796,12 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
           }
           progressed = true;
         }
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagFinished, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe finished");
+        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagFinished, MPI_COMM_WORLD, &ready, &status),
+                 "MPI_Iprobe finished");
         if (ready) {
           std::int64_t count = 0;
-          CheckMpi(MPI_Recv(&count, 1, MPI_INT64_T, status.MPI_SOURCE, kTagFinished, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+          CheckMpi(MPI_Recv(&count, 1, MPI_INT64_T, status.MPI_SOURCE, kTagFinished, MPI_COMM_WORLD,
+                            MPI_STATUS_IGNORE),
                    "MPI_Recv finished");
           expected_from[static_cast<std::size_t>(status.MPI_SOURCE)] = count;
           progressed = true;
@@ -811,12 +837,14 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
     }
     writer.reset();
     std::int64_t counts_all[3] = {0, 0, 0};
-    CheckMpi(MPI_Allreduce(counts_mine, counts_all, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+    CheckMpi(MPI_Allreduce(counts_mine, counts_all, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD),
+             "MPI_Allreduce");
     report.runs_ok = counts_all[0];
     report.runs_failed = counts_all[1];
     report.runs_pending = counts_all[2];
     std::int64_t computed_mine = report.runs_computed;
-    CheckMpi(MPI_Gather(&computed_mine, 1, MPI_INT64_T, report.runs_per_rank.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD),
+    CheckMpi(MPI_Gather(&computed_mine, 1, MPI_INT64_T, report.runs_per_rank.data(), 1, MPI_INT64_T, 0,
+                        MPI_COMM_WORLD),
              "MPI_Gather");
     int cancelled = report.cancelled ? 1 : 0, any_cancelled = 0;
     CheckMpi(MPI_Allreduce(&cancelled, &any_cancelled, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
@@ -834,8 +862,9 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       try {
         std::vector<std::filesystem::path> shards(report.node_archives.begin(), report.node_archives.end());
         MergeScope scope{plan.first_run(), plan.run_count(), plan.shard().index, plan.shard().count};
-        report.merge = MergeArchives(shards, options.output, /*force=*/true, options.command_line + " (merge of the node shards)",
-                                     options.merge, scope);
+        report.merge =
+            MergeArchives(shards, options.output, /*force=*/true,
+                          options.command_line + " (merge of the node shards)", options.merge, scope);
         merged = 1;
       } catch (const InputError& e) {
         code = 2;

@@ -65,14 +65,14 @@ using MpiStartCallback = std::function<void(const MpiSweepReport&)>;
 /// What an MPI sweep did. Every field marked "all ranks" is the same on every rank.
 struct MpiSweepReport {
   int rank = 0, ranks = 1;
-  int nodes = 1;        ///< all ranks: node shards written (one writer each)
-  int node = 0;         ///< this rank's node
-  bool writer = false;  ///< this rank wrote its node's shard
-  std::vector<std::string> node_archives;     ///< all ranks: the node shards, by node
-  std::int64_t runs_computed = 0;             ///< by this rank
-  std::vector<std::int64_t> runs_per_rank;    ///< rank 0: runs computed by each rank
-  std::int64_t runs_complete_at_start = 0;    ///< all ranks: already complete (resume)
-  std::int64_t runs_to_do = 0;                ///< all ranks: pending at the start
+  int nodes = 1;                            ///< all ranks: node shards written (one writer each)
+  int node = 0;                             ///< this rank's node
+  bool writer = false;                      ///< this rank wrote its node's shard
+  std::vector<std::string> node_archives;   ///< all ranks: the node shards, by node
+  std::int64_t runs_computed = 0;           ///< by this rank
+  std::vector<std::int64_t> runs_per_rank;  ///< rank 0: runs computed by each rank
+  std::int64_t runs_complete_at_start = 0;  ///< all ranks: already complete (resume)
+  std::int64_t runs_to_do = 0;              ///< all ranks: pending at the start
   /// All ranks: runs by status over the node shards after the sweep.
   std::int64_t runs_ok = 0, runs_failed = 0, runs_pending = 0;
   bool cancelled = false;  ///< all ranks: stopped by `cancel` with runs still pending
@@ -93,8 +93,8 @@ struct MpiSweepReport {
 /// (rank 0) is kept up to date while it runs: runs to do, and runs done over all ranks (as the
 /// ranks last reported them). Throws only for what no rank can recover from (an MPI error, a bug);
 /// the caller then prints and calls AbortMpi.
-MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, SweepProgress* progress = nullptr,
-                           const MpiStartCallback& on_started = nullptr);
+MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options,
+                           SweepProgress* progress = nullptr, const MpiStartCallback& on_started = nullptr);
 
 /// Ends every rank of the job (MPI_Abort) after the caller printed why: for an exception out of
 /// RunStudyMpi, which may leave other ranks waiting.

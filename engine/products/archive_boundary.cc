@@ -255,10 +255,11 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
                     "), the highest sign change of results/modes/stability_margin_per_s along "
                     "design/height_m with unstable below and stable above, refined on the run's continuous "
                     "model (docs/report.md)");
-    g.Attribute("method",
-                "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
-                "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
-                "parameters, inside the bracket");
+    g.Attribute(
+        "method",
+        "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
+        "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
+        "parameters, inside the bracket");
     g.Attribute("keys", boundary.key_names);
     g.Attribute("source_dataset", kMarginPath);
     g.Attribute("along", kHeightPath);
@@ -297,18 +298,24 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
       heights.push_back(static_cast<std::int32_t>(p.heights));
       reasons.push_back(p.reason);
     }
-    g.Numbers("height_m", height, "m",
-              "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none");
-    g.Numbers("height_over_span", ratio, "1", "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none");
+    g.Numbers(
+        "height_m", height, "m",
+        "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none");
+    g.Numbers("height_over_span", ratio, "1",
+              "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none");
     ProductDataset found_dataset = g.Numbers("found", found, "1", "1 when a boundary was found");
     found_dataset.Attribute("levels", std::vector<std::string>{"false", "true"});
     // The archive's convention for integer codes (schemas/archive.md): never stored here, every
     // point is 0 or 1.
     found_dataset.Attribute("fill", std::int64_t{-1});
-    g.Numbers("grid_lower_height_m", lower, "m", "Grid height just below the sign change (sigma >= 0); NaN when none");
-    g.Numbers("grid_upper_height_m", upper, "m", "Grid height just above the sign change (sigma < 0); NaN when none");
-    g.Numbers("bracket_width_m", width, "m", "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
-    g.Numbers("grid_crossings", crossings, "1", "Sign changes of sigma between neighbouring grid heights of this point");
+    g.Numbers("grid_lower_height_m", lower, "m",
+              "Grid height just below the sign change (sigma >= 0); NaN when none");
+    g.Numbers("grid_upper_height_m", upper, "m",
+              "Grid height just above the sign change (sigma < 0); NaN when none");
+    g.Numbers("bracket_width_m", width, "m",
+              "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none");
+    g.Numbers("grid_crossings", crossings, "1",
+              "Sign changes of sigma between neighbouring grid heights of this point");
     g.Numbers("heights", heights, "1", "Grid heights with a finite sigma (complete ok runs) of this point");
     g.Strings("reason", reasons, "Why there is no boundary (empty when there is one)");
   });

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/modal/boundary.h"
 #include "engine/analyses/analysis.h"
+#include "engine/modal/boundary.h"
 
 namespace gesweep {
 

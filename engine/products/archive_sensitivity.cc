@@ -39,8 +39,8 @@ std::string Join(const std::vector<std::string>& names) {
 
 // An integer attribute of a group that the layout needs: an InputError naming it when absent, since
 // an archive without it was not made by a sweep of this kind (or by an older engine).
-std::int64_t RequireInteger(const ArchiveReader& archive, const std::string& group_name, const std::string& name,
-                            const std::string& source) {
+std::int64_t RequireInteger(const ArchiveReader& archive, const std::string& group_name,
+                            const std::string& name, const std::string& source) {
   const auto value = archive.IntegerAttributeOf(group_name, name);
   if (!value) {
     throw InputError(
@@ -370,7 +370,8 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
     result.message = result.sobol.message;
   } else {
     const std::int64_t trajectories = RequireInteger(archive, archive::kDesignGroup, "trajectories", source);
-    const std::int64_t trajectory_rows = RequireInteger(archive, archive::kDesignGroup, "trajectory_rows", source);
+    const std::int64_t trajectory_rows =
+        RequireInteger(archive, archive::kDesignGroup, "trajectory_rows", source);
     result.morris_levels = static_cast<int>(RequireInteger(archive, archive::kDesignGroup, "levels", source));
     result.morris_delta = archive.DoubleAttributeOf(archive::kDesignGroup, "delta").value_or(std::nan(""));
     const auto D = static_cast<std::int64_t>(result.parameters.size());

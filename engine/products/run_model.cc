@@ -1,11 +1,11 @@
 #include "engine/products/run_model.h"
 
+#include "engine/analyses/analysis_adapters.h"
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/column_reader.h"
 #include "engine/common/errors.h"
 #include "engine/common/toml_reader.h"
-#include "engine/analyses/analysis_adapters.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
-#include "engine/dynamics/longitudinal_model.h"
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/parameter_catalog.h"
+#include "engine/dynamics/longitudinal_model.h"
 
 namespace gesweep {
 

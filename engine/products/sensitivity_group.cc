@@ -24,7 +24,8 @@ constexpr const char* kMorrisEstimator =
     "(Campolongo et al. 2007), sigma = sample standard deviation (n - 1)";
 
 void WriteDoubles(ProductGroup& group, const std::string& name, const std::vector<std::size_t>& dims,
-                  const std::vector<double>& values, const std::string& units, const std::string& description) {
+                  const std::vector<double>& values, const std::string& units,
+                  const std::string& description) {
   group.Numbers(name, values, units, description, dims);
 }
 
@@ -40,8 +41,9 @@ void WriteVector(ProductGroup& group, const std::string& name, const std::vector
 }
 
 // D × 2 (lower, upper) intervals.
-void WriteIntervals(ProductGroup& group, const std::string& name, const std::vector<ConfidenceInterval>& intervals,
-                    const std::string& units, const std::string& description) {
+void WriteIntervals(ProductGroup& group, const std::string& name,
+                    const std::vector<ConfidenceInterval>& intervals, const std::string& units,
+                    const std::string& description) {
   std::vector<double> values;
   for (const auto& ci : intervals) {
     values.push_back(ci.lower);
@@ -115,9 +117,9 @@ void WriteGroup(ProductGroup& g, const ArchiveSensitivity& result, const std::st
       result.method == SensitivityMethod::kSobol ? result.sobol.bootstrap : result.morris.bootstrap;
   const std::string level = ShortNumber(100.0 * bootstrap.confidence_level) + " %";
   g.Attribute("description",
-                       std::string(result.method == SensitivityMethod::kSobol ? "Sobol' indices"
-                                                                              : "Morris elementary effects") +
-                           " of " + result.output.path + " over the swept parameters (docs/sensitivity.md)");
+              std::string(result.method == SensitivityMethod::kSobol ? "Sobol' indices"
+                                                                     : "Morris elementary effects") +
+                  " of " + result.output.path + " over the swept parameters (docs/sensitivity.md)");
   g.Attribute("method", std::string(ToString(result.method)));
   g.Attribute("output", result.output.name);
   g.Attribute("output_path", result.output.path);

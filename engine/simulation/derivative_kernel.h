@@ -56,8 +56,8 @@ inline Equation1Entries EntriesFromDerivatives(const DimensionalDerivatives& d, 
 
 /// ẋ = A x + B δe of Eq. (1) for x = [Δu, Δw, q, Δθ, ΔH] (SI), elevator δe in rad, kinematic
 /// reference speed u0 in m/s. Equal to AssembleStateMatrix(d, u0)·x + AssembleInputMatrix(d)·δe.
-GESWEEP_ALWAYS_INLINE void Equation1Derivative(const Equation1Entries& e, double reference_speed_mps, const double* x,
-                                double elevator_rad, double* dxdt) {
+GESWEEP_ALWAYS_INLINE void Equation1Derivative(const Equation1Entries& e, double reference_speed_mps,
+                                               const double* x, double elevator_rad, double* dxdt) {
   const double du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
   dxdt[0] = e.x_u * du + e.x_w * dw - kGravity_mps2 * dtheta + e.x_h * dh + e.x_de * elevator_rad;
   dxdt[1] = e.z_u * du + e.z_w * dw + reference_speed_mps * q + e.z_h * dh + e.z_de * elevator_rad;
@@ -72,9 +72,9 @@ GESWEEP_ALWAYS_INLINE void Equation1Derivative(const Equation1Entries& e, double
 /// relative in the band (the next term), so the result is IsaDensity to rounding (tested to 1e-14).
 class DensityPolynomial {
  public:
-  static constexpr double kPolynomialLow_m = -100.0;   ///< band of H over which the polynomial is used
-  static constexpr double kPolynomialHigh_m = 600.0;   ///< (covers the landing from 500 m)
-  static constexpr int kDegree = 6;  ///< At() writes the degree-6 Estrin scheme out
+  static constexpr double kPolynomialLow_m = -100.0;  ///< band of H over which the polynomial is used
+  static constexpr double kPolynomialHigh_m = 600.0;  ///< (covers the landing from 500 m)
+  static constexpr int kDegree = 6;                   ///< At() writes the degree-6 Estrin scheme out
   static_assert(kDegree == 6);
 
   /// field_elevation_m: ISA altitude of the ground, m (within the troposphere).
@@ -121,8 +121,8 @@ class LinearDerivativeTable {
   /// path: the speed and density factors come out of the sums, so that the products with the
   /// state run while ρ(H) is being computed, and row q is written q̇ = ΣM·x + Mẇ·ẇ, which is row q
   /// of Eq. (1) (Mẇ·(Zu Δu + Zw Δw + u0 q + Zh ΔH + Zδe δe) = Mẇ·ẇ). segment_hint as above.
-  GESWEEP_ALWAYS_INLINE void Equation1(double start_height_m, double reference_speed_mps, const double* x, double elevator_rad,
-                 double* dxdt, int& segment_hint) const {
+  GESWEEP_ALWAYS_INLINE void Equation1(double start_height_m, double reference_speed_mps, const double* x,
+                                       double elevator_rad, double* dxdt, int& segment_hint) const {
     const double du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
     const double height_m = start_height_m + dh;
     const double speed_mps = reference_speed_mps + du;
@@ -154,7 +154,23 @@ class LinearDerivativeTable {
   int segment_count() const { return static_cast<int>(segments_.size()); }
 
  private:
-  enum Reduced : int { kXu, kXw, kXh, kXde, kZu, kZw, kZh, kZde, kMu, kMw, kMq, kMh, kMde, kMwDot, kReducedCount };
+  enum Reduced : int {
+    kXu,
+    kXw,
+    kXh,
+    kXde,
+    kZu,
+    kZw,
+    kZh,
+    kZde,
+    kMu,
+    kMw,
+    kMq,
+    kMh,
+    kMde,
+    kMwDot,
+    kReducedCount
+  };
   /// One segment (low, high]: R(H) = value + slope·(H − reference).
   struct Segment {
     std::array<double, kReducedCount> value{};

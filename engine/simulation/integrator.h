@@ -63,14 +63,13 @@
 /// No heap allocation happens inside Integrate (states are std::array; the problem decides for its
 /// own hooks).
 
+#include <Eigen/Core>
 #include <array>
 #include <atomic>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
-
-#include <Eigen/Core>
 
 #include "engine/common/describe.h"
 #include "engine/common/enum_names.h"
@@ -136,11 +135,19 @@ struct IntegratorOptions {
   /// are set by the caller. `limits` names the ranges of the analysis the options belong to.
   template <class V>
   void Describe(V& v, const IntegratorLimitNames& limits = {}) {
-    v(Field("integrator", &kind).Doc("Integration method: rk4 (fixed step, the paper's) or dopri5 (adaptive)"));
+    v(Field("integrator", &kind)
+          .Doc("Integration method: rk4 (fixed step, the paper's) or dopri5 (adaptive)"));
     v(Field("step_s", &step_s).Unit("s").Limit(limits.step_s).Doc("RK4 step (dopri5: first trial step), s"));
-    v(Field("relative_tolerance", &relative_tolerance).Limit("relative_tolerance").Doc("dopri5 relative tolerance"));
-    v(Field("absolute_tolerance", &absolute_tolerance).Limit("absolute_tolerance").Doc("dopri5 absolute tolerance"));
-    v(Field("max_step_s", &max_step_s).Unit("s").Limit(limits.max_step_s).Doc("dopri5 largest step, s; 0: no limit"));
+    v(Field("relative_tolerance", &relative_tolerance)
+          .Limit("relative_tolerance")
+          .Doc("dopri5 relative tolerance"));
+    v(Field("absolute_tolerance", &absolute_tolerance)
+          .Limit("absolute_tolerance")
+          .Doc("dopri5 absolute tolerance"));
+    v(Field("max_step_s", &max_step_s)
+          .Unit("s")
+          .Limit(limits.max_step_s)
+          .Doc("dopri5 largest step, s; 0: no limit"));
     v(Field("honour_breakpoints", &honour_breakpoints)
           .Doc("true: no step straddles an input jump; false: steps may (the paper's plain fixed-step RK4)"));
   }
@@ -158,11 +165,11 @@ enum class EventAction {
 
 /// How a run ended.
 enum class IntegrationStatus {
-  kReachedEnd,          ///< the end time was reached
-  kStoppedByEvent,      ///< an event returned kStop
-  kNonFinite,           ///< a state or derivative became NaN or ±∞ (the final state is the last finite one)
-  kStepSizeUnderflow,   ///< dopri5 could not meet its tolerance with a representable step
-  kCancelled,           ///< options.cancel became true; the final state is where the run stopped
+  kReachedEnd,         ///< the end time was reached
+  kStoppedByEvent,     ///< an event returned kStop
+  kNonFinite,          ///< a state or derivative became NaN or ±∞ (the final state is the last finite one)
+  kStepSizeUnderflow,  ///< dopri5 could not meet its tolerance with a representable step
+  kCancelled,          ///< options.cancel became true; the final state is where the run stopped
 };
 
 /// "reached_end" / "stopped_by_event" / "non_finite" / "step_size_underflow" / "cancelled".
@@ -182,14 +189,14 @@ struct EnumNames<IntegrationStatus> {
 template <int N>
 struct IntegrationResult {
   IntegrationStatus status = IntegrationStatus::kReachedEnd;
-  double end_time_s = 0.0;        ///< time of the final state
-  OdeState<N> final_state{};      ///< state at end_time_s
-  int final_segment = 0;          ///< segment of the final state
-  int stopping_event = -1;        ///< index of the event that stopped the run, else -1
-  long accepted_steps = 0;        ///< steps accepted (a step cut short by an event counts once)
-  long rejected_steps = 0;        ///< dopri5 trial steps rejected by the error control
-  long rhs_calls = 0;             ///< Derivative calls
-  long events_fired = 0;          ///< OnEvent calls
+  double end_time_s = 0.0;    ///< time of the final state
+  OdeState<N> final_state{};  ///< state at end_time_s
+  int final_segment = 0;      ///< segment of the final state
+  int stopping_event = -1;    ///< index of the event that stopped the run, else -1
+  long accepted_steps = 0;    ///< steps accepted (a step cut short by an event counts once)
+  long rejected_steps = 0;    ///< dopri5 trial steps rejected by the error control
+  long rhs_calls = 0;         ///< Derivative calls
+  long events_fired = 0;      ///< OnEvent calls
 };
 
 /// A problem that Integrate can solve; see the top of this file for the meaning of each hook.

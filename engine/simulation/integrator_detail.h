@@ -133,8 +133,8 @@ class Dopri5Method {
  public:
   using State = OdeState<N>;
   using Stepper = boost::numeric::odeint::runge_kutta_dopri5<State>;
-  using ErrorChecker = boost::numeric::odeint::default_error_checker<
-      double, typename Stepper::algebra_type, typename Stepper::operations_type>;
+  using ErrorChecker = boost::numeric::odeint::default_error_checker<double, typename Stepper::algebra_type,
+                                                                     typename Stepper::operations_type>;
   using StepAdjuster = boost::numeric::odeint::default_step_adjuster<double, double>;
   using Controlled = boost::numeric::odeint::controlled_runge_kutta<Stepper, ErrorChecker, StepAdjuster>;
 
@@ -142,7 +142,8 @@ class Dopri5Method {
       : controlled_(ErrorChecker(options.absolute_tolerance, options.relative_tolerance, 1.0, 1.0),
                     StepAdjuster(options.max_step_s)),
         max_step_s_(options.max_step_s),
-        trial_step_s_(options.max_step_s > 0 ? std::min(options.step_s, options.max_step_s) : options.step_s) {}
+        trial_step_s_(options.max_step_s > 0 ? std::min(options.step_s, options.max_step_s)
+                                             : options.step_s) {}
 
   template <class Rhs>
   StepOutcome Advance(Rhs& rhs, double t, const State& x, const State& f, double t_limit, double& t_new,
@@ -285,7 +286,8 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
 
   const std::atomic<bool>* cancel = options.cancel;
   while (t < end_time_s) {
-    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return finish(IntegrationStatus::kCancelled);
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed))
+      return finish(IntegrationStatus::kCancelled);
     double t_limit = end_time_s;
     if (honour && next_breakpoint < breakpoint_count && breakpoints_s[next_breakpoint] < end_time_s) {
       t_limit = breakpoints_s[next_breakpoint];
@@ -324,7 +326,8 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
           auto converged = [tolerance](double a, double b) { return std::abs(b - a) <= tolerance; };
           std::uintmax_t iterations = kMaxEventIterations;
           // The bracket's right end is past the crossing (g ≤ 0 there): report it.
-          t_event = boost::math::tools::toms748_solve(g_of, t, t_new, g_previous[i], g_new[i], converged, iterations)
+          t_event = boost::math::tools::toms748_solve(g_of, t, t_new, g_previous[i], g_new[i], converged,
+                                                      iterations)
                         .second;
         }
         event_time[i] = t_event;
@@ -393,7 +396,8 @@ IntegrationResult<P::kDimension> Integrate(P& problem, const OdeState<P::kDimens
   GESWEEP_DEMAND(std::isfinite(start_time_s) && std::isfinite(end_time_s) && end_time_s > start_time_s);
   GESWEEP_DEMAND(options.step_s > 0.0 && options.output_interval_s >= 0.0 && options.max_step_s >= 0.0);
   GESWEEP_DEMAND(options.event_time_tolerance_s > 0.0);
-  for (std::size_t i = 1; i < breakpoints_s.size(); ++i) GESWEEP_DEMAND(breakpoints_s[i] > breakpoints_s[i - 1]);
+  for (std::size_t i = 1; i < breakpoints_s.size(); ++i)
+    GESWEEP_DEMAND(breakpoints_s[i] > breakpoints_s[i - 1]);
   if (options.kind == IntegratorKind::kRk4) {
     return integrator_detail::IntegrateWith<integrator_detail::Rk4Method<P::kDimension>>(
         problem, initial_state, start_time_s, end_time_s, breakpoints_s, options);

@@ -42,7 +42,8 @@ double StallSpeed(const LongitudinalModel& model, const OpenLoopConfig& config) 
 // inlines its own.
 struct FrozenSource {
   Equation1Entries entries;  // A and B at the start condition
-  GESWEEP_ALWAYS_INLINE void Derivative(double /*h0*/, double u0, const double* x, double elevator_rad, double* dxdt) {
+  GESWEEP_ALWAYS_INLINE void Derivative(double /*h0*/, double u0, const double* x, double elevator_rad,
+                                        double* dxdt) {
     Equation1Derivative(entries, u0, x, elevator_rad, dxdt);
   }
 };
@@ -50,7 +51,8 @@ struct FrozenSource {
 struct TableSource {
   const LinearDerivativeTable* table;
   int segment_hint;
-  GESWEEP_ALWAYS_INLINE void Derivative(double h0, double u0, const double* x, double elevator_rad, double* dxdt) {
+  GESWEEP_ALWAYS_INLINE void Derivative(double h0, double u0, const double* x, double elevator_rad,
+                                        double* dxdt) {
     table->Equation1(h0, u0, x, elevator_rad, dxdt, segment_hint);
   }
 };
@@ -74,8 +76,8 @@ class OpenLoopProblem {
   using State = OdeState<kDimension>;
 
   OpenLoopProblem(Source source, double start_height_m, double reference_speed_mps,
-                  const std::vector<double>& elevator_by_segment, double touchdown_height_m, double stall_speed_mps,
-                  OpenLoopSeries* series)
+                  const std::vector<double>& elevator_by_segment, double touchdown_height_m,
+                  double stall_speed_mps, OpenLoopSeries* series)
       : source_(source),
         start_height_m_(start_height_m),
         u0_(reference_speed_mps),
@@ -171,12 +173,14 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
     Reserve(result.series, static_cast<std::size_t>(config.duration_s / config.series_interval_s) + 3);
     series = &result.series;
   }
-  OpenLoopProblem<Source> problem(source, config.start_height_m, config.reference_speed_mps, schedule.elevator_rad,
-                                  TouchdownHeight(model, config), StallSpeed(model, config), series);
+  OpenLoopProblem<Source> problem(source, config.start_height_m, config.reference_speed_mps,
+                                  schedule.elevator_rad, TouchdownHeight(model, config),
+                                  StallSpeed(model, config), series);
   const InitialOffsets& o = config.initial_offsets;
-  const OdeState<5> x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
-                          o.delta_height_m};
-  const IntegrationResult<5> run = Integrate(problem, x0, 0.0, config.duration_s, schedule.breakpoints_s, options);
+  const OdeState<5> x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps,
+                          o.delta_pitch_rad, o.delta_height_m};
+  const IntegrationResult<5> run =
+      Integrate(problem, x0, 0.0, config.duration_s, schedule.breakpoints_s, options);
 
   OpenLoopSummary& summary = result.summary;
   summary.end_time_s = run.end_time_s;
@@ -215,7 +219,8 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
 
 }  // namespace
 
-void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source) {
+void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config,
+                            const std::string& source) {
   auto require = [&source](bool ok, std::string_view key, double value, const char* expected) {
     if (!ok) throw InputError(source, std::string(key), Text(value), expected);
   };
@@ -223,14 +228,15 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
   const double stall_mps = StallSpeed(model, config);
   require(std::isfinite(touchdown_m) && touchdown_m >= 0.0, "touchdown_height_m", touchdown_m,
           "expected a finite height >= 0 m");
-  require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps, "expected a finite speed >= 0 m/s");
+  require(std::isfinite(stall_mps) && stall_mps >= 0.0, "stall_speed_mps", stall_mps,
+          "expected a finite speed >= 0 m/s");
   // Every described number against its range, named by its key (OpenLoopConfig::Describe).
   CheckFieldRanges(config, source);
   const double start_m = config.start_height_m + config.initial_offsets.delta_height_m;
   if (!(start_m > touchdown_m)) {  // the message is built only on failure: this runs once per sweep run
     throw InputError(source, std::string(KeyOf(config, &config.start_height_m)), Text(start_m),
-                     "expected a start height above the touchdown (wheel-contact) height " + Text(touchdown_m) +
-                         " m; a run cannot start on or below the ground");
+                     "expected a start height above the touchdown (wheel-contact) height " +
+                         Text(touchdown_m) + " m; a run cannot start on or below the ground");
   }
   const double start_speed = config.reference_speed_mps + config.initial_offsets.delta_speed_mps;
   if (!(start_speed > stall_mps)) {
@@ -257,7 +263,8 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
   // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
   const bool rk4 = integrator.kind == IntegratorKind::kRk4;
   const double& step_s = rk4 ? integrator.step_s : integrator.max_step_s;
-  if (step_s > 0.0 && config.duration_s / step_s > kMaximumStepsPerRun) {  // the keys are looked up on failure only
+  if (step_s > 0.0 &&
+      config.duration_s / step_s > kMaximumStepsPerRun) {  // the keys are looked up on failure only
     CheckStepCount(config.duration_s, step_s, source, std::string(KeyOf(config, &config.duration_s)),
                    std::string(KeyOf(config, &step_s)));
   }
@@ -272,8 +279,8 @@ OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopCo
     // A and B at the start condition H0 + ΔH(0), u0 + Δu(0), through the generic path.
     const double height_m = h0 + config.initial_offsets.delta_height_m;
     const double speed_mps = u0 + config.initial_offsets.delta_speed_mps;
-    return Run(FrozenSource{EntriesFromDerivatives(model.DerivativesAt(height_m, speed_mps), u0)}, model, config,
-               cancel);
+    return Run(FrozenSource{EntriesFromDerivatives(model.DerivativesAt(height_m, speed_mps), u0)}, model,
+               config, cancel);
   }
   if (config.generic_derivative_path || model.options().interpolation != Interpolation::kLinear) {
     return Run(ModelSource{&model}, model, config, cancel);

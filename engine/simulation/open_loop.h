@@ -22,7 +22,8 @@ enum class ElevatorInputKind {
   kNone,     ///< δe = 0
   kPulse,    ///< amplitude on [start, start + duration), 0 elsewhere (the paper: +5° for 0.2 s)
   kStep,     ///< amplitude from start on
-  kDoublet,  ///< +amplitude on [start, start + duration), −amplitude on [start + duration, start + 2·duration)
+  kDoublet,  ///< +amplitude on [start, start + duration), −amplitude on [start + duration, start +
+             ///< 2·duration)
 };
 
 /// Names in study files, flags and output: "pulse", "step", "doublet", "none".
@@ -66,7 +67,7 @@ struct OpenLoopConfig {
   double reference_speed_mps = 0;  ///< u0, m/s; must be above the stall speed
   ElevatorInput elevator;
   InitialOffsets initial_offsets;
-  double duration_s = 300.0;       ///< time limit, s, > 0
+  double duration_s = 300.0;  ///< time limit, s, > 0
   /// Method, step, tolerances, breakpoints (integrator.h). Its output_interval_s is ignored: use
   /// series_interval_s.
   IntegratorOptions integrator;
@@ -87,34 +88,70 @@ struct OpenLoopConfig {
   /// of the same names, so they are flags only; so are the initial offsets.
   template <class V>
   void Describe(V& v) {
-    v(Field("height_m", &start_height_m).Unit("m").Limit("height_m").CommandLineOnly()
-          .Doc("Start height H0 of the mean chord above ground, m; must be above the aircraft's wheel-contact "
-               "height: starts on or below it are refused"));
-    v(Field("speed_mps", &reference_speed_mps).Unit("m/s").Limit("speed_mps").CommandLineOnly()
+    v(Field("height_m", &start_height_m)
+          .Unit("m")
+          .Limit("height_m")
+          .CommandLineOnly()
+          .Doc(
+              "Start height H0 of the mean chord above ground, m; must be above the aircraft's wheel-contact "
+              "height: starts on or below it are refused"));
+    v(Field("speed_mps", &reference_speed_mps)
+          .Unit("m/s")
+          .Limit("speed_mps")
+          .CommandLineOnly()
           .Doc("Reference speed u0, m/s; must be above the stall speed"));
     v(Field("input", &elevator.kind).Doc("Elevator input: pulse, step, doublet or none"));
-    v(Field("pulse_amplitude_deg", &elevator.amplitude_rad).Unit("deg").Scale(kRadiansPerDegree)
-          .Limit("pulse_amplitude_deg").CommandLineOnly()
+    v(Field("pulse_amplitude_deg", &elevator.amplitude_rad)
+          .Unit("deg")
+          .Scale(kRadiansPerDegree)
+          .Limit("pulse_amplitude_deg")
+          .CommandLineOnly()
           .Doc("Input amplitude, deg, positive trailing edge down (nose down)"));
-    v(Field("pulse_duration_s", &elevator.duration_s).Unit("s").Limit("pulse_duration_s").CommandLineOnly()
+    v(Field("pulse_duration_s", &elevator.duration_s)
+          .Unit("s")
+          .Limit("pulse_duration_s")
+          .CommandLineOnly()
           .Doc("Pulse length (doublet: each half), s"));
-    v(Field("input_start_s", &elevator.start_s).Unit("s").Limit("open_loop.input_start_s")
+    v(Field("input_start_s", &elevator.start_s)
+          .Unit("s")
+          .Limit("open_loop.input_start_s")
           .Doc("Time of the input's first jump, s"));
-    v(Field("duration_s", &duration_s).Unit("s").Limit("open_loop.duration_s").Doc("Time limit of each run, s"));
+    v(Field("duration_s", &duration_s)
+          .Unit("s")
+          .Limit("open_loop.duration_s")
+          .Doc("Time limit of each run, s"));
     integrator.Describe(v);
     v(Field("freeze_derivatives", &freeze_derivatives)
-          .Doc("Freeze A and B at the start condition (the classical linear response) instead of re-evaluating "
+          .Doc("Freeze A and B at the start condition (the classical linear response) instead of "
+               "re-evaluating "
                "them (docs/model.md section 7)"));
-    v(Field("initial_delta_u_mps", &initial_offsets.delta_speed_mps).Unit("m/s")
-          .Limit("open_loop.initial_delta_u_mps").CommandLineOnly().Doc("Initial offset of u, m/s"));
-    v(Field("initial_delta_w_mps", &initial_offsets.delta_normal_velocity_mps).Unit("m/s")
-          .Limit("open_loop.initial_delta_w_mps").CommandLineOnly().Doc("Initial offset of w (positive down), m/s"));
-    v(Field("initial_pitch_rate_degps", &initial_offsets.pitch_rate_radps).Unit("deg/s").Scale(kRadiansPerDegree)
-          .Limit("open_loop.initial_pitch_rate_degps").CommandLineOnly().Doc("Initial pitch rate, deg/s"));
-    v(Field("initial_pitch_deg", &initial_offsets.delta_pitch_rad).Unit("deg").Scale(kRadiansPerDegree)
-          .Limit("open_loop.initial_pitch_deg").CommandLineOnly().Doc("Initial offset of the pitch angle, deg"));
-    v(Field("initial_delta_h_m", &initial_offsets.delta_height_m).Unit("m").Limit("open_loop.initial_delta_h_m")
-          .CommandLineOnly().Doc("Initial offset of H, m (the derivatives see H0 + offset)"));
+    v(Field("initial_delta_u_mps", &initial_offsets.delta_speed_mps)
+          .Unit("m/s")
+          .Limit("open_loop.initial_delta_u_mps")
+          .CommandLineOnly()
+          .Doc("Initial offset of u, m/s"));
+    v(Field("initial_delta_w_mps", &initial_offsets.delta_normal_velocity_mps)
+          .Unit("m/s")
+          .Limit("open_loop.initial_delta_w_mps")
+          .CommandLineOnly()
+          .Doc("Initial offset of w (positive down), m/s"));
+    v(Field("initial_pitch_rate_degps", &initial_offsets.pitch_rate_radps)
+          .Unit("deg/s")
+          .Scale(kRadiansPerDegree)
+          .Limit("open_loop.initial_pitch_rate_degps")
+          .CommandLineOnly()
+          .Doc("Initial pitch rate, deg/s"));
+    v(Field("initial_pitch_deg", &initial_offsets.delta_pitch_rad)
+          .Unit("deg")
+          .Scale(kRadiansPerDegree)
+          .Limit("open_loop.initial_pitch_deg")
+          .CommandLineOnly()
+          .Doc("Initial offset of the pitch angle, deg"));
+    v(Field("initial_delta_h_m", &initial_offsets.delta_height_m)
+          .Unit("m")
+          .Limit("open_loop.initial_delta_h_m")
+          .CommandLineOnly()
+          .Doc("Initial offset of H, m (the derivatives see H0 + offset)"));
   }
 };
 
@@ -123,7 +160,8 @@ struct OpenLoopConfig {
 /// tolerances), H0 not above the touchdown height, u0 + Δu(0) not above the stall speed, a pulse
 /// length ≤ 0, more than kMaximumStepsPerRun steps (duration_s / step_s for RK4, duration_s /
 /// max_step_s for dopri5 with a largest step), integrator options (ValidateIntegratorOptions).
-void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config, const std::string& source);
+void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config,
+                            const std::string& source);
 
 /// How a run ended (docs/model.md §7).
 enum class OpenLoopEndEvent {
@@ -152,17 +190,17 @@ inline constexpr FieldComponent kStateComponents[] = {{"delta_u_mps", "m/s", "De
 /// The summary of one run. The state is x = [Δu m/s, Δw m/s, q rad/s, Δθ rad, ΔH m] (docs/model.md §1).
 struct OpenLoopSummary {
   OpenLoopEndEvent end_event = OpenLoopEndEvent::kTimeLimit;
-  double end_time_s = 0;              ///< time of the end event (touchdown and stall located inside the step)
-  double min_height_m = 0;            ///< lowest H: at step ends, and local minima located inside steps
-  double min_height_time_s = 0;       ///< when it occurred
-  double max_abs_pitch_rate_radps = 0;  ///< largest |q| at the initial point and step ends
+  double end_time_s = 0;         ///< time of the end event (touchdown and stall located inside the step)
+  double min_height_m = 0;       ///< lowest H: at step ends, and local minima located inside steps
+  double min_height_time_s = 0;  ///< when it occurred
+  double max_abs_pitch_rate_radps = 0;      ///< largest |q| at the initial point and step ends
   Vector5d final_state = Vector5d::Zero();  ///< x at end_time_s (the last finite state if diverged)
-  double final_height_m = 0;          ///< H0 + ΔH at end_time_s
-  double final_speed_mps = 0;         ///< u0 + Δu at end_time_s
-  long steps = 0;                     ///< accepted steps
-  long rejected_steps = 0;            ///< rejected dopri5 trials
-  long rhs_calls = 0;                 ///< right-hand-side evaluations
-  std::string message;                ///< empty, or what went wrong numerically
+  double final_height_m = 0;                ///< H0 + ΔH at end_time_s
+  double final_speed_mps = 0;               ///< u0 + Δu at end_time_s
+  long steps = 0;                           ///< accepted steps
+  long rejected_steps = 0;                  ///< rejected dopri5 trials
+  long rhs_calls = 0;                       ///< right-hand-side evaluations
+  std::string message;                      ///< empty, or what went wrong numerically
   /// The run was stopped by its cancellation flag before it ended: the fields above describe the
   /// part flown (end_time_s is where it stopped) and end_event means nothing.
   bool cancelled = false;
@@ -173,14 +211,17 @@ struct OpenLoopSummary {
   /// The results (describe.h): archive columns results/open_loop/<key>, simulate's CSV and JSON.
   template <class V>
   void Describe(V& v) {
-    v(Field("end_event", &end_event).Stored(StoredAs::kInt8).Doc("How the run ended (levels attribute, docs/model.md §7)"));
+    v(Field("end_event", &end_event)
+          .Stored(StoredAs::kInt8)
+          .Doc("How the run ended (levels attribute, docs/model.md §7)"));
     v(Field("end_time_s", &end_time_s).Unit("s").Doc("Time of the end event"));
     v(Field("min_height_m", &min_height_m).Unit("m").Doc("Lowest height H reached"));
     v(Field("min_height_time_s", &min_height_time_s).Unit("s").Doc("When the lowest height was reached"));
     v(Field("max_abs_pitch_rate_radps", &max_abs_pitch_rate_radps).Unit("rad/s").Doc("Largest |q|"));
     v(Field("final_height_m", &final_height_m).Unit("m").Doc("H at the end of the run"));
     v(Field("final_speed_mps", &final_speed_mps).Unit("m/s").Doc("u at the end of the run"));
-    v(Field("final_state", &final_state).Components(kStateComponents, "final_", kStoredFinalState)
+    v(Field("final_state", &final_state)
+          .Components(kStateComponents, "final_", kStoredFinalState)
           .Doc("at the end of the run"));
     v(Field("steps", &steps).Stored(StoredAs::kInt32).Doc("Accepted integration steps"));
     v(Field("rejected_steps", &rejected_steps).NotStored().Doc("Rejected dopri5 trial steps"));

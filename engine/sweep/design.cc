@@ -5,8 +5,8 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/estimators/sensitivity_common.h"
 #include "engine/common/errors.h"
+#include "engine/estimators/sensitivity_common.h"
 #include "engine/sweep/hashing.h"
 
 namespace gesweep {
@@ -18,7 +18,8 @@ constexpr std::uint64_t kLatinJitterTag = 0x4c48535f6a697474ULL;       // "LHS_j
 constexpr std::uint64_t kMorrisTag = 0x4d4f52524953ULL;                // "MORRIS"
 constexpr int kFeistelRounds = 4;  // four rounds make a keyed Feistel network a good permutation
 constexpr std::int64_t kMaximumRuns = std::int64_t{1} << 62;
-static_assert(2 * kMaximumSobolParameters <= static_cast<int>(boost::random::detail::qrng_tables::sobol::max_dimension),
+static_assert(2 * kMaximumSobolParameters <=
+                  static_cast<int>(boost::random::detail::qrng_tables::sobol::max_dimension),
               "a sobol design of kMaximumSobolParameters needs 2D dimensions of Boost's Sobol' tables");
 // Largest double below 1: a unit coordinate never reaches the upper bound by rounding.
 constexpr double kBelowOne = 1.0 - 0x1.0p-53;
@@ -221,7 +222,8 @@ void SobolPoint(int dimension, std::int64_t j, double* coordinates) {
 }
 
 double MapUnit(const DesignParameter& parameter, double u) {
-  return ValueAtUnit(parameter.lower, parameter.upper, parameter.distribution == Distribution::kLogUniform, u);
+  return ValueAtUnit(parameter.lower, parameter.upper, parameter.distribution == Distribution::kLogUniform,
+                     u);
 }
 
 std::int64_t LatinStratum(std::uint64_t seed, int dimension, std::int64_t n, std::int64_t i) {

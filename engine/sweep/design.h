@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/estimators/saltelli_layout.h"
 #include "engine/analyses/parameter_catalog.h"
+#include "engine/estimators/saltelli_layout.h"
 
 namespace gesweep {
 

@@ -32,8 +32,8 @@ struct Burst {
 struct ThreadResult {
   std::vector<Burst> bursts;
   Burst warmup;
-  bool cut = false;           // a run was stopped at the deadline
-  double longest_cut_s = 0;   // how long the stopped burst had run
+  bool cut = false;          // a run was stopped at the deadline
+  double longest_cut_s = 0;  // how long the stopped burst had run
 };
 
 // The sink of MeasurePipelineStart's sweep of no batch: never called.
@@ -44,10 +44,12 @@ class NoSink final : public ResultSink {
 
 }  // namespace
 
-RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options, const std::atomic<bool>* stop) {
+RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options,
+                                const std::atomic<bool>* stop) {
   GESWEEP_DEMAND(options.threads >= 1 && options.budget_s > 0 && options.burst_runs >= 1);
   const auto start = Clock::now();
-  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.budget_s));
+  const auto deadline =
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.budget_s));
   const std::int64_t runs = plan.run_count();
   const std::int64_t burst = std::min<std::int64_t>({options.burst_runs, plan.chunk_runs(), runs});
 
@@ -115,7 +117,8 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
     }
   };
   std::vector<std::thread> workers;
-  for (int t = 1; t < options.threads; ++t) workers.emplace_back(sample, std::ref(results[static_cast<std::size_t>(t)]));
+  for (int t = 1; t < options.threads; ++t)
+    workers.emplace_back(sample, std::ref(results[static_cast<std::size_t>(t)]));
   sample(results[0]);
   for (auto& worker : workers) worker.join();
   {
@@ -197,7 +200,8 @@ double SteadyWallPerRun(const SweepTimeParts& parts, int threads, int cores) {
 double SweepSeconds(const SweepTimeParts& parts, std::int64_t runs, int chunk_runs, int threads, int cores) {
   GESWEEP_DEMAND(runs >= 0 && chunk_runs >= 1 && threads >= 1 && cores >= 1);
   const std::int64_t first = std::min<std::int64_t>(chunk_runs, runs);
-  const double one_batch_per_run = parts.compute_s_per_run / threads + parts.encode_s_per_run + parts.store_s_per_run;
+  const double one_batch_per_run =
+      parts.compute_s_per_run / threads + parts.encode_s_per_run + parts.store_s_per_run;
   return static_cast<double>(first) * one_batch_per_run +
          static_cast<double>(runs - first) * SteadyWallPerRun(parts, threads, cores) + parts.fixed_s;
 }

@@ -29,16 +29,16 @@ struct RunCostOptions {
 
 /// What EstimateRunCost measured.
 struct RunCostEstimate {
-  double seconds_per_run = 0;  ///< mean time of one run on one thread
-  double seconds_per_run_low = 0;   ///< 95 % interval of that mean (equal to it with < 3 bursts)
+  double seconds_per_run = 0;      ///< mean time of one run on one thread
+  double seconds_per_run_low = 0;  ///< 95 % interval of that mean (equal to it with < 3 bursts)
   double seconds_per_run_high = 0;
-  double estimated_seconds = 0;     ///< seconds_per_run x the shard's runs / threads
+  double estimated_seconds = 0;  ///< seconds_per_run x the shard's runs / threads
   double estimated_seconds_low = 0;
   double estimated_seconds_high = 0;
-  std::int64_t timed_runs = 0;      ///< runs the estimate is made of
+  std::int64_t timed_runs = 0;  ///< runs the estimate is made of
   std::int64_t timed_bursts = 0;
-  std::int64_t warmup_runs = 0;     ///< runs of the warm-up bursts (not in the estimate unless alone)
-  double measured_s = 0;            ///< wall time the measurement took
+  std::int64_t warmup_runs = 0;  ///< runs of the warm-up bursts (not in the estimate unless alone)
+  double measured_s = 0;         ///< wall time the measurement took
   /// A sample run was stopped at the deadline before it finished: runs are so long that the
   /// estimate is a lower bound (seconds_per_run is at least the time that run had taken).
   bool lower_bound = false;

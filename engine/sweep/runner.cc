@@ -178,8 +178,8 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
   block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
 }
 
-SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink, const RunnerOptions& options,
-                      SweepProgress* progress) {
+SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink,
+                      const RunnerOptions& options, SweepProgress* progress) {
   SweepProgress local_progress;
   SweepProgress& counters = progress ? *progress : local_progress;
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
@@ -225,50 +225,51 @@ SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& si
     arena.execute([&] {
       tbb::parallel_pipeline(
           static_cast<std::size_t>(tokens),
-          tbb::make_filter<void, ResultBlock*>(
-              tbb::filter_mode::serial_in_order,
-              [&](tbb::flow_control& control) -> ResultBlock* {
-                const bool cancelled = options.cancel != nullptr && options.cancel->load();
-                if (cancelled || stop.load()) {
-                  control.stop();
-                  return nullptr;
-                }
-                const std::int64_t index = source.Next();
-                if (index < 0) {
-                  exhausted = true;
-                  control.stop();
-                  return nullptr;
-                }
-                ResultBlock* block = nullptr;
-                free_blocks.pop(block);
-                block->Reset(plan, index);
-                return block;
-              }) &
+          tbb::make_filter<void, ResultBlock*>(tbb::filter_mode::serial_in_order,
+                                               [&](tbb::flow_control& control) -> ResultBlock* {
+                                                 const bool cancelled =
+                                                     options.cancel != nullptr && options.cancel->load();
+                                                 if (cancelled || stop.load()) {
+                                                   control.stop();
+                                                   return nullptr;
+                                                 }
+                                                 const std::int64_t index = source.Next();
+                                                 if (index < 0) {
+                                                   exhausted = true;
+                                                   control.stop();
+                                                   return nullptr;
+                                                 }
+                                                 ResultBlock* block = nullptr;
+                                                 free_blocks.pop(block);
+                                                 block->Reset(plan, index);
+                                                 return block;
+                                               }) &
               tbb::make_filter<ResultBlock*, ResultBlock*>(
                   tbb::filter_mode::parallel,
                   [&](ResultBlock* block) {
                     std::atomic<int> failed{0};
-                    tbb::parallel_for(tbb::blocked_range<int>(0, block->rows, 1),
-                                      [&](const tbb::blocked_range<int>& range) {
-                                        RunWorkspace& workspace = workspaces.local();
-                                        int range_failed = 0;
-                                        for (int row = range.begin(); row != range.end(); ++row) {
-                                          if (options.cancel != nullptr && options.cancel->load()) break;
-                                          ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)],
-                                                     workspace, *block, row, options.cancel);
-                                          const auto status = block->status[static_cast<std::size_t>(row)];
-                                          if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
-                                          range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
-                                          counters.runs_done.fetch_add(1, std::memory_order_relaxed);
-                                        }
-                                        failed.fetch_add(range_failed, std::memory_order_relaxed);
-                                        counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
-                                      });
+                    tbb::parallel_for(
+                        tbb::blocked_range<int>(0, block->rows, 1),
+                        [&](const tbb::blocked_range<int>& range) {
+                          RunWorkspace& workspace = workspaces.local();
+                          int range_failed = 0;
+                          for (int row = range.begin(); row != range.end(); ++row) {
+                            if (options.cancel != nullptr && options.cancel->load()) break;
+                            ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)], workspace,
+                                       *block, row, options.cancel);
+                            const auto status = block->status[static_cast<std::size_t>(row)];
+                            if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
+                            range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
+                            counters.runs_done.fetch_add(1, std::memory_order_relaxed);
+                          }
+                          failed.fetch_add(range_failed, std::memory_order_relaxed);
+                          counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
+                        });
                     block->runs_failed = failed.load();
                     // A batch a cancellation left unfinished is not encoded (nor written, below).
                     const auto begin = block->status.begin();
-                    if (std::find(begin, begin + block->rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
-                        begin + block->rows) {
+                    if (std::find(begin, begin + block->rows,
+                                  static_cast<std::int8_t>(RunStatus::kPending)) != begin + block->rows) {
                       return block;
                     }
                     // The worker that computed the batch encodes it (filters its chunks).
@@ -279,8 +280,8 @@ SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& si
                   tbb::filter_mode::serial_out_of_order, [&](ResultBlock* block) {
                     // A batch a cancellation left unfinished is not written: its runs stay pending.
                     const auto begin = block->status.begin();
-                    if (std::find(begin, begin + block->rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
-                        begin + block->rows) {
+                    if (std::find(begin, begin + block->rows,
+                                  static_cast<std::int8_t>(RunStatus::kPending)) != begin + block->rows) {
                       dropped.fetch_add(1);
                       free_blocks.push(block);
                       return;

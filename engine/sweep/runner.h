@@ -31,9 +31,9 @@ enum class RunStatus : std::int8_t {
 /// One stored chunk of a batch, filtered by the worker that computed it (opaque to the runner: the
 /// sink's Encode makes them, its Write stores them).
 struct StoredChunk {
-  int dataset = 0;               ///< index of the dataset in the sink's layout
-  std::int64_t row = 0;          ///< first row of the chunk, counted from the batch's first row
-  std::uint32_t filter_mask = 0; ///< HDF5's filter mask (bit i set: filter i skipped)
+  int dataset = 0;                ///< index of the dataset in the sink's layout
+  std::int64_t row = 0;           ///< first row of the chunk, counted from the batch's first row
+  std::uint32_t filter_mask = 0;  ///< HDF5's filter mask (bit i set: filter i skipped)
   std::vector<unsigned char> bytes;
 };
 
@@ -151,8 +151,8 @@ struct SweepOutcome {
 /// MPI ranks and the benchmarks all come through here). Rethrows the first exception of the sink
 /// or of a worker after stopping cleanly. `cancelled` in the outcome: `options.cancel` stopped it
 /// before `source` ran dry.
-SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink, const RunnerOptions& options,
-                      SweepProgress* progress);
+SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink,
+                      const RunnerOptions& options, SweepProgress* progress);
 /// The same over a list of batches (ascending batch numbers of the plan's shard).
 SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
                       ResultSink& sink, const RunnerOptions& options, SweepProgress* progress);

@@ -138,7 +138,8 @@ class StudyParser {
     output->RejectUnknownKeys(
         {"time_series", "output_dt_s", "chunk_runs", "compression_level", "max_archive_gb"});
     study_.storage.time_series = output->OptionalBool("time_series").value_or(false);
-    if (const auto dt = output->OptionalLimitedNumber("output_dt_s", "output_dt_s")) study_.storage.output_dt_s = *dt;
+    if (const auto dt = output->OptionalLimitedNumber("output_dt_s", "output_dt_s"))
+      study_.storage.output_dt_s = *dt;
     if (const auto chunk = output->OptionalInteger("chunk_runs")) {
       if (*chunk < 1 || *chunk > kMaximumChunkRuns || (*chunk & (*chunk - 1)) != 0) {
         output->Fail("chunk_runs", std::to_string(*chunk),

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
-#include "engine/common/output_guard.h"
 #include "engine/analyses/analysis.h"
+#include "engine/common/output_guard.h"
 #include "engine/sweep/design.h"
 
 namespace gesweep {

@@ -50,7 +50,8 @@ ShardSpec ParseShard(const std::string& text, const std::string& flag) {
 
 int ShardBatchRuns(std::int64_t design_runs, int batch_runs, int shards) {
   const std::int64_t per_shard = std::max<std::int64_t>(1, design_runs / std::max(shards, 1));
-  return static_cast<int>(std::max<std::int64_t>(1, std::min<std::int64_t>({batch_runs, per_shard, design_runs})));
+  return static_cast<int>(
+      std::max<std::int64_t>(1, std::min<std::int64_t>({batch_runs, per_shard, design_runs})));
 }
 
 void ShardRange(std::int64_t design_runs, int batch_runs, const ShardSpec& shard, std::int64_t* first,
@@ -135,8 +136,8 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
   // Every shard of an N-way split has batches of the same size (ShardBatchRuns), so its chunks
   // coincide with those of the merged archive; a shard smaller than a batch (a design's only,
   // partial batch) has one chunk of its own size.
-  chunk_runs_ = static_cast<int>(std::min<std::int64_t>(
-      ShardBatchRuns(design_runs_, batch_runs, shard_.count), run_count_));
+  chunk_runs_ = static_cast<int>(
+      std::min<std::int64_t>(ShardBatchRuns(design_runs_, batch_runs, shard_.count), run_count_));
 }
 
 void SweepPlan::CheckStorage() {

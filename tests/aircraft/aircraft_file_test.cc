@@ -133,11 +133,14 @@ TEST(AircraftFile, ValidMinimalFileLoads) {
 TEST(AircraftFile, RejectsBadInputNamingKeyAndProblem) {
   const std::string ok = ValidAircraft();
   ExpectRejected(Replace(ok, "wingspan_m = 5.0\n", ""), {"geometry.wingspan_m", "missing"});
-  ExpectRejected(Replace(ok, "wingspan_m", "wingspam_m"), {"geometry.wingspam_m", "did you mean 'wingspan_m'"});
-  ExpectRejected(Replace(ok, "mass_kg = 100.0", "mass_kg = \"heavy\""), {"mass.mass_kg", "\"heavy\"", "number"});
+  ExpectRejected(Replace(ok, "wingspan_m", "wingspam_m"),
+                 {"geometry.wingspam_m", "did you mean 'wingspan_m'"});
+  ExpectRejected(Replace(ok, "mass_kg = 100.0", "mass_kg = \"heavy\""),
+                 {"mass.mass_kg", "\"heavy\"", "number"});
   ExpectRejected(Replace(ok, "mass_kg = 100.0", "mass_kg = -1.0"), {"mass.mass_kg", "> 0"});
   ExpectRejected(Replace(ok, "CDo = 0.02", "CDo = nan"), {"aerodynamics.CDo", "finite"});
-  ExpectRejected(Replace(ok, "mean_chord_m = 0.5", "mean_chord_m = inf"), {"geometry.mean_chord_m", "finite"});
+  ExpectRejected(Replace(ok, "mean_chord_m = 0.5", "mean_chord_m = inf"),
+                 {"geometry.mean_chord_m", "finite"});
   ExpectRejected(Replace(ok, "height_m = [0.5, 1.0, 2.0]", "height_m = [0.5, 2.0, 1.0]"),
                  {"table.height_m", "strictly increasing"});
   ExpectRejected(Replace(ok, "CLh = [0.1, 0.2, 0.3]", "CLh = [0.1, 0.2]"), {"table.CLh", "3 values"});

@@ -276,8 +276,8 @@ TEST_F(ArchiveTest, OneAndTwoThreadsStoreTheSameChunksByteForByte) {
   const auto study = StudyFile("s.toml", 8);
   SweepPlan one(LoadStudy(study), ShardSpec{});
   {
-    auto writer = ArchiveWriter::Open(directory_ / "one.h5", one, RunProvenance{"test", 1}, ArchiveOpenMode::kCreate,
-                                      nullptr);
+    auto writer = ArchiveWriter::Open(directory_ / "one.h5", one, RunProvenance{"test", 1},
+                                      ArchiveOpenMode::kCreate, nullptr);
     RunSweep(one, std::vector<std::int64_t>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13}, *writer,
              RunnerOptions{1, nullptr, 1}, nullptr);
     writer->Finish();
@@ -316,7 +316,8 @@ TEST_F(ArchiveTest, ThreeShardsMergedVirtuallyOrByCopyEqualOneProcess) {
     EXPECT_EQ(H5Pget_layout(dcpl.get()), H5D_VIRTUAL);
   }
 
-  const MergeReport copy_report = MergeArchives(shards, directory_ / "copy.h5", false, "test", MergeKind::kCopy);
+  const MergeReport copy_report =
+      MergeArchives(shards, directory_ / "copy.h5", false, "test", MergeKind::kCopy);
   EXPECT_EQ(Contents(directory_ / "copy.h5"), Contents(directory_ / "whole.h5"));
   EXPECT_GT(copy_report.chunks_copied, 0);
   EXPECT_EQ(copy_report.chunks_rewritten, 0) << "shards cut at batch boundaries: every chunk coincides";
@@ -362,14 +363,17 @@ TEST_F(ArchiveTest, LongMessagesAreStoredWholeAndOnlyTheirChunksWritten) {
   // limit, with multi-byte UTF-8 characters at the cut.
   SweepPlan plan(LoadStudy(StudyFile("s.toml", 64)), ShardSpec{});
   const auto archive = directory_ / "a.h5";
-  auto writer = ArchiveWriter::Open(archive, plan, RunProvenance{"test", 1}, ArchiveOpenMode::kCreate, nullptr);
+  auto writer =
+      ArchiveWriter::Open(archive, plan, RunProvenance{"test", 1}, ArchiveOpenMode::kCreate, nullptr);
   ResultBlock block;
   block.Allocate(plan);
   block.Reset(plan, 0);
   RunWorkspace workspace(plan);
-  for (int r = 0; r < block.rows; ++r) ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
-  std::string lqr = "landing: design_failed: (Q, A) is not detectable: the mode at lambda = -0.0123+0.4567i is "
-                    "unweighted by Q and not stable; ";
+  for (int r = 0; r < block.rows; ++r)
+    ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
+  std::string lqr =
+      "landing: design_failed: (Q, A) is not detectable: the mode at lambda = -0.0123+0.4567i is "
+      "unweighted by Q and not stable; ";
   while (lqr.size() < 700) lqr += "the useful part of the reason continues past the old cut at 160 bytes; ";
   std::string huge;
   while (huge.size() < 3000) huge += "\u00e9t\u00e9 ";  // "été ": two-byte characters
@@ -382,7 +386,8 @@ TEST_F(ArchiveTest, LongMessagesAreStoredWholeAndOnlyTheirChunksWritten) {
   writer->Write(block);
   for (std::int64_t b = 1; b < plan.block_count(); ++b) {
     block.Reset(plan, b);
-    for (int r = 0; r < block.rows; ++r) ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
+    for (int r = 0; r < block.rows; ++r)
+      ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
     writer->Write(block);
   }
   writer->Finish();

@@ -5,8 +5,11 @@
 // only), 1, 4 and 9, and data that does not compress. Then whole archives: every chunk a sweep's
 // workers stored equals the chunk HDF5 stores when given the same values (each dataset rewritten
 // through H5Dwrite with its own creation properties).
+#include "engine/archive/chunk_filters.h"
+
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstring>
@@ -15,12 +18,9 @@
 #include <limits>
 #include <random>
 
-#include <zlib.h>
-
 #include "engine/archive/archive_layout.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_writer.h"
-#include "engine/archive/chunk_filters.h"
 #include "engine/archive/hdf5_util.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
@@ -33,14 +33,16 @@ using hdf5::Handle;
 const std::string kAircraft = std::string(GESWEEP_SOURCE_DIR) + "/studies/aircraft/ance.toml";
 
 std::filesystem::path TempDir(const std::string& name) {
-  auto dir = std::filesystem::temp_directory_path() / ("gesweep_chunk_filters_" + std::to_string(getpid()) + "_" + name);
+  auto dir = std::filesystem::temp_directory_path() /
+             ("gesweep_chunk_filters_" + std::to_string(getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
 }
 
 // A dataset creation property list with the filters of `pipeline`, in the archive's order.
-Handle Creation(const FilterPipeline& pipeline, hsize_t chunk_rows, hsize_t width, hid_t type, const void* fill) {
+Handle Creation(const FilterPipeline& pipeline, hsize_t chunk_rows, hsize_t width, hid_t type,
+                const void* fill) {
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "dcpl");
   hsize_t chunk[2] = {chunk_rows, width};
   H5Pset_chunk(dcpl.get(), width > 1 ? 2 : 1, chunk);
@@ -78,7 +80,8 @@ void ExpectSameChunks(const Case& c, int level, const std::vector<unsigned char>
     hsize_t dims[2] = {rows, c.width};
     Handle space(H5Screate_simple(c.width > 1 ? 2 : 1, dims, nullptr), "space");
     Handle dcpl = Creation(pipeline, chunk_rows, c.width, c.type, fill.empty() ? nullptr : fill.data());
-    Handle dataset(H5Dcreate2(file.get(), "d", c.type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), "dset");
+    Handle dataset(H5Dcreate2(file.get(), "d", c.type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                   "dset");
     ASSERT_GE(H5Dwrite(dataset.get(), c.type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), 0);
   }
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), "open");
@@ -106,7 +109,8 @@ void ExpectSameChunks(const Case& c, int level, const std::vector<unsigned char>
     std::uint32_t their_mask = 0;
     ASSERT_GE(H5Dread_chunk(dataset.get(), H5P_DEFAULT, offset, &their_mask, theirs.data()), 0);
     EXPECT_EQ(our_mask, their_mask) << "chunk at row " << first;
-    EXPECT_EQ(ours, theirs) << "chunk at row " << first << ": " << ours.size() << " bytes against " << theirs.size();
+    EXPECT_EQ(ours, theirs) << "chunk at row " << first << ": " << ours.size() << " bytes against "
+                            << theirs.size();
 
     std::vector<unsigned char> back;
     ASSERT_TRUE(filter.Reverse(pipeline, our_mask, ours.data(), ours.size(), raw.size(), back));
@@ -143,8 +147,8 @@ TEST(ChunkFilters, EqualHdf5sOwnPipelineForEveryKindOfDataset) {
   Handle string_type = hdf5::FixedStringType(64);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::vector<Case> cases = {
-      {"float64", H5T_IEEE_F64LE, 8, 1, true}, {"int64", H5T_STD_I64LE, 8, 1, true},
-      {"int32", H5T_STD_I32LE, 4, 1, true},    {"int8", H5T_STD_I8LE, 1, 1, true},
+      {"float64", H5T_IEEE_F64LE, 8, 1, true},      {"int64", H5T_STD_I64LE, 8, 1, true},
+      {"int32", H5T_STD_I32LE, 4, 1, true},         {"int8", H5T_STD_I8LE, 1, 1, true},
       {"complex", complex_type.get(), 16, 5, true}, {"series", H5T_IEEE_F64LE, 8, 601, true},
       {"string", string_type.get(), 64, 1, false},
   };
@@ -159,7 +163,8 @@ TEST(ChunkFilters, EqualHdf5sOwnPipelineForEveryKindOfDataset) {
           if (c.element_size == 8 || c.element_size == 16) {
             // Smooth values with an occasional NaN: what the sweeps store.
             for (std::size_t k = 0; k < c.element_size / 8; ++k) {
-              const double v = e % 37 == 0 ? nan : std::sin(0.01 * static_cast<double>(e)) + 1e-3 * uniform(random);
+              const double v =
+                  e % 37 == 0 ? nan : std::sin(0.01 * static_cast<double>(e)) + 1e-3 * uniform(random);
               if (c.name == "int64") {
                 const std::int64_t i = static_cast<std::int64_t>(e) * 3 - 7;
                 std::memcpy(at, &i, 8);
@@ -174,7 +179,8 @@ TEST(ChunkFilters, EqualHdf5sOwnPipelineForEveryKindOfDataset) {
             *at = static_cast<unsigned char>(e % 3);
           } else {
             std::memset(at, 0, c.element_size);
-            if (e % 17 == 3) std::snprintf(reinterpret_cast<char*>(at), c.element_size, "run %zu failed: diverged", e);
+            if (e % 17 == 3)
+              std::snprintf(reinterpret_cast<char*>(at), c.element_size, "run %zu failed: diverged", e);
           }
         }
         std::vector<unsigned char> fill;
@@ -217,10 +223,14 @@ TEST(ChunkFilters, DeflateEqualsCompress2WithReusedDirtyBuffers) {
     const int kind = static_cast<int>(random() % 4);
     unsigned char run = 0;
     for (auto& c : data) {
-      if (kind == 0) c = static_cast<unsigned char>(random());
-      else if (kind == 1) c = random() % 4 == 0 ? static_cast<unsigned char>(random()) : 0;
-      else if (kind == 2) c = static_cast<unsigned char>(random() % 3);
-      else c = run = random() % 8 == 0 ? static_cast<unsigned char>(random()) : run;
+      if (kind == 0)
+        c = static_cast<unsigned char>(random());
+      else if (kind == 1)
+        c = random() % 4 == 0 ? static_cast<unsigned char>(random()) : 0;
+      else if (kind == 2)
+        c = static_cast<unsigned char>(random() % 3);
+      else
+        c = run = random() % 8 == 0 ? static_cast<unsigned char>(random()) : run;
     }
     FilterPipeline pipeline;
     pipeline.deflate_level = level;
@@ -265,7 +275,8 @@ TEST(ChunkFilters, EveryChunkOfASweepEqualsHdf5sOwn) {
   const auto archive = dir / "a.h5";
   {
     ArchiveOpenReport opened;
-    auto writer = ArchiveWriter::Open(archive, plan, RunProvenance{"test", 2}, ArchiveOpenMode::kCreate, &opened);
+    auto writer =
+        ArchiveWriter::Open(archive, plan, RunProvenance{"test", 2}, ArchiveOpenMode::kCreate, &opened);
     RunSweep(plan, opened.pending_blocks, *writer, RunnerOptions{2, nullptr, 2}, nullptr);
     writer->Finish();
   }
@@ -281,7 +292,8 @@ TEST(ChunkFilters, EveryChunkOfASweepEqualsHdf5sOwn) {
     Handle space(H5Dget_space(source.get()), "space");
     Handle dcpl(H5Dget_create_plist(source.get()), "dcpl");
     const std::string name = std::to_string(&stored - layout.datasets().data());
-    Handle target(H5Dcreate2(copy_file.get(), name.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+    Handle target(H5Dcreate2(copy_file.get(), name.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(),
+                             H5P_DEFAULT),
                   "create copy");
     const auto dims = hdf5::Dimensions(source.get());
     std::size_t elements = 1;
@@ -289,7 +301,8 @@ TEST(ChunkFilters, EveryChunkOfASweepEqualsHdf5sOwn) {
     std::vector<unsigned char> values(elements * H5Tget_size(type.get()));
     ASSERT_GE(H5Dread(source.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
     ASSERT_GE(H5Dwrite(target.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
-    for (hsize_t row = 0; row < static_cast<hsize_t>(dims[0]); row += static_cast<hsize_t>(stored.chunk_rows)) {
+    for (hsize_t row = 0; row < static_cast<hsize_t>(dims[0]);
+         row += static_cast<hsize_t>(stored.chunk_rows)) {
       const hsize_t offset[2] = {row, 0};
       unsigned mask = 0;
       haddr_t address = HADDR_UNDEF;

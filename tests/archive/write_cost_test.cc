@@ -4,7 +4,6 @@
 #include "engine/archive/write_cost.h"
 
 #include <gtest/gtest.h>
-
 #include <stdlib.h>
 
 #include <cstdlib>

@@ -9,8 +9,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <ctime>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -104,7 +104,8 @@ void WriteArchive(benchmark::State& state, const char* study_text, const std::st
   double cpu_s = 0, encode_s = 0, store_s = 0;
   for (auto _ : state) {
     RemoveArchive(path);
-    auto writer = ArchiveWriter::Open(path, plan, RunProvenance{"bench", 1}, ArchiveOpenMode::kCreate, nullptr);
+    auto writer =
+        ArchiveWriter::Open(path, plan, RunProvenance{"bench", 1}, ArchiveOpenMode::kCreate, nullptr);
     const double cpu_start = ThreadCpuSeconds();
     const auto start = std::chrono::steady_clock::now();
     for (ResultBlock& block : blocks) {
@@ -129,12 +130,11 @@ void WriteArchive(benchmark::State& state, const char* study_text, const std::st
   state.counters["bytes_per_run"] = static_cast<double>(bytes) / static_cast<double>(plan.run_count());
   state.counters["raw_bytes_per_run"] = static_cast<double>(plan.storage().bytes_per_run);
   // Seconds per 1000 runs, wall clock (printed with an SI prefix).
-  state.counters["time_per_1000_runs"] =
-      benchmark::Counter(thousands, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["time_per_1000_runs"] = benchmark::Counter(
+      thousands, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   // CPU seconds of the writing thread per 1000 runs: what the writer takes from the workers when
   // the cores are busy, and what a loaded machine inflates less than the wall clock.
-  state.counters["cpu_per_1000_runs"] =
-      cpu_s / static_cast<double>(state.iterations()) / thousands;
+  state.counters["cpu_per_1000_runs"] = cpu_s / static_cast<double>(state.iterations()) / thousands;
   // Of it: the workers' share (filtering the chunks) and the writer thread's (storing them).
   state.counters["encode_cpu_per_1000_runs"] = encode_s / static_cast<double>(state.iterations()) / thousands;
   state.counters["store_cpu_per_1000_runs"] = store_s / static_cast<double>(state.iterations()) / thousands;
@@ -156,14 +156,25 @@ void BM_ArchiveWrite_Modes(benchmark::State& state) {
   const int level = static_cast<int>(state.range(0));
   WriteArchive(state, WithOutput(kModesStudy, level, 0).c_str(), "modes");
 }
-BENCHMARK(BM_ArchiveWrite_Modes)->ArgName("deflate")->Arg(1)->Arg(4)->Arg(0)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ArchiveWrite_Modes)
+    ->ArgName("deflate")
+    ->Arg(1)
+    ->Arg(4)
+    ->Arg(0)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 // Argument: runs per batch and chunk (0: the plan's choice, 128 for this study).
 void BM_ArchiveWrite_ModesOpenLoopSummary(benchmark::State& state) {
   const int chunk = static_cast<int>(state.range(0));
   WriteArchive(state, WithOutput(kSummaryStudy, -1, chunk).c_str(), "summary");
 }
-BENCHMARK(BM_ArchiveWrite_ModesOpenLoopSummary)->ArgName("chunk_runs")->Arg(0)->Arg(1024)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ArchiveWrite_ModesOpenLoopSummary)
+    ->ArgName("chunk_runs")
+    ->Arg(0)
+    ->Arg(1024)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace gesweep

@@ -10,7 +10,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -116,7 +115,9 @@ void RunEigenvaluesOnly(benchmark::State& state, EigenvalueSolver solver) {
   }
   state.counters["sweeps"] = sweeps / static_cast<double>(matrices.size());
 }
-void BM_EigenvaluesFixedSize(benchmark::State& state) { RunEigenvaluesOnly(state, EigenvalueSolver::kFixedSize); }
+void BM_EigenvaluesFixedSize(benchmark::State& state) {
+  RunEigenvaluesOnly(state, EigenvalueSolver::kFixedSize);
+}
 BENCHMARK(BM_EigenvaluesFixedSize);
 void BM_EigenvaluesEigen(benchmark::State& state) { RunEigenvaluesOnly(state, EigenvalueSolver::kEigen); }
 BENCHMARK(BM_EigenvaluesEigen);
@@ -242,7 +243,8 @@ void BM_EigenvaluesOnly(benchmark::State& state) {
   }
   std::size_t i = 0;
   for (auto _ : state) {
-    const auto values = kBalanced ? EigenvaluesBalanced(matrices[i++ & 1023]) : EigenvaluesUnbalanced(matrices[i++ & 1023]);
+    const auto values =
+        kBalanced ? EigenvaluesBalanced(matrices[i++ & 1023]) : EigenvaluesUnbalanced(matrices[i++ & 1023]);
     benchmark::DoNotOptimize(values.data());
   }
   state.counters["agreement"] = agreement;
@@ -413,7 +415,8 @@ void RunOpenLoop(benchmark::State& state, const OpenLoopConfig& config) {
     result = SimulateOpenLoop(Model(), config);
     benchmark::DoNotOptimize(result.summary.final_state.data());
   }
-  if (result.summary.end_event != OpenLoopEndEvent::kTimeLimit) state.SkipWithError("the run did not last 30 s");
+  if (result.summary.end_event != OpenLoopEndEvent::kTimeLimit)
+    state.SkipWithError("the run did not last 30 s");
   state.counters["steps"] = static_cast<double>(result.summary.steps);
   state.counters["rhs_calls"] = static_cast<double>(result.summary.rhs_calls);
 }

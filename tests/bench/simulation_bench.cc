@@ -41,9 +41,9 @@ void Report(benchmark::State& state, const OpenLoopResult& result) {
   state.counters["steps"] = static_cast<double>(result.summary.steps);
   state.counters["rhs_calls"] = static_cast<double>(result.summary.rhs_calls);
   // Seconds per right-hand-side call, integrator overhead included (printed with an SI prefix).
-  state.counters["time_per_rhs"] = benchmark::Counter(static_cast<double>(result.summary.rhs_calls),
-                                                      benchmark::Counter::kIsIterationInvariantRate |
-                                                          benchmark::Counter::kInvert);
+  state.counters["time_per_rhs"] =
+      benchmark::Counter(static_cast<double>(result.summary.rhs_calls),
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
 void Run(benchmark::State& state, const LongitudinalModel& model, const OpenLoopConfig& config) {
@@ -56,7 +56,9 @@ void Run(benchmark::State& state, const LongitudinalModel& model, const OpenLoop
 }
 
 // The target: re-evaluation at every stage (linear table, fast path).
-void BM_Rk4_30s_Reevaluated(benchmark::State& state) { Run(state, Model(Interpolation::kLinear), PaperRun()); }
+void BM_Rk4_30s_Reevaluated(benchmark::State& state) {
+  Run(state, Model(Interpolation::kLinear), PaperRun());
+}
 BENCHMARK(BM_Rk4_30s_Reevaluated)->Unit(benchmark::kMicrosecond);
 
 // The floor: the same run with A and B frozen at (H0, u0).

@@ -20,12 +20,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "engine/archive/archive_writer.h"
 #include "engine/common/errors.h"
@@ -89,7 +88,9 @@ struct Timing {
 double ProcessCpuSeconds() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+  auto seconds = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
   return seconds(usage.ru_utime) + seconds(usage.ru_stime);
 }
 
@@ -178,8 +179,9 @@ int Main(int argc, char** argv) {
     } else if (!a.empty() && a[0] != '-' && o.study.empty()) {
       o.study = a;
     } else {
-      throw InputError("command line", a, "", "usage: gesweep_sweep_throughput STUDY [--threads N] "
-                                              "[--repetitions R] [--mode both|compute|write] [--archive PATH]");
+      throw InputError("command line", a, "",
+                       "usage: gesweep_sweep_throughput STUDY [--threads N] "
+                       "[--repetitions R] [--mode both|compute|write] [--archive PATH]");
     }
   }
   if (o.study.empty()) throw InputError("command line", "STUDY", "", "missing: a study file");

@@ -89,7 +89,8 @@ TEST(Describe, RangesAreCheckedInTheKeysUnit) {
 }
 
 TEST(Describe, StudyTablesAreReadFromTheSameList) {
-  const toml::table doc = ParseToml("speed_mps = 40\nangle_deg = 45\nshape = \"triangle\"\nenabled = false\n", "s.toml");
+  const toml::table doc =
+      ParseToml("speed_mps = 40\nangle_deg = 45\nshape = \"triangle\"\nenabled = false\n", "s.toml");
   Settings s;
   ReadFields(TomlSection(doc, "s.toml", ""), s);
   EXPECT_EQ(s.speed_mps, 40.0);
@@ -97,7 +98,8 @@ TEST(Describe, StudyTablesAreReadFromTheSameList) {
   EXPECT_EQ(s.shape, Shape::kTriangle);
   EXPECT_FALSE(s.enabled);
   EXPECT_EQ(s.flag_only_m, 1.5);  // untouched
-  EXPECT_EQ(StudyKeys(Settings{}), (std::vector<std::string>{"speed_mps", "angle_deg", "shape", "enabled", "count"}));
+  EXPECT_EQ(StudyKeys(Settings{}),
+            (std::vector<std::string>{"speed_mps", "angle_deg", "shape", "enabled", "count"}));
 }
 
 TEST(Describe, StudyTablesRefuseUnknownKeysBadNamesAndRanges) {

@@ -32,20 +32,25 @@ TEST(EscapeForMessage, LeavesPrintableTextAndValidUtf8Alone) {
 
 TEST(EscapeForMessage, EscapesControlCharacters) {
   EXPECT_EQ(EscapeForMessage("a\nb\r\tc"), "a\\nb\\r\\tc");
-  EXPECT_EQ(EscapeForMessage("\x1b[2J\x1b[Hcleared"), "\\x1b[2J\\x1b[Hcleared");  // the ESC that cleared a terminal
+  EXPECT_EQ(EscapeForMessage("\x1b[2J\x1b[Hcleared"),
+            "\\x1b[2J\\x1b[Hcleared");  // the ESC that cleared a terminal
   EXPECT_EQ(EscapeForMessage(std::string("nul\0byte", 8)), "nul\\x00byte");
   EXPECT_EQ(EscapeForMessage("del\x7f"), "del\\x7f");
-  EXPECT_EQ(EscapeForMessage("csi\xc2\x9b" "31m"), "csi\\u009b31m");  // U+009B, the 8-bit CSI
+  EXPECT_EQ(EscapeForMessage("csi\xc2\x9b"
+                             "31m"),
+            "csi\\u009b31m");  // U+009B, the 8-bit CSI
 }
 
 TEST(EscapeForMessage, EscapesEveryByteOfBrokenUtf8) {
-  EXPECT_EQ(EscapeForMessage("\xce"), "\\xce");                // one byte of a two-byte character, alone
-  EXPECT_EQ(EscapeForMessage("a\xce" "b"), "a\\xceb");          // a lead byte followed by ASCII
-  EXPECT_EQ(EscapeForMessage("\x80\xbf"), "\\x80\\xbf");        // stray continuation bytes
-  EXPECT_EQ(EscapeForMessage("\xc0\xaf"), "\\xc0\\xaf");        // an overlong '/'
-  EXPECT_EQ(EscapeForMessage("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a UTF-16 surrogate
+  EXPECT_EQ(EscapeForMessage("\xce"), "\\xce");  // one byte of a two-byte character, alone
+  EXPECT_EQ(EscapeForMessage("a\xce"
+                             "b"),
+            "a\\xceb");                                                     // a lead byte followed by ASCII
+  EXPECT_EQ(EscapeForMessage("\x80\xbf"), "\\x80\\xbf");                    // stray continuation bytes
+  EXPECT_EQ(EscapeForMessage("\xc0\xaf"), "\\xc0\\xaf");                    // an overlong '/'
+  EXPECT_EQ(EscapeForMessage("\xed\xa0\x80"), "\\xed\\xa0\\x80");           // a UTF-16 surrogate
   EXPECT_EQ(EscapeForMessage("\xf4\x90\x80\x80"), "\\xf4\\x90\\x80\\x80");  // above U+10FFFF
-  EXPECT_EQ(EscapeForMessage("\xe2\x89"), "\\xe2\\x89");        // a three-byte character cut short
+  EXPECT_EQ(EscapeForMessage("\xe2\x89"), "\\xe2\\x89");  // a three-byte character cut short
 }
 
 TEST(EscapeForMessage, IsIdempotent) {

@@ -71,7 +71,8 @@ TEST(InputLimits, CheckThrowsOneLineNamingKeyAndValue) {
     FAIL() << "no exception";
   } catch (const InputError& e) {
     const std::string text = e.what();
-    EXPECT_EQ(text.rfind("command line: --speed-mps = 1e-300: expected a number in [1, 300] m/s", 0), 0u) << text;
+    EXPECT_EQ(text.rfind("command line: --speed-mps = 1e-300: expected a number in [1, 300] m/s", 0), 0u)
+        << text;
   }
   EXPECT_NO_THROW(CheckInputLimit("speed_mps", 32.0, "command line", "--speed-mps"));
 }

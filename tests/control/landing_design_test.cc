@@ -65,7 +65,8 @@ TEST(LandingDesign, DefaultGainStabilisesTheDesignModel) {
   // Closed-loop eigenvalues recomputed here from the model and the gain, not taken from the solver.
   const DesignMatrix closed = design.model.A - design.model.B * design.design_gain;
   const Eigen::VectorXcd eigenvalues = Eigen::EigenSolver<DesignMatrix>(closed).eigenvalues();
-  for (Eigen::Index i = 0; i < eigenvalues.size(); ++i) EXPECT_LT(eigenvalues(i).real(), 0.0) << eigenvalues(i);
+  for (Eigen::Index i = 0; i < eigenvalues.size(); ++i)
+    EXPECT_LT(eigenvalues(i).real(), 0.0) << eigenvalues(i);
   // The open-loop design model is unstable at the wheel-contact height (the ground-effect phugoid,
   // docs/model.md §6), so this is a real stabilisation, not a formality.
   const Eigen::VectorXcd open = Eigen::EigenSolver<DesignMatrix>(design.model.A).eigenvalues();
@@ -75,9 +76,11 @@ TEST(LandingDesign, DefaultGainStabilisesTheDesignModel) {
   const Eigen::MatrixXd& S = design.riccati_solution;
   const Eigen::MatrixXd A = design.model.A;
   const Eigen::MatrixXd B = design.model.B;
-  const Eigen::MatrixXd residual = A.transpose() * S + S * A - S * B * B.transpose() * S / config.r_weight + Q;
+  const Eigen::MatrixXd residual =
+      A.transpose() * S + S * A - S * B * B.transpose() * S / config.r_weight + Q;
   EXPECT_LT(residual.norm() / (2 * (A.transpose() * S).norm() + Q.norm()), kRelativeResidualTolerance);
-  EXPECT_LT((design.design_gain - B.transpose() * S / config.r_weight).norm(), 1e-9 * design.design_gain.norm());
+  EXPECT_LT((design.design_gain - B.transpose() * S / config.r_weight).norm(),
+            1e-9 * design.design_gain.norm());
 }
 
 TEST(LandingDesign, DeltaHWeightAddsToTheDeviationWeight) {

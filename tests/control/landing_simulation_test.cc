@@ -75,7 +75,8 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
   const double tau_s = config.flare_height_m / (config.start_speed_mps * std::sin(gamma_rad));
   EXPECT_DOUBLE_EQ(r.flare_time_constant_s, tau_s);
   const double ideal_touchdown_s =
-      r.flare_start_time_s + tau_s * std::log(config.flare_height_m / model.aircraft().wheel_contact_height_m);
+      r.flare_start_time_s +
+      tau_s * std::log(config.flare_height_m / model.aircraft().wheel_contact_height_m);
   EXPECT_NEAR(r.touchdown_time_s, ideal_touchdown_s, kFlareTrackingTolerance_s);
   // The transmitter is where the glide path meets H = 0: touchdown past it by u0·(t − H0/(u0·γ)).
   EXPECT_NEAR(r.touchdown_distance_past_transmitter_m,
@@ -92,7 +93,8 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
       EXPECT_NEAR(s.reference_height_m, config.start_height_m - glide_sink_mps * s.time_s,
                   kClosedFormTolerance);
       if (s.time_s > 100.0 && s.time_s < 200.0) {
-        EXPECT_NEAR(s.sink_rate_mps, glide_sink_mps, kGlideSinkRelativeTolerance * glide_sink_mps) << s.time_s;
+        EXPECT_NEAR(s.sink_rate_mps, glide_sink_mps, kGlideSinkRelativeTolerance * glide_sink_mps)
+            << s.time_s;
         checked_glide = true;
       }
     } else {
@@ -107,8 +109,9 @@ TEST(LandingSimulation, DefaultLandingFromFiveHundredMetres) {
 }
 
 TEST(LandingSimulation, SaturatedTimeMatchesTheSeries) {
-  // An upper limit of 3.5° is below the initial pitch-over command (≈ 4.9°) and above the glide trim (≈ 2.8°):
-  // the command saturates once, early. The event-located total must match a fine sampling of the command.
+  // An upper limit of 3.5° is below the initial pitch-over command (≈ 4.9°) and above the glide trim
+  // (≈ 2.8°): the command saturates once, early. The event-located total must match a fine sampling of the
+  // command.
   const LongitudinalModel model = Ance();
   LandingConfig config;
   config.elevator_max_deg = 3.5;
@@ -188,8 +191,9 @@ TEST(LandingSimulation, DefaultTimeLimitIsTwiceTheReferenceTrajectory) {
   LandingConfig config;
   const double gamma_rad = config.glide_slope_deg * kRadPerDeg;
   const double tau_s = FlareTimeConstant(config);
-  const double nominal_s = (config.start_height_m - config.flare_height_m) / (config.start_speed_mps * gamma_rad) +
-                           tau_s * std::log(config.flare_height_m / model.aircraft().wheel_contact_height_m);
+  const double nominal_s =
+      (config.start_height_m - config.flare_height_m) / (config.start_speed_mps * gamma_rad) +
+      tau_s * std::log(config.flare_height_m / model.aircraft().wheel_contact_height_m);
   EXPECT_NEAR(NominalLandingTime(config, model.aircraft().wheel_contact_height_m), nominal_s,
               kClosedFormTolerance);
   EXPECT_NEAR(LandingTimeLimit(config, model.aircraft().wheel_contact_height_m), 2 * nominal_s,

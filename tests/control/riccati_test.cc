@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <random>
 
@@ -156,7 +155,8 @@ TEST(Lqr, InvalidWeightsAreReported) {
   EXPECT_EQ(Lqr(A, B, MatrixXd::Identity(2, 2), Mat({{0}})).status, RiccatiStatus::kInvalidWeights);
   EXPECT_EQ(Lqr(A, B, Mat({{1, 0}, {0, -1}}), Mat({{1}})).status, RiccatiStatus::kInvalidWeights);
   EXPECT_EQ(Lqr(A, B, Mat({{1, 1}, {0, 1}}), Mat({{1}})).status, RiccatiStatus::kInvalidWeights);
-  EXPECT_EQ(Lqr(A, B, MatrixXd::Identity(2, 2), Mat({{std::nan("")}})).status, RiccatiStatus::kInvalidWeights);
+  EXPECT_EQ(Lqr(A, B, MatrixXd::Identity(2, 2), Mat({{std::nan("")}})).status,
+            RiccatiStatus::kInvalidWeights);
 }
 
 TEST(Pbh, StableUncontrollableModeIsStillStabilizable) {

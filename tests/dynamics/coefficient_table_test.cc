@@ -51,7 +51,8 @@ TEST(CoefficientTable, LinearAndPchipReproduceLinearDataExactly) {
     for (double h : {0.5, 0.61, 1.0, 1.7, 2.2, 4.9, 8.99, 9.0}) {
       const CoefficientRow row = table.At(h);
       for (int c = 0; c < kTabulatedCount; ++c) {
-        EXPECT_NEAR(row[c], LinearValue(c, h), kRoundingTolerance) << ToString(kind) << " c=" << c << " H=" << h;
+        EXPECT_NEAR(row[c], LinearValue(c, h), kRoundingTolerance)
+            << ToString(kind) << " c=" << c << " H=" << h;
       }
     }
   }

@@ -55,10 +55,13 @@ TEST_F(AnceCurve, FollowsTheBoundaryAndFindsWhereItAppears) {
     ASSERT_TRUE(h) << u;
     EXPECT_NEAR(*h, *Sampled(model_, u).height_m, kOracle_m) << u;
   }
-  const auto at = std::find_if(curve.points.begin(), curve.points.end(), [](const auto& p) { return p.speed_mps > 40; });
+  const auto at =
+      std::find_if(curve.points.begin(), curve.points.end(), [](const auto& p) { return p.speed_mps > 40; });
   ASSERT_NE(at, curve.points.end());
   constexpr double kDu = 1e-2;  // H* moves ~1e-4 m, far above the oracle's 1e-7 m bracket
-  const double fd = (*Sampled(model_, at->speed_mps + kDu).height_m - *Sampled(model_, at->speed_mps - kDu).height_m) / (2 * kDu);
+  const double fd =
+      (*Sampled(model_, at->speed_mps + kDu).height_m - *Sampled(model_, at->speed_mps - kDu).height_m) /
+      (2 * kDu);
   EXPECT_NEAR(at->height_speed_derivative, fd,
               kSlopeRelativeTolerance * std::max(1.0, std::abs(fd)) + 2 * kOracle_m / kDu);
   EXPECT_EQ(curve.points.front().speed_mps, appears.speed_mps);

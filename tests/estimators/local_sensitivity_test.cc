@@ -34,22 +34,37 @@ Perturbed Perturb(const Aircraft& aircraft, const ModelOptions& base, const Mode
                   double speed_mps) {
   ModelOptions options = base;
   switch (p.kind) {
-    case ModelParameterKind::kCoefficientScale: options.coefficient_scale[Index(p.coefficient)] = value; break;
-    case ModelParameterKind::kCDoScale: options.CDo_scale = value; break;
-    case ModelParameterKind::kMass: options.mass_kg = value; break;
-    case ModelParameterKind::kPitchInertia: options.pitch_inertia_kgm2 = value; break;
-    case ModelParameterKind::kSpeed: return {LongitudinalModel(aircraft, options), value};
+    case ModelParameterKind::kCoefficientScale:
+      options.coefficient_scale[Index(p.coefficient)] = value;
+      break;
+    case ModelParameterKind::kCDoScale:
+      options.CDo_scale = value;
+      break;
+    case ModelParameterKind::kMass:
+      options.mass_kg = value;
+      break;
+    case ModelParameterKind::kPitchInertia:
+      options.pitch_inertia_kgm2 = value;
+      break;
+    case ModelParameterKind::kSpeed:
+      return {LongitudinalModel(aircraft, options), value};
   }
   return {LongitudinalModel(aircraft, options), speed_mps};
 }
 
-double BaseValue(const Aircraft& aircraft, const ModelOptions& options, const ModelParameter& p, double speed) {
+double BaseValue(const Aircraft& aircraft, const ModelOptions& options, const ModelParameter& p,
+                 double speed) {
   switch (p.kind) {
-    case ModelParameterKind::kCoefficientScale: return options.coefficient_scale[Index(p.coefficient)];
-    case ModelParameterKind::kCDoScale: return options.CDo_scale;
-    case ModelParameterKind::kMass: return options.mass_kg.value_or(aircraft.mass_kg);
-    case ModelParameterKind::kPitchInertia: return options.pitch_inertia_kgm2.value_or(aircraft.pitch_inertia_kgm2);
-    case ModelParameterKind::kSpeed: return speed;
+    case ModelParameterKind::kCoefficientScale:
+      return options.coefficient_scale[Index(p.coefficient)];
+    case ModelParameterKind::kCDoScale:
+      return options.CDo_scale;
+    case ModelParameterKind::kMass:
+      return options.mass_kg.value_or(aircraft.mass_kg);
+    case ModelParameterKind::kPitchInertia:
+      return options.pitch_inertia_kgm2.value_or(aircraft.pitch_inertia_kgm2);
+    case ModelParameterKind::kSpeed:
+      return speed;
   }
   return 0;
 }
@@ -73,14 +88,18 @@ TEST_F(AnceLocal, StateMatrixDerivativeMatchesHandDerivedForms) {
   // CMq enters only Mq, linearly: ∂A/∂s_CMq = Mq in (q, q).
   Matrix5d expected = Matrix5d::Zero();
   expected(kPitchRate, kPitchRate) = d.Mq;
-  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("scale.CMq")) - expected).cwiseAbs().maxCoeff(),
+  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("scale.CMq")) - expected)
+                .cwiseAbs()
+                .maxCoeff(),
             kExactMatrixTolerance);
 
   // CLh enters Zh and, through Mẇ·Zh, the q row.
   expected.setZero();
   expected(kDeltaW, kDeltaH) = d.Zh;
   expected(kPitchRate, kDeltaH) = d.Mw_dot * d.Zh;
-  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("scale.CLh")) - expected).cwiseAbs().maxCoeff(),
+  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("scale.CLh")) - expected)
+                .cwiseAbs()
+                .maxCoeff(),
             kExactMatrixTolerance);
 
   // X and Z scale with 1/m, so do the Mẇ·Z products; g, u0 and the M derivatives do not.
@@ -89,17 +108,21 @@ TEST_F(AnceLocal, StateMatrixDerivativeMatchesHandDerivedForms) {
   expected.row(kDeltaW) << d.Zu, d.Zw, 0, 0, d.Zh;
   expected.row(kPitchRate) << d.Mw_dot * d.Zu, d.Mw_dot * d.Zw, 0, 0, d.Mw_dot * d.Zh;
   expected /= -m;
-  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("mass_kg")) - expected).cwiseAbs().maxCoeff(),
+  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("mass_kg")) - expected)
+                .cwiseAbs()
+                .maxCoeff(),
             kExactMatrixTolerance);
 
   // Speed: Xu, Xw, Zu, Zw, Mu, Mw, Mq ∝ u; Xh, Zh, Mh ∝ u²; Mẇ ∝ u⁰; kinematic u0 entries d/du = 1.
   expected.setZero();
   expected.row(kDeltaU) << d.Xu / u, d.Xw / u, 0, 0, 2 * d.Xh / u;
   expected.row(kDeltaW) << d.Zu / u, d.Zw / u, 1.0, 0, 2 * d.Zh / u;
-  expected.row(kPitchRate) << (d.Mu + d.Mw_dot * d.Zu) / u, (d.Mw + d.Mw_dot * d.Zw) / u, d.Mq / u + d.Mw_dot, 0,
-      2 * (d.Mh + d.Mw_dot * d.Zh) / u;
+  expected.row(kPitchRate) << (d.Mu + d.Mw_dot * d.Zu) / u, (d.Mw + d.Mw_dot * d.Zw) / u, d.Mq / u + d.Mw_dot,
+      0, 2 * (d.Mh + d.Mw_dot * d.Zh) / u;
   expected(kDeltaH, kDeltaTheta) = 1.0;
-  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("speed_mps")) - expected).cwiseAbs().maxCoeff(),
+  EXPECT_LT((StateMatrixDerivative(model_, H, u, *ModelParameterFromName("speed_mps")) - expected)
+                .cwiseAbs()
+                .maxCoeff(),
             kExactMatrixTolerance);
 }
 
@@ -118,7 +141,8 @@ TEST_P(ExactDerivative, DoesNotDependOnTheStep) {
       const Matrix5d large = StateMatrixDerivative(model, H, kPaperSpeed_mps, p, 0.25);
       const double size = std::max(small.cwiseAbs().maxCoeff(), 1e-12);
       // Rounding of A (~1e-16·|A| ~ 1e-13) divided by the small step.
-      EXPECT_LT((small - large).cwiseAbs().maxCoeff(), 1e-9 * std::max(size, 1.0)) << p.Name() << " at H = " << H;
+      EXPECT_LT((small - large).cwiseAbs().maxCoeff(), 1e-9 * std::max(size, 1.0))
+          << p.Name() << " at H = " << H;
     }
   }
 }
@@ -154,8 +178,8 @@ TEST_F(AnceLocal, ParametersOutsideEquationOneHaveNoEffect) {
   // A CG shift carries CLq into CMq + CLq·shift, which is in Eq. (1).
   ModelOptions shifted;
   shifted.cg_shift_over_chord = 0.05;
-  const EigenSensitivities t = ComputeEigenSensitivities(LongitudinalModel(ance_, shifted), 2.0, kPaperSpeed_mps,
-                                                        {*ModelParameterFromName("scale.CLq")});
+  const EigenSensitivities t = ComputeEigenSensitivities(
+      LongitudinalModel(ance_, shifted), 2.0, kPaperSpeed_mps, {*ModelParameterFromName("scale.CLq")});
   EXPECT_TRUE(t.parameters[0].enters_state_matrix);
 }
 
@@ -198,13 +222,15 @@ TEST_P(EigenvalueDerivatives, MatchCentralDifferencesOfTheEigenvalues) {
     for (int i = 0; i < 5; ++i) largest = std::max(largest, std::abs(row.eigenvalue_derivatives[i]));
     for (int i = 0; i < 5; ++i) {
       const std::complex<double> fd = (plus.eigenvalues[i] - minus.eigenvalues[i]) / (2.0 * dp);
-      EXPECT_LE(std::abs(row.eigenvalue_derivatives[i] - fd), kEigenvalueAgreement * largest + kEigenvalueRoundingFloor)
+      EXPECT_LE(std::abs(row.eigenvalue_derivatives[i] - fd),
+                kEigenvalueAgreement * largest + kEigenvalueRoundingFloor)
           << row.parameter.Name() << " eigenvalue " << i << " at H = " << c.height_m << ": analytic "
           << row.eigenvalue_derivatives[i] << ", central difference " << fd;
     }
     // σ follows the eigenvalue that sets it.
     const double sigma_fd = (plus.stability_margin_per_s - minus.stability_margin_per_s) / (2.0 * dp);
-    EXPECT_NEAR(row.margin_derivative, sigma_fd, kEigenvalueAgreement * largest + kEigenvalueRoundingFloor) << row.parameter.Name();
+    EXPECT_NEAR(row.margin_derivative, sigma_fd, kEigenvalueAgreement * largest + kEigenvalueRoundingFloor)
+        << row.parameter.Name();
   }
   if (std::isfinite(c.height_m)) {
     // ∂λ/∂H from ∂A/∂H against the eigenvalues a centimetre above and below (inside one table segment).
@@ -219,12 +245,14 @@ TEST_P(EigenvalueDerivatives, MatchCentralDifferencesOfTheEigenvalues) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    HeightsAndOptions, EigenvalueDerivatives,
-    ::testing::Values(EigenCase{1.2, Interpolation::kLinear, 0.0}, EigenCase{2.7, Interpolation::kLinear, 0.0},
-                      EigenCase{8.0, Interpolation::kLinear, 0.0},
-                      EigenCase{std::numeric_limits<double>::infinity(), Interpolation::kLinear, 0.0},
-                      EigenCase{1.8, Interpolation::kPchip, 0.0}, EigenCase{2.7, Interpolation::kPchip, 0.08}));
+INSTANTIATE_TEST_SUITE_P(HeightsAndOptions, EigenvalueDerivatives,
+                         ::testing::Values(EigenCase{1.2, Interpolation::kLinear, 0.0},
+                                           EigenCase{2.7, Interpolation::kLinear, 0.0},
+                                           EigenCase{8.0, Interpolation::kLinear, 0.0},
+                                           EigenCase{std::numeric_limits<double>::infinity(),
+                                                     Interpolation::kLinear, 0.0},
+                                           EigenCase{1.8, Interpolation::kPchip, 0.0},
+                                           EigenCase{2.7, Interpolation::kPchip, 0.08}));
 
 // --- ∂H*/∂p against re-running FindBoundary --------------------------------------------------------
 
@@ -245,7 +273,8 @@ TEST_F(AnceLocal, BoundaryHeightDerivativesMatchRerunningFindBoundary) {
   // Agreement: the re-run difference is itself accurate to ~1e-6 relative; 1e-4 of the largest
   // relative effect (~0.5 m) leaves margin for the kinks of σ at table heights being far away.
   double largest = 0;
-  for (const auto& row : s.parameters) largest = std::max(largest, std::abs(row.relative_height_derivative_m));
+  for (const auto& row : s.parameters)
+    largest = std::max(largest, std::abs(row.relative_height_derivative_m));
   int checked = 0;
   for (const auto& row : s.parameters) {
     if (!row.enters_state_matrix) continue;
@@ -279,7 +308,8 @@ TEST_F(AnceLocal, ImplicitFunctionFormOnDelta4AgreesWithTheEigenvectorForm) {
       EXPECT_EQ(row.implicit_height_derivative, 0.0);
       continue;
     }
-    EXPECT_NEAR(row.implicit_height_derivative, row.height_derivative, kAgreement * std::abs(row.height_derivative))
+    EXPECT_NEAR(row.implicit_height_derivative, row.height_derivative,
+                kAgreement * std::abs(row.height_derivative))
         << row.parameter.Name();
     ++checked;
   }
@@ -313,7 +343,8 @@ TEST_F(AnceLocal, RankingIsByRelativeEffectAndLeavesOutParametersOutsideEquation
   const auto ranked = RankByRelativeEffect(s);
   EXPECT_EQ(ranked.size(), 14u);
   for (std::size_t i = 1; i < ranked.size(); ++i) {
-    EXPECT_GE(std::abs(ranked[i - 1].relative_height_derivative_m), std::abs(ranked[i].relative_height_derivative_m));
+    EXPECT_GE(std::abs(ranked[i - 1].relative_height_derivative_m),
+              std::abs(ranked[i].relative_height_derivative_m));
   }
   // The boundary exists because of the h-derivatives (docs/model.md §6: none without them); a stronger CLh
   // raises it (tests/modal/boundary_test.cc), so ∂H*/∂s_CLh > 0.

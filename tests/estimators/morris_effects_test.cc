@@ -28,8 +28,8 @@ TEST(Morris, LinearFunctionRecoversAbsoluteCoefficientsAsMuStar) {
   // y = 3 a − 2 b + 0.5 c + 0·d + 7. An elementary effect is per full range of the parameter, so the
   // oracle is |coefficient| × (upper − lower): on the unit interval, |coefficient| itself.
   const DesignSpec spec = MorrisSpec(
-      {Sampled("x1", 0.0, 1.0), Sampled("x2", 0.0, 1.0), Sampled("x3", 10.0, 14.0), Sampled("x4", -1.0, 1.0)}, 12, 4,
-      11);
+      {Sampled("x1", 0.0, 1.0), Sampled("x2", 0.0, 1.0), Sampled("x3", 10.0, 14.0), Sampled("x4", -1.0, 1.0)},
+      12, 4, 11);
   const std::vector<ParameterRange> ranges = RangesOf(spec);
   const double coefficients[] = {3.0, -2.0, 0.5, 0.0};
   const Eigen::MatrixXd X = DesignRows(spec);
@@ -56,8 +56,8 @@ TEST(Morris, LinearFunctionRecoversAbsoluteCoefficientsAsMuStar) {
 TEST(Morris, LogUniformParameterStepsInLogSpace) {
   // y = 2 ln x + b with x log-uniform on [1, e³]: linear in the unit coordinate u = ln(x)/3, so every
   // elementary effect is 2 × 3 = 6 per full (log-)range; b on [0, 1] contributes 1.
-  const DesignSpec spec =
-      MorrisSpec({Sampled("x1", 1.0, std::exp(3.0), Distribution::kLogUniform), Sampled("x2", 0.0, 1.0)}, 6, 4, 5);
+  const DesignSpec spec = MorrisSpec(
+      {Sampled("x1", 1.0, std::exp(3.0), Distribution::kLogUniform), Sampled("x2", 0.0, 1.0)}, 6, 4, 5);
   const std::vector<ParameterRange> ranges = RangesOf(spec);
   const Eigen::MatrixXd X = DesignRows(spec);
   std::vector<double> y(X.rows());
@@ -134,7 +134,8 @@ TEST(Morris, RejectsADesignThatIsNotOneAtATime) {
   }
   Eigen::MatrixXd short_design(4, 2);
   short_design.setZero();
-  EXPECT_THROW(AnalyzeMorris(short_design, std::vector<double>(4, 0.0), {}, {{"a", 0, 1}, {"b", 0, 1}}), InputError);
+  EXPECT_THROW(AnalyzeMorris(short_design, std::vector<double>(4, 0.0), {}, {{"a", 0, 1}, {"b", 0, 1}}),
+               InputError);
 }
 
 }  // namespace

@@ -11,10 +11,10 @@
 #include <utility>
 #include <vector>
 
+#include "engine/analyses/parameter_catalog.h"
 #include "engine/estimators/saltelli_layout.h"
 #include "engine/estimators/sensitivity_common.h"
 #include "engine/sweep/design.h"
-#include "engine/analyses/parameter_catalog.h"
 
 namespace gesweep::production_designs {
 
@@ -30,7 +30,8 @@ inline DesignParameter Sampled(const std::string& name, double lower, double upp
 }
 
 /// The spec of a `kind = "sobol"` design.
-inline DesignSpec SobolSpec(std::vector<DesignParameter> parameters, std::int64_t base_samples, bool second_order) {
+inline DesignSpec SobolSpec(std::vector<DesignParameter> parameters, std::int64_t base_samples,
+                            bool second_order) {
   DesignSpec spec;
   spec.kind = DesignKind::kSobol;
   spec.parameters = std::move(parameters);
@@ -56,7 +57,7 @@ inline DesignSpec MorrisSpec(std::vector<DesignParameter> parameters, std::int64
 inline Eigen::MatrixXd DesignRows(const DesignSpec& spec) {
   const auto design = MakeDesign(spec);
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows(design->run_count(),
-                                                                               design->column_count());
+                                                                              design->column_count());
   for (std::int64_t i = 0; i < design->run_count(); ++i) design->Row(i, rows.row(i).data());
   return rows;
 }

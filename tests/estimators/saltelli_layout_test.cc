@@ -40,7 +40,8 @@ TEST(SaltelliTakesB, SelectsTheColumnsOfEachRowKind) {
                                {false, true},  {true, false}, {true, true}};
   for (int row = 0; row < 6; ++row) {
     for (int column = 0; column < 2; ++column) {
-      EXPECT_EQ(SaltelliTakesB(2, true, row, column), expected[row][column]) << "row " << row << " column " << column;
+      EXPECT_EQ(SaltelliTakesB(2, true, row, column), expected[row][column])
+          << "row " << row << " column " << column;
     }
   }
   // Without second order: A, AB1, AB2, B.

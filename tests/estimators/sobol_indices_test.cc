@@ -6,8 +6,8 @@
 #include <numbers>
 #include <set>
 
-#include "engine/estimators/ishigami.h"
 #include "engine/common/errors.h"
+#include "engine/estimators/ishigami.h"
 #include "tests/estimators/production_designs.h"
 
 namespace gesweep {
@@ -53,7 +53,8 @@ DesignSpec IshigamiSpec(int base_samples, bool second_order) {
 
 std::vector<double> EvaluateIshigami(const Eigen::MatrixXd& design) {
   std::vector<double> y(design.rows());
-  for (Eigen::Index r = 0; r < design.rows(); ++r) y[r] = Ishigami({design(r, 0), design(r, 1), design(r, 2)});
+  for (Eigen::Index r = 0; r < design.rows(); ++r)
+    y[r] = Ishigami({design(r, 0), design(r, 1), design(r, 2)});
   return y;
 }
 
@@ -159,8 +160,8 @@ FailedRowsCase MakeFailedRowsCase(bool second_order) {
   c.succeeded.assign(c.outputs.size(), true);
   // Failures in different row kinds: an A row, an AB row, a B row, two rows of one block, and a
   // non-finite output flagged as a success.
-  const std::size_t rows[] = {c.layout.RowA(3), c.layout.RowAB(40, 1), c.layout.RowB(41), c.layout.RowAB(100, 0),
-                              c.layout.RowAB(100, 2)};
+  const std::size_t rows[] = {c.layout.RowA(3), c.layout.RowAB(40, 1), c.layout.RowB(41),
+                              c.layout.RowAB(100, 0), c.layout.RowAB(100, 2)};
   for (std::size_t r : rows) {
     c.succeeded[r] = false;
     c.outputs[r] = 1e30;  // a failed run's garbage: it must never be averaged in
@@ -170,7 +171,8 @@ FailedRowsCase MakeFailedRowsCase(bool second_order) {
   c.failed_blocks.insert(200);
   for (int j = 0; j < c.layout.base_samples; ++j) {
     if (c.failed_blocks.count(j)) continue;
-    for (std::size_t r = c.layout.RowA(j); r <= c.layout.RowB(j); ++r) c.reduced_outputs.push_back(c.outputs[r]);
+    for (std::size_t r = c.layout.RowA(j); r <= c.layout.RowB(j); ++r)
+      c.reduced_outputs.push_back(c.outputs[r]);
   }
   return c;
 }
@@ -204,8 +206,10 @@ TEST_P(SobolFailedRows, ErrorPolicyStopsAndNamesTheFirstFailure) {
   EXPECT_EQ(s.status, SensitivityStatus::kStoppedOnFailedRuns);
   EXPECT_TRUE(std::isnan(s.first_order[0]));
   EXPECT_TRUE(std::isnan(s.total[2]));
-  EXPECT_NE(s.message.find("6 of " + std::to_string(c.outputs.size()) + " runs failed"), std::string::npos) << s.message;
-  EXPECT_NE(s.message.find("row " + std::to_string(c.layout.RowA(3)) + ", base sample 3"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("6 of " + std::to_string(c.outputs.size()) + " runs failed"), std::string::npos)
+      << s.message;
+  EXPECT_NE(s.message.find("row " + std::to_string(c.layout.RowA(3)) + ", base sample 3"), std::string::npos)
+      << s.message;
   EXPECT_NE(s.message.find("drop_blocks"), std::string::npos) << s.message;
 }
 

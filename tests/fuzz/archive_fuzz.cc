@@ -30,11 +30,11 @@
 #include "engine/archive/hdf5_util.h"
 #include "engine/common/errors.h"
 #include "engine/products/archive_boundary.h"
+#include "engine/products/archive_sensitivity.h"
+#include "engine/products/run_model.h"
 #include "engine/query/query.h"
 #include "engine/query/query_output.h"
 #include "engine/query/run_columns.h"
-#include "engine/products/run_model.h"
-#include "engine/products/archive_sensitivity.h"
 
 namespace {
 
@@ -65,8 +65,8 @@ class Bytes {
     return s;
   }
   double Number() {
-    static const double kInteresting[] = {0.0, 1.0, -1.0, 0.5, 2.0, 1e-300, 1e300, -1e300, 32.0208,
-                                          0.788, 5.0, 1e308, -0.0, 1e-9, 42.0, 3.0};
+    static const double kInteresting[] = {0.0,     1.0,   -1.0, 0.5,   2.0,  1e-300, 1e300, -1e300,
+                                          32.0208, 0.788, 5.0,  1e308, -0.0, 1e-9,   42.0,  3.0};
     const std::uint8_t kind = Next();
     if (kind < 128) return kInteresting[kind % (sizeof(kInteresting) / sizeof(double))];
     if (kind < 160) return std::nan("");
@@ -84,11 +84,37 @@ class Bytes {
   std::size_t at_ = 0;
 };
 
-const char* const kNames[] = {"runs",   "design", "results", "series", "analysis", "modes",  "boundary",
-                              "index",  "id",     "status",  "message", "height_m", "speed_mps",
-                              "stability_margin_per_s", "eigenvalues_per_s", "open_loop", "time_s",
-                              "height_over_span", "x1", "x2", "x3", "value", "sensitivity", "landing",
-                              "h_derivatives", "scale.CLh", "found", "gain", ".partial", "a b", "\xce\xb1"};
+const char* const kNames[] = {"runs",
+                              "design",
+                              "results",
+                              "series",
+                              "analysis",
+                              "modes",
+                              "boundary",
+                              "index",
+                              "id",
+                              "status",
+                              "message",
+                              "height_m",
+                              "speed_mps",
+                              "stability_margin_per_s",
+                              "eigenvalues_per_s",
+                              "open_loop",
+                              "time_s",
+                              "height_over_span",
+                              "x1",
+                              "x2",
+                              "x3",
+                              "value",
+                              "sensitivity",
+                              "landing",
+                              "h_derivatives",
+                              "scale.CLh",
+                              "found",
+                              "gain",
+                              ".partial",
+                              "a b",
+                              "\xce\xb1"};
 
 std::string Name(Bytes& in) {
   if (in.Below(16) == 0) {
@@ -132,11 +158,16 @@ bool Parents(hid_t file, const std::string& path) {
 // A datatype of the kinds archives (and other programs) use.
 Handle Type(Bytes& in) {
   switch (in.Below(9)) {
-    case 0: return Handle(H5Tcopy(H5T_NATIVE_INT8));
-    case 1: return Handle(H5Tcopy(H5T_NATIVE_INT32));
-    case 2: return Handle(H5Tcopy(H5T_NATIVE_INT64));
-    case 3: return Handle(H5Tcopy(H5T_NATIVE_UINT64));
-    case 4: return Handle(H5Tcopy(H5T_NATIVE_FLOAT));
+    case 0:
+      return Handle(H5Tcopy(H5T_NATIVE_INT8));
+    case 1:
+      return Handle(H5Tcopy(H5T_NATIVE_INT32));
+    case 2:
+      return Handle(H5Tcopy(H5T_NATIVE_INT64));
+    case 3:
+      return Handle(H5Tcopy(H5T_NATIVE_UINT64));
+    case 4:
+      return Handle(H5Tcopy(H5T_NATIVE_FLOAT));
     case 5: {
       Handle type(H5Tcopy(H5T_C_S1));
       H5Tset_size(type.get(), 1 + in.Below(200));
@@ -153,7 +184,8 @@ Handle Type(Bytes& in) {
       H5Tinsert(type.get(), "im", sizeof(double), H5T_NATIVE_DOUBLE);
       return type;
     }
-    default: return Handle(H5Tcopy(H5T_NATIVE_DOUBLE));
+    default:
+      return Handle(H5Tcopy(H5T_NATIVE_DOUBLE));
   }
 }
 
@@ -189,10 +221,10 @@ std::vector<unsigned char> Values(Bytes& in, hid_t type, std::size_t count, std:
 }
 
 void Attribute(Bytes& in, hid_t object) {
-  static const char* const kAttributes[] = {"units",  "description", "levels", "fill",          "time_axis",
-                                            "parameters", "component_names", "method", "keys", "wingspan_m",
-                                            "tolerance_m", "block_rows", "block_layout", "base_samples",
-                                            "second_order", "levels_count", "run_count", "format"};
+  static const char* const kAttributes[] = {
+      "units",           "description",  "levels",       "fill",         "time_axis",   "parameters",
+      "component_names", "method",       "keys",         "wingspan_m",   "tolerance_m", "block_rows",
+      "block_layout",    "base_samples", "second_order", "levels_count", "run_count",   "format"};
   const std::string name = kAttributes[in.Below(sizeof(kAttributes) / sizeof(kAttributes[0]))];
   Handle type = Type(in);
   const bool scalar = in.Below(2) == 0;
@@ -223,8 +255,10 @@ void IntegerAttribute(hid_t object, const char* name, std::int64_t value) {
 }
 
 const char* kStudyTexts[] = {
-    "format_version = 1\nname = \"f\"\naircraft = \"ance.toml\"\n[analyses.modes]\n[parameters]\nspeed_mps = 32.0\n",
-    "format_version = 1\n[analyses.ishigami]\n[design]\nkind = \"sobol\"\nbase_samples = 4\n[[design.parameter]]\n"
+    "format_version = 1\nname = \"f\"\naircraft = \"ance.toml\"\n[analyses.modes]\n[parameters]\nspeed_mps = "
+    "32.0\n",
+    "format_version = 1\n[analyses.ishigami]\n[design]\nkind = \"sobol\"\nbase_samples = "
+    "4\n[[design.parameter]]\n"
     "name = \"x1\"\nuniform = [0.0, 1.0]\n",
     "not toml [[[",
     "",
@@ -264,8 +298,8 @@ void BuildFile(Bytes& in, const std::string& path) {
       Handle space(H5Screate_simple(1, dims, nullptr));
       Handle type = k == 3 ? Handle(H5Tcopy(H5T_C_S1)) : Handle(H5Tcopy(kTypes[k]));
       if (k == 3) H5Tset_size(type.get(), 1 + in.Below(160));
-      Handle dataset(H5Dcreate2(file.get(), kRuns[k], type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                                H5P_DEFAULT));
+      Handle dataset(
+          H5Dcreate2(file.get(), kRuns[k], type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
       std::vector<std::string> texts;
       const auto values = Values(in, type.get(), static_cast<std::size_t>(dims[0]), texts);
       if (dataset && !values.empty()) {

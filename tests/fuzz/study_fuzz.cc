@@ -24,14 +24,16 @@ namespace {
 // seed studies' relative aircraft paths resolve as they do for `gesweep run`.
 std::filesystem::path SourceRoot() {
   std::filesystem::path file(__FILE__);
-  return file.is_absolute() ? file.parent_path().parent_path().parent_path() : std::filesystem::current_path();
+  return file.is_absolute() ? file.parent_path().parent_path().parent_path()
+                            : std::filesystem::current_path();
 }
 
 // Where the fuzzed text pretends to live: the folder whose relative paths its aircraft key most
 // likely uses (studies/, studies/paper/ or the hostile-input corpus). Deterministic in the input.
 std::filesystem::path VirtualPath(std::string_view text) {
   static const std::filesystem::path root = SourceRoot();
-  if (text.find("../../../studies/") != std::string_view::npos) return root / "tests/bad_inputs/study/fuzz.toml";
+  if (text.find("../../../studies/") != std::string_view::npos)
+    return root / "tests/bad_inputs/study/fuzz.toml";
   if (text.find("../aircraft/") != std::string_view::npos) return root / "studies/paper/fuzz.toml";
   return root / "studies/fuzz.toml";
 }

@@ -66,7 +66,8 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
   int with_crossings = 0, scanned_changes = 0, uncertified = 0, wrong_stability = 0;
   for (int n = 0; n < count; ++n) {
     ModelOptions options;
-    for (int c = 0; c < kCoefficientCount; ++c) options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
+    for (int c = 0; c < kCoefficientCount; ++c)
+      options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
     options.CDo_scale = factor(random);
     const LongitudinalModel model(ance, options);
     const BoundaryResult result = FindBoundary(model, kSpeed_mps);
@@ -76,7 +77,8 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
     // Every reported crossing: an eigenvalue on the axis at the root (complex for Hopf, real otherwise).
     for (const BoundaryCrossing& c : result.crossings) {
       ASSERT_TRUE(c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) << ToString(c.kind);
-      const auto lambda = Eigen::EigenSolver<Matrix5d>(model.StateMatrix(c.height_m, kSpeed_mps), false).eigenvalues();
+      const auto lambda =
+          Eigen::EigenSolver<Matrix5d>(model.StateMatrix(c.height_m, kSpeed_mps), false).eigenvalues();
       double closest = INFINITY;
       for (int i = 0; i < 5; ++i) {
         const bool complex = std::abs(lambda[i].imag()) > 1e-9;
@@ -121,7 +123,8 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
       if (!near_a_crossing(h) && stated_stable(h) != (scan.unstable == 0)) {
         ++wrong_stability;
         ADD_FAILURE() << "aircraft " << n << ": at " << h << " m the scan has " << scan.unstable
-                      << " unstable eigenvalues, the finder says " << (stated_stable(h) ? "stable" : "unstable");
+                      << " unstable eigenvalues, the finder says "
+                      << (stated_stable(h) ? "stable" : "unstable");
       }
       if (!std::isnan(previous_h) && scan.unstable != previous.unstable) {
         ++scanned_changes;
@@ -129,8 +132,8 @@ TEST(BoundaryProperty, EveryScannedCrossingIsFoundAndEveryFoundOneIsOnTheAxis) {
           return c.height_m >= previous_h - kLocation_m && c.height_m <= h + kLocation_m;
         });
         EXPECT_TRUE(found) << "aircraft " << n << ": the unstable count goes " << previous.unstable << " -> "
-                           << scan.unstable << " between " << previous_h << " and " << h << " m; certificate: "
-                           << result.certificate;
+                           << scan.unstable << " between " << previous_h << " and " << h
+                           << " m; certificate: " << result.certificate;
       }
       previous = scan;
       previous_h = h;

@@ -101,7 +101,8 @@ TEST_F(AnceBoundary, IsThePapersValueByBothMethods) {
   EXPECT_TRUE(c.stable_above);
   EXPECT_FALSE(c.stable_below);
   // Its eigenvalue is on the axis: the definition of a crossing, checked with Eigen directly.
-  const auto lambda = Eigen::EigenSolver<Matrix5d>(model.StateMatrix(c.height_m, kPaperSpeed_mps), false).eigenvalues();
+  const auto lambda =
+      Eigen::EigenSolver<Matrix5d>(model.StateMatrix(c.height_m, kPaperSpeed_mps), false).eigenvalues();
   double closest = 1;
   for (int i = 0; i < 5; ++i) closest = std::min(closest, std::abs(lambda[i].real()));
   EXPECT_LT(closest, 1e-12);
@@ -236,9 +237,12 @@ TEST(CrossingSearch, SaysSoWhenAPairIsBelowTheRounding) {
 TEST(CrossingSearch, RejectsRootsOfDelta4WhereTwoRealRootsAreOpposite) {
   // D(H) with real roots r(H) and −r(H) + small: λᵢ + λⱼ = 0 at some H but nothing crosses the axis.
   Matrix5d D0 = Matrix5d::Zero(), D1 = Matrix5d::Zero();
-  D0(0, 0) = -2.0;  D1(0, 0) = 0.2;    // −2 + 0.2H
-  D0(1, 1) = -1.0;  D1(1, 1) = -0.1;   // −1 − 0.1H: sum with the first is 0 at... both negative; use
-  D0(1, 1) = 3.0;   D1(1, 1) = -0.5;   // 3 − 0.5H > 0 on [0, 5): unstable, opposite at H = 10/3
+  D0(0, 0) = -2.0;
+  D1(0, 0) = 0.2;  // −2 + 0.2H
+  D0(1, 1) = -1.0;
+  D1(1, 1) = -0.1;  // −1 − 0.1H: sum with the first is 0 at... both negative; use
+  D0(1, 1) = 3.0;
+  D1(1, 1) = -0.5;  // 3 − 0.5H > 0 on [0, 5): unstable, opposite at H = 10/3
   D0(2, 2) = D0(3, 3) = -0.5;
   D0(2, 3) = 1.0;
   D0(3, 2) = -1.0;
@@ -256,7 +260,8 @@ TEST(CrossingSearch, AWrongDegreeBoundIsCaught) {
   s.lower_height_m = 0;
   s.upper_height_m = 10;
   s.coefficient_degrees = {0, 1, 2, 3, 4, 5};
-  s.polynomial_matrix = s.exact_matrix = [&](double h) -> Matrix5d { return linear(h) + 0.01 * h * h * linear.A1; };
+  s.polynomial_matrix =
+      s.exact_matrix = [&](double h) -> Matrix5d { return linear(h) + 0.01 * h * h * linear.A1; };
   const CrossingSearchResult found = CrossingSearch({s}, 1.0);
   EXPECT_FALSE(found.certified);
 }

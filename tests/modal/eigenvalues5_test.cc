@@ -48,7 +48,8 @@ double SpectrumDistance(const Spectrum& a, const Spectrum& b, Scale scale) {
   do {
     double worst = 0;
     for (int i = 0; i < 5 && worst < best; ++i) {
-      worst = std::max(worst, std::abs(a[static_cast<std::size_t>(i)] - b[static_cast<std::size_t>(p[static_cast<std::size_t>(i)])]) /
+      worst = std::max(worst, std::abs(a[static_cast<std::size_t>(i)] -
+                                       b[static_cast<std::size_t>(p[static_cast<std::size_t>(i)])]) /
                                   scale(b[static_cast<std::size_t>(p[static_cast<std::size_t>(i)])]));
     }
     best = std::min(best, worst);
@@ -227,7 +228,8 @@ TEST(FixedSizeKernel, AgreesWithEigenSolverOn100000TableAndRandomMatrices) {
   // contact to above the table and speeds 24-60 m/s.
   for (int n = 0; n < 200; ++n) {
     ModelOptions options;
-    for (int c = 0; c < kCoefficientCount; ++c) options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
+    for (int c = 0; c < kCoefficientCount; ++c)
+      options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
     options.interpolation = n % 2 == 0 ? Interpolation::kLinear : Interpolation::kPchip;
     options.h_derivatives = n % 4 != 3;
     const LongitudinalModel model(ance, options);
@@ -282,10 +284,11 @@ TEST(FixedSizeKernel, TheAnceModesTableIsUnchanged) {
           EXPECT_FALSE(a.solver_fallback);
           EXPECT_TRUE(near(a.stability_margin_per_s, b.stability_margin_per_s));
           for (std::size_t i = 0; i < 5; ++i) {
-            EXPECT_LE(std::abs(a.eigenvalues[i] - b.eigenvalues[i]), kAgreement * std::max(1.0, std::abs(b.eigenvalues[i])));
+            EXPECT_LE(std::abs(a.eigenvalues[i] - b.eigenvalues[i]),
+                      kAgreement * std::max(1.0, std::abs(b.eigenvalues[i])));
           }
-          for (const auto& [x, y] : {std::pair{a.short_period, b.short_period}, std::pair{a.phugoid, b.phugoid},
-                                     std::pair{a.height, b.height}}) {
+          for (const auto& [x, y] : {std::pair{a.short_period, b.short_period},
+                                     std::pair{a.phugoid, b.phugoid}, std::pair{a.height, b.height}}) {
             EXPECT_EQ(x.oscillatory, y.oscillatory);
             EXPECT_EQ(x.neutral, y.neutral);
             EXPECT_TRUE(near(x.natural_frequency_radps, y.natural_frequency_radps));
@@ -310,26 +313,41 @@ TEST(FixedSizeKernel, CompanionMatricesGiveTheirRoots) {
   // max(1, |r|) holds against the roots themselves (measured 5e-14; Eigen's solver 3e-12).
   constexpr double kRootTolerance = 1e-12;
   std::mt19937_64 random(7);
-  std::uniform_real_distribution<double> log_magnitude(std::log(0.05), std::log(20.0)), angle(0.15, std::numbers::pi - 0.15);
+  std::uniform_real_distribution<double> log_magnitude(std::log(0.05), std::log(20.0)),
+      angle(0.15, std::numbers::pi - 0.15);
   std::uniform_int_distribution<int> pattern(0, 2), sign(0, 1);
   double worst = 0, worst_eigen = 0;
   int sets = 0;
   while (sets < 2000) {
     Spectrum roots;
-    auto real = [&](int k) { roots[static_cast<std::size_t>(k)] = (sign(random) ? 1.0 : -1.0) * std::exp(log_magnitude(random)); };
+    auto real = [&](int k) {
+      roots[static_cast<std::size_t>(k)] = (sign(random) ? 1.0 : -1.0) * std::exp(log_magnitude(random));
+    };
     auto pair = [&](int k) {
       const Complex z = std::polar(std::exp(log_magnitude(random)), angle(random));
       roots[static_cast<std::size_t>(k)] = z;
       roots[static_cast<std::size_t>(k + 1)] = std::conj(z);
     };
     const int p = pattern(random);
-    if (p == 0) { pair(0); pair(2); real(4); }
-    if (p == 1) { pair(0); real(2); real(3); real(4); }
-    if (p == 2) { for (int k = 0; k < 5; ++k) real(k); }
+    if (p == 0) {
+      pair(0);
+      pair(2);
+      real(4);
+    }
+    if (p == 1) {
+      pair(0);
+      real(2);
+      real(3);
+      real(4);
+    }
+    if (p == 2) {
+      for (int k = 0; k < 5; ++k) real(k);
+    }
     bool separated = true;
     for (std::size_t i = 0; i < 5; ++i)
       for (std::size_t j = i + 1; j < 5; ++j)
-        separated = separated && std::abs(roots[i] - roots[j]) >= 0.2 * std::max(std::abs(roots[i]), std::abs(roots[j]));
+        separated = separated &&
+                    std::abs(roots[i] - roots[j]) >= 0.2 * std::max(std::abs(roots[i]), std::abs(roots[j]));
     if (!separated) continue;
     const Matrix5d A = Companion(roots);
     const Spectrum ours = Kernel(A);
@@ -550,7 +568,8 @@ TEST(FixedSizeKernel, TheCyclicShiftNeedsAndGetsAnExceptionalShift) {
   EXPECT_TRUE(result.converged);
   EXPECT_GE(result.iterations, 10);
   Spectrum roots;
-  for (int k = 0; k < 5; ++k) roots[static_cast<std::size_t>(k)] = std::polar(1.0, 2 * std::numbers::pi * k / 5);
+  for (int k = 0; k < 5; ++k)
+    roots[static_cast<std::size_t>(k)] = std::polar(1.0, 2 * std::numbers::pi * k / 5);
   EXPECT_LT(Normwise(result.values, roots), kNormwise);
   ExpectStandardised(result.values);
 }

@@ -30,7 +30,9 @@ CharacteristicCoefficients FromRoots(const std::array<std::complex<double>, 5>& 
   std::array<std::complex<double>, 6> c{};
   c[0] = 1.0;
   for (int i = 0; i < 5; ++i) {
-    for (int k = i + 1; k >= 1; --k) c[static_cast<std::size_t>(k)] -= roots[static_cast<std::size_t>(i)] * c[static_cast<std::size_t>(k - 1)];
+    for (int k = i + 1; k >= 1; --k)
+      c[static_cast<std::size_t>(k)] -=
+          roots[static_cast<std::size_t>(i)] * c[static_cast<std::size_t>(k - 1)];
   }
   CharacteristicCoefficients a;
   for (int k = 0; k < 6; ++k) a[static_cast<std::size_t>(k)] = c[static_cast<std::size_t>(k)].real();
@@ -126,7 +128,8 @@ TEST(HurwitzDelta4, IsOrlandosProductOfRootSums) {
   for (int trial = 0; trial < 200; ++trial) {
     Matrix5d A;
     for (int i = 0; i < 25; ++i) A.data()[i] = n(random);
-    const Eigen::Matrix<std::complex<double>, 5, 1> lambda = Eigen::EigenSolver<Matrix5d>(A, false).eigenvalues();
+    const Eigen::Matrix<std::complex<double>, 5, 1> lambda =
+        Eigen::EigenSolver<Matrix5d>(A, false).eigenvalues();
     std::complex<double> product = 1.0;
     double scale = 1.0;
     for (int i = 0; i < 5; ++i)
@@ -152,7 +155,8 @@ TEST(HopfFrequencySquared, TellsAnAxisPairFromAnOppositeRealPair) {
   const CharacteristicCoefficients hopf = FromRoots({{{0, 0.4}, {0, -0.4}, {-1, 3}, {-1, -3}, {-0.2, 0}}});
   EXPECT_NEAR(HurwitzDelta4(hopf), 0.0, kDelta4RoundingTolerance);
   EXPECT_NEAR(HopfFrequencySquared(hopf), 0.16, kHurwitzRoundingTolerance);
-  const CharacteristicCoefficients opposite = FromRoots({{{0.5, 0}, {-0.5, 0}, {-1, 3}, {-1, -3}, {-0.2, 0}}});
+  const CharacteristicCoefficients opposite =
+      FromRoots({{{0.5, 0}, {-0.5, 0}, {-1, 3}, {-1, -3}, {-0.2, 0}}});
   EXPECT_NEAR(HurwitzDelta4(opposite), 0.0, kDelta4RoundingTolerance);
   EXPECT_NEAR(HopfFrequencySquared(opposite), -0.25, kHurwitzRoundingTolerance);
 }

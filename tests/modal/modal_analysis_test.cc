@@ -2,12 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <vector>
 #include <random>
-#include <Eigen/LU>
+#include <vector>
 
 #include "engine/aircraft/atmosphere.h"
 #include "tests/testing/test_paths.h"
@@ -68,7 +68,8 @@ TEST(AnalyzeModes, ReproducesCompanionMatrixRootsAndIdentifiesModes) {
 }
 
 TEST(AnalyzeModes, UnstablePhugoidSetsTheMargin) {
-  const ModalAnalysis modal = AnalyzeModes(Companion({{-1.3, 3.2}, {-1.3, -3.2}, {0.03, 0.6}, {0.03, -0.6}, -0.009}));
+  const ModalAnalysis modal =
+      AnalyzeModes(Companion({{-1.3, 3.2}, {-1.3, -3.2}, {0.03, 0.6}, {0.03, -0.6}, -0.009}));
   EXPECT_NEAR(modal.stability_margin_per_s, 0.03, kRootTolerance);
   EXPECT_FALSE(modal.stable);
   EXPECT_LT(modal.phugoid.damping_ratio, 0.0);
@@ -124,8 +125,8 @@ TEST_F(AnceModes, FreeFlightPhugoidAgreesWithLanchester) {
   constexpr double kLanchesterAccuracy = 0.08;
   const LongitudinalModel model(ance_, ModelOptions{});
   const double CLo = ance_.free_flight[Index(Coefficient::CLo)];
-  const double trim_speed = std::sqrt(2.0 * ance_.mass_kg * kGravity_mps2 /
-                                      (kSeaLevelDensity_kgpm3 * ance_.wing_area_m2 * CLo));
+  const double trim_speed =
+      std::sqrt(2.0 * ance_.mass_kg * kGravity_mps2 / (kSeaLevelDensity_kgpm3 * ance_.wing_area_m2 * CLo));
   const double inf = std::numeric_limits<double>::infinity();
   const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(inf, trim_speed));
   const double lanchester = std::sqrt(2.0) * kGravity_mps2 / trim_speed;
@@ -175,7 +176,8 @@ TEST(Eigenvalues5, LapackAgreesWithEigenSolverOnModelAndRandomMatrices) {
   };
   for (int n = 0; n < 200; ++n) {
     ModelOptions options;
-    for (int c = 0; c < kCoefficientCount; ++c) options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
+    for (int c = 0; c < kCoefficientCount; ++c)
+      options.coefficient_scale[static_cast<std::size_t>(c)] = factor(random);
     const LongitudinalModel model(ance, options);
     for (int i = 0; i < 250; ++i) compare(model.StateMatrix(height(random), speed(random)));
   }

@@ -4,7 +4,6 @@
 //                                 [--prefetch N] [--ranks-per-node N] [--copy] [--quiet]
 // Exit codes as `gesweep run`: 0 all ok, 3 some runs failed, 2 bad input, 1 an I/O error.
 #include <CLI/CLI.hpp>
-
 #include <atomic>
 #include <csignal>
 #include <iostream>
@@ -68,12 +67,14 @@ int main(int argc, char** argv) {
       if (report.error_code) {
         std::cerr << "gesweep: error: " << report.error << "\n";
       } else if (!quiet || report.cancelled || report.runs_failed) {
-        std::cerr << "mpi_runner_driver: " << report.ranks << " ranks on " << report.nodes << " nodes (runs per rank:";
+        std::cerr << "mpi_runner_driver: " << report.ranks << " ranks on " << report.nodes
+                  << " nodes (runs per rank:";
         for (const auto r : report.runs_per_rank) std::cerr << " " << r;
-        std::cerr << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
-                  << " pending" << (report.merged ? "; merged" : "") << "\n";
+        std::cerr << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, "
+                  << report.runs_pending << " pending" << (report.merged ? "; merged" : "") << "\n";
         if (report.runs_complete_at_start)
-          std::cerr << "mpi_runner_driver: resuming: " << report.runs_complete_at_start << " runs already complete\n";
+          std::cerr << "mpi_runner_driver: resuming: " << report.runs_complete_at_start
+                    << " runs already complete\n";
         if (report.cancelled) std::cerr << "mpi_runner_driver: stopped by a signal; continue with --resume\n";
       }
     }

@@ -16,16 +16,16 @@
 #include <numeric>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_writer.h"
 #include "engine/common/errors.h"
 #include "engine/modal/boundary.h"
 #include "engine/modal/modal_analysis.h"
 #include "engine/products/archive_boundary.h"
-#include "engine/archive/archive_lock.h"
+#include "engine/products/run_model.h"
 #include "engine/query/expression.h"
 #include "engine/query/run_columns.h"
-#include "engine/products/run_model.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #include "tests/testing/test_paths.h"

@@ -169,7 +169,8 @@ TEST(Rk4Test, DecayMatchesTheExponentialAndConvergesAtFourthOrder) {
   EXPECT_NEAR(order_23, 4.0, kOrderTolerance);
   // The leading error term of RK4 on ẋ = λx over [0, T]: T·(λh)^4·λ e^{λT}/120 in magnitude.
   const double lambda = -1.3;
-  const double predicted = 2.0 * std::pow(lambda * 0.025, 4) * std::abs(lambda) * std::exp(lambda * 2.0) / 120.0;
+  const double predicted =
+      2.0 * std::pow(lambda * 0.025, 4) * std::abs(lambda) * std::exp(lambda * 2.0) / 120.0;
   EXPECT_NEAR(e3 / predicted, 1.0, kLeadingTermAgreement);
 }
 
@@ -224,7 +225,8 @@ TEST(OscillatorTest, BothMethodsFollowTheClosedFormAndSampleOnTheGrid) {
     // x = cos 2t falls through zero at π/4 + kπ: at π/4, 5π/4, 9π/4 (≈ 7.07) within 10 s.
     ASSERT_EQ(problem.event_times.size(), 3u);
     for (std::size_t k = 0; k < 3; ++k) {
-      const double exact = (std::numbers::pi / 2 + 2 * std::numbers::pi * static_cast<double>(k)) / problem.omega;
+      const double exact =
+          (std::numbers::pi / 2 + 2 * std::numbers::pi * static_cast<double>(k)) / problem.omega;
       EXPECT_NEAR(problem.event_times[k], exact, kEventTimeTolerance_s);
       // The located state is on the far side of the crossing, within the time tolerance of it.
       EXPECT_LE(problem.event_values[k], 0.0);
@@ -287,8 +289,8 @@ TEST(BreakpointTest, HonouredBreakpointsMakeAPulseExact) {
     EXPECT_NEAR(result.final_state[0], 0.2, kSumRoundingTolerance);  // a few additions of rounding
     // A step ending at a breakpoint evaluates its last stage with the left segment.
     for (const auto& [t, segment] : problem.calls) {
-      EXPECT_TRUE((t < 0.1 && segment == 0) || (t == 0.1) || (t > 0.1 && t < 0.3 && segment == 1) || t == 0.3 ||
-                  (t > 0.3 && segment == 2))
+      EXPECT_TRUE((t < 0.1 && segment == 0) || (t == 0.1) || (t > 0.1 && t < 0.3 && segment == 1) ||
+                  t == 0.3 || (t > 0.3 && segment == 2))
           << "t = " << t << " segment " << segment;
     }
   }

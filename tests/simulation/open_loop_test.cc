@@ -5,11 +5,10 @@
 
 #include <gtest/gtest.h>
 
-#include <unsupported/Eigen/MatrixFunctions>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "engine/aircraft/atmosphere.h"
 #include "engine/common/errors.h"
@@ -74,7 +73,8 @@ TEST(DensityPolynomialTest, MatchesIsaDensityInItsBandAndEqualsItOutside) {
   constexpr double kRelativeTolerance = 1e-14;
   for (double field_m : {0.0, 1500.0}) {
     const DensityPolynomial density(field_m);
-    for (double h = DensityPolynomial::kPolynomialLow_m; h <= DensityPolynomial::kPolynomialHigh_m; h += 0.173) {
+    for (double h = DensityPolynomial::kPolynomialLow_m; h <= DensityPolynomial::kPolynomialHigh_m;
+         h += 0.173) {
       const double exact = IsaDensity(field_m + h);
       EXPECT_NEAR(density.At(h), exact, kRelativeTolerance * exact) << "H = " << h;
     }
@@ -111,13 +111,16 @@ TEST(LinearDerivativeTableTest, EqualsTheGenericModelPath) {
       for (double speed_mps : {22.0, 32.0208, 45.0}) {
         const DimensionalDerivatives a = table.DerivativesAt(height_m, speed_mps, hint);
         const DimensionalDerivatives b = model.DerivativesAt(height_m, speed_mps);
-        const double av[] = {a.Xu, a.Xw, a.Xh, a.Xde, a.Zu, a.Zw, a.Zh, a.Zde, a.Mu, a.Mw, a.Mw_dot, a.Mq, a.Mh, a.Mde};
-        const double bv[] = {b.Xu, b.Xw, b.Xh, b.Xde, b.Zu, b.Zw, b.Zh, b.Zde, b.Mu, b.Mw, b.Mw_dot, b.Mq, b.Mh, b.Mde};
+        const double av[] = {a.Xu,  a.Xw, a.Xh, a.Xde,    a.Zu, a.Zw, a.Zh,
+                             a.Zde, a.Mu, a.Mw, a.Mw_dot, a.Mq, a.Mh, a.Mde};
+        const double bv[] = {b.Xu,  b.Xw, b.Xh, b.Xde,    b.Zu, b.Zw, b.Zh,
+                             b.Zde, b.Mu, b.Mw, b.Mw_dot, b.Mq, b.Mh, b.Mde};
         double scale = 0;
         for (double v : bv) scale = std::max(scale, std::abs(v));
         for (int j = 0; j < 14; ++j) {
           EXPECT_NEAR(av[j], bv[j], kRelativeTolerance * scale)
-              << "variant " << variant << " derivative " << j << " at H = " << height_m << ", u = " << speed_mps;
+              << "variant " << variant << " derivative " << j << " at H = " << height_m
+              << ", u = " << speed_mps;
         }
       }
     }
@@ -132,7 +135,8 @@ TEST(LinearDerivativeTableTest, Equation1EqualsTheAssembledMatrices) {
   int hint = 0;
   const double u0 = kPaperSpeed_mps;
   for (double h0 : {1.0, 2.9987, 8.0}) {
-    for (const Vector5d& x : {Vector5d(0.3, -0.2, 0.05, -0.02, 0.4), Vector5d(-1.0, 0.5, -0.1, 0.03, -0.15)}) {
+    for (const Vector5d& x :
+         {Vector5d(0.3, -0.2, 0.05, -0.02, 0.4), Vector5d(-1.0, 0.5, -0.1, 0.03, -0.15)}) {
       for (double elevator_rad : {0.0, 5 * kRadPerDeg}) {
         const DimensionalDerivatives d = model.DerivativesAt(h0 + x[kDeltaH], u0 + x[kDeltaU]);
         const Vector5d expected = AssembleStateMatrix(d, u0) * x + AssembleInputMatrix(d) * elevator_rad;

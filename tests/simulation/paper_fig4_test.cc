@@ -35,7 +35,8 @@ TEST_P(PaperFigure4Test, LowStartsTouchDown) {
   EXPECT_EQ(s.end_event, OpenLoopEndEvent::kTouchdown) << "H0 = " << GetParam();
   EXPECT_LT(s.end_time_s, 300.0);
 }
-INSTANTIATE_TEST_SUITE_P(TableA2, PaperFigure4Test, ::testing::Values(1.0374, 1.2968, 1.5561, 2.0748, 2.5935));
+INSTANTIATE_TEST_SUITE_P(TableA2, PaperFigure4Test,
+                         ::testing::Values(1.0374, 1.2968, 1.5561, 2.0748, 2.5935));
 
 class PaperFigure4HighTest : public ::testing::TestWithParam<double> {};
 

@@ -1,13 +1,13 @@
 // `gesweep simulate` end to end: the CSV header and row count, the JSON layout, and refusals of bad
 // flags with exit code 2 and one line naming the flag (docs/simulation.md).
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
+#include <sys/wait.h>
 
 #include <array>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace {
 
@@ -19,8 +19,10 @@ struct Output {
 
 Output RunGesweep(const std::string& arguments) {
   const std::string err_path = std::string(GESWEEP_BINARY_DIR) + "/simulate_cli_test.stderr";
-  const std::string command = std::string(GESWEEP_BINARY_DIR) + "/gesweep simulate --aircraft " GESWEEP_SOURCE_DIR
-                              "/studies/aircraft/ance.toml " + arguments + " 2>" + err_path;
+  const std::string command = std::string(GESWEEP_BINARY_DIR) +
+                              "/gesweep simulate --aircraft " GESWEEP_SOURCE_DIR
+                              "/studies/aircraft/ance.toml " +
+                              arguments + " 2>" + err_path;
   Output result;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
@@ -42,9 +44,10 @@ TEST(SimulateCliTest, CsvHasUnitSuffixedHeaderAndOneRowPerSample) {
   std::istringstream lines(r.out);
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header,
-            "time_s,delta_speed_mps,delta_normal_velocity_mps,pitch_rate_radps,delta_pitch_rad,delta_height_m,"
-            "height_m,speed_mps,elevator_rad");
+  EXPECT_EQ(
+      header,
+      "time_s,delta_speed_mps,delta_normal_velocity_mps,pitch_rate_radps,delta_pitch_rad,delta_height_m,"
+      "height_m,speed_mps,elevator_rad");
   int rows = 0;
   std::string line, last;
   while (std::getline(lines, line)) {
@@ -64,8 +67,8 @@ TEST(SimulateCliTest, JsonHasSummaryAndSeries) {
   EXPECT_EQ(summary.at("end_event"), "touchdown");  // the paper: starts this low sink to the ground
   EXPECT_EQ(summary.at("final_state").size(), 5u);
   EXPECT_DOUBLE_EQ(summary.at("final_height_m").get<double>(), 0.788);
-  for (const char* key : {"end_time_s", "min_height_m", "min_height_time_s", "max_abs_pitch_rate_radps", "steps",
-                          "rhs_calls"}) {
+  for (const char* key : {"end_time_s", "min_height_m", "min_height_time_s", "max_abs_pitch_rate_radps",
+                          "steps", "rhs_calls"}) {
     EXPECT_TRUE(summary.contains(key)) << key;
   }
   const auto& series = j.at("series");
@@ -82,13 +85,13 @@ TEST(SimulateCliTest, BadFlagsExitWithCodeTwoAndNameTheFlag) {
     const char* arguments;
     const char* mentions;
   };
-  for (const Case& c : {Case{"--height-m 2 --speed-mps 32 --dt-s 0", "--dt-s"},
-                        Case{"--height-m 2 --speed-mps -3", "--speed-mps"},
-                        Case{"--height-m 0.5 --speed-mps 32", "wheel-contact"},
-                        Case{"--height-m 2 --speed-mps 20", "stall"},
-                        Case{"--height-m 2 --speed-mps 32 --integrator euler", "--integrator"},
-                        Case{"--height-m 2 --speed-mps 32 --duration-s -1", "--duration-s"},
-                        Case{"--height-m 2 --speed-mps 32 --pulse-s 0", "--pulse-s"}}) {
+  for (const Case& c :
+       {Case{"--height-m 2 --speed-mps 32 --dt-s 0", "--dt-s"},
+        Case{"--height-m 2 --speed-mps -3", "--speed-mps"},
+        Case{"--height-m 0.5 --speed-mps 32", "wheel-contact"}, Case{"--height-m 2 --speed-mps 20", "stall"},
+        Case{"--height-m 2 --speed-mps 32 --integrator euler", "--integrator"},
+        Case{"--height-m 2 --speed-mps 32 --duration-s -1", "--duration-s"},
+        Case{"--height-m 2 --speed-mps 32 --pulse-s 0", "--pulse-s"}}) {
     const Output r = RunGesweep(c.arguments);
     EXPECT_EQ(r.exit_code, 2) << c.arguments;
     EXPECT_TRUE(r.out.empty()) << c.arguments;  // nothing half-written

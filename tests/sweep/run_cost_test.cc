@@ -52,7 +52,8 @@ TEST(RunCost, EstimateIsTheMeanCostTimesRunsOverThreadsWithAnIntervalAroundIt) {
   // Double rounding of one product and one division.
   constexpr double kRounding = 1e-12;
   EXPECT_NEAR(e.estimated_seconds, e.seconds_per_run * 200 / 2, kRounding * e.estimated_seconds);
-  EXPECT_NEAR(e.estimated_seconds_high, e.seconds_per_run_high * 200 / 2, kRounding * e.estimated_seconds_high);
+  EXPECT_NEAR(e.estimated_seconds_high, e.seconds_per_run_high * 200 / 2,
+              kRounding * e.estimated_seconds_high);
 }
 
 TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
@@ -64,7 +65,8 @@ TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
   Study study;
   study.path = "<test>";
   study.aircraft = aircraft;
-  study.analyses.push_back(MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+  study.analyses.push_back(
+      MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
   study.fixed = {{RequireParameter("speed_mps"), 32.0208}, {RequireParameter("height_m"), 100.0}};
   const SweepPlan plan(std::move(study), ShardSpec{});
   RunCostOptions options;

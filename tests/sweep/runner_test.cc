@@ -13,10 +13,10 @@
 #include <mutex>
 #include <thread>
 
-#include "engine/modal/modal_analysis.h"
 #include "engine/analyses/analysis_adapters.h"
-#include "engine/simulation/open_loop.h"
 #include "engine/control/landing_simulation.h"
+#include "engine/modal/modal_analysis.h"
+#include "engine/simulation/open_loop.h"
 
 namespace gesweep {
 namespace {

@@ -3,16 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <nlohmann/json.hpp>
-#include <optional>
 #include <iterator>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
-
-#include "engine/common/input_limits.h"
 
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/parameter_catalog.h"
+#include "engine/common/input_limits.h"
 
 namespace gesweep {
 namespace {
@@ -89,8 +88,8 @@ void ExpectSameBounds(const nlohmann::json& entry, const InputLimit& limit, cons
     EXPECT_EQ(b.minimum_exclusive, limit.minimum_exclusive) << where;
     return;
   }
-  ASSERT_TRUE(b.minimum && b.maximum) << where << ": the schema states no range; the table says "
-                                      << DescribeLimit(limit);
+  ASSERT_TRUE(b.minimum && b.maximum)
+      << where << ": the schema states no range; the table says " << DescribeLimit(limit);
   EXPECT_EQ(*b.minimum, limit.minimum) << where;
   EXPECT_EQ(*b.maximum, limit.maximum) << where;
   EXPECT_EQ(b.minimum_exclusive, limit.minimum_exclusive) << where;
@@ -110,9 +109,10 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
   }
   const auto& analyses = schema["properties"]["analyses"]["properties"];
   // Settings named "<analysis>.<key>", the shared ones by their key, and two that reuse a parameter's.
-  const std::vector<std::pair<std::string, std::string>> shared = {
-      {"open_loop", "relative_tolerance"}, {"open_loop", "absolute_tolerance"},
-      {"landing", "relative_tolerance"},   {"landing", "absolute_tolerance"}};
+  const std::vector<std::pair<std::string, std::string>> shared = {{"open_loop", "relative_tolerance"},
+                                                                   {"open_loop", "absolute_tolerance"},
+                                                                   {"landing", "relative_tolerance"},
+                                                                   {"landing", "absolute_tolerance"}};
   for (const InputLimit& limit : InputLimits()) {
     const std::string name(limit.name);
     const auto dot = name.find('.');
@@ -124,7 +124,8 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
     ++checked;
   }
   for (const auto& [analysis, key] : shared) {
-    ExpectSameBounds(analyses[analysis]["properties"][key], RequireInputLimit(key), "analyses." + analysis + "." + key);
+    ExpectSameBounds(analyses[analysis]["properties"][key], RequireInputLimit(key),
+                     "analyses." + analysis + "." + key);
     ++checked;
   }
   ExpectSameBounds(analyses["landing"]["properties"]["design_speed_mps"], RequireInputLimit("speed_mps"),
@@ -133,8 +134,8 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
                    "analyses.boundary.lower_height_m");
   ExpectSameBounds(analyses["boundary"]["properties"]["upper_height_m"], RequireInputLimit("height_m"),
                    "analyses.boundary.upper_height_m");
-  ExpectSameBounds(schema["properties"]["output"]["properties"]["output_dt_s"], RequireInputLimit("output_dt_s"),
-                   "output.output_dt_s");
+  ExpectSameBounds(schema["properties"]["output"]["properties"]["output_dt_s"],
+                   RequireInputLimit("output_dt_s"), "output.output_dt_s");
   EXPECT_GT(checked, 40);
 }
 
@@ -172,7 +173,8 @@ TEST(StudySchema, DescribedSettingsAreTheSchemaProperties) {
         case FieldKind::kNumber:
           EXPECT_EQ(entry["type"], "number") << where;
           EXPECT_EQ(entry["default"].get<double>(), *field.number) << where;
-          if (!field.attributes.limit.empty()) ExpectSameBounds(entry, RequireInputLimit(field.attributes.limit), where);
+          if (!field.attributes.limit.empty())
+            ExpectSameBounds(entry, RequireInputLimit(field.attributes.limit), where);
           break;
         case FieldKind::kInteger:
           EXPECT_EQ(entry["type"], "integer") << where;

@@ -152,8 +152,9 @@ TEST_F(StudyTest, StartHeightUnderWheelContactIsRefused) {
 
 TEST_F(StudyTest, NegativeAndZeroValuesAreRefused) {
   // The ranges of the limits table (engine/common/input_limits.h), the same as the CLI flags'.
-  EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 0\nheight_m = 2\n").expected().find("in [1, 300] m/s"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf(Header() + "[parameters]\nspeed_mps = 0\nheight_m = 2\n").expected().find("in [1, 300] m/s"),
+      std::string::npos);
   EXPECT_NE(ErrorOf(Header() + "[parameters]\nspeed_mps = 30\nheight_m = 2\nmass_kg = -1\n")
                 .expected()
                 .find("in (0, 1000000] kg"),
