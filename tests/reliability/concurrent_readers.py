@@ -5,7 +5,7 @@ garbage; and a reader never breaks the writer.
 
     concurrent_readers.py GESWEEP
 
-1. A reference sweep of tests/reliability/kill_campaign.toml (2 threads).
+1. A reference sweep of tests/reliability/concurrent_readers.toml (2 threads).
 2. The same sweep on one thread (a thread count must not change a bit), read all the while, in turn, by
    - h5py in SWMR-read mode, as docs/sweep.md tells users to;
    - h5py as a user who does not know about SWMR: a normal open, then SWMR when that is refused;
@@ -33,7 +33,7 @@ import h5py
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import archive_tools as tools  # noqa: E402
 
-STUDY = pathlib.Path(__file__).resolve().parent / "kill_campaign.toml"
+STUDY = pathlib.Path(__file__).resolve().parent / "concurrent_readers.toml"
 # HDF5's reasons for refusing an open while a writer has the file: the answers a reader may get
 # instead of a snapshot.
 IN_USE_REASONS = ("already open for write", "not already open for SWMR writing", "unable to lock file")
