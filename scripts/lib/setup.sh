@@ -6,7 +6,7 @@ GESWEEP_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 
 # Debian packages the build, the tests and the scripts need. Keep in step with docs/dependencies.md.
 GESWEEP_PACKAGES=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git ccache
   libeigen3-dev libboost-dev libboost-math-dev libhdf5-dev hdf5-tools libtbb-dev
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5 libre2-dev
@@ -34,10 +34,17 @@ gesweep_install_deps() {
 }
 
 # gesweep_build BUILD_DIR [extra cmake args...]: configure (once) and build with all cores.
+# Compiles go through ccache when it is there (it is in GESWEEP_PACKAGES): a second build of the same
+# sources, in this clone or another one of the same machine, takes the objects from its cache
+# (CCACHE_BASEDIR makes the cache independent of where the clone is; docs/reliability.md §6).
 gesweep_build() {
   local dir="$1"; shift
   local generator=()
   command -v ninja >/dev/null && generator=(-G Ninja)
+  if command -v ccache >/dev/null; then
+    export CMAKE_CXX_COMPILER_LAUNCHER=ccache CMAKE_C_COMPILER_LAUNCHER=ccache
+    export CCACHE_BASEDIR="$GESWEEP_ROOT" CCACHE_NOHASHDIR=1
+  fi
   if [ ! -f "$dir/CMakeCache.txt" ]; then
     cmake -S "$GESWEEP_ROOT" -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
   else
