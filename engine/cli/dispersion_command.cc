@@ -157,7 +157,11 @@ void PrintTable(const Dispersion& d) {
     std::cout << std::left << std::setw(static_cast<int>(w)) << "column" << std::right << std::setw(7)
               << "values" << std::setw(7) << "failed" << std::setw(9) << "no value" << std::setw(8)
               << "pending" << std::setw(13) << "mean" << std::setw(13) << "std";
-    for (double p : d.options.percentiles) std::cout << std::setw(12) << ("p" + ShortNumber(p));
+    for (double p : d.options.percentiles) {
+      std::string label = "p";
+      label += ShortNumber(p);
+      std::cout << std::setw(12) << label;
+    }
     std::cout << "\n";
     for (std::size_t c = 0; c < d.columns.size(); ++c) {
       const ColumnDispersion& s = g.columns[c];
@@ -170,8 +174,8 @@ void PrintTable(const Dispersion& d) {
     }
     std::cout << "# tail fits: the value exceeded (upper) or not reached (lower) with probability";
     for (double p : d.options.tail_probabilities) std::cout << " " << ShortNumber(p);
-    std::cout
-        << "; A2 = Anderson-Darling, rejected at = largest level of Stephens' table rejecting the fit\n";
+    std::cout << "; A2 = Anderson-Darling, rejected at = smallest level of Stephens' table that rejects the "
+                 "fit (none: not rejected at the largest)\n";
     std::cout << std::left << std::setw(static_cast<int>(w)) << "column" << std::setw(12) << "fit"
               << std::right << std::setw(13) << "location" << std::setw(13) << "scale" << std::setw(9) << "A2"
               << std::setw(12) << "rejected at";

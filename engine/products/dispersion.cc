@@ -65,8 +65,6 @@ double NormalLogCdf(double z) {
                : std::log1p(-boost::math::cdf(boost::math::complement(kStandardNormal, z)));
 }
 
-std::string FormatLimitValue(double value) { return ShortNumber(value); }
-
 }  // namespace
 
 double Percentile(const std::vector<double>& sorted, double p) {
@@ -165,7 +163,8 @@ double AndersonDarling::rejected_at_percent() const {
   if (!std::isfinite(statistic)) return kNaN;
   double level = 0;
   for (std::size_t i = 0; i < critical.size(); ++i) {
-    if (statistic > critical[i]) level = std::max(level, significance_percent[i]);
+    if (statistic > critical[i] && (level == 0 || significance_percent[i] < level))
+      level = significance_percent[i];
   }
   return level;
 }
@@ -369,6 +368,7 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
       throw InputError(source, "group_by", options.group_by, "expected a numeric column to group by");
     }
     d.group_by = group_column->name;
+    d.group_path = group_column->path;
     d.group_units = group_column->units;
     ColumnValues values;
     for (std::int64_t first = 0; first < n; first += kPieceRows) {
@@ -500,6 +500,7 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
     group.Attribute("column_paths", d.column_paths);
     group.Attribute("column_units", d.column_units);
     group.Attribute("group_by", d.group_by);
+    group.Attribute("group_path", d.group_path);
     group.Attribute("group_units", d.group_units);
     group.Attribute("percentiles", d.options.percentiles);
     group.Attribute("tail_probabilities", d.options.tail_probabilities);
@@ -561,10 +562,11 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
                  [&](const ColumnDispersion& c) { return tail_of(c).fit.scale; });
       per_column(prefix + "_anderson_darling", "1", law + " fit: Anderson-Darling statistic A2",
                  [&](const ColumnDispersion& c) { return tail_of(c).goodness.statistic; });
-      per_column(
-          prefix + "_rejected_at_percent", "%",
-          law + " fit: largest significance level (of Stephens' table) at which A2 rejects it; 0: none",
-          [&](const ColumnDispersion& c) { return tail_of(c).goodness.rejected_at_percent(); });
+      per_column(prefix + "_rejected_at_percent", "%",
+                 law +
+                     " fit: smallest significance level (of Stephens' table) at which A2 rejects it; 0: not "
+                     "rejected at any",
+                 [&](const ColumnDispersion& c) { return tail_of(c).goodness.rejected_at_percent(); });
       for (int side = 0; side < 2; ++side) {
         if ((side == 0 && !upper) || (side == 1 && !lower)) continue;
         std::vector<double> values;

@@ -66,8 +66,9 @@ struct AndersonDarling {
   double statistic = 0;
   std::vector<double> critical;
   std::vector<double> significance_percent;
-  /// The largest significance level (percent) at which the fit is rejected (statistic > critical),
-  /// 0 when it is rejected at none, NaN when there is no statistic.
+  /// The smallest significance level (percent) at which the fit is rejected (statistic > critical):
+  /// the p-value is below it. 0 when it is rejected at none (p above the table's largest level), NaN
+  /// when there is no statistic.
   double rejected_at_percent() const;
 };
 /// Against the normal of mean x̄ and standard deviation with divisor n − 1 (Stephens' case 3).
@@ -150,7 +151,8 @@ struct Dispersion {
   std::vector<std::string> column_paths;
   std::vector<std::string> column_units;
   std::vector<DispersionLimit> limits;
-  std::string group_by;  ///< display name; empty: no grouping
+  std::string group_by;    ///< display name; empty: no grouping
+  std::string group_path;  ///< its dataset path
   std::string group_units;
   DispersionOptions options;
   std::vector<DispersionGroup> groups;  ///< by increasing grouping value

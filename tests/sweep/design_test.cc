@@ -274,9 +274,6 @@ TEST(MapUnit, LogUniformSpacesGeometrically) {
   EXPECT_DOUBLE_EQ(MapUnit(p, 0.5), 50.5);
 }
 
-}  // namespace
-}  // namespace gesweep
-
 // --- monte_carlo ------------------------------------------------------------------------------
 
 // The analytic CDFs of the test, from std::erfc (not from the Boost.Math the design uses).
@@ -452,3 +449,6 @@ TEST(MonteCarloDesign, UnitCoordinatesStayStrictlyInsideTheUnitInterval) {
     ASSERT_TRUE(u >= kMonteCarloUnitLow && u <= kMonteCarloUnitHigh) << u;
   }
 }
+
+}  // namespace
+}  // namespace gesweep
