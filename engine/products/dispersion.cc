@@ -245,13 +245,15 @@ ColumnDispersion Describe(std::vector<double>& sample, const DispersionOptions& 
   std::vector<double> negated(sample.rbegin(), sample.rend());
   for (double& v : negated) v = -v;
   c.gumbel_min.law = "gumbel_min";
-  c.gumbel_min.fit = FitGumbelMax(negated);
-  c.gumbel_min.goodness = AndersonDarlingGumbelMax(negated, c.gumbel_min.fit);
+  const LocationScale negated_fit = FitGumbelMax(negated);
+  c.gumbel_min.goodness = AndersonDarlingGumbelMax(negated, negated_fit);
+  // Stored as the smallest-value Gumbel law itself (scipy's gumbel_l): location −μ of the negated fit.
+  c.gumbel_min.fit = {-negated_fit.location, negated_fit.scale};
   for (double p : options.tail_probabilities) {
     c.normal.upper_quantiles.push_back(NormalQuantile(c.normal.fit, 1.0 - p));
     c.normal.lower_quantiles.push_back(NormalQuantile(c.normal.fit, p));
     c.gumbel_max.upper_quantiles.push_back(GumbelMaxQuantile(c.gumbel_max.fit, 1.0 - p));
-    c.gumbel_min.lower_quantiles.push_back(-GumbelMaxQuantile(c.gumbel_min.fit, 1.0 - p));
+    c.gumbel_min.lower_quantiles.push_back(-GumbelMaxQuantile(negated_fit, 1.0 - p));
   }
   return c;
 }
@@ -472,7 +474,8 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
         } else {
           const LocationScale negated{-described.normal.fit.location, described.normal.fit.scale};
           e.normal_probability = NormalProbabilityAbove(negated, -limit.value);
-          e.gumbel_probability = GumbelMaxProbabilityAbove(described.gumbel_min.fit, -limit.value);
+          const LocationScale negated_fit{-described.gumbel_min.fit.location, described.gumbel_min.fit.scale};
+          e.gumbel_probability = GumbelMaxProbabilityAbove(negated_fit, -limit.value);
         }
       }
       d.groups[g].columns.push_back(std::move(described));
@@ -587,7 +590,8 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
         "gumbel_max", "Gumbel (largest values)",
         [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_max; }, true, false);
     fit(
-        "gumbel_min", "Gumbel (smallest values; location and scale of the negated values)",
+        "gumbel_min",
+        "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
         [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_min; }, false, true);
 
     // The limits: [group, limit].

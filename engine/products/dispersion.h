@@ -52,8 +52,9 @@ LocationScale FitNormal(const std::vector<double>& values);
 /// values or all equal.
 LocationScale FitGumbelMax(const std::vector<double>& values);
 
-/// Quantile and upper-tail probability of the fitted laws. "Gumbel min" is the law of −Y for Y
-/// Gumbel-max with the fit of the negated values (its lower tail is the one that matters).
+/// Quantile and upper-tail probability of the fitted laws. The "Gumbel min" law (of the smallest
+/// values, scipy's gumbel_l) is that of −Y for Y Gumbel-max fitted to the negated values; it is
+/// stored with location −μ and scale β of that fit.
 double NormalQuantile(const LocationScale& fit, double p);
 double NormalProbabilityAbove(const LocationScale& fit, double x);
 double GumbelMaxQuantile(const LocationScale& fit, double p);

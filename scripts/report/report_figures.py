@@ -976,6 +976,7 @@ def dispersion(archives, outdir):
                 low = limits["clopper_pearson_lower"][...][order, l]
                 high = limits["clopper_pearson_upper"][...][order, l]
                 ax.errorbar(keys[order], p, yerr=np.vstack([p - low, high - p]), marker="o", capsize=3, label=text)
+            ax.set_xticks(keys[order], [labels[i] for i in order])  # level names for a choice or flag
             ax.set_xlabel(f"{group_by} ({_text(attrs.get('group_units', ''))})")
             ax.set_ylabel("probability of exceeding the limit")
             ax.grid(alpha=0.3)
