@@ -245,6 +245,45 @@ class PeerDispersionTest(unittest.TestCase):
                 self.assertEqual(self.product_limits["exceed"][i][l], e["exceed"])
 
 
+class FailedRunsTest(unittest.TestCase):
+    def test_failed_runs_are_counted_per_group_and_kept_out_of_the_sample(self):
+        # An absurd mass and inertia overflow the state matrix: those runs fail (tests/e2e's oracle).
+        directory = tempfile.mkdtemp(prefix="gesweep_peer_dispersion_failed_")
+        try:
+            study = os.path.join(directory, "failed.toml")
+            with open(study, "w") as f:
+                f.write(f"""format_version = 1
+name = "peer_dispersion_failed"
+aircraft = "{REPO}/studies/aircraft/ance.toml"
+[analyses.modes]
+[parameters]
+speed_mps = 32
+height_m = 2
+[design]
+kind = "list"
+columns = ["mass_kg", "pitch_inertia_kgm2"]
+rows = [[182.055, 400.0], [1e-300, 1e-300], [200.0, 420.0], [1e-300, 1e-300], [182.055, 410.0]]
+""")
+            archive = os.path.join(directory, "failed.h5")
+            self.assertEqual(subprocess.run([GESWEEP, "run", study, "-o", archive], capture_output=True).returncode, 3)
+            result = json.loads(run("dispersion", archive, "--columns", "stability_margin_per_s", "--group-by",
+                                    "mass_kg", "--limit", "stability_margin_per_s>0", "--format", "json"))
+            with h5py.File(archive, "r") as f:
+                sigma = f["results/modes/stability_margin_per_s"][:]
+                status = f["runs/status"][:]
+                mass = f["design/mass_kg"][:]
+            for g in result["groups"]:
+                mask = mass == g["value"]
+                c, e = g["columns"][0], g["limits"][0]
+                self.assertEqual(c["failed"], int((status[mask] == 2).sum()))
+                self.assertEqual(c["values"], int((mask & (status == 1)).sum()))
+                self.assertEqual(e["failed"], c["failed"] + c["without_value"])
+                self.assertEqual(e["exceed"], int((sigma[mask & (status == 1)] > 0).sum()))
+            self.assertEqual(sum(g["columns"][0]["failed"] for g in result["groups"]), 2)
+        finally:
+            shutil.rmtree(directory, ignore_errors=True)
+
+
 class LandingDefaultsTest(unittest.TestCase):
     def test_default_columns_are_the_touchdown_columns_and_counts_add_up(self):
         directory = tempfile.mkdtemp(prefix="gesweep_peer_dispersion_landing_")
