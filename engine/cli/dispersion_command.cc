@@ -89,6 +89,7 @@ nlohmann::json FitJson(const TailFit& fit) {
                       {"critical_values", Numbers(fit.goodness.critical)},
                       {"significance_percent", Numbers(fit.goodness.significance_percent)},
                       {"rejected_at_percent", Number(fit.goodness.rejected_at_percent())}};
+  if (fit.law == "gev_max") j["shape"] = Number(fit.shape);
   if (!fit.upper_quantiles.empty()) j["upper_quantiles"] = Numbers(fit.upper_quantiles);
   if (!fit.lower_quantiles.empty()) j["lower_quantiles"] = Numbers(fit.lower_quantiles);
   return j;
@@ -100,18 +101,19 @@ nlohmann::json ToJson(const Dispersion& d, bool written) {
     nlohmann::json columns = nlohmann::json::array();
     for (std::size_t c = 0; c < d.columns.size(); ++c) {
       const ColumnDispersion& s = g.columns[c];
-      columns.push_back({{"column", d.columns[c]},
-                         {"runs", s.runs},
-                         {"values", s.values},
-                         {"failed", s.failed},
-                         {"without_value", s.without_value},
-                         {"pending", s.pending},
-                         {"mean", Number(s.mean)},
-                         {"standard_deviation", Number(s.standard_deviation)},
-                         {"minimum", Number(s.minimum)},
-                         {"maximum", Number(s.maximum)},
-                         {"percentiles", Numbers(s.percentiles)},
-                         {"fits", {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min)}}});
+      columns.push_back(
+          {{"column", d.columns[c]},
+           {"runs", s.runs},
+           {"values", s.values},
+           {"failed", s.failed},
+           {"without_value", s.without_value},
+           {"pending", s.pending},
+           {"mean", Number(s.mean)},
+           {"standard_deviation", Number(s.standard_deviation)},
+           {"minimum", Number(s.minimum)},
+           {"maximum", Number(s.maximum)},
+           {"percentiles", Numbers(s.percentiles)},
+           {"fits", {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)}}});
     }
     nlohmann::json limits = nlohmann::json::array();
     for (std::size_t l = 0; l < d.limits.size(); ++l) {
@@ -125,7 +127,8 @@ nlohmann::json ToJson(const Dispersion& d, bool written) {
            {"wilson", {Number(e.wilson.lower), Number(e.wilson.upper)}},
            {"clopper_pearson", {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)}},
            {"normal_probability", Number(e.normal_probability)},
-           {"gumbel_probability", Number(e.gumbel_probability)}});
+           {"gumbel_probability", Number(e.gumbel_probability)},
+           {"gev_probability", Number(e.gev_probability)}});
     }
     groups.push_back(
         {{"label", g.label}, {"value", Number(g.value)}, {"columns", columns}, {"limits", limits}});
@@ -199,6 +202,9 @@ void PrintTable(const Dispersion& d) {
       row(s.normal, "normal low", s.normal.lower_quantiles);
       row(s.gumbel_max, "gumbel max", s.gumbel_max.upper_quantiles);
       row(s.gumbel_min, "gumbel min", s.gumbel_min.lower_quantiles);
+      std::ostringstream gev_name;  // the shape in the name column: the table has no column for it
+      gev_name << "gev xi=" << std::setprecision(2) << s.gev_max.shape;
+      row(s.gev_max, gev_name.str(), s.gev_max.upper_quantiles);
     }
     if (!d.limits.empty()) {
       std::cout
@@ -211,7 +217,8 @@ void PrintTable(const Dispersion& d) {
                   << General(e.wilson.lower) << ", " << General(e.wilson.upper) << "]  Clopper-Pearson ["
                   << General(e.clopper_pearson.lower) << ", " << General(e.clopper_pearson.upper)
                   << "]  normal " << General(e.normal_probability) << "  gumbel "
-                  << General(e.gumbel_probability) << "  failed " << e.failed << "\n";
+                  << General(e.gumbel_probability) << "  gev " << General(e.gev_probability) << "  failed "
+                  << e.failed << "\n";
       }
     }
   }

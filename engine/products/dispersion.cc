@@ -1,6 +1,7 @@
 #include "engine/products/dispersion.h"
 
 #include <algorithm>
+#include <array>
 #include <boost/math/distributions/beta.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/tools/roots.hpp>
@@ -33,6 +34,19 @@ constexpr double kGumbelCritical[] = {0.474, 0.637, 0.757, 0.877, 1.038};
 constexpr double kGumbelSignificance[] = {25, 10, 5, 2.5, 1};
 
 const boost::math::normal kStandardNormal;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// The GEV fit: |ξ| below this is the Gumbel law (the GEV formulas lose digits as 1/ξ grows: at
+// 1e-7 the two laws differ by about ξ·z² ≈ 1e-5 relative at z = 10, below any sample's resolution);
+// ξ above −1, where the likelihood is bounded; Nelder–Mead's start step (standardised units),
+// tolerances (relative on the log-likelihood, absolute on the standardised parameters), iteration
+// cap per run and restarts.
+constexpr double kGumbelShape = 1e-7;
+constexpr double kLowestShape = -1.0;
+constexpr double kNelderMeadStep = 0.1;
+constexpr double kNelderMeadValueTolerance = 1e-14;
+constexpr double kNelderMeadPointTolerance = 1e-9;
+constexpr int kNelderMeadIterations = 20000;
+constexpr int kNelderMeadRestarts = 8;
 
 double Round3(double x) { return std::nearbyint(x * 1000.0) / 1000.0; }
 
@@ -159,8 +173,136 @@ double GumbelMaxProbabilityAbove(const LocationScale& fit, double x) {
   return -std::expm1(-std::exp(-(x - fit.location) / fit.scale));
 }
 
+double GevNegativeLogLikelihood(const std::vector<double>& values, double location, double scale,
+                                double shape) {
+  if (!(scale > 0) || !std::isfinite(location) || !std::isfinite(shape)) return kInfinity;
+  const auto n = static_cast<double>(values.size());
+  double sum_log = 0, sum_power = 0;
+  if (std::abs(shape) < kGumbelShape) {
+    for (double x : values) {
+      const double z = (x - location) / scale;
+      sum_log += z;
+      sum_power += std::exp(-z);
+    }
+    return n * std::log(scale) + sum_log + sum_power;
+  }
+  for (double x : values) {
+    const double t = 1.0 + shape * (x - location) / scale;
+    if (!(t > 0)) return kInfinity;
+    const double log_t = std::log(t);
+    sum_log += log_t;
+    sum_power += std::exp(-log_t / shape);
+  }
+  return n * std::log(scale) + (1.0 + 1.0 / shape) * sum_log + sum_power;
+}
+
+GevFit FitGevMax(const std::vector<double>& values) {
+  GevFit fit{kNaN, kNaN, kNaN, kNaN};
+  if (values.size() < 3) return fit;
+  const double mean = Mean(values);
+  const double sd = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
+  if (!(sd > 0)) return fit;
+  std::vector<double> y(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / sd;
+  using Point = std::array<double, 3>;  // (μ, log σ, ξ) of the standardised values
+  auto f = [&](const Point& p) {
+    if (!(p[2] > kLowestShape)) return kInfinity;
+    return GevNegativeLogLikelihood(y, p[0], std::exp(p[1]), p[2]);
+  };
+  const LocationScale gumbel = FitGumbelMax(y);
+  Point best = {gumbel.location, std::log(gumbel.scale), 0.0};
+  double best_value = f(best);
+  // Nelder–Mead (the standard coefficients 1, 2, 1/2, 1/2), restarted from its optimum with a fresh
+  // simplex until a restart no longer lowers the minimum.
+  for (int restart = 0; restart < kNelderMeadRestarts; ++restart) {
+    std::array<Point, 4> simplex;
+    std::array<double, 4> value;
+    simplex[0] = best;
+    for (std::size_t d = 0; d < 3; ++d) {
+      simplex[d + 1] = best;
+      simplex[d + 1][d] += kNelderMeadStep;
+    }
+    for (std::size_t k = 0; k < 4; ++k) value[k] = f(simplex[k]);
+    for (int iteration = 0; iteration < kNelderMeadIterations; ++iteration) {
+      std::array<std::size_t, 4> order = {0, 1, 2, 3};
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t a, std::size_t b) { return value[a] < value[b]; });
+      const std::size_t lo = order[0], hi = order[3], second = order[2];
+      double spread = 0;
+      for (std::size_t k = 1; k < 4; ++k)
+        for (std::size_t d = 0; d < 3; ++d)
+          spread = std::max(spread, std::abs(simplex[order[k]][d] - simplex[lo][d]));
+      if (value[hi] - value[lo] <= kNelderMeadValueTolerance * (1.0 + std::abs(value[lo])) &&
+          spread <= kNelderMeadPointTolerance)
+        break;
+      Point centroid = {0, 0, 0};
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::size_t d = 0; d < 3; ++d) centroid[d] += simplex[order[k]][d] / 3.0;
+      auto along = [&](double t) {
+        Point p;
+        for (std::size_t d = 0; d < 3; ++d) p[d] = centroid[d] + t * (simplex[hi][d] - centroid[d]);
+        return p;
+      };
+      const Point reflected = along(-1.0);
+      const double fr = f(reflected);
+      if (fr < value[lo]) {
+        const Point expanded = along(-2.0);
+        const double fe = f(expanded);
+        simplex[hi] = fe < fr ? expanded : reflected;
+        value[hi] = std::min(fe, fr);
+      } else if (fr < value[second]) {
+        simplex[hi] = reflected;
+        value[hi] = fr;
+      } else {
+        const bool outside = fr < value[hi];
+        const Point contracted = along(outside ? -0.5 : 0.5);
+        const double fc = f(contracted);
+        if (fc < (outside ? fr : value[hi])) {
+          simplex[hi] = contracted;
+          value[hi] = fc;
+        } else {
+          for (std::size_t k = 0; k < 4; ++k) {
+            if (k == lo) continue;
+            for (std::size_t d = 0; d < 3; ++d)
+              simplex[k][d] = simplex[lo][d] + 0.5 * (simplex[k][d] - simplex[lo][d]);
+            value[k] = f(simplex[k]);
+          }
+        }
+      }
+    }
+    const auto lo = static_cast<std::size_t>(std::min_element(value.begin(), value.end()) - value.begin());
+    const bool improved = value[lo] < best_value - kNelderMeadValueTolerance * (1.0 + std::abs(best_value));
+    if (value[lo] < best_value) {
+      best = simplex[lo];
+      best_value = value[lo];
+    }
+    if (!improved && restart > 0) break;
+  }
+  if (!std::isfinite(best_value)) return fit;
+  fit.location = mean + sd * best[0];
+  fit.scale = sd * std::exp(best[1]);
+  fit.shape = best[2];
+  fit.negative_log_likelihood = GevNegativeLogLikelihood(values, fit.location, fit.scale, fit.shape);
+  return fit;
+}
+
+double GevMaxQuantile(const GevFit& fit, double p) {
+  if (!(fit.scale > 0)) return kNaN;
+  const double minus_log_p = -std::log1p(p - 1.0);  // p − 1 is exact near 1
+  if (std::abs(fit.shape) < kGumbelShape) return fit.location - fit.scale * std::log(minus_log_p);
+  return fit.location + fit.scale / fit.shape * std::expm1(-fit.shape * std::log(minus_log_p));
+}
+
+double GevMaxProbabilityAbove(const GevFit& fit, double x) {
+  if (!(fit.scale > 0)) return kNaN;
+  if (std::abs(fit.shape) < kGumbelShape) return GumbelMaxProbabilityAbove({fit.location, fit.scale}, x);
+  const double t = 1.0 + fit.shape * (x - fit.location) / fit.scale;
+  if (!(t > 0)) return fit.shape < 0 ? 0.0 : 1.0;  // beyond the upper end point, or below the lower
+  return -std::expm1(-std::exp(-std::log(t) / fit.shape));
+}
+
 double AndersonDarling::rejected_at_percent() const {
-  if (!std::isfinite(statistic)) return kNaN;
+  if (!std::isfinite(statistic) || critical.empty()) return kNaN;
   double level = 0;
   for (std::size_t i = 0; i < critical.size(); ++i) {
     if (statistic > critical[i] && (level == 0 || significance_percent[i] < level))
@@ -249,7 +391,22 @@ ColumnDispersion Describe(std::vector<double>& sample, const DispersionOptions& 
   c.gumbel_min.goodness = AndersonDarlingGumbelMax(negated, negated_fit);
   // Stored as the smallest-value Gumbel law itself (scipy's gumbel_l): location −μ of the negated fit.
   c.gumbel_min.fit = {-negated_fit.location, negated_fit.scale};
+  c.gev_max.law = "gev_max";
+  const GevFit gev = FitGevMax(sample);
+  c.gev_max.fit = {gev.location, gev.scale};
+  c.gev_max.shape = gev.shape;
+  c.gev_max.goodness.statistic = kNaN;
+  if (std::isfinite(gev.scale)) {
+    std::vector<double> logcdf, logsf;
+    for (double x : sample) {
+      const double above = GevMaxProbabilityAbove(gev, x);
+      logcdf.push_back(std::log1p(-above));
+      logsf.push_back(std::log(above));
+    }
+    c.gev_max.goodness.statistic = AndersonDarlingStatistic(logcdf, logsf);
+  }
   for (double p : options.tail_probabilities) {
+    c.gev_max.upper_quantiles.push_back(GevMaxQuantile(gev, 1.0 - p));
     c.normal.upper_quantiles.push_back(NormalQuantile(c.normal.fit, 1.0 - p));
     c.normal.lower_quantiles.push_back(NormalQuantile(c.normal.fit, p));
     c.gumbel_max.upper_quantiles.push_back(GumbelMaxQuantile(c.gumbel_max.fit, 1.0 - p));
@@ -471,11 +628,15 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
         if (limit.above) {
           e.normal_probability = NormalProbabilityAbove(described.normal.fit, limit.value);
           e.gumbel_probability = GumbelMaxProbabilityAbove(described.gumbel_max.fit, limit.value);
+          e.gev_probability = GevMaxProbabilityAbove(
+              {described.gev_max.fit.location, described.gev_max.fit.scale, described.gev_max.shape, 0},
+              limit.value);
         } else {
           const LocationScale negated{-described.normal.fit.location, described.normal.fit.scale};
           e.normal_probability = NormalProbabilityAbove(negated, -limit.value);
           const LocationScale negated_fit{-described.gumbel_min.fit.location, described.gumbel_min.fit.scale};
           e.gumbel_probability = GumbelMaxProbabilityAbove(negated_fit, -limit.value);
+          e.gev_probability = kNaN;
         }
       }
       d.groups[g].columns.push_back(std::move(described));
@@ -590,6 +751,11 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
         "gumbel_max", "Gumbel (largest values)",
         [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_max; }, true, false);
     fit(
+        "gev_max", "Generalised extreme value (largest values; A2 without a table)",
+        [](const ColumnDispersion& c) -> const TailFit& { return c.gev_max; }, true, false);
+    per_column("gev_max_shape", "1", "Generalised extreme value fit: shape xi (scipy's genextreme c = -xi)",
+               [](const ColumnDispersion& c) { return c.gev_max.shape; });
+    fit(
         "gumbel_min",
         "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
         [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_min; }, false, true);
@@ -643,6 +809,8 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
               [](const LimitExceedance& e) { return e.normal_probability; });
     per_limit("gumbel_probability", "Of the Gumbel fit of the same tail",
               [](const LimitExceedance& e) { return e.gumbel_probability; });
+    per_limit("gev_probability", "Of the generalised extreme value fit of the largest values (NaN for <)",
+              [](const LimitExceedance& e) { return e.gev_probability; });
   });
 }
 

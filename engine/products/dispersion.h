@@ -60,6 +60,25 @@ double NormalProbabilityAbove(const LocationScale& fit, double x);
 double GumbelMaxQuantile(const LocationScale& fit, double p);
 double GumbelMaxProbabilityAbove(const LocationScale& fit, double x);
 
+/// The generalised extreme value law of the largest values, P(X ≤ x) = exp(−(1 + ξ(x − μ)/σ)^(−1/ξ))
+/// (Coles 2001, §3.1.3; ξ > 0 a heavy tail, ξ < 0 a bounded one with end point μ − σ/ξ, ξ → 0 the
+/// Gumbel law; SciPy's genextreme has c = −ξ).
+struct GevFit {
+  double location = 0, scale = 0, shape = 0;  ///< μ, σ, ξ
+  double negative_log_likelihood = 0;         ///< at the fit, in the values' units
+};
+/// The negative log-likelihood of values under a GEV law (+∞ outside its support or for σ ≤ 0).
+double GevNegativeLogLikelihood(const std::vector<double>& values, double location, double scale,
+                                double shape);
+/// The GEV maximum-likelihood fit: Nelder–Mead on (μ, log σ, ξ) of the standardised values, started
+/// from the Gumbel fit (ξ = 0) and restarted from its own optimum until it no longer improves; ξ is
+/// kept above −1, where the likelihood is bounded (Smith 1985: regular above −0.5). NaN when fewer
+/// than three values or all equal.
+GevFit FitGevMax(const std::vector<double>& values);
+/// The value not exceeded with probability p, and the probability of exceeding x.
+double GevMaxQuantile(const GevFit& fit, double p);
+double GevMaxProbabilityAbove(const GevFit& fit, double x);
+
 /// The Anderson–Darling statistic A² of sorted values against a fitted law, and Stephens'
 /// critical values for a law whose parameters were estimated from the same values (as
 /// scipy.stats.anderson tabulates them). `critical` and `significance_percent` have equal sizes.
@@ -69,7 +88,8 @@ struct AndersonDarling {
   std::vector<double> significance_percent;
   /// The smallest significance level (percent) at which the fit is rejected (statistic > critical):
   /// the p-value is below it. 0 when it is rejected at none (p above the table's largest level), NaN
-  /// when there is no statistic.
+  /// when there is no statistic or no table (the GEV fit: Stephens gives none for three estimated
+  /// parameters).
   double rejected_at_percent() const;
 };
 /// Against the normal of mean x̄ and standard deviation with divisor n − 1 (Stephens' case 3).
@@ -104,8 +124,9 @@ const std::vector<std::string>& DefaultDispersionColumns();
 
 /// A fitted tail: the law's fit, its goodness, and the quantiles at the tail probabilities.
 struct TailFit {
-  std::string law;  ///< "normal", "gumbel_max" or "gumbel_min"
+  std::string law;  ///< "normal", "gumbel_max", "gumbel_min" or "gev_max"
   LocationScale fit;
+  double shape = 0;  ///< gev_max: ξ
   AndersonDarling goodness;
   std::vector<double> upper_quantiles;  ///< exceeded with probability p (normal, gumbel_max)
   std::vector<double> lower_quantiles;  ///< not reached with probability p (normal, gumbel_min)
@@ -120,7 +141,7 @@ struct ColumnDispersion {
   std::int64_t pending = 0;        ///< not run yet
   double mean = 0, standard_deviation = 0, minimum = 0, maximum = 0;  ///< standard deviation: n − 1
   std::vector<double> percentiles;                                    ///< one per option
-  TailFit normal, gumbel_max, gumbel_min;
+  TailFit normal, gumbel_max, gumbel_min, gev_max;
 };
 
 /// A limit's exceedance in one group.
@@ -132,6 +153,7 @@ struct LimitExceedance {
   ProportionInterval wilson, clopper_pearson;
   double normal_probability = 0;  ///< of the normal fit
   double gumbel_probability = 0;  ///< of the Gumbel fit of the same tail (max for >, min for <)
+  double gev_probability = 0;     ///< of the GEV fit of the largest values (NaN for <)
 };
 
 /// One group of runs.

@@ -46,6 +46,11 @@ kTailRelative = 1e-7
 kAndersonAbsolute = 1e-6
 # Binomial intervals: Boost's incomplete-beta inverse and SciPy's beta.ppf, both to about 1e-14.
 kIntervalAbsolute = 1e-12
+# The GEV fit: SciPy's genextreme.fit stops its Nelder-Mead at xtol = ftol = 1e-4 on its own scale,
+# so it may sit a little below the maximum: the engine's log-likelihood must be at least as high
+# (within 1e-6 of round-off), and its shape within 1e-3 of SciPy's.
+kGevLikelihood = 1e-6
+kGevShape = 1e-3
 # Design rows: Boost's normal quantile against scipy.special.ndtri, both within a few ulps;
 # the truncated normal is computed by different formulas (the engine mirrors intervals above the
 # mean, SciPy's truncnorm uses its own log-space method), agreeing to about 1e-12 relative.
@@ -183,7 +188,7 @@ class PeerDispersionTest(unittest.TestCase):
 
     def test_fits_goodness_and_tails(self):
         for g, _, values in self.groups():
-            normal, gmax, gmin = g["columns"][0]["fits"]
+            normal, gmax, gmin, gev = g["columns"][0]["fits"]
             loc, scale = stats.norm.fit(values)
             self.close(normal["location"], loc, kFitRelative, "norm.fit loc")
             self.close(normal["scale"], scale, kFitRelative, "norm.fit scale")
@@ -198,6 +203,17 @@ class PeerDispersionTest(unittest.TestCase):
                 self.assertAlmostEqual(fit["anderson_darling"], ad.statistic, delta=kAndersonAbsolute, msg=dist)
                 self.assertEqual(fit["critical_values"], list(ad.critical_values), dist)
                 self.assertEqual(fit["significance_percent"], list(ad.significance_level), dist)
+            # GEV: SciPy's genextreme.fit (Nelder-Mead from its own start) and the engine's fit; the
+            # engine's likelihood is at least as high, and the parameters agree to the optimisers'
+            # tolerances (kGevShape on ξ).
+            c, loc_g, scale_g = stats.genextreme.fit(values)
+            nll = lambda c_, l_, s_: -np.sum(stats.genextreme.logpdf(values, c_, l_, s_))
+            self.assertLessEqual(nll(-gev["shape"], gev["location"], gev["scale"]),
+                                 nll(c, loc_g, scale_g) + kGevLikelihood)
+            self.assertAlmostEqual(gev["shape"], -c, delta=kGevShape)
+            for p, q in zip(TAILS, gev["upper_quantiles"]):
+                self.close(q, stats.genextreme.isf(p, -gev["shape"], gev["location"], gev["scale"]), kTailRelative,
+                           f"gev upper {p}")
             for p, up, low, gup, glow in zip(TAILS, normal["upper_quantiles"], normal["lower_quantiles"],
                                              gmax["upper_quantiles"], gmin["lower_quantiles"]):
                 self.close(up, stats.norm.isf(p, loc, scale), kTailRelative, f"normal upper {p}")
