@@ -115,6 +115,10 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
       hdf5::WriteAttribute(group, "seed", static_cast<std::int64_t>(spec.seed));
       hdf5::WriteAttribute(group, "trajectory_rows", static_cast<std::int64_t>(spec.parameters.size()) + 1);
       break;
+    case DesignKind::kMonteCarlo:
+      hdf5::WriteAttribute(group, "samples", spec.samples);
+      hdf5::WriteAttribute(group, "seed", static_cast<std::int64_t>(spec.seed));
+      break;
     case DesignKind::kSingle:
       break;
   }
@@ -275,6 +279,9 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
         const DesignKind kind = plan_.design().spec().kind;
         if (kind == DesignKind::kLhs || kind == DesignKind::kSobol || kind == DesignKind::kMorris) {
           hdf5::WriteAttribute(d.get(), "distribution", std::string(ToString(parameter.distribution)));
+          hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
+        } else if (kind == DesignKind::kMonteCarlo) {
+          hdf5::WriteAttribute(d.get(), "distribution", DescribeDistribution(parameter));
           hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
         } else if (kind == DesignKind::kGrid) {
           hdf5::WriteAttribute(d.get(), "axis_values", parameter.values);

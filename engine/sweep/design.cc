@@ -1,9 +1,11 @@
 #include "engine/sweep/design.h"
 
+#include <boost/math/distributions/normal.hpp>
 #include <boost/random/sobol.hpp>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <sstream>
 
 #include "engine/common/errors.h"
 #include "engine/estimators/sensitivity_common.h"
@@ -16,6 +18,7 @@ namespace {
 constexpr std::uint64_t kLatinPermutationTag = 0x4c48535f7065726dULL;  // "LHS_perm"
 constexpr std::uint64_t kLatinJitterTag = 0x4c48535f6a697474ULL;       // "LHS_jitt"
 constexpr std::uint64_t kMorrisTag = 0x4d4f52524953ULL;                // "MORRIS"
+constexpr std::uint64_t kMonteCarloTag = 0x4d4f4e54455f4341ULL;        // "MONTE_CA"
 constexpr int kFeistelRounds = 4;  // four rounds make a keyed Feistel network a good permutation
 constexpr std::int64_t kMaximumRuns = std::int64_t{1} << 62;
 static_assert(2 * kMaximumSobolParameters <=
@@ -144,6 +147,23 @@ class MorrisDesign final : public Design {
   }
 };
 
+class MonteCarloDesign final : public Design {
+ public:
+  explicit MonteCarloDesign(DesignSpec spec) : Design(std::move(spec)) {}
+  std::int64_t run_count() const override { return spec_.samples; }
+  void Row(std::int64_t index, double* values) const override {
+    GESWEEP_DEMAND(index >= 0 && index < spec_.samples);
+    for (int d = 0; d < column_count(); ++d) {
+      const DesignParameter& parameter = spec_.parameters[static_cast<std::size_t>(d)];
+      values[d] = MonteCarloValue(parameter, MonteCarloUnit(spec_.seed, index, parameter.id));
+    }
+  }
+};
+
+// The standard normal's quantile and distribution function (Boost.Math).
+double StandardNormalQuantile(double p) { return boost::math::quantile(boost::math::normal(), p); }
+double StandardNormalCdf(double z) { return boost::math::cdf(boost::math::normal(), z); }
+
 // A keyed Feistel network on `bits` (even) bits: a bijection of [0, 2^bits).
 std::uint64_t Feistel(std::uint64_t x, int bits, std::uint64_t key) {
   const int half = bits / 2;
@@ -174,12 +194,28 @@ std::string_view ToString(DesignKind kind) {
       return "sobol";
     case DesignKind::kMorris:
       return "morris";
+    case DesignKind::kMonteCarlo:
+      return "monte_carlo";
   }
   GESWEEP_UNREACHABLE();
 }
 
 std::string_view ToString(Distribution distribution) {
-  return distribution == Distribution::kUniform ? "uniform" : "loguniform";
+  switch (distribution) {
+    case Distribution::kUniform:
+      return "uniform";
+    case Distribution::kLogUniform:
+      return "loguniform";
+    case Distribution::kNormal:
+      return "normal";
+    case Distribution::kTruncatedNormal:
+      return "truncated_normal";
+    case Distribution::kLogNormal:
+      return "lognormal";
+    case Distribution::kDiscrete:
+      return "discrete";
+  }
+  GESWEEP_UNREACHABLE();
 }
 
 std::int64_t CountRuns(const DesignSpec& spec) {
@@ -200,6 +236,7 @@ std::int64_t CountRuns(const DesignSpec& spec) {
     case DesignKind::kList:
       return spec.list_rows;
     case DesignKind::kLhs:
+    case DesignKind::kMonteCarlo:
       return spec.samples;
     case DesignKind::kSobol:
       return multiply(spec.base_samples,
@@ -224,6 +261,101 @@ void SobolPoint(int dimension, std::int64_t j, double* coordinates) {
 double MapUnit(const DesignParameter& parameter, double u) {
   return ValueAtUnit(parameter.lower, parameter.upper, parameter.distribution == Distribution::kLogUniform,
                      u);
+}
+
+double MonteCarloUnit(std::uint64_t seed, std::int64_t index, ParameterId id) {
+  GESWEEP_DEMAND(index >= 0);
+  const std::uint64_t run_key = HashWords(seed ^ kMonteCarloTag, static_cast<std::uint64_t>(index));
+  const std::uint64_t bits =
+      HashWords(run_key, Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].name));
+  return (static_cast<double>(bits >> 12) + 0.5) * 0x1.0p-52;
+}
+
+double MonteCarloValue(const DesignParameter& parameter, double u) {
+  GESWEEP_DEMAND(u > 0 && u < 1);
+  switch (parameter.distribution) {
+    case Distribution::kUniform:
+    case Distribution::kLogUniform:
+      return MapUnit(parameter, u);
+    case Distribution::kNormal:
+      return parameter.mean + parameter.sigma * StandardNormalQuantile(u);
+    case Distribution::kLogNormal:
+      return std::exp(parameter.mean + parameter.sigma * StandardNormalQuantile(u));
+    case Distribution::kTruncatedNormal: {
+      // Inverse CDF on [a, b] in standard units. An interval above the mean is drawn as the mirror
+      // of its reflection, so Φ is always evaluated where it is small and keeps its relative precision.
+      double a = (parameter.truncate_lower - parameter.mean) / parameter.sigma;
+      double b = (parameter.truncate_upper - parameter.mean) / parameter.sigma;
+      const bool mirrored = a > 0;
+      if (mirrored) {
+        std::swap(a, b);
+        a = -a;
+        b = -b;
+        u = 1.0 - u;  // exact: u is an odd multiple of 2⁻⁵³ in (0, 1)
+      }
+      const double fa = StandardNormalCdf(a), fb = StandardNormalCdf(b);
+      double z = StandardNormalQuantile(fa + u * (fb - fa));
+      z = std::min(std::max(z, a), b);
+      if (mirrored) z = -z;
+      const double x = parameter.mean + parameter.sigma * z;
+      return std::min(std::max(x, parameter.truncate_lower), parameter.truncate_upper);
+    }
+    case Distribution::kDiscrete: {
+      GESWEEP_DEMAND(!parameter.values.empty() && parameter.weights.size() == parameter.values.size());
+      double total = 0;
+      for (double w : parameter.weights) total += w;
+      const double target = u * total;
+      double cumulative = 0;
+      for (std::size_t k = 0; k < parameter.values.size(); ++k) {
+        cumulative += parameter.weights[k];
+        if (target < cumulative) return parameter.values[k];
+      }
+      return parameter.values.back();
+    }
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+double TruncatedNormalMass(const DesignParameter& parameter) {
+  double a = (parameter.truncate_lower - parameter.mean) / parameter.sigma;
+  double b = (parameter.truncate_upper - parameter.mean) / parameter.sigma;
+  if (a > 0) {
+    std::swap(a, b);
+    a = -a;
+    b = -b;
+  }
+  return StandardNormalCdf(b) - StandardNormalCdf(a);
+}
+
+std::string DescribeDistribution(const DesignParameter& parameter) {
+  std::ostringstream text;
+  text.precision(17);
+  text << ToString(parameter.distribution);
+  switch (parameter.distribution) {
+    case Distribution::kUniform:
+    case Distribution::kLogUniform:
+      text << "(lower=" << parameter.lower << ", upper=" << parameter.upper << ")";
+      break;
+    case Distribution::kNormal:
+      text << "(mean=" << parameter.mean << ", sigma=" << parameter.sigma << ")";
+      break;
+    case Distribution::kLogNormal:
+      text << "(mean of log=" << parameter.mean << ", sigma of log=" << parameter.sigma << ")";
+      break;
+    case Distribution::kTruncatedNormal:
+      text << "(mean=" << parameter.mean << ", sigma=" << parameter.sigma
+           << ", lower=" << parameter.truncate_lower << ", upper=" << parameter.truncate_upper << ")";
+      break;
+    case Distribution::kDiscrete:
+      text << "(";
+      for (std::size_t k = 0; k < parameter.values.size(); ++k) {
+        text << (k ? ", " : "") << FormatParameterValue(parameter.id, parameter.values[k]) << ":"
+             << parameter.weights[k];
+      }
+      text << ")";
+      break;
+  }
+  return text.str();
 }
 
 std::int64_t LatinStratum(std::uint64_t seed, int dimension, std::int64_t n, std::int64_t i) {
@@ -256,6 +388,8 @@ std::unique_ptr<Design> MakeDesign(DesignSpec spec) {
       return std::make_unique<SaltelliDesign>(std::move(spec));
     case DesignKind::kMorris:
       return std::make_unique<MorrisDesign>(std::move(spec));
+    case DesignKind::kMonteCarlo:
+      return std::make_unique<MonteCarloDesign>(std::move(spec));
   }
   GESWEEP_DEMAND(false);
   return nullptr;

@@ -7,7 +7,9 @@
 ///  - list:   explicit rows (inline or from CSV);
 ///  - lhs:    Latin hypercube, seeded (a keyed Feistel permutation per dimension, cycle-walked);
 ///  - sobol:  Saltelli's scheme on Boost.Random's Sobol' sequence (row layout: see below);
-///  - morris: r trajectories of D+1 rows, p levels, seeded (Morris 1991).
+///  - morris: r trajectories of D+1 rows, p levels, seeded (Morris 1991);
+///  - monte_carlo: N independent draws, each parameter from its own distribution (normal, truncated
+///    normal, uniform, log-uniform, lognormal, or weighted discrete values), seeded.
 ///
 /// These are the only designs of the project: the sensitivity estimators of engine/estimators are fed,
 /// and unit-tested, with the rows these classes make. The sobol design's rows follow the Saltelli
@@ -25,22 +27,33 @@
 
 namespace gesweep {
 
-enum class DesignKind { kSingle, kGrid, kList, kLhs, kSobol, kMorris };
+enum class DesignKind { kSingle, kGrid, kList, kLhs, kSobol, kMorris, kMonteCarlo };
 std::string_view ToString(DesignKind kind);
 
-/// How a sampled parameter's unit-interval coordinate maps to its value.
+/// How a sampled parameter's unit-interval coordinate maps to its value (by the inverse of its
+/// cumulative distribution function). lhs, sobol and morris take the first two only.
 enum class Distribution {
-  kUniform,     ///< lower + u·(upper − lower)
-  kLogUniform,  ///< exp(log lower + u·(log upper − log lower)); lower > 0
+  kUniform,          ///< lower + u·(upper − lower)
+  kLogUniform,       ///< exp(log lower + u·(log upper − log lower)); lower > 0
+  kNormal,           ///< mean + sigma·Φ⁻¹(u)
+  kTruncatedNormal,  ///< the normal (mean, sigma) conditioned on [truncate_lower, truncate_upper]
+  kLogNormal,        ///< exp(mean + sigma·Φ⁻¹(u)): mean and sigma are those of the log of the value
+  kDiscrete,         ///< values[k] with probability weights[k] / Σ weights
 };
 std::string_view ToString(Distribution distribution);
 
 /// One column of a design.
 struct DesignParameter {
   ParameterId id = 0;
-  std::vector<double> values;                          ///< grid: the axis values (a choice as level indices)
-  Distribution distribution = Distribution::kUniform;  ///< lhs, sobol, morris
-  double lower = 0, upper = 0;                         ///< lhs, sobol, morris
+  /// grid: the axis values; monte_carlo discrete: the values drawn (a choice as level indices)
+  std::vector<double> values;
+  Distribution distribution = Distribution::kUniform;  ///< lhs, sobol, morris, monte_carlo
+  /// lhs, sobol, morris: the bounds. monte_carlo: the smallest and largest value a draw can take
+  /// (MonteCarloValue at the extreme unit coordinates), which the study checks against the parameter.
+  double lower = 0, upper = 0;
+  double mean = 0, sigma = 0;                     ///< monte_carlo normal kinds (lognormal: of the log)
+  double truncate_lower = 0, truncate_upper = 0;  ///< monte_carlo truncated normal
+  std::vector<double> weights;                    ///< monte_carlo discrete: one > 0 per value
 };
 
 /// A validated design specification (parsed from a study's [design] table).
@@ -50,8 +63,8 @@ struct DesignSpec {
   std::vector<double> list_values;          ///< list: row-major, parameters.size() per row
   std::int64_t list_rows = 0;
   std::string list_csv;           ///< list: the CSV path when the rows came from one
-  std::int64_t samples = 0;       ///< lhs: N
-  std::uint64_t seed = 0;         ///< lhs, morris
+  std::int64_t samples = 0;       ///< lhs, monte_carlo: N
+  std::uint64_t seed = 0;         ///< lhs, morris, monte_carlo
   std::int64_t base_samples = 0;  ///< sobol: N
   bool second_order = false;      ///< sobol
   std::int64_t trajectories = 0;  ///< morris: r
@@ -96,6 +109,31 @@ void SobolPoint(int dimension, std::int64_t j, double* coordinates);
 
 /// Maps a unit-interval coordinate through a design parameter's distribution.
 double MapUnit(const DesignParameter& parameter, double u);
+
+/// The monte_carlo design's unit coordinate of parameter `id` in run `index`, in (0, 1): a pure
+/// function of (seed, run index, parameter name), counter-based like engine/disturbance/run_noise.h:
+///   run key = HashWords(seed ^ "MONTE_CA", index)            (engine/sweep/hashing.h)
+///   bits    = HashWords(run key, FNV-1a 64 of the parameter's name)
+///   u       = ((bits >> 12) + 0.5)·2⁻⁵², in [2⁻⁵³, 1 − 2⁻⁵³] (52 random bits: every u and 1 − u
+///             is exact in a double, so both tails are symmetric and u never rounds to 0 or 1)
+/// Keyed by the name rather than the column, a parameter draws the same values when another is
+/// added to or removed from the design (common random numbers between studies of one seed).
+double MonteCarloUnit(std::uint64_t seed, std::int64_t index, ParameterId id);
+
+/// The smallest and largest unit coordinates MonteCarloUnit gives.
+inline constexpr double kMonteCarloUnitLow = 0x1.0p-53;
+inline constexpr double kMonteCarloUnitHigh = 1.0 - 0x1.0p-53;
+
+/// Maps a unit coordinate through a monte_carlo parameter's distribution (inverse CDF; a discrete
+/// parameter takes the first value whose cumulative weight exceeds u·Σ weights).
+double MonteCarloValue(const DesignParameter& parameter, double u);
+
+/// The probability a truncated normal parameter's interval holds under the untruncated normal
+/// (the study parser refuses an interval whose probability underflows).
+double TruncatedNormalMass(const DesignParameter& parameter);
+
+/// A one-line statement of a design parameter's distribution, e.g. "normal(mean=32, sigma=0.5)".
+std::string DescribeDistribution(const DesignParameter& parameter);
 
 /// The stratum (0..n−1) of point i of dimension `dimension` in a seeded Latin hypercube of n points:
 /// a keyed bijection of [0, n). Exposed for tests.

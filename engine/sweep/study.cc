@@ -362,6 +362,163 @@ class StudyParser {
     }
   }
 
+  // [[design.parameter]] entries of a monte_carlo design: name and exactly one distribution.
+  void ParseMonteCarloParameters(const TomlSection& design) {
+    const toml::node* node = design.table().get("parameter");
+    if (node == nullptr) {
+      design.Fail("parameter", "", "missing [[design.parameter]] entries (one per sampled parameter)");
+    }
+    const toml::array* array = node->as_array();
+    if (array == nullptr || array->empty()) {
+      design.Fail("parameter", DescribeNode(*node), "expected one or more [[design.parameter]] tables");
+    }
+    static const std::vector<std::string> kContinuous = {"normal", "truncated_normal", "uniform",
+                                                         "loguniform", "lognormal"};
+    std::set<ParameterId> seen;
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const std::string prefix = "design.parameter[" + std::to_string(i) + "]";
+      const toml::table* table = array->get(i)->as_table();
+      if (table == nullptr) {
+        throw InputError(source_, prefix, DescribeNode(*array->get(i)), "expected a table",
+                         NodeLine(*array->get(i)));
+      }
+      const TomlSection entry(*table, source_, prefix);
+      entry.RejectUnknownKeys(
+          {"name", "normal", "truncated_normal", "uniform", "loguniform", "lognormal", "values", "weights"});
+      const std::string name = entry.String("name");
+      DesignParameter parameter;
+      parameter.id = ParameterIdOf(name, entry.KeyOf("name"), entry.LineOf("name"));
+      if (!seen.insert(parameter.id).second) {
+        entry.Fail("name", Quote(name), "expected each parameter once in the design (it is a duplicate)");
+      }
+      swept_lines_[parameter.id] = entry.LineOf("name");
+      int given = entry.Has("values");
+      std::string key = "values";
+      for (const auto& distribution : kContinuous) {
+        if (entry.Has(distribution)) {
+          ++given;
+          key = distribution;
+        }
+      }
+      if (given != 1) {
+        entry.Fail("name", Quote(name),
+                   "expected exactly one distribution: normal = [mean, sigma], truncated_normal = [mean, "
+                   "sigma, lower, upper], uniform = [lower, upper], loguniform = [lower, upper], lognormal "
+                   "= [mean of log, sigma of log], or values = [...] with optional weights = [...]");
+      }
+      if (entry.Has("weights") && key != "values") {
+        entry.Fail("weights", "[...]",
+                   "expected weights only beside values = [...] (a discrete distribution)");
+      }
+      const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
+      const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
+      if (key == "values") {
+        ParseDiscrete(entry, parameter);
+      } else {
+        if (info.kind != ParameterKind::kReal) {
+          entry.Fail(key, "[...]",
+                     "expected values = [...] (with optional weights = [...]) for " + name +
+                         ": a continuous distribution needs a real-valued parameter (" +
+                         DescribeAllowedValues(parameter.id) + ")");
+        }
+        if (key == "uniform" || key == "loguniform") {
+          ParseBounds(entry, parameter);  // checks both bounds against the parameter
+          study_.design.parameters.push_back(std::move(parameter));
+          continue;
+        }
+        ParseNormalKind(entry, key, parameter);
+        // The reach: the smallest and largest value any draw can take, checked against the parameter.
+        parameter.lower = MonteCarloValue(parameter, kMonteCarloUnitLow);
+        parameter.upper = MonteCarloValue(parameter, kMonteCarloUnitHigh);
+        for (double value : {parameter.lower, parameter.upper}) {
+          const std::string problem = CheckParameterValue(parameter.id, value, aircraft);
+          if (!problem.empty()) {
+            entry.Fail(
+                key, "[...]",
+                "the distribution reaches " + FormatNumber(value) +
+                    " (its value at probability 2^-53 from an end, the furthest a draw can go), " + "and " +
+                    name + ": " + problem +
+                    (key == "normal" || key == "lognormal" ? "; truncate it (truncated_normal) or narrow it"
+                                                           : ""));
+          }
+        }
+      }
+      study_.design.parameters.push_back(std::move(parameter));
+    }
+  }
+
+  void ParseNormalKind(const TomlSection& entry, const std::string& key, DesignParameter& parameter) {
+    const std::vector<double> numbers = entry.NumberArray(key);
+    const bool truncated = key == "truncated_normal";
+    const std::size_t count = truncated ? 4 : 2;
+    const std::string form = key == "lognormal" ? "[mean of log, sigma of log]"
+                             : truncated        ? "[mean, sigma, lower, upper]"
+                                                : "[mean, sigma]";
+    if (numbers.size() != count) entry.Fail(key, "[...]", "expected " + form);
+    if (!(numbers[1] > 0)) entry.Fail(key, FormatNumber(numbers[1]), "expected sigma > 0 in " + form);
+    parameter.mean = numbers[0];
+    parameter.sigma = numbers[1];
+    if (key == "normal") {
+      parameter.distribution = Distribution::kNormal;
+    } else if (key == "lognormal") {
+      parameter.distribution = Distribution::kLogNormal;
+      // exp of the reach must stay finite: |mean| + 8.3 sigma below log(DBL_MAX) ≈ 709.
+      if (std::abs(numbers[0]) + 9 * numbers[1] > 700) {
+        entry.Fail(key, "[...]", "expected |mean of log| + 9 sigma of log <= 700 (exp overflows beyond)");
+      }
+    } else {
+      parameter.distribution = Distribution::kTruncatedNormal;
+      if (!(numbers[2] < numbers[3])) {
+        entry.Fail(key, "[" + FormatNumber(numbers[2]) + ", " + FormatNumber(numbers[3]) + "]",
+                   "expected lower < upper in " + form);
+      }
+      parameter.truncate_lower = numbers[2];
+      parameter.truncate_upper = numbers[3];
+      if (!(TruncatedNormalMass(parameter) > 0)) {
+        entry.Fail(key, "[...]",
+                   "the interval [lower, upper] holds no probability of the normal (it lies about 38 sigma "
+                   "or more from the mean); move it or widen sigma");
+      }
+    }
+  }
+
+  void ParseDiscrete(const TomlSection& entry, DesignParameter& parameter) {
+    parameter.distribution = Distribution::kDiscrete;
+    const toml::array* array = entry.table().get("values")->as_array();
+    if (array == nullptr || array->empty()) {
+      entry.Fail("values", DescribeNode(*entry.table().get("values")),
+                 "expected a non-empty array of values");
+    }
+    for (std::size_t k = 0; k < array->size(); ++k) {
+      parameter.values.push_back(ParameterValue(parameter.id, *array->get(k),
+                                                entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
+    }
+    std::vector<double> sorted = parameter.values;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+      entry.Fail("values", "[...]", "expected distinct values (give a value's weight once, in weights)");
+    }
+    if (entry.Has("weights")) {
+      parameter.weights = entry.NumberArray("weights");
+      if (parameter.weights.size() != parameter.values.size()) {
+        entry.Fail("weights", "[...]",
+                   "expected " + std::to_string(parameter.values.size()) + " weights (one per value)");
+      }
+      double total = 0;
+      for (double w : parameter.weights) {
+        if (!(w > 0) || !std::isfinite(w)) {
+          entry.Fail("weights", FormatNumber(w), "expected every weight finite and > 0");
+        }
+        total += w;
+      }
+      if (!std::isfinite(total)) entry.Fail("weights", "[...]", "expected weights whose sum is finite");
+    } else {
+      parameter.weights.assign(parameter.values.size(), 1.0);
+    }
+    parameter.lower = sorted.front();
+    parameter.upper = sorted.back();
+  }
+
   void ParseBounds(const TomlSection& entry, DesignParameter& parameter) {
     const int given = entry.Has("uniform") + entry.Has("loguniform");
     if (given != 1)
@@ -563,7 +720,7 @@ class StudyParser {
     }
     study_.design_line = root.LineOf("design");
     const std::string kind = design->String("kind");
-    const std::vector<std::string> kinds = {"grid", "list", "lhs", "sobol", "morris"};
+    const std::vector<std::string> kinds = {"grid", "list", "lhs", "sobol", "morris", "monte_carlo"};
     if (kind == "grid") {
       spec.kind = DesignKind::kGrid;
       design->RejectUnknownKeys({"kind", "parameter"});
@@ -601,10 +758,16 @@ class StudyParser {
       spec.levels = static_cast<int>(*levels);
       spec.seed = Seed(*design);
       ParseDesignParameters(*design, /*grid=*/false);
+    } else if (kind == "monte_carlo") {
+      spec.kind = DesignKind::kMonteCarlo;
+      design->RejectUnknownKeys({"kind", "samples", "seed", "parameter"});
+      spec.samples = PositiveCount(*design, "samples", kMaximumListRows);
+      spec.seed = Seed(*design);
+      ParseMonteCarloParameters(*design);
     } else {
       const std::string near = NearestName(kind, kinds);
       design->Fail("kind", Quote(kind),
-                   "expected grid, list, lhs, sobol or morris" +
+                   "expected grid, list, lhs, sobol, morris or monte_carlo" +
                        (near.empty() ? "" : " (did you mean '" + near + "'?)"));
     }
     if (CountRuns(spec) < 0) {

@@ -200,7 +200,7 @@ def write_report(args, archives, progress):
     # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
     # The level maps (one section per rated analysis of the column manifest) follow the stability map.
     rated = report_figures.rated_analyses()
-    ours = {"stability", "root", "open", "landing", "sensitivity"} | {r.name.split("_")[0] for r in rated}
+    ours = {"stability", "root", "open", "landing", "sensitivity", "dispersion"} | {r.name.split("_")[0] for r in rated}
     for name in os.listdir(args.output):
         if name.endswith(".png") and name.split("_")[0] in ours:
             os.remove(os.path.join(args.output, name))
@@ -213,7 +213,8 @@ def write_report(args, archives, progress):
                                 + [("Root locus against height", "locus", report_figures.root_locus),
                                    ("Open-loop responses", "open_loop", report_figures.open_loop),
                                    ("Landing", "landing", report_figures.landing),
-                                   ("Sensitivity", "sensitivity", report_figures.sensitivity)]):
+                                   ("Sensitivity", "sensitivity", report_figures.sensitivity),
+                                   ("Dispersion", "dispersion", report_figures.dispersion)]):
         figures = draw(archives, args.output)
         progress(f"{title.lower()}: {len(figures)} figure(s)")
         if figures:

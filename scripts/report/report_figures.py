@@ -900,3 +900,90 @@ def sensitivity(archives, outdir):
                                   f"From {path} of {os.path.basename(archive.path)}: bars with bootstrap "
                                   f"confidence intervals (docs/sensitivity.md)."))
     return figures
+
+
+def _text(value):
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
+def dispersion(archives, outdir):
+    """From /analysis/dispersion (gesweep dispersion, docs/dispersion.md): the empirical CDF of each
+    dispersion column per group, the touchdown footprint (sink rate against distance past the
+    transmitter) when both columns are there, and each limit's probability against the grouping
+    value with its Clopper-Pearson interval."""
+    figures = []
+    status_path = columns.runs_path("status")
+    distance = columns.path("landing", "touchdown_distance_past_transmitter_m")
+    sink = columns.path("landing", "touchdown_sink_rate_mps")
+    for archive in archives:
+        if "analysis/dispersion" not in archive.file:
+            continue
+        product = archive.file["analysis/dispersion"]
+        attrs = {k: product.attrs[k] for k in product.attrs}
+        paths = [_text(p) for p in attrs.get("column_paths", [])]
+        names = [_text(p) for p in attrs.get("columns", [])]
+        units = [_text(p) for p in attrs.get("column_units", [])]
+        group_path = _text(attrs.get("group_path", ""))
+        group_by = _text(attrs.get("group_by", ""))
+        labels = [_text(v) for v in product["group_label"][...]]
+        keys = product["group_value"][...]
+        ok = archive.file[status_path][...] == 1
+        grouping = archive.file[group_path][...] if group_path and group_path in archive.file else None
+
+        def members(index):
+            if grouping is None:
+                return ok
+            return ok & (np.isnan(grouping) if np.isnan(keys[index]) else grouping == keys[index])
+
+        if paths:
+            fig, axes = plt.subplots(1, len(paths), figsize=(4.2 * len(paths), 3.8), layout="constrained",
+                                     squeeze=False)
+            for ax, path, name, unit in zip(axes[0], paths, names, units):
+                values = archive.file[path][...]
+                for g, label in enumerate(labels):
+                    sample = np.sort(values[members(g) & np.isfinite(values)])
+                    if sample.size:
+                        ax.step(sample, np.arange(1, sample.size + 1) / sample.size, where="post",
+                                label=(f"{group_by} = {label}" if group_by else "all runs") + f" (n = {sample.size})")
+                ax.set_xlabel(f"{name} ({unit})")
+                ax.set_ylabel("fraction of runs at or below")
+                ax.grid(alpha=0.3)
+            axes[0][0].legend(fontsize="small")
+            name = _save(fig, outdir, f"dispersion_{_slug(archive.study_name)}_ecdf.png")
+            figures.append(Figure(name, f"Dispersion of {archive.study_name}: empirical CDFs",
+                                  "Each column of /analysis/dispersion over the complete runs with a value, "
+                                  "one curve per group (docs/dispersion.md)."))
+        if distance in archive.file and sink in archive.file:
+            x, y = archive.file[distance][...], archive.file[sink][...]
+            fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
+            for g, label in enumerate(labels):
+                m = members(g) & np.isfinite(x) & np.isfinite(y)
+                ax.scatter(x[m], y[m], s=6, alpha=0.6, label=(f"{group_by} = {label}" if group_by else "all runs"))
+            ax.set_xlabel(f"touchdown distance past the transmitter ({columns.units('landing', 'touchdown_distance_past_transmitter_m')})")
+            ax.set_ylabel(f"touchdown sink rate ({columns.units('landing', 'touchdown_sink_rate_mps')})")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize="small")
+            name = _save(fig, outdir, f"dispersion_{_slug(archive.study_name)}_footprint.png")
+            figures.append(Figure(name, f"Touchdown footprint of {archive.study_name}",
+                                  "Sink rate against distance past the transmitter at touchdown, one point per "
+                                  "complete run."))
+        limits = product.get("limits")
+        if limits is not None and "probability" in limits and limits["probability"].shape[1] and group_by:
+            order = np.argsort(keys)
+            fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+            for l, text in enumerate(_text(t) for t in limits["limit"][...]):
+                p = limits["probability"][...][order, l]
+                low = limits["clopper_pearson_lower"][...][order, l]
+                high = limits["clopper_pearson_upper"][...][order, l]
+                ax.errorbar(keys[order], p, yerr=np.vstack([p - low, high - p]), marker="o", capsize=3, label=text)
+            ax.set_xticks(keys[order], [labels[i] for i in order])  # level names for a choice or flag
+            ax.set_xlabel(f"{group_by} ({_text(attrs.get('group_units', ''))})")
+            ax.set_ylabel("probability of exceeding the limit")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize="small")
+            level = float(attrs.get("confidence_level", 0.95)) * 100
+            name = _save(fig, outdir, f"dispersion_{_slug(archive.study_name)}_limits.png")
+            figures.append(Figure(name, f"Limit exceedance against {group_by} ({archive.study_name})",
+                                  f"Empirical probability per group with its {level:g} % Clopper-Pearson interval "
+                                  "(e.g. a hard landing against the wind level)."))
+    return figures

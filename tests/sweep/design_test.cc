@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -271,6 +272,182 @@ TEST(MapUnit, LogUniformSpacesGeometrically) {
   EXPECT_DOUBLE_EQ(MapUnit(p, 0.5), 10.0);
   p.distribution = Distribution::kUniform;
   EXPECT_DOUBLE_EQ(MapUnit(p, 0.5), 50.5);
+}
+
+// --- monte_carlo ------------------------------------------------------------------------------
+
+// The analytic CDFs of the test, from std::erfc (not from the Boost.Math the design uses).
+double Phi(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+
+// Kolmogorov–Smirnov: the design is seeded, so a sample either passes or not, every time; the
+// critical value is the asymptotic one at significance 0.001, c = sqrt(-ln(0.0005)/2) = 1.9495, over
+// sqrt(n): a correct sampler fails it with probability 0.001 for a given seed, a wrong mapping (a
+// shifted mean by 0.05 sigma at n = 20000, a wrong sigma by 3 %) fails it surely.
+constexpr double kKolmogorovCritical001 = 1.9495;
+constexpr std::int64_t kSamples = 20000;
+
+template <typename Cdf>
+double KolmogorovStatistic(std::vector<double> sample, Cdf cdf) {
+  std::sort(sample.begin(), sample.end());
+  const auto n = static_cast<double>(sample.size());
+  double d = 0;
+  for (std::size_t i = 0; i < sample.size(); ++i) {
+    const double f = cdf(sample[i]);
+    d = std::max({d, f - static_cast<double>(i) / n, static_cast<double>(i + 1) / n - f});
+  }
+  return d;
+}
+
+std::vector<double> Column(const Design& design, int column) {
+  std::vector<double> row(static_cast<std::size_t>(design.column_count())), values;
+  for (std::int64_t i = 0; i < design.run_count(); ++i) {
+    design.Row(i, row.data());
+    values.push_back(row[static_cast<std::size_t>(column)]);
+  }
+  return values;
+}
+
+DesignSpec MonteCarloSpec() {
+  DesignSpec spec;
+  spec.kind = DesignKind::kMonteCarlo;
+  spec.samples = kSamples;
+  spec.seed = 2024;
+  DesignParameter normal;
+  normal.id = RequireParameter("speed_mps");
+  normal.distribution = Distribution::kNormal;
+  normal.mean = 32;
+  normal.sigma = 0.8;
+  DesignParameter truncated;
+  truncated.id = RequireParameter("height_m");
+  truncated.distribution = Distribution::kTruncatedNormal;
+  truncated.mean = 2;
+  truncated.sigma = 1;
+  truncated.truncate_lower = 2.5;  // above the mean: the mirrored branch
+  truncated.truncate_upper = 4;
+  DesignParameter lognormal;
+  lognormal.id = RequireParameter("mass_kg");
+  lognormal.distribution = Distribution::kLogNormal;
+  lognormal.mean = std::log(30.0);
+  lognormal.sigma = 0.1;
+  DesignParameter uniform;
+  uniform.id = RequireParameter("x1");
+  uniform.distribution = Distribution::kUniform;
+  uniform.lower = -1;
+  uniform.upper = 3;
+  DesignParameter discrete;
+  discrete.id = RequireParameter("x2");
+  discrete.distribution = Distribution::kDiscrete;
+  discrete.values = {0, 1, 5};
+  discrete.weights = {1, 2, 7};
+  DesignParameter lower_truncated;
+  lower_truncated.id = RequireParameter("x3");
+  lower_truncated.distribution = Distribution::kTruncatedNormal;
+  lower_truncated.mean = 0;
+  lower_truncated.sigma = 2;
+  lower_truncated.truncate_lower = -1;
+  lower_truncated.truncate_upper = 5;
+  spec.parameters = {normal, truncated, lognormal, uniform, discrete, lower_truncated};
+  return spec;
+}
+
+TEST(MonteCarloDesign, EachColumnFollowsItsDistributionByKolmogorovSmirnov) {
+  const auto design = MakeDesign(MonteCarloSpec());
+  ASSERT_EQ(design->run_count(), kSamples);
+  const double critical = kKolmogorovCritical001 / std::sqrt(static_cast<double>(kSamples));
+  EXPECT_LT(KolmogorovStatistic(Column(*design, 0), [](double x) { return Phi((x - 32) / 0.8); }), critical);
+  const double mass = Phi(2.0) - Phi(0.5);
+  EXPECT_LT(KolmogorovStatistic(Column(*design, 1), [&](double x) { return (Phi(x - 2) - Phi(0.5)) / mass; }),
+            critical);
+  EXPECT_LT(KolmogorovStatistic(Column(*design, 2),
+                                [](double x) { return Phi((std::log(x) - std::log(30.0)) / 0.1); }),
+            critical);
+  EXPECT_LT(KolmogorovStatistic(Column(*design, 3), [](double x) { return (x + 1) / 4; }), critical);
+  const double lower_mass = Phi(2.5) - Phi(-0.5);
+  EXPECT_LT(KolmogorovStatistic(Column(*design, 5),
+                                [&](double x) { return (Phi(x / 2) - Phi(-0.5)) / lower_mass; }),
+            critical);
+  // Every truncated draw inside its interval.
+  for (double x : Column(*design, 1)) ASSERT_TRUE(x >= 2.5 && x <= 4) << x;
+  for (double x : Column(*design, 5)) ASSERT_TRUE(x >= -1 && x <= 5) << x;
+}
+
+TEST(MonteCarloDesign, MomentsMatchTheAnalyticOnesWithinFiveStandardErrors) {
+  const auto design = MakeDesign(MonteCarloSpec());
+  const auto n = static_cast<double>(kSamples);
+  // Five standard errors: a correct sampler is outside with probability 6e-7.
+  constexpr double kStandardErrors = 5;
+  const std::vector<double> normal = Column(*design, 0);
+  double mean = 0;
+  for (double x : normal) mean += x / n;
+  double variance = 0;
+  for (double x : normal) variance += (x - mean) * (x - mean) / (n - 1);
+  EXPECT_NEAR(mean, 32, kStandardErrors * 0.8 / std::sqrt(n));
+  // The sample variance's standard error is sigma² sqrt(2/(n − 1)) for a normal sample.
+  EXPECT_NEAR(variance, 0.64, kStandardErrors * 0.64 * std::sqrt(2 / (n - 1)));
+  // Lognormal: E = exp(mu + sigma²/2).
+  double lognormal_mean = 0;
+  for (double x : Column(*design, 2)) lognormal_mean += x / n;
+  const double expected = 30 * std::exp(0.005);
+  const double sd = expected * std::sqrt(std::exp(0.01) - 1);
+  EXPECT_NEAR(lognormal_mean, expected, kStandardErrors * sd / std::sqrt(n));
+}
+
+TEST(MonteCarloDesign, DiscreteValuesComeInProportionToTheirWeights) {
+  const auto design = MakeDesign(MonteCarloSpec());
+  std::map<double, double> counts;
+  for (double x : Column(*design, 4)) counts[x] += 1;
+  ASSERT_EQ(counts.size(), 3u);
+  const auto n = static_cast<double>(kSamples);
+  constexpr double kStandardErrors = 5;  // binomial standard errors; outside with probability 6e-7
+  const std::map<double, double> expected = {{0, 0.1}, {1, 0.2}, {5, 0.7}};
+  for (const auto& [value, p] : expected) {
+    EXPECT_NEAR(counts[value] / n, p, kStandardErrors * std::sqrt(p * (1 - p) / n)) << value;
+  }
+}
+
+TEST(MonteCarloDesign, RowDependsOnSeedIndexAndNameOnlyNotOnColumnOrOtherParameters) {
+  DesignSpec spec = MonteCarloSpec();
+  const auto design = MakeDesign(spec);
+  std::vector<double> full(spec.parameters.size());
+  design->Row(1234, full.data());
+  // The same parameter alone in a design of one column, at the same index and seed: the same value.
+  DesignSpec alone = spec;
+  alone.parameters = {spec.parameters[2]};
+  double value = 0;
+  MakeDesign(alone)->Row(1234, &value);
+  EXPECT_EQ(value, full[2]);
+  // Rows computed out of order equal rows computed in order.
+  std::vector<double> again(spec.parameters.size());
+  for (std::int64_t i = kSamples - 1; i >= 0; i -= 997) {
+    design->Row(i, again.data());
+    std::vector<double> fresh(spec.parameters.size());
+    MakeDesign(spec)->Row(i, fresh.data());
+    EXPECT_EQ(again, fresh);
+  }
+  // Another seed, other values.
+  spec.seed = 2025;
+  std::vector<double> other(spec.parameters.size());
+  MakeDesign(spec)->Row(1234, other.data());
+  EXPECT_NE(other[0], full[0]);
+}
+
+TEST(MonteCarloDesign, UnitCoordinatesStayStrictlyInsideTheUnitInterval) {
+  // The extremes are the reach the study checks: Phi^-1(2^-53) = -8.2095 (scipy.stats.norm.ppf), so a
+  // normal's draws stay within mean ± 8.21 sigma, symmetrically.
+  constexpr double kReach = 8.21;
+  DesignParameter normal;
+  normal.id = RequireParameter("speed_mps");
+  normal.distribution = Distribution::kNormal;
+  normal.mean = 0;
+  normal.sigma = 1;
+  EXPECT_GT(MonteCarloValue(normal, kMonteCarloUnitLow), -kReach);
+  EXPECT_LT(MonteCarloValue(normal, kMonteCarloUnitLow), -8.2);
+  EXPECT_LT(MonteCarloValue(normal, kMonteCarloUnitHigh), kReach);
+  EXPECT_EQ(MonteCarloValue(normal, kMonteCarloUnitHigh), -MonteCarloValue(normal, kMonteCarloUnitLow));
+  for (std::int64_t i = 0; i < 1000; ++i) {
+    const double u = MonteCarloUnit(7, i, normal.id);
+    ASSERT_TRUE(u >= kMonteCarloUnitLow && u <= kMonteCarloUnitHigh) << u;
+  }
 }
 
 }  // namespace

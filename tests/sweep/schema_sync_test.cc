@@ -50,6 +50,22 @@ TEST(StudySchema, ListsEveryCatalogueParameterAndNoOther) {
   EXPECT_EQ(documented, catalogue);
 }
 
+TEST(StudySchema, MonteCarloDesignNamesEveryCatalogueParameter) {
+  // A monte_carlo design samples any parameter (a choice or boolean by values = [...]).
+  const nlohmann::json schema = Schema();
+  std::set<std::string> catalogue, documented;
+  for (const auto& info : ParameterCatalog()) catalogue.insert(info.name);
+  bool found = false;
+  for (const auto& branch : schema["properties"]["design"]["allOf"]) {
+    if (branch["if"]["properties"]["kind"]["const"] != "monte_carlo") continue;
+    found = true;
+    for (const auto& name : branch["then"]["properties"]["parameter"]["items"]["properties"]["name"]["enum"])
+      documented.insert(name.get<std::string>());
+  }
+  EXPECT_TRUE(found) << "no monte_carlo branch in the design's allOf";
+  EXPECT_EQ(documented, catalogue);
+}
+
 TEST(StudySchema, ListsEveryAnalysis) {
   const nlohmann::json schema = Schema();
   std::set<std::string> registry, documented;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -80,6 +81,74 @@ values = [true, false]
   EXPECT_EQ(plan.design_runs(), 10);
   EXPECT_EQ(plan.base_parameters()[static_cast<std::size_t>(RequireParameter("scale.CLh"))], 1.1);
   EXPECT_EQ(plan.base_parameters()[static_cast<std::size_t>(RequireParameter("mass_kg"))], 182.055);
+}
+
+TEST_F(StudyTest, ParsesAMonteCarloStudyAndChecksEachDistributionsReach) {
+  const auto path = Write("mc.toml", Header() + R"(
+[design]
+kind = "monte_carlo"
+samples = 500
+seed = 9
+[[design.parameter]]
+name = "speed_mps"
+normal = [40.0, 2.0]
+[[design.parameter]]
+name = "height_m"
+truncated_normal = [2.0, 1.0, 1.0, 5.0]
+[[design.parameter]]
+name = "mass_kg"
+lognormal = [3.4, 0.1]
+[[design.parameter]]
+name = "scale.CLh"
+uniform = [0.9, 1.1]
+[[design.parameter]]
+name = "cdh"
+values = ["polar", "zero"]
+weights = [3, 1]
+[[design.parameter]]
+name = "h_derivatives"
+values = [true]
+)");
+  const Study study = LoadStudy(path);
+  const DesignSpec& spec = study.design;
+  ASSERT_EQ(spec.kind, DesignKind::kMonteCarlo);
+  EXPECT_EQ(spec.samples, 500);
+  EXPECT_EQ(spec.seed, 9u);
+  ASSERT_EQ(spec.parameters.size(), 6u);
+  // The reach of a normal: mean ± sigma·Φ⁻¹(2⁻⁵³), Φ⁻¹(2⁻⁵³) = −8.209536151601387 (scipy.stats.norm.ppf).
+  constexpr double kZReach = 8.209536151601387;
+  constexpr double kQuantileRelative = 1e-13;  // Boost's and SciPy's normal quantiles agree to a few ulps
+  EXPECT_EQ(spec.parameters[0].distribution, Distribution::kNormal);
+  EXPECT_NEAR(spec.parameters[0].lower, 40 - 2 * kZReach, 40 * kQuantileRelative);
+  EXPECT_NEAR(spec.parameters[0].upper, 40 + 2 * kZReach, 40 * kQuantileRelative);
+  // A truncated normal reaches its bounds (to within the 2⁻⁵³ of probability left out at each end).
+  constexpr double kTruncationReach = 1e-9;  // 2⁻⁵³ of the interval's mass over the density at an end
+  EXPECT_NEAR(spec.parameters[1].lower, 1.0, kTruncationReach);
+  EXPECT_NEAR(spec.parameters[1].upper, 5.0, kTruncationReach);
+  EXPECT_NEAR(spec.parameters[2].upper, std::exp(3.4 + 0.1 * kZReach), 50 * kQuantileRelative);
+  EXPECT_EQ(spec.parameters[3].lower, 0.9);  // uniform: its bounds
+  EXPECT_EQ(spec.parameters[4].distribution, Distribution::kDiscrete);
+  EXPECT_EQ(spec.parameters[4].values, (std::vector<double>{0, 1}));  // level indices
+  EXPECT_EQ(spec.parameters[4].weights, (std::vector<double>{3, 1}));
+  EXPECT_EQ(spec.parameters[5].weights, (std::vector<double>{1}));  // default: equal weights
+  EXPECT_EQ(DescribeDistribution(spec.parameters[4]), "discrete(polar:3, zero:1)");
+  EXPECT_EQ(DescribeDistribution(spec.parameters[0]), "normal(mean=40, sigma=2)");
+}
+
+TEST_F(StudyTest, MonteCarloRefusesADistributionThatReachesOutsideTheParameter) {
+  // height_m ~ N(1.5, 0.3) reaches 1.5 − 8.21·0.3 = −0.96 m, under the wheels.
+  const InputError e = ErrorOf(Header() + R"(
+[design]
+kind = "monte_carlo"
+samples = 10
+seed = 1
+[[design.parameter]]
+name = "height_m"
+normal = [1.5, 0.3]
+)");
+  EXPECT_EQ(e.key(), "design.parameter[0].normal");
+  EXPECT_NE(e.expected().find("the distribution reaches"), std::string::npos) << e.expected();
+  EXPECT_NE(e.expected().find("truncated_normal"), std::string::npos) << e.expected();
 }
 
 TEST_F(StudyTest, FingerprintIgnoresCommentsButNotValues) {

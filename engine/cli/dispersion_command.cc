@@ -1,0 +1,314 @@
+// gesweep dispersion: the dispersion of a Monte Carlo sweep's results (docs/dispersion.md): counts,
+// moments, percentiles, normal and Gumbel tail fits with their Anderson–Darling statistics, limit
+// exceedance probabilities with Wilson and Clopper–Pearson intervals, per group of a column; prints
+// them (or JSON) and writes /analysis/dispersion into the archive.
+//   gesweep dispersion ARCHIVE [--columns a,b] [--limit 'touchdown_sink_rate_mps>3' ...]
+//       [--group-by NAME] [--percentiles 1,50,99] [--tail-probabilities 1e-3,1e-6]
+//       [--confidence-level 0.95] [--max-groups 1000] [--format table|json] [--no-write]
+// Exit codes: 0 ok; 2 bad input (no such archive or column, archive in use); 1 an I/O error.
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "engine/archive/archive_error.h"
+#include "engine/archive/archive_lock.h"
+#include "engine/archive/archive_reader.h"
+#include "engine/cli/command.h"
+#include "engine/cli/request_names.h"
+#include "engine/common/errors.h"
+#include "engine/products/dispersion.h"
+#include "engine/query/run_columns.h"
+
+namespace gesweep::cli {
+namespace {
+
+struct DispersionFlags {
+  std::string archive;
+  std::vector<std::string> columns;
+  std::vector<std::string> limits;
+  std::string group_by;
+  std::vector<double> percentiles = DispersionOptions{}.percentiles;
+  std::vector<double> tail_probabilities = DispersionOptions{}.tail_probabilities;
+  double confidence_level = DispersionOptions{}.confidence_level;
+  int max_groups = DispersionOptions{}.max_groups;
+  std::string format = "table";
+  bool no_write = false;
+};
+
+std::string Join(const std::vector<std::string>& items) {
+  std::string text;
+  for (const auto& item : items) text += (text.empty() ? "" : ",") + item;
+  return text;
+}
+
+std::string JoinNumbers(const std::vector<double>& values) {
+  std::string text;
+  for (double v : values) text += (text.empty() ? "" : ",") + ShortNumber(v);
+  return text;
+}
+
+std::string CommandLine(const DispersionFlags& flags) {
+  std::ostringstream line;
+  line << "gesweep dispersion " << flags.archive;
+  if (!flags.columns.empty()) line << " --columns " << Join(flags.columns);
+  for (const auto& limit : flags.limits) line << " --limit '" << limit << "'";
+  if (!flags.group_by.empty()) line << " --group-by " << flags.group_by;
+  line << " --percentiles " << JoinNumbers(flags.percentiles) << " --tail-probabilities "
+       << JoinNumbers(flags.tail_probabilities) << " --confidence-level "
+       << ShortNumber(flags.confidence_level);
+  return line.str();
+}
+
+std::string General(double value) {
+  if (!std::isfinite(value)) return FormatValue(value);
+  std::ostringstream out;
+  out << std::setprecision(6) << value;
+  return out.str();
+}
+
+// JSON has no NaN: null.
+nlohmann::json Number(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
+nlohmann::json Numbers(const std::vector<double>& values) {
+  nlohmann::json array = nlohmann::json::array();
+  for (double v : values) array.push_back(Number(v));
+  return array;
+}
+
+nlohmann::json FitJson(const TailFit& fit) {
+  nlohmann::json j = {{"law", fit.law},
+                      {"location", Number(fit.fit.location)},
+                      {"scale", Number(fit.fit.scale)},
+                      {"anderson_darling", Number(fit.goodness.statistic)},
+                      {"critical_values", Numbers(fit.goodness.critical)},
+                      {"significance_percent", Numbers(fit.goodness.significance_percent)},
+                      {"rejected_at_percent", Number(fit.goodness.rejected_at_percent())}};
+  if (fit.law == "gev_max") j["shape"] = Number(fit.shape);
+  if (!fit.upper_quantiles.empty()) j["upper_quantiles"] = Numbers(fit.upper_quantiles);
+  if (!fit.lower_quantiles.empty()) j["lower_quantiles"] = Numbers(fit.lower_quantiles);
+  return j;
+}
+
+nlohmann::json ToJson(const Dispersion& d, bool written) {
+  nlohmann::json groups = nlohmann::json::array();
+  for (const auto& g : d.groups) {
+    nlohmann::json columns = nlohmann::json::array();
+    for (std::size_t c = 0; c < d.columns.size(); ++c) {
+      const ColumnDispersion& s = g.columns[c];
+      columns.push_back(
+          {{"column", d.columns[c]},
+           {"runs", s.runs},
+           {"values", s.values},
+           {"failed", s.failed},
+           {"without_value", s.without_value},
+           {"pending", s.pending},
+           {"mean", Number(s.mean)},
+           {"standard_deviation", Number(s.standard_deviation)},
+           {"minimum", Number(s.minimum)},
+           {"maximum", Number(s.maximum)},
+           {"percentiles", Numbers(s.percentiles)},
+           {"fits", {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)}}});
+    }
+    nlohmann::json limits = nlohmann::json::array();
+    for (std::size_t l = 0; l < d.limits.size(); ++l) {
+      const LimitExceedance& e = g.limits[l];
+      limits.push_back(
+          {{"limit", d.limits[l].text},
+           {"exceed", e.exceed},
+           {"values", e.values},
+           {"failed", e.failed},
+           {"probability", Number(e.probability)},
+           {"wilson", {Number(e.wilson.lower), Number(e.wilson.upper)}},
+           {"clopper_pearson", {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)}},
+           {"normal_probability", Number(e.normal_probability)},
+           {"gumbel_probability", Number(e.gumbel_probability)},
+           {"gev_probability", Number(e.gev_probability)}});
+    }
+    groups.push_back(
+        {{"label", g.label}, {"value", Number(g.value)}, {"columns", columns}, {"limits", limits}});
+  }
+  nlohmann::json j = {{"archive", d.archive},
+                      {"study_name", d.study_name},
+                      {"design_kind", d.design_kind},
+                      {"run_count", d.run_count},
+                      {"columns", d.columns},
+                      {"column_units", d.column_units},
+                      {"group_by", d.group_by},
+                      {"percentiles", Numbers(d.options.percentiles)},
+                      {"tail_probabilities", Numbers(d.options.tail_probabilities)},
+                      {"confidence_level", d.options.confidence_level},
+                      {"groups", groups}};
+  if (written) j["written"] = "/" + DispersionGroupPath();
+  return j;
+}
+
+void PrintTable(const Dispersion& d) {
+  std::size_t w = 8;
+  for (const auto& c : d.columns) w = std::max(w, c.size() + 2);
+  std::cout << "# dispersion of " << d.archive
+            << (d.study_name.empty() ? "" : " (study " + d.study_name + ")") << ": " << d.run_count
+            << " runs, design " << (d.design_kind.empty() ? "?" : d.design_kind) << "\n";
+  const std::string level = ShortNumber(100 * d.options.confidence_level) + " %";
+  for (const auto& g : d.groups) {
+    if (!d.group_by.empty()) std::cout << "\n## " << d.group_by << " = " << g.label << "\n";
+    std::cout << std::left << std::setw(static_cast<int>(w)) << "column" << std::right << std::setw(7)
+              << "values" << std::setw(7) << "failed" << std::setw(9) << "no value" << std::setw(8)
+              << "pending" << std::setw(13) << "mean" << std::setw(13) << "std";
+    for (double p : d.options.percentiles) {
+      std::string label = "p";
+      label += ShortNumber(p);
+      std::cout << std::setw(12) << label;
+    }
+    std::cout << "\n";
+    for (std::size_t c = 0; c < d.columns.size(); ++c) {
+      const ColumnDispersion& s = g.columns[c];
+      std::cout << std::left << std::setw(static_cast<int>(w)) << d.columns[c] << std::right << std::setw(7)
+                << s.values << std::setw(7) << s.failed << std::setw(9) << s.without_value << std::setw(8)
+                << s.pending << std::setw(13) << General(s.mean) << std::setw(13)
+                << General(s.standard_deviation);
+      for (double v : s.percentiles) std::cout << std::setw(12) << General(v);
+      std::cout << "\n";
+    }
+    std::cout << "# tail fits: the value exceeded (upper) or not reached (lower) with probability";
+    for (double p : d.options.tail_probabilities) std::cout << " " << ShortNumber(p);
+    std::cout << "; A2 = Anderson-Darling, rejected at = smallest level of Stephens' table that rejects the "
+                 "fit (none: not rejected at the largest)\n";
+    std::cout << std::left << std::setw(static_cast<int>(w)) << "column" << std::setw(12) << "fit"
+              << std::right << std::setw(13) << "location" << std::setw(13) << "scale" << std::setw(9) << "A2"
+              << std::setw(12) << "rejected at";
+    for (double p : d.options.tail_probabilities) std::cout << std::setw(12) << ShortNumber(p);
+    std::cout << "\n";
+    for (std::size_t c = 0; c < d.columns.size(); ++c) {
+      const ColumnDispersion& s = g.columns[c];
+      auto row = [&](const TailFit& fit, const std::string& name, const std::vector<double>& quantiles) {
+        const double rejected = fit.goodness.rejected_at_percent();
+        std::cout << std::left << std::setw(static_cast<int>(w)) << d.columns[c] << std::setw(12) << name
+                  << std::right << std::setw(13) << General(fit.fit.location) << std::setw(13)
+                  << General(fit.fit.scale) << std::setw(9) << General(fit.goodness.statistic)
+                  << std::setw(12)
+                  << (std::isnan(rejected) ? "-"
+                      : rejected == 0      ? "none"
+                                           : ShortNumber(rejected) + " %");
+        for (double q : quantiles) std::cout << std::setw(12) << General(q);
+        std::cout << "\n";
+      };
+      row(s.normal, "normal up", s.normal.upper_quantiles);
+      row(s.normal, "normal low", s.normal.lower_quantiles);
+      row(s.gumbel_max, "gumbel max", s.gumbel_max.upper_quantiles);
+      row(s.gumbel_min, "gumbel min", s.gumbel_min.lower_quantiles);
+      std::ostringstream gev_name;  // the shape in the name column: the table has no column for it
+      gev_name << "gev xi=" << std::setprecision(2) << s.gev_max.shape;
+      row(s.gev_max, gev_name.str(), s.gev_max.upper_quantiles);
+    }
+    if (!d.limits.empty()) {
+      std::cout
+          << "# limits: empirical probability with " << level
+          << " intervals (failed runs and runs without a value are outside the sample, counted apart)\n";
+      for (std::size_t l = 0; l < d.limits.size(); ++l) {
+        const LimitExceedance& e = g.limits[l];
+        std::cout << "  " << std::left << std::setw(static_cast<int>(w) + 8) << d.limits[l].text << std::right
+                  << e.exceed << "/" << e.values << " = " << General(e.probability) << "  Wilson ["
+                  << General(e.wilson.lower) << ", " << General(e.wilson.upper) << "]  Clopper-Pearson ["
+                  << General(e.clopper_pearson.lower) << ", " << General(e.clopper_pearson.upper)
+                  << "]  normal " << General(e.normal_probability) << "  gumbel "
+                  << General(e.gumbel_probability) << "  gev " << General(e.gev_probability) << "  failed "
+                  << e.failed << "\n";
+      }
+    }
+  }
+}
+
+int RunDispersion(const DispersionFlags& flags) {
+  if (flags.format != "table" && flags.format != "json") {
+    throw InputError("command line", "--format", flags.format, "expected table or json");
+  }
+  if (flags.max_groups < 1) {
+    throw InputError("command line", "--max-groups", std::to_string(flags.max_groups), "expected >= 1");
+  }
+  DispersionOptions options;
+  options.columns = flags.columns;
+  options.limits = flags.limits;
+  options.group_by = flags.group_by;
+  options.percentiles = flags.percentiles;
+  options.tail_probabilities = flags.tail_probabilities;
+  options.confidence_level = flags.confidence_level;
+  options.max_groups = flags.max_groups;
+  const FlagNames names = {{"columns", "--columns"},
+                           {"limits", "--limit"},
+                           {"group_by", "--group-by"},
+                           {"percentiles", "--percentiles"},
+                           {"tail_probabilities", "--tail-probabilities"},
+                           {"confidence_level", "--confidence-level"}};
+  try {
+    const std::filesystem::path path = flags.archive;
+    std::error_code ec;
+    std::optional<ArchiveLock> lock;
+    if (!flags.no_write && std::filesystem::is_regular_file(path, ec))
+      lock.emplace(ArchiveLock::Acquire(
+          path, "run gesweep dispersion once it has finished, or pass --no-write to only print it"));
+    ArchiveReader reader = ArchiveReader::Open(path);
+    if (reader.snapshot() && !flags.no_write) {
+      throw InputError(flags.archive, "", "",
+                       "archive in use: a sweep is writing it, or the sweep that wrote it stopped without "
+                       "closing it (finish it with `gesweep run STUDY -o " +
+                           flags.archive + " --resume`); or pass --no-write");
+    }
+    const ColumnCatalog catalog = ColumnCatalog::Of(reader);
+    const Dispersion result = ComputeDispersion(reader, catalog, options);
+    reader.Close();
+    if (lock) WriteDispersionGroup(path, result, CommandLine(flags));
+    if (flags.format == "json") {
+      std::cout << ToJson(result, lock.has_value()).dump(2) << "\n";
+    } else {
+      PrintTable(result);
+      if (lock) std::cout << "# written to " << flags.archive << ": /" << DispersionGroupPath() << "\n";
+    }
+  } catch (const InputError& e) {
+    throw ForCommandLine(e, names);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+const CommandRegistrar kRegistrar{Command{
+    "dispersion",
+    "Dispersion of a Monte Carlo sweep's results (by default the landing's touchdown columns): moments, "
+    "percentiles, normal and Gumbel tail fits, limit exceedance probabilities with Wilson and "
+    "Clopper-Pearson intervals, per group; writes /analysis/dispersion",
+    [](CLI::App& app) -> std::function<int()> {
+      auto flags = std::make_shared<DispersionFlags>();
+      app.add_option("archive", flags->archive, "Archive of a sweep (typically a monte_carlo design)")
+          ->required();
+      app.add_option("--columns", flags->columns,
+                     "Result columns (names, paths or wildcards, comma-separated; default: the landing's "
+                     "touchdown distance past the transmitter, sink rate, speed and pitch, and the flare's "
+                     "peak elevator when present)")
+          ->delimiter(',');
+      app.add_option("--limit", flags->limits,
+                     "A limit COLUMN>VALUE or COLUMN<VALUE (repeatable), e.g. 'touchdown_sink_rate_mps>3': "
+                     "the probability of exceeding it");
+      app.add_option("--group-by", flags->group_by,
+                     "A column (e.g. a design parameter) whose values split the runs into groups");
+      app.add_option("--percentiles", flags->percentiles,
+                     "Percentiles, 0 to 100 (default 0.1,1,5,50,95,99,99.9)")
+          ->delimiter(',');
+      app.add_option("--tail-probabilities", flags->tail_probabilities,
+                     "Tail probabilities of the fitted quantiles (default 1e-3,1e-4,1e-5,1e-6)")
+          ->delimiter(',');
+      app.add_option("--confidence-level", flags->confidence_level, "Level of the intervals (default 0.95)");
+      app.add_option("--max-groups", flags->max_groups, "Most groups accepted (default 1000)");
+      app.add_option("--format", flags->format, "table (default) or json");
+      app.add_flag("--no-write", flags->no_write, "Print only; leave the archive untouched");
+      return [flags] { return RunDispersion(*flags); };
+    }}};
+
+}  // namespace
+}  // namespace gesweep::cli

@@ -1,0 +1,817 @@
+#include "engine/products/dispersion.h"
+
+#include <algorithm>
+#include <array>
+#include <boost/math/distributions/beta.hpp>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/tools/roots.hpp>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "engine/archive/analysis_product.h"
+#include "engine/archive/archive_reader.h"
+#include "engine/archive/provenance.h"
+#include "engine/common/errors.h"
+#include "engine/common/request_error.h"
+#include "engine/query/run_columns.h"
+
+namespace gesweep {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::int8_t kStatusPending = 0;
+constexpr std::int8_t kStatusOk = 1;
+constexpr std::int8_t kStatusFailed = 2;
+// Runs read at a time: bounded buffers for any archive.
+constexpr std::int64_t kPieceRows = 1 << 16;
+// Stephens' tables for the Anderson–Darling test with estimated parameters, as scipy.stats.anderson
+// holds them: normal (case 3, Stephens 1974) and Gumbel (Stephens 1977), and their small-sample
+// corrections; the critical values are rounded to the tables' three decimals.
+constexpr double kNormalCritical[] = {0.576, 0.656, 0.787, 0.918, 1.092};
+constexpr double kNormalSignificance[] = {15, 10, 5, 2.5, 1};
+constexpr double kGumbelCritical[] = {0.474, 0.637, 0.757, 0.877, 1.038};
+constexpr double kGumbelSignificance[] = {25, 10, 5, 2.5, 1};
+
+const boost::math::normal kStandardNormal;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// The GEV fit: |ξ| below this is the Gumbel law (the GEV formulas lose digits as 1/ξ grows: at
+// 1e-7 the two laws differ by about ξ·z² ≈ 1e-5 relative at z = 10, below any sample's resolution);
+// ξ above −1, where the likelihood is bounded; Nelder–Mead's start step (standardised units),
+// tolerances (relative on the log-likelihood, absolute on the standardised parameters), iteration
+// cap per run and restarts.
+constexpr double kGumbelShape = 1e-7;
+constexpr double kLowestShape = -1.0;
+constexpr double kNelderMeadStep = 0.1;
+constexpr double kNelderMeadValueTolerance = 1e-14;
+constexpr double kNelderMeadPointTolerance = 1e-9;
+constexpr int kNelderMeadIterations = 20000;
+constexpr int kNelderMeadRestarts = 8;
+
+double Round3(double x) { return std::nearbyint(x * 1000.0) / 1000.0; }
+
+double Mean(const std::vector<double>& values) {
+  double sum = 0;
+  for (double v : values) sum += v;
+  return sum / static_cast<double>(values.size());
+}
+
+// Σ (x − mean)² by two passes.
+double SumOfSquares(const std::vector<double>& values, double mean) {
+  double sum = 0;
+  for (double v : values) sum += (v - mean) * (v - mean);
+  return sum;
+}
+
+// A² from the log CDF and log survival of each sorted value.
+double AndersonDarlingStatistic(const std::vector<double>& logcdf, const std::vector<double>& logsf) {
+  const auto n = static_cast<double>(logcdf.size());
+  const std::size_t size = logcdf.size();
+  double sum = 0;
+  for (std::size_t i = 0; i < size; ++i) {
+    sum += (2.0 * static_cast<double>(i + 1) - 1.0) / n * (logcdf[i] + logsf[size - 1 - i]);
+  }
+  return -n - sum;
+}
+
+double NormalLogCdf(double z) {
+  return z < 0 ? std::log(boost::math::cdf(kStandardNormal, z))
+               : std::log1p(-boost::math::cdf(boost::math::complement(kStandardNormal, z)));
+}
+
+}  // namespace
+
+double Percentile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return kNaN;
+  const double h = static_cast<double>(sorted.size() - 1) * p / 100.0;
+  const double lower = std::floor(h);
+  const auto i = static_cast<std::size_t>(lower);
+  if (i + 1 >= sorted.size()) return sorted.back();
+  return sorted[i] + (h - lower) * (sorted[i + 1] - sorted[i]);
+}
+
+ProportionInterval WilsonInterval(std::int64_t k, std::int64_t n, double confidence_level) {
+  if (n <= 0) return {kNaN, kNaN};
+  const double z = boost::math::quantile(kStandardNormal, 0.5 + 0.5 * confidence_level);
+  const auto nn = static_cast<double>(n);
+  const double p = static_cast<double>(k) / nn;
+  const double denominator = 2.0 * (nn + z * z);
+  const double center = (2.0 * nn * p + z * z) / denominator;
+  const double half = z * std::sqrt(z * z + 4.0 * nn * p * (1.0 - p)) / denominator;
+  return {std::max(0.0, center - half), std::min(1.0, center + half)};
+}
+
+ProportionInterval ClopperPearsonInterval(std::int64_t k, std::int64_t n, double confidence_level) {
+  if (n <= 0) return {kNaN, kNaN};
+  const double alpha = 1.0 - confidence_level;
+  const auto kk = static_cast<double>(k), nn = static_cast<double>(n);
+  const double lower = k == 0 ? 0.0 : boost::math::ibeta_inv(kk, nn - kk + 1.0, alpha / 2);
+  const double upper = k == n ? 1.0 : boost::math::ibetac_inv(kk + 1.0, nn - kk, alpha / 2);
+  return {lower, upper};
+}
+
+LocationScale FitNormal(const std::vector<double>& values) {
+  if (values.size() < 2) return {kNaN, kNaN};
+  const double mean = Mean(values);
+  const double sigma = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
+  if (!(sigma > 0)) return {kNaN, kNaN};
+  return {mean, sigma};
+}
+
+LocationScale FitGumbelMax(const std::vector<double>& values) {
+  if (values.size() < 2) return {kNaN, kNaN};
+  // Standardised values y = (x − x̄)/s keep the exponentials in range; the fit is equivariant.
+  const double mean = Mean(values);
+  const double s = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
+  if (!(s > 0)) return {kNaN, kNaN};
+  std::vector<double> y(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / s;
+  const double y_min = *std::min_element(y.begin(), y.end());
+  // log Σ e^{−y/b}, shifted by its largest term (−y_min/b).
+  auto log_sum = [&](double b) {
+    double sum = 0;
+    for (double v : y) sum += std::exp(-(v - y_min) / b);
+    return std::log(sum) - y_min / b;
+  };
+  // g(b) = b − ȳ + Σ y e^{−y/b} / Σ e^{−y/b}, with ȳ = 0: g → y_min < 0 as b → 0, g → b as b → ∞.
+  auto g = [&](double b) {
+    double weights = 0, weighted = 0;
+    for (double v : y) {
+      const double w = std::exp(-(v - y_min) / b);
+      weights += w;
+      weighted += v * w;
+    }
+    return b + weighted / weights;
+  };
+  double low = 1e-6, high = 1.0;
+  while (g(high) < 0) high *= 2;
+  std::uintmax_t iterations = 200;
+  const auto bracket = boost::math::tools::toms748_solve(
+      g, low, high, boost::math::tools::eps_tolerance<double>(52), iterations);
+  const double b = 0.5 * (bracket.first + bracket.second);
+  const double location_y = -b * (log_sum(b) - std::log(static_cast<double>(y.size())));
+  return {mean + s * location_y, s * b};
+}
+
+double NormalQuantile(const LocationScale& fit, double p) {
+  if (!(fit.scale > 0)) return kNaN;
+  return fit.location + fit.scale * boost::math::quantile(kStandardNormal, p);
+}
+
+double NormalProbabilityAbove(const LocationScale& fit, double x) {
+  if (!(fit.scale > 0)) return kNaN;
+  return boost::math::cdf(boost::math::complement(kStandardNormal, (x - fit.location) / fit.scale));
+}
+
+double GumbelMaxQuantile(const LocationScale& fit, double p) {
+  if (!(fit.scale > 0)) return kNaN;
+  return fit.location - fit.scale * std::log(-std::log1p(p - 1.0));  // p − 1 is exact near 1
+}
+
+double GumbelMaxProbabilityAbove(const LocationScale& fit, double x) {
+  if (!(fit.scale > 0)) return kNaN;
+  return -std::expm1(-std::exp(-(x - fit.location) / fit.scale));
+}
+
+double GevNegativeLogLikelihood(const std::vector<double>& values, double location, double scale,
+                                double shape) {
+  if (!(scale > 0) || !std::isfinite(location) || !std::isfinite(shape)) return kInfinity;
+  const auto n = static_cast<double>(values.size());
+  double sum_log = 0, sum_power = 0;
+  if (std::abs(shape) < kGumbelShape) {
+    for (double x : values) {
+      const double z = (x - location) / scale;
+      sum_log += z;
+      sum_power += std::exp(-z);
+    }
+    return n * std::log(scale) + sum_log + sum_power;
+  }
+  for (double x : values) {
+    const double t = 1.0 + shape * (x - location) / scale;
+    if (!(t > 0)) return kInfinity;
+    const double log_t = std::log(t);
+    sum_log += log_t;
+    sum_power += std::exp(-log_t / shape);
+  }
+  return n * std::log(scale) + (1.0 + 1.0 / shape) * sum_log + sum_power;
+}
+
+GevFit FitGevMax(const std::vector<double>& values) {
+  GevFit fit{kNaN, kNaN, kNaN, kNaN};
+  if (values.size() < 3) return fit;
+  const double mean = Mean(values);
+  const double sd = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
+  if (!(sd > 0)) return fit;
+  std::vector<double> y(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / sd;
+  using Point = std::array<double, 3>;  // (μ, log σ, ξ) of the standardised values
+  auto f = [&](const Point& p) {
+    if (!(p[2] > kLowestShape)) return kInfinity;
+    return GevNegativeLogLikelihood(y, p[0], std::exp(p[1]), p[2]);
+  };
+  const LocationScale gumbel = FitGumbelMax(y);
+  Point best = {gumbel.location, std::log(gumbel.scale), 0.0};
+  double best_value = f(best);
+  // Nelder–Mead (the standard coefficients 1, 2, 1/2, 1/2), restarted from its optimum with a fresh
+  // simplex until a restart no longer lowers the minimum.
+  for (int restart = 0; restart < kNelderMeadRestarts; ++restart) {
+    std::array<Point, 4> simplex;
+    std::array<double, 4> value;
+    simplex[0] = best;
+    for (std::size_t d = 0; d < 3; ++d) {
+      simplex[d + 1] = best;
+      simplex[d + 1][d] += kNelderMeadStep;
+    }
+    for (std::size_t k = 0; k < 4; ++k) value[k] = f(simplex[k]);
+    for (int iteration = 0; iteration < kNelderMeadIterations; ++iteration) {
+      std::array<std::size_t, 4> order = {0, 1, 2, 3};
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t a, std::size_t b) { return value[a] < value[b]; });
+      const std::size_t lo = order[0], hi = order[3], second = order[2];
+      double spread = 0;
+      for (std::size_t k = 1; k < 4; ++k)
+        for (std::size_t d = 0; d < 3; ++d)
+          spread = std::max(spread, std::abs(simplex[order[k]][d] - simplex[lo][d]));
+      if (value[hi] - value[lo] <= kNelderMeadValueTolerance * (1.0 + std::abs(value[lo])) &&
+          spread <= kNelderMeadPointTolerance)
+        break;
+      Point centroid = {0, 0, 0};
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::size_t d = 0; d < 3; ++d) centroid[d] += simplex[order[k]][d] / 3.0;
+      auto along = [&](double t) {
+        Point p;
+        for (std::size_t d = 0; d < 3; ++d) p[d] = centroid[d] + t * (simplex[hi][d] - centroid[d]);
+        return p;
+      };
+      const Point reflected = along(-1.0);
+      const double fr = f(reflected);
+      if (fr < value[lo]) {
+        const Point expanded = along(-2.0);
+        const double fe = f(expanded);
+        simplex[hi] = fe < fr ? expanded : reflected;
+        value[hi] = std::min(fe, fr);
+      } else if (fr < value[second]) {
+        simplex[hi] = reflected;
+        value[hi] = fr;
+      } else {
+        const bool outside = fr < value[hi];
+        const Point contracted = along(outside ? -0.5 : 0.5);
+        const double fc = f(contracted);
+        if (fc < (outside ? fr : value[hi])) {
+          simplex[hi] = contracted;
+          value[hi] = fc;
+        } else {
+          for (std::size_t k = 0; k < 4; ++k) {
+            if (k == lo) continue;
+            for (std::size_t d = 0; d < 3; ++d)
+              simplex[k][d] = simplex[lo][d] + 0.5 * (simplex[k][d] - simplex[lo][d]);
+            value[k] = f(simplex[k]);
+          }
+        }
+      }
+    }
+    const auto lo = static_cast<std::size_t>(std::min_element(value.begin(), value.end()) - value.begin());
+    const bool improved = value[lo] < best_value - kNelderMeadValueTolerance * (1.0 + std::abs(best_value));
+    if (value[lo] < best_value) {
+      best = simplex[lo];
+      best_value = value[lo];
+    }
+    if (!improved && restart > 0) break;
+  }
+  if (!std::isfinite(best_value)) return fit;
+  fit.location = mean + sd * best[0];
+  fit.scale = sd * std::exp(best[1]);
+  fit.shape = best[2];
+  fit.negative_log_likelihood = GevNegativeLogLikelihood(values, fit.location, fit.scale, fit.shape);
+  return fit;
+}
+
+double GevMaxQuantile(const GevFit& fit, double p) {
+  if (!(fit.scale > 0)) return kNaN;
+  const double minus_log_p = -std::log1p(p - 1.0);  // p − 1 is exact near 1
+  if (std::abs(fit.shape) < kGumbelShape) return fit.location - fit.scale * std::log(minus_log_p);
+  return fit.location + fit.scale / fit.shape * std::expm1(-fit.shape * std::log(minus_log_p));
+}
+
+double GevMaxProbabilityAbove(const GevFit& fit, double x) {
+  if (!(fit.scale > 0)) return kNaN;
+  if (std::abs(fit.shape) < kGumbelShape) return GumbelMaxProbabilityAbove({fit.location, fit.scale}, x);
+  const double t = 1.0 + fit.shape * (x - fit.location) / fit.scale;
+  if (!(t > 0)) return fit.shape < 0 ? 0.0 : 1.0;  // beyond the upper end point, or below the lower
+  return -std::expm1(-std::exp(-std::log(t) / fit.shape));
+}
+
+double AndersonDarling::rejected_at_percent() const {
+  if (!std::isfinite(statistic) || critical.empty()) return kNaN;
+  double level = 0;
+  for (std::size_t i = 0; i < critical.size(); ++i) {
+    if (statistic > critical[i] && (level == 0 || significance_percent[i] < level))
+      level = significance_percent[i];
+  }
+  return level;
+}
+
+AndersonDarling AndersonDarlingNormal(const std::vector<double>& sorted) {
+  AndersonDarling result;
+  const auto n = static_cast<double>(sorted.size());
+  for (std::size_t i = 0; i < std::size(kNormalCritical); ++i) {
+    result.critical.push_back(Round3(kNormalCritical[i] / (1.0 + 4.0 / n - 25.0 / n / n)));
+    result.significance_percent.push_back(kNormalSignificance[i]);
+  }
+  result.statistic = kNaN;
+  if (sorted.size() < 3) return result;
+  const double mean = Mean(sorted);
+  const double s = std::sqrt(SumOfSquares(sorted, mean) / (n - 1));
+  if (!(s > 0)) return result;
+  std::vector<double> logcdf, logsf;
+  for (double x : sorted) {
+    const double z = (x - mean) / s;
+    logcdf.push_back(NormalLogCdf(z));
+    logsf.push_back(NormalLogCdf(-z));
+  }
+  result.statistic = AndersonDarlingStatistic(logcdf, logsf);
+  return result;
+}
+
+AndersonDarling AndersonDarlingGumbelMax(const std::vector<double>& sorted, const LocationScale& fit) {
+  AndersonDarling result;
+  const auto n = static_cast<double>(sorted.size());
+  for (std::size_t i = 0; i < std::size(kGumbelCritical); ++i) {
+    result.critical.push_back(Round3(kGumbelCritical[i] / (1.0 + 0.2 / std::sqrt(n))));
+    result.significance_percent.push_back(kGumbelSignificance[i]);
+  }
+  result.statistic = kNaN;
+  if (sorted.size() < 3 || !(fit.scale > 0)) return result;
+  std::vector<double> logcdf, logsf;
+  for (double x : sorted) {
+    const double e = std::exp(-(x - fit.location) / fit.scale);
+    logcdf.push_back(-e);
+    logsf.push_back(std::log(-std::expm1(-e)));
+  }
+  result.statistic = AndersonDarlingStatistic(logcdf, logsf);
+  return result;
+}
+
+const std::vector<std::string>& DefaultDispersionColumns() {
+  static const std::vector<std::string> columns = {
+      "results/landing/touchdown_distance_past_transmitter_m", "results/landing/touchdown_sink_rate_mps",
+      "results/landing/touchdown_speed_mps", "results/landing/touchdown_pitch_deg"};
+  return columns;
+}
+
+namespace {
+
+// The statistics of one sample (its values sorted in place).
+ColumnDispersion Describe(std::vector<double>& sample, const DispersionOptions& options) {
+  ColumnDispersion c;
+  std::sort(sample.begin(), sample.end());
+  c.values = static_cast<std::int64_t>(sample.size());
+  if (sample.empty()) {
+    c.mean = c.standard_deviation = c.minimum = c.maximum = kNaN;
+  } else {
+    c.mean = Mean(sample);
+    c.standard_deviation =
+        sample.size() < 2 ? kNaN
+                          : std::sqrt(SumOfSquares(sample, c.mean) / static_cast<double>(sample.size() - 1));
+    c.minimum = sample.front();
+    c.maximum = sample.back();
+  }
+  for (double p : options.percentiles) c.percentiles.push_back(Percentile(sample, p));
+  c.normal.law = "normal";
+  c.normal.fit = FitNormal(sample);
+  c.normal.goodness = AndersonDarlingNormal(sample);
+  c.gumbel_max.law = "gumbel_max";
+  c.gumbel_max.fit = FitGumbelMax(sample);
+  c.gumbel_max.goodness = AndersonDarlingGumbelMax(sample, c.gumbel_max.fit);
+  // The minimum's law: the negated values' Gumbel-max fit.
+  std::vector<double> negated(sample.rbegin(), sample.rend());
+  for (double& v : negated) v = -v;
+  c.gumbel_min.law = "gumbel_min";
+  const LocationScale negated_fit = FitGumbelMax(negated);
+  c.gumbel_min.goodness = AndersonDarlingGumbelMax(negated, negated_fit);
+  // Stored as the smallest-value Gumbel law itself (scipy's gumbel_l): location −μ of the negated fit.
+  c.gumbel_min.fit = {-negated_fit.location, negated_fit.scale};
+  c.gev_max.law = "gev_max";
+  const GevFit gev = FitGevMax(sample);
+  c.gev_max.fit = {gev.location, gev.scale};
+  c.gev_max.shape = gev.shape;
+  c.gev_max.goodness.statistic = kNaN;
+  if (std::isfinite(gev.scale)) {
+    std::vector<double> logcdf, logsf;
+    for (double x : sample) {
+      const double above = GevMaxProbabilityAbove(gev, x);
+      logcdf.push_back(std::log1p(-above));
+      logsf.push_back(std::log(above));
+    }
+    c.gev_max.goodness.statistic = AndersonDarlingStatistic(logcdf, logsf);
+  }
+  for (double p : options.tail_probabilities) {
+    c.gev_max.upper_quantiles.push_back(GevMaxQuantile(gev, 1.0 - p));
+    c.normal.upper_quantiles.push_back(NormalQuantile(c.normal.fit, 1.0 - p));
+    c.normal.lower_quantiles.push_back(NormalQuantile(c.normal.fit, p));
+    c.gumbel_max.upper_quantiles.push_back(GumbelMaxQuantile(c.gumbel_max.fit, 1.0 - p));
+    c.gumbel_min.lower_quantiles.push_back(-GumbelMaxQuantile(negated_fit, 1.0 - p));
+  }
+  return c;
+}
+
+DispersionLimit ParseLimit(const std::string& text, const ColumnCatalog& catalog, const std::string& source) {
+  const auto at = text.find_first_of("<>");
+  if (at == std::string::npos || at == 0 || text.find_first_of("<>", at + 1) != std::string::npos) {
+    throw InputError(source, "limits", text,
+                     "expected COLUMN>VALUE or COLUMN<VALUE, e.g. touchdown_sink_rate_mps>3");
+  }
+  DispersionLimit limit;
+  limit.text = text;
+  limit.above = text[at] == '>';
+  std::string name = text.substr(0, at), number = text.substr(at + 1);
+  auto trim = [](std::string s) {
+    const auto b = s.find_first_not_of(' '), e = s.find_last_not_of(' ');
+    return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+  };
+  name = trim(name);
+  number = trim(number);
+  char* end = nullptr;
+  limit.value = std::strtod(number.c_str(), &end);
+  if (number.empty() || end != number.c_str() + number.size() || !std::isfinite(limit.value)) {
+    throw InputError(source, "limits", text, "expected a finite number after " + std::string(1, text[at]));
+  }
+  const int index = catalog.Require(name, source, "limits");
+  limit.column = catalog.column(index).name;
+  return limit;
+}
+
+}  // namespace
+
+Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& catalog,
+                             const DispersionOptions& options) {
+  const std::string source = archive.path().string();
+  for (double p : options.percentiles) {
+    if (!(p >= 0 && p <= 100))
+      throw InputError("command line", "percentiles", ShortNumber(p), "expected 0 to 100");
+  }
+  for (double p : options.tail_probabilities) {
+    if (!(p > 0 && p < 0.5))
+      throw InputError("command line", "tail_probabilities", ShortNumber(p), "expected 0 < p < 0.5");
+  }
+  if (!(options.confidence_level > 0 && options.confidence_level < 1)) {
+    throw InputError("command line", "confidence_level", ShortNumber(options.confidence_level),
+                     "expected a level between 0 and 1, e.g. 0.95");
+  }
+  Dispersion d;
+  d.archive = source;
+  d.options = options;
+  d.run_count = archive.run_count();
+  d.study_name = archive.StringAttributeOf("/", "study_name").value_or("");
+  d.design_kind = archive.StringAttributeOf("design", "kind").value_or("");
+
+  // The columns.
+  std::vector<int> indices;
+  if (options.columns.empty()) {
+    for (const auto& path : DefaultDispersionColumns()) {
+      if (const auto index = catalog.FindPath(path)) indices.push_back(*index);
+    }
+    for (std::size_t i = 0; i < catalog.columns().size(); ++i) {
+      const RunColumn& column = catalog.columns()[i];
+      const std::string leaf = column.path.substr(column.path.rfind('/') + 1);
+      if (column.path.rfind("results/landing/", 0) == 0 && leaf.find("flare") != std::string::npos &&
+          leaf.find("elevator") != std::string::npos && column.kind == ColumnKind::kNumber) {
+        indices.push_back(static_cast<int>(i));
+      }
+    }
+    if (indices.empty()) {
+      throw RequestError(source, "columns", "",
+                         "expected the landing's touchdown columns (results/landing/touchdown_*) or columns "
+                         "chosen by name",
+                         "describe_columns");
+    }
+  } else {
+    for (const auto& name : options.columns) {
+      for (int index : catalog.Expand(name, source, "columns")) {
+        if (std::find(indices.begin(), indices.end(), index) == indices.end()) indices.push_back(index);
+      }
+    }
+  }
+  for (int index : indices) {
+    const RunColumn& column = catalog.column(index);
+    if (column.kind != ColumnKind::kNumber || column.path.rfind("results/", 0) != 0) {
+      throw InputError(source, "columns", column.name, "expected a numeric result column (results/...)");
+    }
+    d.columns.push_back(column.name);
+    d.column_paths.push_back(column.path);
+    d.column_units.push_back(column.units);
+  }
+  for (const auto& text : options.limits) {
+    DispersionLimit limit = ParseLimit(text, catalog, source);
+    const RunColumn& column = catalog.column(catalog.Require(limit.column, source, "limits"));
+    if (std::find(d.column_paths.begin(), d.column_paths.end(), column.path) == d.column_paths.end()) {
+      // A limit on a column not chosen adds it.
+      if (column.kind != ColumnKind::kNumber || column.path.rfind("results/", 0) != 0) {
+        throw InputError(source, "limits", text, "expected a limit on a numeric result column (results/...)");
+      }
+      d.columns.push_back(column.name);
+      d.column_paths.push_back(column.path);
+      d.column_units.push_back(column.units);
+      indices.push_back(catalog.Require(limit.column, source, "limits"));
+    }
+    d.limits.push_back(limit);
+  }
+
+  // The groups.
+  const std::int64_t n = archive.run_count();
+  std::vector<double> group_values(static_cast<std::size_t>(n), kNaN);
+  const RunColumn* group_column = nullptr;
+  if (!options.group_by.empty()) {
+    group_column = &catalog.column(catalog.Require(options.group_by, source, "group_by"));
+    if (group_column->kind != ColumnKind::kNumber) {
+      throw InputError(source, "group_by", options.group_by, "expected a numeric column to group by");
+    }
+    d.group_by = group_column->name;
+    d.group_path = group_column->path;
+    d.group_units = group_column->units;
+    ColumnValues values;
+    for (std::int64_t first = 0; first < n; first += kPieceRows) {
+      const std::int64_t count = std::min(kPieceRows, n - first);
+      ReadColumn(archive, *group_column, first, count, values);
+      std::copy(values.numbers.begin(), values.numbers.end(), group_values.begin() + first);
+    }
+  }
+  // Distinct grouping values, NaN last; each run's group.
+  std::vector<double> keys;
+  std::vector<int> group_of(static_cast<std::size_t>(n), 0);
+  if (group_column != nullptr) {
+    std::map<double, int> finite;
+    bool has_nan = false;
+    for (double v : group_values) {
+      if (std::isnan(v)) {
+        has_nan = true;
+      } else {
+        finite.emplace(v, 0);
+      }
+      if (static_cast<int>(finite.size()) + (has_nan ? 1 : 0) > options.max_groups) {
+        throw RequestError(source, "group_by", options.group_by,
+                           "more than " + std::to_string(options.max_groups) + " groups", "fewer_groups");
+      }
+    }
+    int g = 0;
+    for (auto& [value, index] : finite) {
+      index = g++;
+      keys.push_back(value);
+    }
+    if (has_nan) keys.push_back(kNaN);
+    for (std::size_t r = 0; r < group_values.size(); ++r) {
+      group_of[r] = std::isnan(group_values[r]) ? g : finite.at(group_values[r]);
+    }
+  } else {
+    keys.push_back(kNaN);
+  }
+  d.groups.resize(keys.size());
+  for (std::size_t g = 0; g < keys.size(); ++g) {
+    d.groups[g].value = keys[g];
+    d.groups[g].label = group_column == nullptr ? "all" : FormatCell(*group_column, keys[g]);
+  }
+
+  // Statuses, then each column: its samples per group.
+  std::vector<std::int8_t> status;
+  status.reserve(static_cast<std::size_t>(n));
+  for (std::int64_t first = 0; first < n; first += kPieceRows) {
+    const auto piece = archive.ReadStatus(first, std::min(kPieceRows, n - first));
+    status.insert(status.end(), piece.begin(), piece.end());
+  }
+  for (auto& group : d.groups) group.limits.resize(d.limits.size());
+  for (std::size_t c = 0; c < indices.size(); ++c) {
+    const RunColumn& column = catalog.column(indices[c]);
+    std::vector<std::vector<double>> samples(keys.size());
+    std::vector<ColumnDispersion> counts(keys.size());
+    ColumnValues values;
+    for (std::int64_t first = 0; first < n; first += kPieceRows) {
+      const std::int64_t count = std::min(kPieceRows, n - first);
+      ReadColumn(archive, column, first, count, values);
+      for (std::int64_t k = 0; k < count; ++k) {
+        const auto r = static_cast<std::size_t>(first + k);
+        const auto g = static_cast<std::size_t>(group_of[r]);
+        ColumnDispersion& tally = counts[g];
+        ++tally.runs;
+        if (status[r] == kStatusPending) {
+          ++tally.pending;
+        } else if (status[r] == kStatusFailed) {
+          ++tally.failed;
+        } else if (status[r] == kStatusOk && std::isfinite(values.numbers[static_cast<std::size_t>(k)])) {
+          samples[g].push_back(values.numbers[static_cast<std::size_t>(k)]);
+        } else {
+          ++tally.without_value;
+        }
+      }
+    }
+    for (std::size_t g = 0; g < keys.size(); ++g) {
+      // The limits on this column first, on the unsorted sample (order does not matter).
+      for (std::size_t l = 0; l < d.limits.size(); ++l) {
+        if (d.limits[l].column != column.name) continue;
+        const DispersionLimit& limit = d.limits[l];
+        LimitExceedance& e = d.groups[g].limits[l];
+        e.values = static_cast<std::int64_t>(samples[g].size());
+        e.failed = counts[g].failed + counts[g].without_value;
+        for (double v : samples[g]) e.exceed += limit.above ? v > limit.value : v < limit.value;
+      }
+      ColumnDispersion described = Describe(samples[g], options);
+      described.runs = counts[g].runs;
+      described.failed = counts[g].failed;
+      described.without_value = counts[g].without_value;
+      described.pending = counts[g].pending;
+      for (std::size_t l = 0; l < d.limits.size(); ++l) {
+        if (d.limits[l].column != column.name) continue;
+        const DispersionLimit& limit = d.limits[l];
+        LimitExceedance& e = d.groups[g].limits[l];
+        e.probability = e.values > 0 ? static_cast<double>(e.exceed) / static_cast<double>(e.values) : kNaN;
+        e.wilson = WilsonInterval(e.exceed, e.values, options.confidence_level);
+        e.clopper_pearson = ClopperPearsonInterval(e.exceed, e.values, options.confidence_level);
+        if (limit.above) {
+          e.normal_probability = NormalProbabilityAbove(described.normal.fit, limit.value);
+          e.gumbel_probability = GumbelMaxProbabilityAbove(described.gumbel_max.fit, limit.value);
+          e.gev_probability = GevMaxProbabilityAbove(
+              {described.gev_max.fit.location, described.gev_max.fit.scale, described.gev_max.shape, 0},
+              limit.value);
+        } else {
+          const LocationScale negated{-described.normal.fit.location, described.normal.fit.scale};
+          e.normal_probability = NormalProbabilityAbove(negated, -limit.value);
+          const LocationScale negated_fit{-described.gumbel_min.fit.location, described.gumbel_min.fit.scale};
+          e.gumbel_probability = GumbelMaxProbabilityAbove(negated_fit, -limit.value);
+          e.gev_probability = kNaN;
+        }
+      }
+      d.groups[g].columns.push_back(std::move(described));
+    }
+  }
+  return d;
+}
+
+std::string DispersionGroupPath() { return "analysis/dispersion"; }
+
+void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion& d,
+                          const std::string& command_line) {
+  WriteAnalysisProduct(archive, DispersionGroupPath(), "the dispersion", [&](ProductGroup& group) {
+    group.Attribute("description",
+                    "Dispersion of per-run result columns over the runs of a sweep, per group of a grouping "
+                    "column (docs/dispersion.md): counts, moments, percentiles, normal and Gumbel tail fits "
+                    "with Anderson-Darling statistics, and limit exceedance probabilities with Wilson and "
+                    "Clopper-Pearson intervals");
+    group.Attribute("command_line", command_line);
+    group.Attribute("engine_version", EngineVersion());
+    group.Attribute("git_commit", EngineGitCommit());
+    group.Attribute("created", UtcTimestamp());
+    group.Attribute("study_name", d.study_name);
+    group.Attribute("columns", d.columns);
+    group.Attribute("column_paths", d.column_paths);
+    group.Attribute("column_units", d.column_units);
+    group.Attribute("group_by", d.group_by);
+    group.Attribute("group_path", d.group_path);
+    group.Attribute("group_units", d.group_units);
+    group.Attribute("percentiles", d.options.percentiles);
+    group.Attribute("tail_probabilities", d.options.tail_probabilities);
+    group.Attribute("confidence_level", d.options.confidence_level);
+    group.Attribute("run_count", d.run_count);
+
+    const std::size_t G = d.groups.size(), C = d.columns.size(), P = d.options.percentiles.size(),
+                      T = d.options.tail_probabilities.size(), L = d.limits.size();
+    std::vector<std::string> labels;
+    std::vector<double> keys;
+    for (const auto& g : d.groups) {
+      labels.push_back(g.label);
+      keys.push_back(g.value);
+    }
+    group.Strings("group_label", labels,
+                  "The grouping value as shown, one per group (\"all\" without grouping)");
+    group.Numbers("group_value", keys, d.group_units.empty() ? "1" : d.group_units,
+                  "The grouping value, one per group (NaN without grouping, or for runs without one)");
+    // Per (group, column) tables, shape [G, C] (and [G, C, P] / [G, C, T]).
+    auto per_column = [&](const std::string& name, const std::string& units, const std::string& description,
+                          auto value_of) {
+      std::vector<double> values;
+      for (const auto& g : d.groups)
+        for (const auto& c : g.columns) values.push_back(value_of(c));
+      group.Numbers(name, values, units, description + " [group, column]", {G, C});
+    };
+    auto per_count = [&](const std::string& name, const std::string& description, auto value_of) {
+      std::vector<std::int64_t> values;
+      for (const auto& g : d.groups)
+        for (const auto& c : g.columns) values.push_back(value_of(c));
+      group.Numbers(name, values, "1", description + " [group, column]", {G, C});
+    };
+    const std::string column_units = "see column_units";  // each column has its own units
+    per_count("runs", "Runs of the group", [](const ColumnDispersion& c) { return c.runs; });
+    per_count("values", "Complete runs with a finite value: the sample",
+              [](const ColumnDispersion& c) { return c.values; });
+    per_count("failed", "Failed runs (status failed)", [](const ColumnDispersion& c) { return c.failed; });
+    per_count("without_value", "Complete runs whose value is not finite",
+              [](const ColumnDispersion& c) { return c.without_value; });
+    per_count("pending", "Runs not run yet", [](const ColumnDispersion& c) { return c.pending; });
+    per_column("mean", column_units, "Mean", [](const ColumnDispersion& c) { return c.mean; });
+    per_column("standard_deviation", column_units, "Standard deviation (divisor n - 1)",
+               [](const ColumnDispersion& c) { return c.standard_deviation; });
+    per_column("minimum", column_units, "Smallest value",
+               [](const ColumnDispersion& c) { return c.minimum; });
+    per_column("maximum", column_units, "Largest value", [](const ColumnDispersion& c) { return c.maximum; });
+    std::vector<double> percentiles;
+    for (const auto& g : d.groups)
+      for (const auto& c : g.columns)
+        percentiles.insert(percentiles.end(), c.percentiles.begin(), c.percentiles.end());
+    group.Numbers("percentile_values", percentiles, column_units,
+                  "Percentiles (linear interpolation, NumPy's default) at the attribute percentiles "
+                  "[group, column, percentile]",
+                  {G, C, P});
+    auto fit = [&](const std::string& prefix, const std::string& law, auto tail_of, bool upper, bool lower) {
+      per_column(prefix + "_location", column_units, law + " fit: location",
+                 [&](const ColumnDispersion& c) { return tail_of(c).fit.location; });
+      per_column(prefix + "_scale", column_units, law + " fit: scale",
+                 [&](const ColumnDispersion& c) { return tail_of(c).fit.scale; });
+      per_column(prefix + "_anderson_darling", "1", law + " fit: Anderson-Darling statistic A2",
+                 [&](const ColumnDispersion& c) { return tail_of(c).goodness.statistic; });
+      per_column(prefix + "_rejected_at_percent", "%",
+                 law +
+                     " fit: smallest significance level (of Stephens' table) at which A2 rejects it; 0: not "
+                     "rejected at any",
+                 [&](const ColumnDispersion& c) { return tail_of(c).goodness.rejected_at_percent(); });
+      for (int side = 0; side < 2; ++side) {
+        if ((side == 0 && !upper) || (side == 1 && !lower)) continue;
+        std::vector<double> values;
+        for (const auto& g : d.groups)
+          for (const auto& c : g.columns) {
+            const auto& q = side == 0 ? tail_of(c).upper_quantiles : tail_of(c).lower_quantiles;
+            values.insert(values.end(), q.begin(), q.end());
+          }
+        group.Numbers(prefix + (side == 0 ? "_upper_quantiles" : "_lower_quantiles"), values, column_units,
+                      law + " fit: the value " + (side == 0 ? "exceeded" : "not reached") +
+                          " with probability p, p the attribute tail_probabilities [group, column, p]",
+                      {G, C, T});
+      }
+    };
+    fit(
+        "normal", "Normal", [](const ColumnDispersion& c) -> const TailFit& { return c.normal; }, true, true);
+    fit(
+        "gumbel_max", "Gumbel (largest values)",
+        [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_max; }, true, false);
+    fit(
+        "gev_max", "Generalised extreme value (largest values; A2 without a table)",
+        [](const ColumnDispersion& c) -> const TailFit& { return c.gev_max; }, true, false);
+    per_column("gev_max_shape", "1", "Generalised extreme value fit: shape xi (scipy's genextreme c = -xi)",
+               [](const ColumnDispersion& c) { return c.gev_max.shape; });
+    fit(
+        "gumbel_min",
+        "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
+        [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_min; }, false, true);
+
+    // The limits: [group, limit].
+    std::vector<std::string> texts, limit_columns;
+    std::vector<double> limit_values;
+    std::vector<std::int64_t> above;
+    for (const auto& l : d.limits) {
+      texts.push_back(l.text);
+      limit_columns.push_back(l.column);
+      limit_values.push_back(l.value);
+      above.push_back(l.above ? 1 : 0);
+    }
+    ProductGroup limits = group.Group("limits");
+    limits.Attribute(
+        "description",
+        "Probability of exceeding each limit, per group: empirical with Wilson and Clopper-Pearson "
+        "intervals at the parent's confidence_level, and the fitted tails'");
+    limits.Strings("limit", texts, "The limit as given, one per limit");
+    limits.Strings("column", limit_columns, "Its column");
+    limits.Numbers("value", limit_values, "see column", "Its value, in its column's units");
+    limits.Numbers("above", above, "1", "1: P(value > limit); 0: P(value < limit)");
+    auto per_limit = [&](const std::string& name, const std::string& description, auto value_of) {
+      std::vector<double> values;
+      for (const auto& g : d.groups)
+        for (const auto& e : g.limits) values.push_back(value_of(e));
+      limits.Numbers(name, values, "1", description + " [group, limit]", {G, L});
+    };
+    auto per_limit_count = [&](const std::string& name, const std::string& description, auto value_of) {
+      std::vector<std::int64_t> values;
+      for (const auto& g : d.groups)
+        for (const auto& e : g.limits) values.push_back(value_of(e));
+      limits.Numbers(name, values, "1", description + " [group, limit]", {G, L});
+    };
+    per_limit_count("exceed", "Values beyond the limit", [](const LimitExceedance& e) { return e.exceed; });
+    per_limit_count("values", "The sample (finite values)",
+                    [](const LimitExceedance& e) { return e.values; });
+    per_limit_count("failed", "Failed runs and runs without a value: not in the sample",
+                    [](const LimitExceedance& e) { return e.failed; });
+    per_limit("probability", "exceed / values", [](const LimitExceedance& e) { return e.probability; });
+    per_limit("wilson_lower", "Wilson interval, lower end",
+              [](const LimitExceedance& e) { return e.wilson.lower; });
+    per_limit("wilson_upper", "Wilson interval, upper end",
+              [](const LimitExceedance& e) { return e.wilson.upper; });
+    per_limit("clopper_pearson_lower", "Clopper-Pearson interval, lower end",
+              [](const LimitExceedance& e) { return e.clopper_pearson.lower; });
+    per_limit("clopper_pearson_upper", "Clopper-Pearson interval, upper end",
+              [](const LimitExceedance& e) { return e.clopper_pearson.upper; });
+    per_limit("normal_probability", "Of the normal fit",
+              [](const LimitExceedance& e) { return e.normal_probability; });
+    per_limit("gumbel_probability", "Of the Gumbel fit of the same tail",
+              [](const LimitExceedance& e) { return e.gumbel_probability; });
+    per_limit("gev_probability", "Of the generalised extreme value fit of the largest values (NaN for <)",
+              [](const LimitExceedance& e) { return e.gev_probability; });
+  });
+}
+
+}  // namespace gesweep
