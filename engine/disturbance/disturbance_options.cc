@@ -14,7 +14,7 @@ double EffectiveSigmaW(const DisturbanceOptions& options) {
 
 void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& source) {
   auto fail = [&](const char* key, double value, const char* expected) {
-    throw InputError(source, key, ShortNumber(value), expected);
+    throw InputError(source, key, ShortNumber(value), std::string("expected ") + expected);
   };
   if (!std::isfinite(o.wind_20ft_mps)) fail("wind_20ft_mps", o.wind_20ft_mps, "a finite speed in m/s");
   if (!std::isnan(o.turbulence_sigma_w_mps) &&

@@ -183,12 +183,14 @@ TEST(LandingInWind, TheGlidePathIsALineOverTheGround) {
   // A steady wind without shear on the geometric glide path (docs/model.md §9): the path is a line over
   // the along-track ground position, so the flare starts at the same ground point whatever the wind
   // (where the line is at Ho, give or take the tracking error there), later in a headwind (lower ground
-  // speed) and earlier in a tailwind; from there the airplane covers the ground at its inertial speed
+  // speed) than in a tailwind; from there the airplane covers the ground at its inertial speed
   // u = u0 + Δu, so the touchdown point is the flare's start plus ∫u dt over the flare, and a
-  // headwind lands short of still air, a tailwind long.
-  double distance[3], flare_time[3];
-  const double winds[3] = {-5.0, 0.0, 5.0};
-  for (int i = 0; i < 3; ++i) {
+  // headwind lands short of a tailwind. (Still air flies the time-based path of docs/model.md §8, whose
+  // along-track distance is u0·t: not comparable, since the unpowered model's speed rises by 30 % on
+  // the glide, docs/landing.md §6.)
+  double distance[2], flare_time[2];
+  const double winds[2] = {-5.0, 5.0};
+  for (int i = 0; i < 2; ++i) {
     LandingConfig config = PaperLanding();
     config.disturbance.wind_20ft_mps = winds[i];
     config.disturbance.wind_shear = WindShear::kNone;
@@ -197,7 +199,6 @@ TEST(LandingInWind, TheGlidePathIsALineOverTheGround) {
     ASSERT_EQ(r.outcome, LandingOutcome::kLanded) << r.message;
     distance[i] = r.touchdown_distance_past_transmitter_m;
     flare_time[i] = r.flare_start_time_s;
-    if (winds[i] == 0.0) continue;
     EXPECT_NEAR(r.touchdown_airspeed_mps, r.touchdown_speed_mps - winds[i], kRoundingTolerance)
         << "airspeed = u − u_g";
     // The geometry, from the series: before the flare the reference is the line's height −γ·x at the
@@ -219,12 +220,10 @@ TEST(LandingInWind, TheGlidePathIsALineOverTheGround) {
     EXPECT_NEAR(distance[i], start.distance_past_transmitter_m + flown_m, kTrapezoidTolerance_m) << winds[i];
   }
   EXPECT_LT(distance[0], distance[1]);
-  EXPECT_LT(distance[1], distance[2]);
   EXPECT_GT(flare_time[0], flare_time[1]);
-  EXPECT_GT(flare_time[1], flare_time[2]);
-  // The flare starts at the same ground point: the glide lasts (path length)/(mean ground speed), so the
-  // headwind's extra time is about W·t/u of the still-air time (≥ 5/66 of 215 s ≈ 16 s).
-  EXPECT_GT(flare_time[0] - flare_time[1], 10.0);
+  // The same ground distance (the line from the start to where it is at Ho) at ground speeds 10 m/s
+  // apart, about 60 m/s on average: the headwind's glide is longer by roughly 10/60 of it (~25 s).
+  EXPECT_GT(flare_time[0] - flare_time[1], 0.1 * flare_time[1]);
 }
 
 TEST(LandingInWind, TurbulentLandingLandsAndReplays) {
