@@ -468,7 +468,7 @@ def hardening_cases():
         # The moving atmosphere (docs/model.md section 9): each flag in its words.
         run("simulate --turbulence foo", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps",
                                           "32", "--turbulence", "foo"],
-            "--turbulence = 'foo': expected one of none, dryden")
+            "--turbulence = 'foo': expected none or dryden")
         run("simulate --turbulence-sigma-w-mps -1", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
                                                      "--speed-mps", "32", "--turbulence", "dryden",
                                                      "--turbulence-sigma-w-mps", "-1"],
@@ -480,7 +480,7 @@ def hardening_cases():
                                                "--speed-mps", "32", "--wind-20ft-mps", "1e308"],
             "--wind-20ft-mps = 1e308: expected a number in [-50, 50] m/s")
         run("land --turbulence foo", ["land", "--aircraft", str(ANCE), "--turbulence", "foo"],
-            "--turbulence = 'foo': expected one of none, dryden")
+            "--turbulence = 'foo': expected none or dryden")
         run("land --turbulence-sigma-w-mps -0.5", ["land", "--aircraft", str(ANCE), "--turbulence", "dryden",
                                                    "--turbulence-sigma-w-mps", "-0.5"],
             "--turbulence-sigma-w-mps = -0.5: expected a finite number >= 0 (m/s)")
@@ -490,7 +490,7 @@ def hardening_cases():
             "--flare-asymptote-m = 10: expected a height in [0, flare_height_m = 10 m)")
         run("land --turbulent-integrator euler", ["land", "--aircraft", str(ANCE), "--turbulent-integrator",
                                                   "euler"],
-            "--turbulent-integrator = 'euler': expected one of rk4, dopri5")
+            "--turbulent-integrator = 'euler': expected rk4 or dopri5")
         run("run --threads 0", ["run", str(study), "-o", "{out}/out.h5", "--threads", "0"],
             "--threads = 0: expected 1 to 4096 worker threads")
         (tmp / "past.csv").write_text("height_m\n2.0\n1e999\n")
