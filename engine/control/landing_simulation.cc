@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <sstream>
 
@@ -88,7 +89,12 @@ class LandingProblem {
         compensator_pole_(config.compensator_pole_per_s),
         fixed_reference_(config.plant_height_reference == PlantHeightReference::kFixedHeight),
         fixed_reference_height_m_(result.plant_fixed_reference_height_m),
-        gain_(design.gain) {}
+        gain_(design.gain) {
+    if (kAir && plant.options().interpolation == Interpolation::kLinear) {
+      table_ = std::make_unique<LinearDerivativeTable>(plant);
+      table_hint_ = table_->SegmentOf(config.start_height_m);
+    }
+  }
 
   /// Height of the reference trajectory: the glide path (over time in still air; over the ground
   /// position in a moving atmosphere), or the flare's exponential towards its asymptote.
@@ -157,8 +163,13 @@ class LandingProblem {
       DisturbanceField::State field_dxdt;
       const AirMotion air = Air(x, segment, field_dxdt);
       const Vector5d x5(x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h);
+      // The per-segment table of the derivatives (derivative_kernel.h) when the interpolation is
+      // linear, as the open loop's fast path; the model's own evaluation otherwise.
+      const DimensionalDerivatives derivatives =
+          table_ != nullptr ? table_->DerivativesAt(height_m, air.airspeed_mps, table_hint_)
+                            : plant_.DerivativesAt(height_m, air.airspeed_mps);
       const Vector5d d5 =
-          AirRelativeDerivative(plant_.DerivativesAt(height_m, air.airspeed_mps), u0_, x5, x[kSimElevator],
+          AirRelativeDerivative(derivatives, u0_, x5, x[kSimElevator],
                                 AirVelocity{air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2});
       for (int i = 0; i < 4; ++i) dxdt[static_cast<std::size_t>(i)] = d5[i];
       dxdt[kSimH] = d5[kDeltaH];
@@ -184,15 +195,18 @@ class LandingProblem {
   void EventValues(double t, const State& x, int segment, std::array<double, kEventCount>& g) const {
     g[kFlareEvent] = phase_ == LandingPhase::kGlideSlope ? x[kSimH] - flare_height_m_ : 1.0;
     g[kTouchdownEvent] = x[kSimH] - touchdown_height_m_;
+    double command = 0.0;
     if constexpr (kAir) {
       DisturbanceField::State unused;
-      g[kStallEvent] = Air(x, segment, unused).airspeed_mps - stall_speed_mps_;  // the airspeed stalls
+      const AirMotion air = Air(x, segment, unused);
+      g[kStallEvent] = air.airspeed_mps - stall_speed_mps_;  // the airspeed stalls
+      command = Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
     } else {
       (void)segment;
       g[kStallEvent] = u0_ + x[kSimDu] - stall_speed_mps_;
+      command = Command(t, x, x[kSimDu], x[kSimDw]);
     }
     g[kDivergenceEvent] = divergence_rad_ - std::abs(x[kSimTheta]);
-    const double command = Command(t, x, segment);
     g[kUpperEnter] = elevator_max_rad_ - command;
     g[kUpperLeave] = command - elevator_max_rad_;
     g[kLowerEnter] = command - elevator_min_rad_;
@@ -311,6 +325,9 @@ class LandingProblem {
   }
 
   const LongitudinalModel& plant_;
+  // In a moving atmosphere with linear interpolation: the derivatives' per-segment table.
+  std::unique_ptr<LinearDerivativeTable> table_;
+  mutable int table_hint_ = 0;
   const DisturbanceField* field_;
   const std::vector<DisturbanceField::Segment>* field_segments_;
   LandingResult& result_;
