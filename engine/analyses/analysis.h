@@ -134,6 +134,9 @@ struct RunContext {
   /// Not null in a sweep: set by SIGINT/SIGTERM or a deadline. An analysis that runs long (a time
   /// response) passes it to its integrator and returns AnalysisOutcome::Cancelled() once it fired.
   const std::atomic<bool>* cancel = nullptr;
+  /// The run's global index in the design (0, 1, ...), the same whoever runs it (threads, MPI ranks,
+  /// shards): run i's turbulence is RunNoise(seed, i) (docs/disturbance.md).
+  std::uint64_t run_index = 0;
   double value(ParameterId id) const { return parameters[static_cast<std::size_t>(id)]; }
 };
 

@@ -33,6 +33,8 @@ class LandingAnalysis final : public Analysis {
   std::vector<ParameterId> parameters_used() const override {
     std::vector<ParameterId> ids = {height_, speed_, glide_slope_, flare_height_, flare_tau_, r_};
     ids.insert(ids.end(), q_.begin(), q_.end());
+    const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
+    ids.insert(ids.end(), disturbance.begin(), disturbance.end());
     return ids;
   }
   double nominal_run_cost_us() const override { return kLandingCost_us; }
@@ -71,6 +73,11 @@ class LandingAnalysis final : public Analysis {
     real("design_height_m", "m", "Height of the linear model the gain was designed on");
     real("closed_loop_max_real_per_s", "1/s",
          "Largest real part of the design model's closed-loop eigenvalues");
+    real("touchdown_airspeed_mps", "m/s",
+         "Airspeed u0 + Delta u - u_g at touchdown (the speed in still air)");
+    real("flare_max_abs_elevator_deg", "deg",
+         "Largest |elevator deflection| in the flare phase (NaN without a flare)");
+    real("flare_max_abs_pitch_rate_degps", "deg/s", "Largest |q| in the flare phase (NaN without a flare)");
     steps_ =
         schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
     rhs_calls_ = schema.Add(
@@ -101,7 +108,8 @@ class LandingAnalysis final : public Analysis {
     series("reference_height_m", "m", "Height of the glide path, or H_ref in the flare");
     series("tracking_error_m", "m", "H minus the reference");
     series("distance_past_transmitter_m", "m",
-           "Along-track distance past the glide-slope transmitter, u0 (t - t_transmitter)");
+           "Along-track distance past the glide-slope transmitter: u0 (t - t_transmitter) in still air, the "
+           "ground position with a disturbance");
     series("speed_mps", "m/s", "Speed u");
     series("delta_w_mps", "m/s", "Delta w, positive down");
     series("pitch_rate_radps", "rad/s", "Pitch rate q");
@@ -110,6 +118,12 @@ class LandingAnalysis final : public Analysis {
     series("elevator_rad", "rad", "Elevator deflection (actuator position)");
     series("elevator_command_rad", "rad", "Elevator command before the limits");
     series("phase", "1", "0 glide slope, 1 flare");
+    // The air motion the airplane met (docs/model.md §9): 0 in still air.
+    series(
+        "u_g_mps", "m/s",
+        "Air velocity along x at the airplane: mean wind + turbulence + a u gust (a headwind is negative)");
+    series("w_g_mps", "m/s", "Air velocity along z at the airplane (positive down): turbulence + a w gust");
+    if (config_.disturbance.pitch_rate_gust) series("q_g_radps", "rad/s", "Pitch-rate gust q_g (Dryden)");
   }
 
   std::string CheckRun(const RunParameters& p, const Aircraft* aircraft) const override {
@@ -122,7 +136,8 @@ class LandingAnalysis final : public Analysis {
   }
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
-    const LandingConfig config = ConfigFor(context.parameters);
+    LandingConfig config = ConfigFor(context.parameters);
+    config.run_index = context.run_index;
     const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
     if (r.cancelled) return AnalysisOutcome::Cancelled();
     row.Set(outcome_, static_cast<double>(static_cast<int>(r.outcome)));
@@ -147,7 +162,10 @@ class LandingAnalysis final : public Analysis {
                              r.design.design_height_m,
                              r.design.closed_loop_eigenvalues.size()
                                  ? r.design.closed_loop_eigenvalues[0].real()
-                                 : std::numeric_limits<double>::quiet_NaN()};
+                                 : std::numeric_limits<double>::quiet_NaN(),
+                             r.touchdown_airspeed_mps,
+                             r.flare_max_abs_elevator_deg,
+                             r.flare_max_abs_pitch_rate_degps};
     for (std::size_t i = 0; i < scalars_.size(); ++i) row.Set(scalars_[i], values[i]);
     row.Set(steps_, static_cast<double>(r.accepted_steps));
     row.Set(rhs_calls_, static_cast<double>(r.rhs_calls));
@@ -156,7 +174,7 @@ class LandingAnalysis final : public Analysis {
       for (int i = 0; i < kLandingStateCount; ++i) gain[i] = r.design.gain[static_cast<std::size_t>(i)];
     }
     bool truncated = false;
-    if (samples_ > 0) truncated = StoreSeries(r, config, row);
+    if (samples_ > 0) truncated = StoreSeries(r, row);
     const std::string note =
         truncated ? r.message + " (series cut at " + ShortNumber(series_duration_s_) + " s)" : r.message;
     if (r.outcome == LandingOutcome::kDiverged || r.outcome == LandingOutcome::kDesignFailed) {
@@ -178,14 +196,12 @@ class LandingAnalysis final : public Analysis {
       config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
     }
     config.r_weight = at(r_);
+    config.seed = ApplyDisturbanceParameters(p, config.disturbance);
     return config;
   }
 
   // Samples on the grid t = k·dt; returns whether some fell past the stored duration.
-  bool StoreSeries(const LandingResult& r, const LandingConfig& config, OutputRow& row) const {
-    const double u0 = config.start_speed_mps;
-    const double transmitter_time_s = (config.start_height_m - config.start_glide_path_offset_m) /
-                                      (u0 * config.glide_slope_deg * kRadPerDeg);
+  bool StoreSeries(const LandingResult& r, OutputRow& row) const {
     bool truncated = false;
     for (const LandingSample& s : r.series) {
       const double position = s.time_s / dt_s_;
@@ -198,7 +214,7 @@ class LandingAnalysis final : public Analysis {
       const double values[] = {s.height_m,
                                s.reference_height_m,
                                s.tracking_error_m,
-                               u0 * (s.time_s - transmitter_time_s),
+                               s.distance_past_transmitter_m,
                                s.speed_mps,
                                s.delta_w_mps,
                                s.pitch_rate_radps,
@@ -206,7 +222,10 @@ class LandingAnalysis final : public Analysis {
                                s.sink_rate_mps,
                                s.elevator_rad,
                                s.elevator_command_rad,
-                               static_cast<double>(static_cast<int>(s.phase))};
+                               static_cast<double>(static_cast<int>(s.phase)),
+                               s.u_g_mps,
+                               s.w_g_mps,
+                               s.q_g_radps};
       for (std::size_t c = 0; c < series_.size(); ++c) row.Slot(series_[c])[static_cast<int>(k)] = values[c];
     }
     return truncated;
@@ -230,11 +249,28 @@ class LandingAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys(
-      {"start_pitch_deg", "start_glide_path_offset_m", "design_height_m", "design_speed_mps",
-       "design_h_derivatives", "actuator_pole_per_s", "compensator_pole_per_s", "elevator_min_deg",
-       "elevator_max_deg", "plant_height_reference", "plant_fixed_reference_height_m", "relative_tolerance",
-       "absolute_tolerance", "max_step_s", "time_limit_s", "divergence_pitch_deg", "series_duration_s"});
+  settings.RejectUnknownKeys({"start_pitch_deg",
+                              "start_glide_path_offset_m",
+                              "design_height_m",
+                              "design_speed_mps",
+                              "design_h_derivatives",
+                              "actuator_pole_per_s",
+                              "compensator_pole_per_s",
+                              "elevator_min_deg",
+                              "elevator_max_deg",
+                              "plant_height_reference",
+                              "plant_fixed_reference_height_m",
+                              "relative_tolerance",
+                              "absolute_tolerance",
+                              "max_step_s",
+                              "time_limit_s",
+                              "divergence_pitch_deg",
+                              "series_duration_s",
+                              "flare_asymptote_m",
+                              "reset_compensator_at_flare",
+                              "turbulence_sample_interval_s",
+                              "pitch_rate_gust",
+                              "turbulent_integrator"});
   LandingConfig config;
   // Every number against the limits table (docs/limits.md), with the study's file and line; what
   // depends on the run's parameters is checked on the design's extreme runs (CheckRun).
@@ -274,6 +310,27 @@ std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const
     config.time_limit_s = *value;
   }
   number("divergence_pitch_deg", config.divergence_pitch_deg);
+  // The flare's options (docs/landing.md §5) and the settings of the moving atmosphere (the winds
+  // themselves are run parameters: DisturbanceOptions::Describe).
+  if (const auto value = settings.OptionalNumber("flare_asymptote_m")) {
+    if (!(std::isfinite(*value) && *value >= 0.0)) {
+      settings.Fail("flare_asymptote_m", ShortNumber(*value),
+                    "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
+    }
+    config.flare_asymptote_m = *value;
+  }
+  config.reset_compensator_at_flare = settings.OptionalBool("reset_compensator_at_flare").value_or(false);
+  if (const auto value =
+          settings.OptionalLimitedNumber("turbulence_sample_interval_s", "turbulence_sample_interval_s")) {
+    config.disturbance.turbulence_sample_interval_s = *value;
+  }
+  config.disturbance.pitch_rate_gust = settings.OptionalBool("pitch_rate_gust").value_or(false);
+  if (const auto text = settings.OptionalString("turbulent_integrator")) {
+    const auto parsed = ParseEnum<IntegratorKind>(*text);
+    if (!parsed)
+      settings.Fail("turbulent_integrator", "\"" + *text + "\"", "expected " + EnumChoices<IntegratorKind>());
+    config.turbulent_integrator = *parsed;
+  }
   double series_duration_s = kDefaultSeriesDuration_s;
   number("series_duration_s", series_duration_s);
   return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);

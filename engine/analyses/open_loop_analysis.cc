@@ -27,7 +27,10 @@ class OpenLoopAnalysis final : public Analysis {
 
   std::string_view name() const override { return "open_loop"; }
   std::vector<ParameterId> parameters_used() const override {
-    return {height_, speed_, amplitude_, duration_};
+    std::vector<ParameterId> used = {height_, speed_, amplitude_, duration_};
+    const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
+    used.insert(used.end(), disturbance.begin(), disturbance.end());
+    return used;
   }
   double nominal_run_cost_us() const override {
     return kOpenLoopCost_us * config_.duration_s / kDefaultDuration_s;
@@ -58,6 +61,18 @@ class OpenLoopAnalysis final : public Analysis {
     series_elevator_ = schema.Add(OutputColumn::Series(series + "elevator_rad", "rad",
                                                        "Elevator deflection (positive trailing edge down)",
                                                        axis.path, samples));
+    // The air motion the airplane met (docs/model.md §9): 0 in still air.
+    series_u_g_ = schema.Add(OutputColumn::Series(
+        series + "u_g_mps", "m/s",
+        "Air velocity along x at the airplane: mean wind + turbulence + a u gust (a headwind is negative)",
+        axis.path, samples));
+    series_w_g_ = schema.Add(OutputColumn::Series(
+        series + "w_g_mps", "m/s",
+        "Air velocity along z at the airplane (positive down): turbulence + a w gust", axis.path, samples));
+    if (config_.disturbance.pitch_rate_gust) {
+      series_q_g_ = schema.Add(OutputColumn::Series(series + "q_g_radps", "rad/s",
+                                                    "Pitch-rate gust q_g (Dryden)", axis.path, samples));
+    }
     samples_ = samples;
   }
 
@@ -85,6 +100,8 @@ class OpenLoopAnalysis final : public Analysis {
     config.reference_speed_mps = context.value(speed_);
     config.elevator.amplitude_rad = context.value(amplitude_) * std::numbers::pi / 180.0;
     config.elevator.duration_s = context.value(duration_);
+    config.seed = ApplyDisturbanceParameters(context.parameters, config.disturbance);
+    config.run_index = context.run_index;
     const OpenLoopResult result = SimulateOpenLoop(*context.model, config, context.cancel);
     const OpenLoopSummary& s = result.summary;
     if (s.cancelled) return AnalysisOutcome::Cancelled();
@@ -106,11 +123,17 @@ class OpenLoopAnalysis final : public Analysis {
         {series_q_, &series.pitch_rate_radps},
         {series_theta_, &series.delta_pitch_rad},
         {series_elevator_, &series.elevator_rad}};
+    const bool air = !series.u_g_mps.empty();
+    const bool pitch_gust = series_q_g_ >= 0;
     for (std::size_t i = 0; i < series.time_s.size(); ++i) {
       const double position = series.time_s[i] / dt_s_;
       const double k = std::round(position);
       if (std::abs(position - k) * dt_s_ > kGridTolerance_s || k < 0 || k >= samples_) continue;
-      for (const auto& [column, values] : columns) row.Slot(column)[static_cast<int>(k)] = (*values)[i];
+      const int sample = static_cast<int>(k);
+      for (const auto& [column, values] : columns) row.Slot(column)[sample] = (*values)[i];
+      row.Slot(series_u_g_)[sample] = air ? series.u_g_mps[i] : 0.0;
+      row.Slot(series_w_g_)[sample] = air ? series.w_g_mps[i] : 0.0;
+      if (pitch_gust) row.Slot(series_q_g_)[sample] = air ? series.q_g_radps[i] : 0.0;
     }
   }
 
@@ -121,7 +144,8 @@ class OpenLoopAnalysis final : public Analysis {
   ParameterId duration_ = RequireParameter("pulse_duration_s");
   DescribedColumns<OpenLoopSummary> summary_;
   int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0,
-      series_elevator_ = 0;
+      series_elevator_ = 0, series_u_g_ = 0, series_w_g_ = 0;
+  int series_q_g_ = -1;
   int samples_ = 0;
   double dt_s_ = 0;
 };

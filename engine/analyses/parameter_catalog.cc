@@ -1,11 +1,13 @@
 #include "engine/analyses/parameter_catalog.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "engine/aircraft/coefficient.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/disturbance/disturbance_options.h"
 
 namespace gesweep {
 namespace {
@@ -113,6 +115,30 @@ std::vector<ParameterInfo> BuildCatalog() {
         Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0, "lqr.r"));
   }
 
+  // The moving atmosphere (docs/model.md §9): every command-line field of DisturbanceOptions::Describe
+  // is a run parameter of the same name, unit, range and default (read by open_loop and landing),
+  // and the seed of the run's turbulence (RunNoise(seed, run index), docs/disturbance.md).
+  for (const FieldRecord& field : ListFields(DisturbanceOptions{})) {
+    const FieldAttributes& a = field.attributes;
+    if (a.scope != FieldScope::kCommandLineOnly) continue;
+    if (field.kind == FieldKind::kNumber) {
+      const std::string limit(a.limit.empty() ? a.key : a.limit);
+      c.push_back(Real(std::string(a.key), std::string(a.unit), std::string(a.doc), G::kFlight, *field.number,
+                       limit));
+    } else {
+      GESWEEP_DEMAND(field.kind == FieldKind::kChoice);
+      const auto code = std::find(field.levels.begin(), field.levels.end(), field.default_text);
+      ParameterInfo info = Levels(std::string(a.key), std::string(a.doc), ParameterKind::kChoice,
+                                  static_cast<double>(code - field.levels.begin()), field.levels);
+      info.group = G::kFlight;
+      c.push_back(std::move(info));
+    }
+  }
+  c.push_back(Real("seed", "1",
+                   "Seed of the run's turbulence: run i of a sweep flies RunNoise(seed, i) "
+                   "(docs/disturbance.md); a whole number",
+                   G::kFlight, 0.0, "seed"));
+
   // Inputs of the verification models (Ishigami, linear): dimensionless, no default meaning.
   for (int i = 1; i <= 8; ++i) {
     std::string name = "x";
@@ -185,6 +211,7 @@ std::string CheckParameterValue(ParameterId id, double value, const Aircraft* ai
   const InputLimit& limit = RequireInputLimit(info.limit);
   std::string problem = LimitProblem(limit, value);
   if (!problem.empty()) return problem;
+  if (info.name == "seed" && value != std::floor(value)) return "expected a whole number";
   if (aircraft != nullptr && info.name == "height_m") {
     if (value < aircraft->wheel_contact_height_m) {
       return "expected a height >= the wheel-contact height " +
@@ -213,6 +240,53 @@ std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text)
     if (info.levels[i] == text) return static_cast<double>(i);
   }
   return std::nullopt;
+}
+
+}  // namespace gesweep
+
+namespace gesweep {
+namespace {
+
+// Sets each command-line field of DisturbanceOptions from the run's parameters, in field order.
+struct DisturbanceSetter {
+  const std::vector<double>* parameters;
+  const std::vector<ParameterId>* ids;
+  std::size_t next = 0;
+  template <class U>
+  void operator()(const Field<U>& field) {
+    if (field.attributes().scope != FieldScope::kCommandLineOnly) return;
+    const double value = (*parameters)[static_cast<std::size_t>((*ids)[next++])];
+    if constexpr (NamedEnum<U>) {
+      *field.value() = static_cast<U>(static_cast<int>(value));
+    } else if constexpr (std::floating_point<U>) {
+      *field.value() = value * field.attributes().scale;
+    } else {
+      GESWEEP_UNREACHABLE();
+    }
+  }
+};
+
+}  // namespace
+
+const std::vector<ParameterId>& DisturbanceParameterIds() {
+  static const std::vector<ParameterId> ids = [] {
+    std::vector<ParameterId> list;
+    for (const FieldRecord& field : ListFields(DisturbanceOptions{})) {
+      if (field.attributes.scope == FieldScope::kCommandLineOnly)
+        list.push_back(RequireParameter(field.attributes.key));
+    }
+    list.push_back(RequireParameter("seed"));
+    return list;
+  }();
+  return ids;
+}
+
+std::uint64_t ApplyDisturbanceParameters(const std::vector<double>& parameters, DisturbanceOptions& options) {
+  const std::vector<ParameterId>& ids = DisturbanceParameterIds();
+  DisturbanceSetter setter{&parameters, &ids};
+  options.Describe(setter);
+  GESWEEP_DEMAND(setter.next + 1 == ids.size());
+  return static_cast<std::uint64_t>(parameters[static_cast<std::size_t>(ids.back())]);
 }
 
 }  // namespace gesweep

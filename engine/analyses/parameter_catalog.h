@@ -4,12 +4,14 @@
 /// mass properties, the open-loop perturbation, the landing controller, and the inputs of the
 /// verification models. The unit is in each name; degrees only where the name says `_deg`.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/disturbance/disturbance_options.h"
 
 namespace gesweep {
 
@@ -88,5 +90,13 @@ std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text)
 
 /// A short description of the allowed values ("one of linear, pchip", "a number in (0, 1e+06] kg").
 std::string DescribeAllowedValues(ParameterId id);
+
+/// The run parameters of the moving atmosphere, in the order of DisturbanceOptions::Describe's
+/// command-line fields, then `seed` (docs/model.md §9, docs/disturbance.md).
+const std::vector<ParameterId>& DisturbanceParameterIds();
+
+/// Writes a run's values of the disturbance parameters into `options` (a choice's level index is the
+/// enum's code) and returns the run's seed.
+std::uint64_t ApplyDisturbanceParameters(const std::vector<double>& parameters, DisturbanceOptions& options);
 
 }  // namespace gesweep

@@ -2,6 +2,7 @@
 // LQR gain), flown on the re-evaluated model with or without h-derivatives (docs/landing.md; the paper's
 // Fig. 6–9).
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -11,10 +12,12 @@
 #include <vector>
 
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/model_flags.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/control/landing_simulation.h"
+#include "engine/disturbance/disturbance_field.h"
 
 namespace gesweep::cli {
 namespace {
@@ -40,6 +43,9 @@ struct LandFlags {
   bool no_design_h_derivatives = false;
   bool summary_only = false;
   std::string format = "csv";
+  // The moving atmosphere's flags (DisturbanceOptions::Describe) and the turbulence's RunNoise(seed, i).
+  DescribedFlags described;
+  std::string turbulent_integrator = "rk4";
 };
 
 std::string Number(double value) {
@@ -75,6 +81,7 @@ std::string FlagOf(const std::string& key) {
       {"time_limit_s", "--time-limit-s"},
       {"output_interval_s", "--output-dt-s"},
       {"divergence_pitch_deg", "--divergence-pitch-deg"},
+      {"flare_asymptote_m", "--flare-asymptote-m"},
   };
   for (const auto& [field, flag] : kFlags) {
     if (key == field) return flag;
@@ -100,6 +107,12 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
                      "expected path or fixed");
   }
   config.plant_height_reference = *reference;
+  const auto integrator = ParseEnum<IntegratorKind>(flags.turbulent_integrator);
+  if (!integrator) {
+    throw InputError("command line", "--turbulent-integrator", "'" + flags.turbulent_integrator + "'",
+                     "expected " + EnumChoices<IntegratorKind>());
+  }
+  config.turbulent_integrator = *integrator;
   if (!flags.q_weights.empty()) {
     const std::vector<double> weights = ParseNumberList(flags.q_weights, "--q-weights", false);
     if (weights.size() != static_cast<std::size_t>(kLandingStateCount)) {
@@ -120,7 +133,9 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
       const auto at = expected.find(from);
       if (at != std::string::npos) expected.replace(at, std::string(field).size(), FlagOf(field));
     }
-    throw InputError("command line", FlagOf(error.key()), error.value(), expected);
+    const std::string flag = FlagOf(error.key());
+    throw InputError("command line", flag == error.key() ? flags.described.FlagOf(flag) : flag, error.value(),
+                     expected);
   }
   const double time_limit_s = LandingTimeLimit(config, model.aircraft().wheel_contact_height_m);
   if (config.output_interval_s > 0.0 && time_limit_s / config.output_interval_s > 1e7) {
@@ -164,6 +179,9 @@ Json SummaryJson(const LandingResult& r) {
           {"max_speed_mps", JsonNumber(r.max_speed_mps)},
           {"final_time_s", JsonNumber(r.final_time_s)},
           {"final_height_m", JsonNumber(r.final_height_m)},
+          {"touchdown_airspeed_mps", JsonNumber(r.touchdown_airspeed_mps)},
+          {"flare_max_abs_elevator_deg", JsonNumber(r.flare_max_abs_elevator_deg)},
+          {"flare_max_abs_pitch_rate_degps", JsonNumber(r.flare_max_abs_pitch_rate_degps)},
           {"steps", r.accepted_steps},
           {"rejected_steps", r.rejected_steps},
           {"rhs_calls", r.rhs_calls},
@@ -190,6 +208,25 @@ constexpr Column kColumns[] = {
     {"compensator_m_s", [](const LandingSample& s) { return s.compensator; }},
     {"error_integral_m_s", [](const LandingSample& s) { return s.error_integral; }},
 };
+// The air motion the airplane met (docs/model.md §9), after the columns above when the run had a
+// disturbance; q_g only with the pitch-rate gust.
+constexpr Column kAirColumns[] = {
+    {"u_g_mps", [](const LandingSample& s) { return s.u_g_mps; }},
+    {"w_g_mps", [](const LandingSample& s) { return s.w_g_mps; }},
+    {"q_g_radps", [](const LandingSample& s) { return s.q_g_radps; }},
+};
+
+std::vector<Column> SeriesColumns(const LandingConfig& config) {
+  std::vector<Column> columns(std::begin(kColumns), std::end(kColumns));
+  DisturbanceOptions d = config.disturbance;
+  d.pitch_rate_gust = false;  // needs the aircraft's span; it makes no air motion of its own
+  if (DisturbanceField(d, config.seed, config.run_index).active()) {
+    columns.push_back(kAirColumns[0]);
+    columns.push_back(kAirColumns[1]);
+    if (config.disturbance.pitch_rate_gust) columns.push_back(kAirColumns[2]);
+  }
+  return columns;
+}
 
 Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model) {
   Json weights = Json::object();
@@ -213,6 +250,8 @@ Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalM
               {"cdh", std::string(ToString(model.options().cdh))},
               {"interpolation", std::string(ToString(model.options().interpolation))},
               {"integrator", "dopri5"},
+              {"flare_asymptote_m", c.flare_asymptote_m},
+              {"reset_compensator_at_flare", c.reset_compensator_at_flare},
               {"rtol", c.relative_tolerance},
               {"atol", c.absolute_tolerance},
               {"max_step_s", c.max_step_s},
@@ -220,6 +259,20 @@ Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalM
   if (c.plant_height_reference == PlantHeightReference::kFixedHeight) {
     run["plant_reference_height_m"] = r.plant_fixed_reference_height_m;
   }
+  const DisturbanceOptions& d = c.disturbance;
+  run["wind_20ft_mps"] = d.wind_20ft_mps;
+  run["wind_shear"] = std::string(ToString(d.wind_shear));
+  run["turbulence"] = std::string(ToString(d.turbulence));
+  run["turbulence_sigma_w_mps"] = EffectiveSigmaW(d);
+  run["turbulence_sample_interval_s"] = d.turbulence_sample_interval_s;
+  run["pitch_rate_gust"] = d.pitch_rate_gust;
+  run["gust_axis"] = std::string(ToString(d.gust_axis));
+  run["gust_amplitude_mps"] = d.gust_amplitude_mps;
+  run["gust_half_length_m"] = d.gust_half_length_m;
+  run["gust_start_s"] = d.gust_start_s;
+  run["seed"] = c.seed;
+  run["run_index"] = c.run_index;
+  run["turbulent_integrator"] = std::string(ToString(c.turbulent_integrator));
   return run;
 }
 
@@ -244,7 +297,7 @@ int RunLand(const LandFlags& flags) {
       series = Json::object();
       Json phase = Json::array();
       for (const LandingSample& s : result.series) phase.push_back(std::string(ToString(s.phase)));
-      for (const Column& column : kColumns) {
+      for (const Column& column : SeriesColumns(config)) {
         Json values = Json::array();
         for (const LandingSample& s : result.series) values.push_back(JsonNumber(column.value(s)));
         series[column.name] = std::move(values);
@@ -279,12 +332,21 @@ int RunLand(const LandFlags& flags) {
     }
     out += header + "\n" + row + "\n";
   } else {
-    for (const Column& column : kColumns) out += std::string(column.name) + ",";
-    out += "phase\n";
+    const std::vector<Column> columns = SeriesColumns(config);
+    const std::size_t air_columns = columns.size() - std::size(kColumns);  // after phase: still air unchanged
+    for (std::size_t c = 0; c < std::size(kColumns); ++c) out += std::string(columns[c].name) + ",";
+    out += "phase";
+    for (std::size_t c = std::size(kColumns); c < columns.size(); ++c)
+      out += "," + std::string(columns[c].name);
+    out += "\n";
     for (const LandingSample& s : result.series) {
-      for (const Column& column : kColumns) out += Number(column.value(s)) + ",";
-      out += std::string(ToString(s.phase)) + "\n";
+      for (std::size_t c = 0; c < std::size(kColumns); ++c) out += Number(columns[c].value(s)) + ",";
+      out += std::string(ToString(s.phase));
+      for (std::size_t c = std::size(kColumns); c < columns.size(); ++c)
+        out += "," + Number(columns[c].value(s));
+      out += "\n";
     }
+    (void)air_columns;
   }
   std::cout << out;
   if (result.outcome == LandingOutcome::kDesignFailed)
@@ -361,7 +423,25 @@ const CommandRegistrar kRegistrar{Command{
       app.add_option("--format", flags->format,
                      "csv (default: the series; with --summary-only one summary row) or json "
                      "({\"run\", \"summary\", \"series\"})");
-      return [flags] { return RunLand(*flags); };
+      app.add_option("--flare-asymptote-m", c.flare_asymptote_m,
+                     "Height the flare's exponential tends to, m, in [0, Ho); default 0 (the ground, the "
+                     "paper's); the wheel-contact height makes touchdown a long float (docs/landing.md)");
+      app.add_flag("--reset-compensator-at-flare", c.reset_compensator_at_flare,
+                   "Restart the compensator and the error integral from zero at the flare switch (default: "
+                   "they carry over)");
+      // The moving atmosphere (docs/model.md section 9): one flag per field of DisturbanceOptions.
+      flags->described.Add(app, c.disturbance);
+      app.add_option("--turbulent-integrator", flags->turbulent_integrator,
+                     "Integrator of a landing in turbulence: rk4 (default; step = "
+                     "--turbulence-sample-interval-s) or dopri5 (--rtol, --atol)");
+      app.add_option("--seed", c.seed,
+                     "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
+      app.add_option("--run-index", c.run_index,
+                     "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
+      return [flags] {
+        flags->described.Apply();
+        return RunLand(*flags);
+      };
     }}};
 
 }  // namespace

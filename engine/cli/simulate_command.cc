@@ -1,6 +1,7 @@
 // gesweep simulate: one open-loop time response of Eq. (1) with the derivatives re-evaluated at the
 // current height and speed (docs/model.md §7, docs/simulation.md): the paper's Fig. 4 runs.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -37,12 +38,17 @@ struct SimulateFlags {
   double output_dt_s = std::nan("");  // default: the step
   bool summary_only = false;
   std::string format = "csv";
+  // The run's turbulence is RunNoise(seed, run_index): a sweep's run i replays with its seed and i.
+  std::uint64_t seed = 0;
+  std::uint64_t run_index = 0;
 };
 
 // Each flag's own range is checked as it is parsed (AddLimitedOption); here what depends on the
 // aircraft or on several flags (ValidateOpenLoopConfig), in the flags' names.
 OpenLoopConfig BuildConfig(const SimulateFlags& flags, const LongitudinalModel& model) {
   OpenLoopConfig config = flags.config;
+  config.seed = flags.seed;
+  config.run_index = flags.run_index;
   if (!flags.summary_only) {
     const double output_dt = std::isnan(flags.output_dt_s) ? config.integrator.step_s : flags.output_dt_s;
     if (config.duration_s / output_dt > 1e7) {
@@ -69,17 +75,25 @@ std::string Number(double value) {
   return buffer;
 }
 
-// Column names (unit-suffixed) and the series columns, in the CSV and JSON order.
+// Column names (unit-suffixed) and the series columns, in the CSV and JSON order; the air motion
+// (docs/model.md §9) only when the run had a disturbance.
 std::vector<std::pair<const char*, const std::vector<double>*>> SeriesColumns(const OpenLoopSeries& s) {
-  return {{"time_s", &s.time_s},
-          {"delta_speed_mps", &s.delta_speed_mps},
-          {"delta_normal_velocity_mps", &s.delta_normal_velocity_mps},
-          {"pitch_rate_radps", &s.pitch_rate_radps},
-          {"delta_pitch_rad", &s.delta_pitch_rad},
-          {"delta_height_m", &s.delta_height_m},
-          {"height_m", &s.height_m},
-          {"speed_mps", &s.speed_mps},
-          {"elevator_rad", &s.elevator_rad}};
+  std::vector<std::pair<const char*, const std::vector<double>*>> columns = {
+      {"time_s", &s.time_s},
+      {"delta_speed_mps", &s.delta_speed_mps},
+      {"delta_normal_velocity_mps", &s.delta_normal_velocity_mps},
+      {"pitch_rate_radps", &s.pitch_rate_radps},
+      {"delta_pitch_rad", &s.delta_pitch_rad},
+      {"delta_height_m", &s.delta_height_m},
+      {"height_m", &s.height_m},
+      {"speed_mps", &s.speed_mps},
+      {"elevator_rad", &s.elevator_rad}};
+  if (!s.u_g_mps.empty()) {
+    columns.push_back({"u_g_mps", &s.u_g_mps});
+    columns.push_back({"w_g_mps", &s.w_g_mps});
+  }
+  if (!s.q_g_radps.empty()) columns.push_back({"q_g_radps", &s.q_g_radps});
+  return columns;
 }
 
 int RunSimulate(const SimulateFlags& flags) {
@@ -113,6 +127,8 @@ int RunSimulate(const SimulateFlags& flags) {
     run["h_derivatives"] = model.options().h_derivatives;
     run["cdh"] = std::string(ToString(model.options().cdh));
     run["interpolation"] = std::string(ToString(model.options().interpolation));
+    run["seed"] = config.seed;
+    run["run_index"] = config.run_index;
     std::cout
         << nlohmann::json{{"run", run}, {"summary", FieldsJson(result.summary)}, {"series", series}}.dump(1)
         << "\n";
@@ -150,6 +166,10 @@ const CommandRegistrar kRegistrar{Command{
       auto* summary =
           app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       output_dt->excludes(summary);
+      app.add_option("--seed", flags->seed,
+                     "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
+      app.add_option("--run-index", flags->run_index,
+                     "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
       app.add_option("--format", flags->format,
                      "csv (default: the time series; with --summary-only one summary row) or json "
                      "({\"run\", \"summary\", \"series\"})");

@@ -83,6 +83,25 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(Closed("lqr.r", "1", 1e-12, kMaximumWeight,
                      "as lqr.q; R must be positive for the LQR problem to have a solution"));
 
+  // The moving atmosphere (run parameters of open_loop and landing; flags of simulate and land).
+  t.push_back(Closed("wind_20ft_mps", "m/s", -50.0, 50.0,
+                     "MIL-F-8785C's low-altitude model is written for winds up to about 45 kt (23 m/s) at "
+                     "20 ft; beyond 50 m/s no airplane of this model lands"));
+  t.push_back(Closed("turbulence_sigma_w_mps", "m/s", 0.0, 50.0,
+                     "the specification's severe turbulence at low altitude is sigma_w of about 3 m/s; as "
+                     "wind_20ft_mps (a NaN run parameter: 0.1 |wind_20ft_mps|)"));
+  t.push_back(Closed("gust_amplitude_mps", "m/s", -50.0, 50.0,
+                     "the specification's design gusts are a few m/s; as wind_20ft_mps"));
+  t.push_back(Positive("gust_half_length_m", "m", 1e4,
+                       "the specification's half-lengths are tens to hundreds of metres; 0 is a step"));
+  t.push_back(Closed("gust_start_s", "s", 0.0, kMaximumRunDuration_s, "within the longest run"));
+  t.push_back(Closed("turbulence_sample_interval_s", "s", 1e-4, 1.0,
+                     "the held noise loses the band above about 0.35 per interval (docs/disturbance.md): "
+                     "beyond 1 s it misses the short period; below 0.1 ms it costs without changing "
+                     "anything the model has"));
+  t.push_back(Closed("seed", "1", 0.0, 9007199254740992.0,
+                     "a whole number: every integer up to 2^53 is exact as a double"));
+
   // The verification models' inputs.
   t.push_back(Closed("verification_input", "1", -1e9, 1e9,
                      "x1..x8 of the test functions: dimensionless, bounded so that their sums and powers "

@@ -34,14 +34,20 @@ std::optional<PlantHeightReference> ParsePlantHeightReference(std::string_view t
 double FlareTimeConstant(const LandingConfig& config) {
   if (config.flare_time_constant_s) return *config.flare_time_constant_s;
   const double gamma_rad = config.glide_slope_deg * std::numbers::pi / 180.0;
-  return config.flare_height_m / (config.start_speed_mps * std::sin(gamma_rad));
+  return (config.flare_height_m - config.flare_asymptote_m) / (config.start_speed_mps * std::sin(gamma_rad));
 }
 
 double NominalLandingTime(const LandingConfig& config, double wheel_contact_height_m) {
   const double gamma_rad = config.glide_slope_deg * std::numbers::pi / 180.0;
   const double glide_s = (config.start_height_m - config.start_glide_path_offset_m - config.flare_height_m) /
                          (config.start_speed_mps * gamma_rad);
-  const double flare_s = FlareTimeConstant(config) * std::log(config.flare_height_m / wheel_contact_height_m);
+  // H_ref reaches the wheels after τ·ln((Ho − h_a)/(h_wc − h_a)); with the asymptote at or above the
+  // wheels it never does, and the float ends by the airplane's lag: count 100 times the drop's fall.
+  const double drop_m = config.flare_height_m - config.flare_asymptote_m;
+  const double left_m = config.flare_asymptote_m > 0.0
+                            ? std::max(wheel_contact_height_m - config.flare_asymptote_m, 0.01 * drop_m)
+                            : wheel_contact_height_m;
+  const double flare_s = FlareTimeConstant(config) * std::log(drop_m / left_m);
   return std::max(glide_s, 0.0) + flare_s;
 }
 
@@ -92,6 +98,15 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   limit("landing.actuator_pole_per_s", "actuator_pole_per_s", c.actuator_pole_per_s);
   limit("landing.compensator_pole_per_s", "compensator_pole_per_s", c.compensator_pole_per_s);
   if (c.flare_time_constant_s) limit("flare_tau_s", "flare_time_constant_s", *c.flare_time_constant_s);
+  require(std::isfinite(c.flare_asymptote_m) && c.flare_asymptote_m >= 0.0 &&
+              c.flare_asymptote_m < c.flare_height_m,
+          "flare_asymptote_m", c.flare_asymptote_m,
+          "expected a height in [0, flare_height_m = " + Text(c.flare_height_m) + " m)");
+  {
+    DisturbanceOptions disturbance = c.disturbance;
+    disturbance.wing_span_m = aircraft.wingspan_m;
+    ValidateDisturbanceOptions(disturbance, source);
+  }
   limit("landing.elevator_min_deg", "elevator_min_deg", c.elevator_min_deg);
   limit("landing.elevator_max_deg", "elevator_max_deg", c.elevator_max_deg);
   if (c.plant_fixed_reference_height_m) {

@@ -4,11 +4,14 @@
 /// integration. Every field has a documented default; docs/landing.md explains each choice.
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/disturbance/disturbance_options.h"
+#include "engine/simulation/integrator.h"
 
 namespace gesweep {
 
@@ -65,8 +68,17 @@ struct LandingConfig {
 
   // --- Flare (paper Eq. (22)–(27)) ---
   double flare_height_m = 10.0;  ///< Ho: the flare starts when H falls to it, m
-  /// τ of Ḣ_ref = −H_ref/τ, s. Unset: Ho/(u0·sin γ), so the commanded sink rate is continuous at Ho.
+  /// τ of Ḣ_ref = −(H_ref − h_a)/τ, s. Unset: (Ho − h_a)/(u0·sin γ), so the commanded sink rate is
+  /// continuous at Ho.
   std::optional<double> flare_time_constant_s;
+  /// The flare's asymptote h_a, m: H_ref = h_a + (Ho − h_a)·e^(−(t − t_f)/τ). 0 (default): the
+  /// paper's Eq. (22), H_ref → the ground; the wheel-contact height makes touchdown a long float
+  /// (docs/landing.md §5). In [0, Ho).
+  double flare_asymptote_m = 0.0;
+  /// true: the compensator and the error integral restart from zero at the flare switch (their
+  /// values at the switch are removed with the free response they would have had); false (default):
+  /// they carry over, as the paper's one controller (docs/landing.md §5).
+  bool reset_compensator_at_flare = false;
 
   // --- Elevator (positive trailing edge down) ---
   double elevator_min_deg = -25.0;  ///< the command ηe is clipped to [min, max], deg
@@ -88,6 +100,19 @@ struct LandingConfig {
   double output_interval_s = 0.1;  ///< series sampling, s; 0: no series
   /// |Δθ| beyond this ends the run as diverged, deg: the small-angle model no longer means anything.
   double divergence_pitch_deg = 60.0;
+
+  // --- The moving atmosphere (docs/model.md §9) ---
+  /// Default still air: the landing above, bit for bit. With any disturbance the glide path is
+  /// geometric (a line over the along-track ground position, docs/model.md §9), the airplane starts
+  /// at airspeed start_speed_mps in the mean wind (Δu(0) = W(H0)), and the span of the pitch-rate
+  /// gust is the aircraft's.
+  DisturbanceOptions disturbance;
+  std::uint64_t seed = 0;  ///< the turbulence is RunNoise(seed, run_index) (docs/disturbance.md)
+  std::uint64_t run_index = 0;
+  /// The integrator of a landing in turbulence: rk4 (default) with its step equal to
+  /// turbulence_sample_interval_s, so the noise's sample instants are its grid (docs/disturbance.md,
+  /// Cost); dopri5 at the tolerances above, stopping at every sample instant (about 1.8× the cost).
+  IntegratorKind turbulent_integrator = IntegratorKind::kRk4;
 };
 
 /// Throws InputError(source, <field name>, value, expectation) when a field is out of range: first the
@@ -96,7 +121,7 @@ struct LandingConfig {
 /// then the step count: time limit / max_step_s at most kMaximumStepsPerRun.
 void ValidateLandingConfig(const LandingConfig& config, const Aircraft& aircraft, const std::string& source);
 
-/// The flare time constant used: config's, or Ho/(u0·sin γ), s.
+/// The flare time constant used: config's, or (Ho − h_a)/(u0·sin γ), s.
 double FlareTimeConstant(const LandingConfig& config);
 
 /// Time the reference trajectory takes from the start to the wheels, s: down the glide path to Ho at

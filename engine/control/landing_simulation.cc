@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <sstream>
 
 #include "engine/common/errors.h"
+#include "engine/disturbance/disturbance_field.h"
+#include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
 #include "engine/simulation/integrator.h"
 
@@ -23,8 +26,22 @@ constexpr double kMonitorInterval_s = 0.05;
 /// Simulation state: the plant's [Δu, Δw, q, Δθ] and the absolute height H (Ḣ = u0·Δθ − Δw, the ΔH row
 /// of Eq. (1)), the actuator δe and the compensator. The tracking error e (d or H − H_ref) is not a
 /// state: with ḋ = Ḣ − u0·γr it is exactly H minus the reference trajectory (docs/landing.md §3).
-enum SimIndex : int { kSimDu, kSimDw, kSimQ, kSimTheta, kSimH, kSimElevator, kSimCompensator, kSimIntegral };
+/// In a moving atmosphere (docs/model.md §9) two more: the along-track ground position x_g (m from the
+/// start, ẋ_g = u0 + Δu, over which the glide path is a line) and the disturbance field's states.
+enum SimIndex : int {
+  kSimDu,
+  kSimDw,
+  kSimQ,
+  kSimTheta,
+  kSimH,
+  kSimElevator,
+  kSimCompensator,
+  kSimIntegral,
+  kSimGround,
+  kSimField
+};
 constexpr int kSimDimension = 8;
+constexpr int kSimAirDimension = kSimField + DisturbanceField::kStateCount;
 
 enum EventIndex : int {
   kFlareEvent,
@@ -38,21 +55,30 @@ enum EventIndex : int {
   kEventTotal
 };
 
+// kAir: in a moving atmosphere (the field's states, the ground position, the geometric glide path);
+// otherwise the still-air problem of docs/landing.md.
+template <bool kAir>
 class LandingProblem {
  public:
-  static constexpr int kDimension = kSimDimension;
+  static constexpr int kDimension = kAir ? kSimAirDimension : kSimDimension;
   static constexpr int kEventCount = kEventTotal;
   using State = OdeState<kDimension>;
 
   LandingProblem(const LongitudinalModel& plant, const LandingConfig& config, const LandingDesign& design,
-                 LandingResult& result, bool store_series)
+                 LandingResult& result, bool store_series, const DisturbanceField* field = nullptr,
+                 const std::vector<DisturbanceField::Segment>* field_segments = nullptr)
       : plant_(plant),
+        field_(field),
+        field_segments_(field_segments),
         result_(result),
         store_series_(store_series),
         u0_(config.start_speed_mps),
         gamma_r_rad_(-config.glide_slope_deg * kRadPerDeg),
+        gamma_rad_(config.glide_slope_deg * kRadPerDeg),
         path_start_m_(config.start_height_m - config.start_glide_path_offset_m),
         flare_height_m_(config.flare_height_m),
+        flare_asymptote_m_(config.flare_asymptote_m),
+        reset_at_flare_(config.reset_compensator_at_flare),
         tau_s_(FlareTimeConstant(config)),
         touchdown_height_m_(plant.aircraft().wheel_contact_height_m),
         stall_speed_mps_(plant.aircraft().stall_speed_mps),
@@ -63,61 +89,142 @@ class LandingProblem {
         compensator_pole_(config.compensator_pole_per_s),
         fixed_reference_(config.plant_height_reference == PlantHeightReference::kFixedHeight),
         fixed_reference_height_m_(result.plant_fixed_reference_height_m),
-        gain_(design.gain) {}
-
-  /// Height of the reference trajectory at t: the glide path, or the flare's exponential.
-  double ReferenceHeight(double t) const {
-    if (phase_ == LandingPhase::kGlideSlope) return path_start_m_ + u0_ * gamma_r_rad_ * t;
-    return flare_height_m_ * std::exp(-(t - flare_start_s_) / tau_s_);
+        gain_(design.gain) {
+    if (kAir && plant.options().interpolation == Interpolation::kLinear) {
+      table_ = std::make_unique<LinearDerivativeTable>(plant);
+      table_hint_ = table_->SegmentOf(config.start_height_m);
+    }
   }
 
-  /// ηe = −K·z with z the states of Eq. (14) (K_ΔH = 0 by design).
-  double Command(double t, const State& x) const {
-    const double e = x[kSimH] - ReferenceHeight(t);
-    return -(gain_[0] * x[kSimDu] + gain_[1] * x[kSimDw] + gain_[2] * x[kSimQ] + gain_[3] * x[kSimTheta] +
-             gain_[5] * x[kSimElevator] + gain_[6] * e + gain_[7] * x[kSimCompensator] +
-             gain_[8] * x[kSimIntegral]);
+  /// Height of the reference trajectory: the glide path (over time in still air; over the ground
+  /// position in a moving atmosphere), or the flare's exponential towards its asymptote.
+  double ReferenceHeight(double t, const State& x) const {
+    if (phase_ == LandingPhase::kGlideSlope) {
+      if constexpr (kAir) {
+        return path_start_m_ + gamma_r_rad_ * x[kSimGround];
+      } else {
+        return path_start_m_ + u0_ * gamma_r_rad_ * t;
+      }
+    }
+    return flare_asymptote_m_ +
+           (flare_height_m_ - flare_asymptote_m_) * std::exp(-(t - flare_start_s_) / tau_s_);
   }
 
-  void Derivative(double t, const State& x, int /*segment*/, State& dxdt) const {
+  /// ηe = −K·z with z the states of Eq. (14) (K_ΔH = 0 by design). In a moving atmosphere the
+  /// controller's Δu and Δw are the air-relative ones (what an airspeed sensor and an angle-of-attack
+  /// vane measure: the deviations from the trim it was designed about, docs/landing.md §6).
+  double Command(double t, const State& x, int segment) const {
+    if constexpr (kAir) {
+      DisturbanceField::State unused;
+      const AirMotion air = Air(x, segment, unused);
+      return Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
+    } else {
+      (void)segment;
+      return Command(t, x, x[kSimDu], x[kSimDw]);
+    }
+  }
+  double Command(double t, const State& x, double delta_u_mps, double delta_w_mps) const {
+    const double e = x[kSimH] - ReferenceHeight(t, x);
+    double compensator = x[kSimCompensator];
+    double integral = x[kSimIntegral];
+    if (reset_at_flare_ && phase_ == LandingPhase::kFlare) {
+      // The free response from the values at the switch (ε̇ = 0, ẋ_c = −S·x_c + ε), removed: what is
+      // left started from zero at the switch and obeys the same equations.
+      const double settled = integral_at_flare_ / compensator_pole_;
+      compensator -=
+          settled + (compensator_at_flare_ - settled) * std::exp(-compensator_pole_ * (t - flare_start_s_));
+      integral -= integral_at_flare_;
+    }
+    return -(gain_[0] * delta_u_mps + gain_[1] * delta_w_mps + gain_[2] * x[kSimQ] + gain_[3] * x[kSimTheta] +
+             gain_[5] * x[kSimElevator] + gain_[6] * e + gain_[7] * compensator + gain_[8] * integral);
+  }
+
+  /// The air motion at the airplane (zeros in still air).
+  AirMotion Air(const State& x, int segment, DisturbanceField::State& field_dxdt) const {
+    if constexpr (kAir) {
+      DisturbanceField::State xf;
+      std::copy(x.begin() + kSimField, x.end(), xf.begin());
+      return field_->Evaluate((*field_segments_)[static_cast<std::size_t>(segment)], x[kSimH],
+                              u0_ + x[kSimDu], xf, field_dxdt);
+    } else {
+      AirMotion still;
+      still.airspeed_mps = u0_ + x[kSimDu];
+      return still;
+    }
+  }
+
+  void Derivative(double t, const State& x, int segment, State& dxdt) const {
     const double height_m = x[kSimH];
     const double speed_mps = u0_ + x[kSimDu];
-    const double e = height_m - ReferenceHeight(t);
-    const Equation1Entries entries = EntriesFromDerivatives(plant_.DerivativesAt(height_m, speed_mps), u0_);
+    const double e = height_m - ReferenceHeight(t, x);
     const double delta_h = fixed_reference_ ? height_m - fixed_reference_height_m_ : e;
-    const double x5[5] = {x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h};
-    double dx5[5];
-    Equation1Derivative(entries, u0_, x5, x[kSimElevator], dx5);
-    for (int i = 0; i < 4; ++i) dxdt[i] = dx5[i];
-    dxdt[kSimH] = dx5[kDeltaH];
-    const double command = std::clamp(Command(t, x), elevator_min_rad_, elevator_max_rad_);
+    double command = 0.0;
+    if constexpr (kAir) {
+      DisturbanceField::State field_dxdt;
+      const AirMotion air = Air(x, segment, field_dxdt);
+      const Vector5d x5(x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h);
+      // The per-segment table of the derivatives (derivative_kernel.h) when the interpolation is
+      // linear, as the open loop's fast path; the model's own evaluation otherwise.
+      const DimensionalDerivatives derivatives =
+          table_ != nullptr ? table_->DerivativesAt(height_m, air.airspeed_mps, table_hint_)
+                            : plant_.DerivativesAt(height_m, air.airspeed_mps);
+      const Vector5d d5 =
+          AirRelativeDerivative(derivatives, u0_, x5, x[kSimElevator],
+                                AirVelocity{air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2});
+      for (int i = 0; i < 4; ++i) dxdt[static_cast<std::size_t>(i)] = d5[i];
+      dxdt[kSimH] = d5[kDeltaH];
+      dxdt[kSimGround] = speed_mps;  // the ground speed, to first order
+      std::copy(field_dxdt.begin(), field_dxdt.end(), dxdt.begin() + kSimField);
+      command = Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
+    } else {
+      (void)segment;
+      const Equation1Entries entries = EntriesFromDerivatives(plant_.DerivativesAt(height_m, speed_mps), u0_);
+      const double x5[5] = {x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h};
+      double dx5[5];
+      Equation1Derivative(entries, u0_, x5, x[kSimElevator], dx5);
+      for (int i = 0; i < 4; ++i) dxdt[i] = dx5[i];
+      dxdt[kSimH] = dx5[kDeltaH];
+      command = Command(t, x, x[kSimDu], x[kSimDw]);
+    }
+    command = std::clamp(command, elevator_min_rad_, elevator_max_rad_);
     dxdt[kSimElevator] = actuator_pole_ * (command - x[kSimElevator]);
     dxdt[kSimCompensator] = -compensator_pole_ * x[kSimCompensator] + x[kSimIntegral];
     dxdt[kSimIntegral] = -e;  // ε̇ = r − e with r = 0
   }
 
-  void EventValues(double t, const State& x, int /*segment*/, std::array<double, kEventCount>& g) const {
+  void EventValues(double t, const State& x, int segment, std::array<double, kEventCount>& g) const {
     g[kFlareEvent] = phase_ == LandingPhase::kGlideSlope ? x[kSimH] - flare_height_m_ : 1.0;
     g[kTouchdownEvent] = x[kSimH] - touchdown_height_m_;
-    g[kStallEvent] = u0_ + x[kSimDu] - stall_speed_mps_;
+    double command = 0.0;
+    if constexpr (kAir) {
+      DisturbanceField::State unused;
+      const AirMotion air = Air(x, segment, unused);
+      g[kStallEvent] = air.airspeed_mps - stall_speed_mps_;  // the airspeed stalls
+      command = Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
+    } else {
+      (void)segment;
+      g[kStallEvent] = u0_ + x[kSimDu] - stall_speed_mps_;
+      command = Command(t, x, x[kSimDu], x[kSimDw]);
+    }
     g[kDivergenceEvent] = divergence_rad_ - std::abs(x[kSimTheta]);
-    const double command = Command(t, x);
     g[kUpperEnter] = elevator_max_rad_ - command;
     g[kUpperLeave] = command - elevator_max_rad_;
     g[kLowerEnter] = command - elevator_min_rad_;
     g[kLowerLeave] = elevator_min_rad_ - command;
   }
 
-  EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
-    Monitor(t, x);
+  EventAction OnEvent(int event, double t, const State& x, int segment) {
+    Monitor(t, x, segment);
     switch (event) {
       case kFlareEvent:
         result_.flare_start_time_s = t;
-        result_.glide_path_error_at_flare_m = x[kSimH] - ReferenceHeight(t);
+        result_.glide_path_error_at_flare_m = x[kSimH] - ReferenceHeight(t, x);
         phase_ = LandingPhase::kFlare;
         flare_start_s_ = t;
+        compensator_at_flare_ = x[kSimCompensator];
+        integral_at_flare_ = x[kSimIntegral];
         // The tracking error jumps from d to H − H_ref = 0, and with it the command: re-read saturation.
-        UpdateSaturation(t, IsSaturated(Command(t, x)));
+        UpdateSaturation(t, IsSaturated(Command(t, x, segment)));
         return EventAction::kRestart;
       case kTouchdownEvent:
       case kStallEvent:
@@ -137,16 +244,16 @@ class LandingProblem {
     return EventAction::kContinue;
   }
 
-  void OnStep(double t, const State& x, int /*segment*/) { Monitor(t, x); }
+  void OnStep(double t, const State& x, int segment) { Monitor(t, x, segment); }
 
-  void OnOutput(double t, const State& x, int /*segment*/) {
-    Monitor(t, x);
+  void OnOutput(double t, const State& x, int segment) {
+    Monitor(t, x, segment);
     if (!store_series_) return;
     LandingSample s;
     s.time_s = t;
     s.phase = phase_;
     s.height_m = x[kSimH];
-    s.reference_height_m = ReferenceHeight(t);
+    s.reference_height_m = ReferenceHeight(t, x);
     s.tracking_error_m = s.height_m - s.reference_height_m;
     s.speed_mps = u0_ + x[kSimDu];
     s.delta_w_mps = x[kSimDw];
@@ -154,15 +261,26 @@ class LandingProblem {
     s.pitch_rad = x[kSimTheta];
     s.sink_rate_mps = SinkRate(x);
     s.elevator_rad = x[kSimElevator];
-    s.elevator_command_rad = Command(t, x);
+    s.elevator_command_rad = Command(t, x, segment);
     s.compensator = x[kSimCompensator];
     s.error_integral = x[kSimIntegral];
+    if constexpr (kAir) {
+      s.distance_past_transmitter_m = x[kSimGround] - path_start_m_ / gamma_rad_;
+      DisturbanceField::State unused;
+      const AirMotion air = Air(x, segment, unused);
+      s.u_g_mps = air.u_g_mps;
+      s.w_g_mps = air.w_g_mps;
+      s.q_g_radps = air.q_g_radps;
+    } else {
+      (void)segment;
+      s.distance_past_transmitter_m = u0_ * (t - path_start_m_ / (u0_ * gamma_rad_));
+    }
     result_.series.push_back(s);
   }
 
   /// Starts the saturation bookkeeping at the initial state.
   void Start(double t, const State& x) {
-    saturated_ = IsSaturated(Command(t, x));
+    saturated_ = IsSaturated(Command(t, x, 0));
     saturated_since_s_ = t;
   }
 
@@ -188,25 +306,39 @@ class LandingProblem {
     saturated_since_s_ = t;
   }
 
-  void Monitor(double t, const State& x) {
+  void Monitor(double t, const State& x, int segment) {
     result_.max_abs_elevator_deg =
         std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
     result_.max_abs_elevator_command_deg =
-        std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x)) * kDegPerRad);
+        std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x, segment)) * kDegPerRad);
     result_.max_abs_pitch_rate_degps =
         std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
     const double speed = u0_ + x[kSimDu];
     result_.min_speed_mps = std::min(result_.min_speed_mps, speed);
     result_.max_speed_mps = std::max(result_.max_speed_mps, speed);
+    if (phase_ == LandingPhase::kFlare) {
+      result_.flare_max_abs_elevator_deg =
+          std::max(result_.flare_max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
+      result_.flare_max_abs_pitch_rate_degps =
+          std::max(result_.flare_max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
+    }
   }
 
   const LongitudinalModel& plant_;
+  // In a moving atmosphere with linear interpolation: the derivatives' per-segment table.
+  std::unique_ptr<LinearDerivativeTable> table_;
+  mutable int table_hint_ = 0;
+  const DisturbanceField* field_;
+  const std::vector<DisturbanceField::Segment>* field_segments_;
   LandingResult& result_;
   bool store_series_;
   double u0_;
   double gamma_r_rad_;
+  double gamma_rad_;
   double path_start_m_;
   double flare_height_m_;
+  double flare_asymptote_m_;
+  bool reset_at_flare_;
   double tau_s_;
   double touchdown_height_m_;
   double stall_speed_mps_;
@@ -220,6 +352,8 @@ class LandingProblem {
   std::array<double, kLandingStateCount> gain_;
   LandingPhase phase_ = LandingPhase::kGlideSlope;
   double flare_start_s_ = 0.0;
+  double compensator_at_flare_ = 0.0;
+  double integral_at_flare_ = 0.0;
   bool saturated_ = false;
   double saturated_since_s_ = 0.0;
 };
@@ -229,6 +363,103 @@ std::string Format(double value, int precision = 4) {
   out.precision(precision);
   out << value;
   return out.str();
+}
+
+template <bool kAir>
+void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingResult& result,
+         bool store_series, const DisturbanceField* field, const std::atomic<bool>* cancel) {
+  std::vector<double> breakpoints;
+  std::vector<DisturbanceField::Segment> field_segments;
+  if constexpr (kAir) {
+    breakpoints = field->Breakpoints(0.0, result.time_limit_s);
+    field_segments = field->SegmentTable(breakpoints, 0.0);
+  }
+  LandingProblem<kAir> problem(plant, config, result.design, result, store_series, field, &field_segments);
+  typename LandingProblem<kAir>::State x0{};
+  x0[kSimTheta] = config.start_pitch_deg * kRadPerDeg;
+  x0[kSimH] = config.start_height_m;
+  if constexpr (kAir) {
+    // At airspeed start_speed_mps in the mean wind (docs/model.md §9).
+    x0[kSimDu] =
+        MeanWindAt(field->options().wind_20ft_mps, config.start_height_m, field->options().wind_shear);
+    const DisturbanceField::State field_start = field->InitialState();
+    std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
+  }
+  problem.Start(0.0, x0);
+
+  IntegratorOptions options;
+  options.kind = IntegratorKind::kDopri5;
+  options.relative_tolerance = config.relative_tolerance;
+  options.absolute_tolerance = config.absolute_tolerance;
+  options.max_step_s = config.max_step_s;
+  options.step_s = std::min(0.01, config.max_step_s);
+  options.output_interval_s = store_series ? config.output_interval_s : kMonitorInterval_s;
+  options.cancel = cancel;
+  if constexpr (kAir) {
+    const DisturbanceOptions& d = field->options();
+    if (d.turbulence != TurbulenceModel::kNone && field->sigma_w_mps() > 0.0 &&
+        config.turbulent_integrator == IntegratorKind::kRk4) {
+      // The noise's sample instants are RK4's grid (docs/disturbance.md, Cost).
+      options.kind = IntegratorKind::kRk4;
+      options.step_s = d.turbulence_sample_interval_s;
+    }
+  }
+  const auto run = Integrate(problem, x0, 0.0, result.time_limit_s, breakpoints, options);
+  problem.Finish(run.end_time_s);
+
+  const auto& xf = run.final_state;
+  result.final_time_s = run.end_time_s;
+  result.final_height_m = xf[kSimH];
+  result.accepted_steps = run.accepted_steps;
+  result.rejected_steps = run.rejected_steps;
+  result.rhs_calls = run.rhs_calls;
+  const std::string at = " at t = " + Format(run.end_time_s, 6) + " s";
+  switch (run.status) {
+    case IntegrationStatus::kReachedEnd:
+      result.outcome = LandingOutcome::kNoTouchdown;
+      result.message = "time limit reached in flight at H = " + Format(xf[kSimH]) + " m";
+      break;
+    case IntegrationStatus::kCancelled:
+      result.cancelled = true;
+      result.outcome = LandingOutcome::kNoTouchdown;
+      result.message = "cancelled" + at;
+      break;
+    case IntegrationStatus::kNonFinite:
+    case IntegrationStatus::kStepSizeUnderflow:
+      result.outcome = LandingOutcome::kDiverged;
+      result.message = "the state stopped being finite (" + std::string(ToString(run.status)) + ")" + at;
+      break;
+    case IntegrationStatus::kStoppedByEvent:
+      if (run.stopping_event == kTouchdownEvent) {
+        result.outcome = LandingOutcome::kLanded;
+        result.message = "touchdown" + at + " in the " + std::string(ToString(problem.phase())) + " phase";
+        result.touchdown_time_s = run.end_time_s;
+        const double gamma_rad = config.glide_slope_deg * kRadPerDeg;
+        if constexpr (kAir) {
+          // The glide path meets H = 0 at x_g = (H0 − d0)/γ; the ground position is a state.
+          result.touchdown_distance_past_transmitter_m =
+              xf[kSimGround] - (config.start_height_m - config.start_glide_path_offset_m) / gamma_rad;
+          DisturbanceField::State unused;
+          result.touchdown_airspeed_mps = problem.Air(xf, run.final_segment, unused).airspeed_mps;
+        } else {
+          const double transmitter_time_s = (config.start_height_m - config.start_glide_path_offset_m) /
+                                            (config.start_speed_mps * gamma_rad);
+          result.touchdown_distance_past_transmitter_m =
+              config.start_speed_mps * (run.end_time_s - transmitter_time_s);
+          result.touchdown_airspeed_mps = config.start_speed_mps + xf[kSimDu];
+        }
+        result.touchdown_sink_rate_mps = problem.SinkRate(xf);
+        result.touchdown_pitch_deg = xf[kSimTheta] * kDegPerRad;
+        result.touchdown_speed_mps = config.start_speed_mps + xf[kSimDu];
+      } else if (run.stopping_event == kStallEvent) {
+        result.outcome = LandingOutcome::kStall;
+        result.message = "stall speed reached" + at + " at H = " + Format(xf[kSimH]) + " m";
+      } else {
+        result.outcome = LandingOutcome::kDiverged;
+        result.message = "|pitch| reached " + Format(config.divergence_pitch_deg) + " deg" + at;
+      }
+      break;
+  }
 }
 
 }  // namespace
@@ -269,7 +500,7 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   for (double* field :
        {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
         &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
-        &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
+        &result.touchdown_airspeed_mps, &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
     *field = kNaN;
   }
   result.min_speed_mps = std::numeric_limits<double>::infinity();
@@ -286,69 +517,20 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   }
 
   const bool store_series = config.output_interval_s > 0.0;
-  LandingProblem problem(plant, config, result.design, result, store_series);
-  LandingProblem::State x0{};
-  x0[kSimTheta] = config.start_pitch_deg * kRadPerDeg;
-  x0[kSimH] = config.start_height_m;
   if (store_series) {
     result.series.reserve(static_cast<std::size_t>(result.time_limit_s / config.output_interval_s) + 2);
   }
-  problem.Start(0.0, x0);
-
-  IntegratorOptions options;
-  options.kind = IntegratorKind::kDopri5;
-  options.relative_tolerance = config.relative_tolerance;
-  options.absolute_tolerance = config.absolute_tolerance;
-  options.max_step_s = config.max_step_s;
-  options.step_s = std::min(0.01, config.max_step_s);
-  options.output_interval_s = store_series ? config.output_interval_s : kMonitorInterval_s;
-  options.cancel = cancel;
-  const IntegrationResult<kSimDimension> run = Integrate(problem, x0, 0.0, result.time_limit_s, {}, options);
-  problem.Finish(run.end_time_s);
-
-  const auto& xf = run.final_state;
-  result.final_time_s = run.end_time_s;
-  result.final_height_m = xf[kSimH];
-  result.accepted_steps = run.accepted_steps;
-  result.rejected_steps = run.rejected_steps;
-  result.rhs_calls = run.rhs_calls;
-  const std::string at = " at t = " + Format(run.end_time_s, 6) + " s";
-  switch (run.status) {
-    case IntegrationStatus::kReachedEnd:
-      result.outcome = LandingOutcome::kNoTouchdown;
-      result.message = "time limit reached in flight at H = " + Format(xf[kSimH]) + " m";
-      break;
-    case IntegrationStatus::kCancelled:
-      result.cancelled = true;
-      result.outcome = LandingOutcome::kNoTouchdown;
-      result.message = "cancelled" + at;
-      break;
-    case IntegrationStatus::kNonFinite:
-    case IntegrationStatus::kStepSizeUnderflow:
-      result.outcome = LandingOutcome::kDiverged;
-      result.message = "the state stopped being finite (" + std::string(ToString(run.status)) + ")" + at;
-      break;
-    case IntegrationStatus::kStoppedByEvent:
-      if (run.stopping_event == kTouchdownEvent) {
-        result.outcome = LandingOutcome::kLanded;
-        result.message = "touchdown" + at + " in the " + std::string(ToString(problem.phase())) + " phase";
-        result.touchdown_time_s = run.end_time_s;
-        const double gamma_rad = config.glide_slope_deg * kRadPerDeg;
-        const double transmitter_time_s =
-            (config.start_height_m - config.start_glide_path_offset_m) / (config.start_speed_mps * gamma_rad);
-        result.touchdown_distance_past_transmitter_m =
-            config.start_speed_mps * (run.end_time_s - transmitter_time_s);
-        result.touchdown_sink_rate_mps = problem.SinkRate(xf);
-        result.touchdown_pitch_deg = xf[kSimTheta] * kDegPerRad;
-        result.touchdown_speed_mps = config.start_speed_mps + xf[kSimDu];
-      } else if (run.stopping_event == kStallEvent) {
-        result.outcome = LandingOutcome::kStall;
-        result.message = "stall speed reached" + at + " at H = " + Format(xf[kSimH]) + " m";
-      } else {
-        result.outcome = LandingOutcome::kDiverged;
-        result.message = "|pitch| reached " + Format(config.divergence_pitch_deg) + " deg" + at;
-      }
-      break;
+  DisturbanceOptions disturbance = config.disturbance;
+  disturbance.wing_span_m = aircraft.wingspan_m;
+  const DisturbanceField field(disturbance, config.seed, config.run_index);
+  if (field.active()) {
+    Fly<true>(plant, config, result, store_series, &field, cancel);
+  } else {
+    Fly<false>(plant, config, result, store_series, nullptr, cancel);
+  }
+  if (result.flare_start_time_s != result.flare_start_time_s) {  // NaN: no flare
+    result.flare_max_abs_elevator_deg = kNaN;
+    result.flare_max_abs_pitch_rate_degps = kNaN;
   }
   return result;
 }

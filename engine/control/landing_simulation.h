@@ -50,6 +50,13 @@ struct LandingSample {
   double elevator_command_rad = 0;  ///< ηe = −K·z before the limits
   double compensator = 0;           ///< x_c, m·s
   double error_integral = 0;        ///< ε_c, m·s
+  /// Along-track distance past the glide-slope transmitter, m: u0·(t − t_transmitter) in still air,
+  /// the ground position x_g − (H0 − d0)/γ in a moving atmosphere.
+  double distance_past_transmitter_m = 0;
+  /// The air motion the airplane met (docs/model.md §9; 0 in still air): u_g, w_g (m/s), q_g (rad/s).
+  double u_g_mps = 0;
+  double w_g_mps = 0;
+  double q_g_radps = 0;
 };
 
 /// The result of one landing. Quantities that did not occur (no touchdown, no flare) are NaN.
@@ -68,20 +75,23 @@ struct LandingResult {
   /// Along-track distance from the glide-slope transmitter (where the glide path meets H = 0) to the
   /// touchdown point, m, positive past it; along-track motion at u0, as in the kinematics of Eq. (1).
   double touchdown_distance_past_transmitter_m = 0;
-  double touchdown_sink_rate_mps = 0;       ///< −Ḣ at touchdown, positive down
-  double touchdown_pitch_deg = 0;           ///< θ at touchdown
-  double touchdown_speed_mps = 0;           ///< u at touchdown
-  double flare_start_time_s = 0;            ///< when H fell to Ho
-  double glide_path_error_at_flare_m = 0;   ///< d at the flare switch, positive above the path
-  double max_abs_elevator_deg = 0;          ///< max |δe| (actuator position) over steps and samples
-  double max_abs_elevator_command_deg = 0;  ///< max |ηe| before the limits
-  double max_abs_pitch_rate_degps = 0;      ///< max |q| over steps and samples
-  double saturated_time_s = 0;              ///< total time the command was beyond a limit (located events)
-  double longest_saturation_s = 0;          ///< longest single interval of saturation
-  double min_speed_mps = 0;                 ///< lowest u over steps and samples
-  double max_speed_mps = 0;                 ///< highest u over steps and samples
-  double final_time_s = 0;                  ///< end of the run
-  double final_height_m = 0;                ///< H at the end
+  double touchdown_sink_rate_mps = 0;         ///< −Ḣ at touchdown, positive down
+  double touchdown_pitch_deg = 0;             ///< θ at touchdown
+  double touchdown_speed_mps = 0;             ///< u at touchdown (inertial: the ground speed)
+  double touchdown_airspeed_mps = 0;          ///< u0 + Δu − u_g at touchdown (= u in still air)
+  double flare_start_time_s = 0;              ///< when H fell to Ho
+  double glide_path_error_at_flare_m = 0;     ///< d at the flare switch, positive above the path
+  double max_abs_elevator_deg = 0;            ///< max |δe| (actuator position) over steps and samples
+  double max_abs_elevator_command_deg = 0;    ///< max |ηe| before the limits
+  double max_abs_pitch_rate_degps = 0;        ///< max |q| over steps and samples
+  double flare_max_abs_elevator_deg = 0;      ///< max |δe| in the flare phase (NaN without a flare)
+  double flare_max_abs_pitch_rate_degps = 0;  ///< max |q| in the flare phase (NaN without a flare)
+  double saturated_time_s = 0;                ///< total time the command was beyond a limit (located events)
+  double longest_saturation_s = 0;            ///< longest single interval of saturation
+  double min_speed_mps = 0;                   ///< lowest u over steps and samples
+  double max_speed_mps = 0;                   ///< highest u over steps and samples
+  double final_time_s = 0;                    ///< end of the run
+  double final_height_m = 0;                  ///< H at the end
 
   long accepted_steps = 0;
   long rejected_steps = 0;

@@ -8,17 +8,19 @@ namespace gesweep {
 
 double EffectiveSigmaW(const DisturbanceOptions& options) {
   if (options.turbulence == TurbulenceModel::kNone) return 0.0;
-  return options.turbulence_sigma_w_mps.value_or(0.1 * std::abs(options.wind_20ft_mps));
+  if (std::isnan(options.turbulence_sigma_w_mps)) return 0.1 * std::abs(options.wind_20ft_mps);
+  return options.turbulence_sigma_w_mps;
 }
 
 void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& source) {
   auto fail = [&](const char* key, double value, const char* expected) {
-    throw InputError(source, key, ShortNumber(value), expected);
+    throw InputError(source, key, ShortNumber(value), std::string("expected ") + expected);
   };
   if (!std::isfinite(o.wind_20ft_mps)) fail("wind_20ft_mps", o.wind_20ft_mps, "a finite speed in m/s");
-  if (o.turbulence_sigma_w_mps &&
-      !(std::isfinite(*o.turbulence_sigma_w_mps) && *o.turbulence_sigma_w_mps >= 0.0)) {
-    fail("turbulence_sigma_w_mps", *o.turbulence_sigma_w_mps, "a finite number >= 0 (m/s)");
+  if (!std::isnan(o.turbulence_sigma_w_mps) &&
+      !(std::isfinite(o.turbulence_sigma_w_mps) && o.turbulence_sigma_w_mps >= 0.0)) {
+    fail("turbulence_sigma_w_mps", o.turbulence_sigma_w_mps,
+         "a finite number >= 0 (m/s), or nan: 0.1 |wind_20ft_mps|");
   }
   if (!(o.turbulence_sample_interval_s >= 1e-4 && o.turbulence_sample_interval_s <= 1.0)) {
     fail("turbulence_sample_interval_s", o.turbulence_sample_interval_s, "a number in [0.0001, 1] (s)");

@@ -3,9 +3,10 @@
 /// defaults are still air: no wind, no turbulence, no gust.
 
 #include <cstdint>
-#include <optional>
+#include <limits>
 #include <string>
 
+#include "engine/common/describe.h"
 #include "engine/disturbance/mean_wind.h"
 
 namespace gesweep {
@@ -40,8 +41,8 @@ struct DisturbanceOptions {
   /// The shear profile; kLogarithmic is the specification's.
   WindShear wind_shear = WindShear::kLogarithmic;
   TurbulenceModel turbulence = TurbulenceModel::kNone;
-  /// σ_w, m/s (≥ 0, finite); unset: 0.1·|W20| as the specification's low-altitude model.
-  std::optional<double> turbulence_sigma_w_mps;
+  /// σ_w, m/s (≥ 0, finite); NaN (the default): 0.1·|W20| as the specification's low-altitude model.
+  double turbulence_sigma_w_mps = std::numeric_limits<double>::quiet_NaN();
   /// Interval Δt_n at which the white noise is sampled and held, s. In [1e-4, 1]. The w filter
   /// loses variance above ω ≈ 1/Δt_n (docs/disturbance.md gives the loss and the cost).
   double turbulence_sample_interval_s = 0.01;
@@ -56,6 +57,56 @@ struct DisturbanceOptions {
   double gust_half_length_m = 30.0;
   /// Time at which the airplane enters the gust, s (≥ 0, finite).
   double gust_start_s = 0.0;
+
+  /// The settings a person gives (describe.h): the flags of `gesweep simulate` and `gesweep land`,
+  /// and in a sweep the run parameters of the same names (engine/analyses/parameter_catalog.cc makes
+  /// a catalogue entry of every command-line-only field here), so they can be fixed, swept or drawn
+  /// per run. The sample interval and the pitch-rate gust are settings of the analysis
+  /// ([analyses.open_loop], [analyses.landing]). The span of the pitch-rate gust is the aircraft's.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("wind_20ft_mps", &wind_20ft_mps)
+          .Unit("m/s")
+          .Limit("wind_20ft_mps")
+          .CommandLineOnly()
+          .Doc("Mean wind at 20 ft as u_g, m/s: a headwind is negative (docs/model.md section 9)"));
+    v(Field("wind_shear", &wind_shear)
+          .CommandLineOnly()
+          .Doc("Mean-wind profile in height: logarithmic (MIL-F-8785C) or none (W20 at every height)"));
+    v(Field("turbulence", &turbulence)
+          .CommandLineOnly()
+          .Doc("Continuous turbulence: none or dryden (low-altitude Dryden, docs/model.md section 9)"));
+    v(Field("turbulence_sigma_w_mps", &turbulence_sigma_w_mps)
+          .Unit("m/s")
+          .CommandLineOnly()
+          .Doc("Vertical turbulence intensity sigma_w, m/s, >= 0; nan (default): 0.1 |wind_20ft_mps| "
+               "as the specification's low-altitude model"));
+    v(Field("gust_axis", &gust_axis)
+          .CommandLineOnly()
+          .Doc("Axis of the 1 - cos gust: u (positive: a tail gust) or w (positive: a down gust)"));
+    v(Field("gust_amplitude_mps", &gust_amplitude_mps)
+          .Unit("m/s")
+          .Limit("gust_amplitude_mps")
+          .CommandLineOnly()
+          .Doc("Amplitude v_m of the 1 - cos gust, m/s; 0: no gust"));
+    v(Field("gust_half_length_m", &gust_half_length_m)
+          .Unit("m")
+          .Limit("gust_half_length_m")
+          .CommandLineOnly()
+          .Doc("Half-length d_m of the 1 - cos gust, m"));
+    v(Field("gust_start_s", &gust_start_s)
+          .Unit("s")
+          .Limit("gust_start_s")
+          .CommandLineOnly()
+          .Doc("Time at which the airplane enters the gust, s"));
+    v(Field("turbulence_sample_interval_s", &turbulence_sample_interval_s)
+          .Unit("s")
+          .Limit("turbulence_sample_interval_s")
+          .Doc("Interval at which the turbulence's white noise is sampled and held, s "
+               "(docs/disturbance.md)"));
+    v(Field("pitch_rate_gust", &pitch_rate_gust)
+          .Doc("Add the Dryden pitch-rate gust q_g (span: the aircraft's)"));
+  }
 };
 
 /// σ_w in force: the override, else 0.1·|W20|; 0 without turbulence.

@@ -1,10 +1,13 @@
 #include "engine/simulation/open_loop.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/disturbance/disturbance_field.h"
+#include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
 
 namespace gesweep {
@@ -159,32 +162,12 @@ void Reserve(OpenLoopSeries& series, std::size_t count) {
   }
 }
 
-template <class Source>
-OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoopConfig& config,
-                   const std::atomic<bool>* cancel) {
-  OpenLoopResult result;
-  const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
-  IntegratorOptions options = config.integrator;
-  options.output_interval_s = config.series_interval_s;
-  options.cancel = cancel;
-  OpenLoopSeries* series = nullptr;
-  if (config.series_interval_s > 0.0) {
-    // Every sample and the end point, so that push_back never reallocates during the run.
-    Reserve(result.series, static_cast<std::size_t>(config.duration_s / config.series_interval_s) + 3);
-    series = &result.series;
-  }
-  OpenLoopProblem<Source> problem(source, config.start_height_m, config.reference_speed_mps,
-                                  schedule.elevator_rad, TouchdownHeight(model, config),
-                                  StallSpeed(model, config), series);
-  const InitialOffsets& o = config.initial_offsets;
-  const OdeState<5> x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps,
-                          o.delta_pitch_rad, o.delta_height_m};
-  const IntegrationResult<5> run =
-      Integrate(problem, x0, 0.0, config.duration_s, schedule.breakpoints_s, options);
-
-  OpenLoopSummary& summary = result.summary;
+// The summary of a run from the integrator's result and the problem's records.
+template <int N, class Problem>
+void FillSummary(OpenLoopSummary& summary, const IntegrationResult<N>& run, const Problem& problem,
+                 const OpenLoopConfig& config) {
   summary.end_time_s = run.end_time_s;
-  for (int i = 0; i < 5; ++i) summary.final_state[i] = run.final_state[i];
+  for (int i = 0; i < 5; ++i) summary.final_state[i] = run.final_state[static_cast<std::size_t>(i)];
   summary.final_height_m = config.start_height_m + run.final_state[kDeltaH];
   summary.final_speed_mps = config.reference_speed_mps + run.final_state[kDeltaU];
   summary.min_height_m = problem.min_height_m();
@@ -214,6 +197,223 @@ OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoop
       summary.message = "cancelled at t = " + Text(run.end_time_s) + " s";
       break;
   }
+}
+
+template <class Source>
+OpenLoopResult Run(Source source, const LongitudinalModel& model, const OpenLoopConfig& config,
+                   const std::atomic<bool>* cancel) {
+  OpenLoopResult result;
+  const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
+  IntegratorOptions options = config.integrator;
+  options.output_interval_s = config.series_interval_s;
+  options.cancel = cancel;
+  OpenLoopSeries* series = nullptr;
+  if (config.series_interval_s > 0.0) {
+    // Every sample and the end point, so that push_back never reallocates during the run.
+    Reserve(result.series, static_cast<std::size_t>(config.duration_s / config.series_interval_s) + 3);
+    series = &result.series;
+  }
+  OpenLoopProblem<Source> problem(source, config.start_height_m, config.reference_speed_mps,
+                                  schedule.elevator_rad, TouchdownHeight(model, config),
+                                  StallSpeed(model, config), series);
+  const InitialOffsets& o = config.initial_offsets;
+  const OdeState<5> x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps,
+                          o.delta_pitch_rad, o.delta_height_m};
+  const IntegrationResult<5> run =
+      Integrate(problem, x0, 0.0, config.duration_s, schedule.breakpoints_s, options);
+  FillSummary(result.summary, run, problem, config);
+  return result;
+}
+
+// ---------------------------------------------------------------- with a disturbance (model.md §9)
+
+// The derivatives at (H, airspeed): the same three sources as above, as DimensionalDerivatives for
+// the air-relative Eq. (1) (AirRelativeDerivative).
+struct FrozenDerivatives {
+  DimensionalDerivatives d;
+  const DimensionalDerivatives& At(double /*height_m*/, double /*airspeed_mps*/) const { return d; }
+};
+struct TableDerivatives {
+  const LinearDerivativeTable* table;
+  int segment_hint;
+  DimensionalDerivatives At(double height_m, double airspeed_mps) {
+    return table->DerivativesAt(height_m, airspeed_mps, segment_hint);
+  }
+};
+struct ModelDerivatives {
+  const LongitudinalModel* model;
+  DimensionalDerivatives At(double height_m, double airspeed_mps) const {
+    return model->DerivativesAt(height_m, airspeed_mps);
+  }
+};
+
+// The open-loop airplane and the field's states: x = [Δu, Δw, q, Δθ, ΔH, field states].
+template <class Derivatives>
+class DisturbedOpenLoopProblem {
+ public:
+  static constexpr int kDimension = 5 + DisturbanceField::kStateCount;
+  static constexpr int kEventCount = 3;
+  using State = OdeState<kDimension>;
+
+  DisturbedOpenLoopProblem(Derivatives derivatives, const DisturbanceField* field,
+                           const std::vector<DisturbanceField::Segment>* field_segments,
+                           const std::vector<double>* elevator_by_segment, double start_height_m,
+                           double reference_speed_mps, double touchdown_height_m, double stall_speed_mps,
+                           OpenLoopSeries* series)
+      : derivatives_(derivatives),
+        field_(field),
+        field_segments_(field_segments),
+        elevator_by_segment_(elevator_by_segment),
+        start_height_m_(start_height_m),
+        u0_(reference_speed_mps),
+        touchdown_height_m_(touchdown_height_m),
+        stall_speed_mps_(stall_speed_mps),
+        series_(series) {}
+
+  void Derivative(double /*t*/, const State& x, int segment, State& dxdt) {
+    DisturbanceField::State field_dxdt;
+    const AirMotion air = Air(x, segment, field_dxdt);
+    const double height_m = start_height_m_ + x[kDeltaH];
+    const Vector5d x5(x[0], x[1], x[2], x[3], x[4]);
+    const Vector5d d5 =
+        AirRelativeDerivative(derivatives_.At(height_m, air.airspeed_mps), u0_, x5,
+                              (*elevator_by_segment_)[static_cast<std::size_t>(segment)],
+                              AirVelocity{air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2});
+    for (int i = 0; i < 5; ++i) dxdt[static_cast<std::size_t>(i)] = d5[i];
+    std::copy(field_dxdt.begin(), field_dxdt.end(), dxdt.begin() + 5);
+  }
+
+  void EventValues(double /*t*/, const State& x, int segment, std::array<double, kEventCount>& g) const {
+    DisturbanceField::State unused;
+    g[kTouchdownEvent] = start_height_m_ + x[kDeltaH] - touchdown_height_m_;
+    g[kStallEvent] = Air(x, segment, unused).airspeed_mps - stall_speed_mps_;  // the airspeed stalls
+    g[kHeightMinimumEvent] = x[kDeltaW] - u0_ * x[kDeltaTheta];
+  }
+
+  EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
+    if (event == kHeightMinimumEvent) {
+      NoteHeight(t, x);
+      return EventAction::kContinue;
+    }
+    stopping_event_ = event;
+    return EventAction::kStop;
+  }
+
+  void OnStep(double t, const State& x, int /*segment*/) {
+    NoteHeight(t, x);
+    max_abs_pitch_rate_radps_ = std::max(max_abs_pitch_rate_radps_, std::abs(x[kPitchRate]));
+  }
+
+  void OnOutput(double t, const State& x, int segment) {
+    if (series_ == nullptr) return;
+    DisturbanceField::State unused;
+    const AirMotion air = Air(x, segment, unused);
+    series_->time_s.push_back(t);
+    series_->delta_speed_mps.push_back(x[kDeltaU]);
+    series_->delta_normal_velocity_mps.push_back(x[kDeltaW]);
+    series_->pitch_rate_radps.push_back(x[kPitchRate]);
+    series_->delta_pitch_rad.push_back(x[kDeltaTheta]);
+    series_->delta_height_m.push_back(x[kDeltaH]);
+    series_->height_m.push_back(start_height_m_ + x[kDeltaH]);
+    series_->speed_mps.push_back(u0_ + x[kDeltaU]);
+    series_->elevator_rad.push_back((*elevator_by_segment_)[static_cast<std::size_t>(segment)]);
+    series_->u_g_mps.push_back(air.u_g_mps);
+    series_->w_g_mps.push_back(air.w_g_mps);
+    if (field_->options().pitch_rate_gust) series_->q_g_radps.push_back(air.q_g_radps);
+  }
+
+  double min_height_m() const { return min_height_m_; }
+  double min_height_time_s() const { return min_height_time_s_; }
+  double max_abs_pitch_rate_radps() const { return max_abs_pitch_rate_radps_; }
+  int stopping_event() const { return stopping_event_; }
+
+ private:
+  AirMotion Air(const State& x, int segment, DisturbanceField::State& field_dxdt) const {
+    DisturbanceField::State xf;
+    std::copy(x.begin() + 5, x.end(), xf.begin());
+    return field_->Evaluate((*field_segments_)[static_cast<std::size_t>(segment)],
+                            start_height_m_ + x[kDeltaH], u0_ + x[kDeltaU], xf, field_dxdt);
+  }
+  void NoteHeight(double t, const State& x) {
+    const double height_m = start_height_m_ + x[kDeltaH];
+    if (height_m < min_height_m_) {
+      min_height_m_ = height_m;
+      min_height_time_s_ = t;
+    }
+  }
+
+  Derivatives derivatives_;
+  const DisturbanceField* field_;
+  const std::vector<DisturbanceField::Segment>* field_segments_;
+  const std::vector<double>* elevator_by_segment_;
+  double start_height_m_;
+  double u0_;
+  double touchdown_height_m_;
+  double stall_speed_mps_;
+  OpenLoopSeries* series_;
+  double min_height_m_ = std::numeric_limits<double>::infinity();
+  double min_height_time_s_ = 0;
+  double max_abs_pitch_rate_radps_ = 0;
+  int stopping_event_ = -1;
+};
+
+// The options the field is built from: the span of the pitch-rate gust is the aircraft's.
+DisturbanceOptions FieldOptions(const LongitudinalModel& model, const OpenLoopConfig& config) {
+  DisturbanceOptions options = config.disturbance;
+  options.wing_span_m = model.aircraft().wingspan_m;
+  return options;
+}
+
+template <class Derivatives>
+OpenLoopResult RunDisturbed(Derivatives derivatives, const DisturbanceField& field,
+                            const LongitudinalModel& model, const OpenLoopConfig& config,
+                            const std::atomic<bool>* cancel) {
+  OpenLoopResult result;
+  const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
+  // The input's jumps and the field's (noise samples, gust entry) in one ascending list; the
+  // elevator of each merged segment is the schedule's value at the segment's left end.
+  std::vector<double> breakpoints = field.Breakpoints(0.0, config.duration_s);
+  breakpoints.insert(breakpoints.end(), schedule.breakpoints_s.begin(), schedule.breakpoints_s.end());
+  std::sort(breakpoints.begin(), breakpoints.end());
+  breakpoints.erase(std::unique(breakpoints.begin(), breakpoints.end()), breakpoints.end());
+  const std::vector<DisturbanceField::Segment> field_segments = field.SegmentTable(breakpoints, 0.0);
+  std::vector<double> elevator(breakpoints.size() + 1);
+  for (std::size_t s = 0; s < elevator.size(); ++s) {
+    const double left_s = s == 0 ? 0.0 : breakpoints[s - 1];
+    const auto jumps =
+        std::upper_bound(schedule.breakpoints_s.begin(), schedule.breakpoints_s.end(), left_s) -
+        schedule.breakpoints_s.begin();
+    elevator[s] = schedule.elevator_rad[static_cast<std::size_t>(jumps)];
+  }
+  IntegratorOptions options = config.integrator;
+  options.output_interval_s = config.series_interval_s;
+  options.cancel = cancel;
+  OpenLoopSeries* series = nullptr;
+  if (config.series_interval_s > 0.0) {
+    const auto count = static_cast<std::size_t>(config.duration_s / config.series_interval_s) + 3;
+    Reserve(result.series, count);
+    result.series.u_g_mps.reserve(count);
+    result.series.w_g_mps.reserve(count);
+    if (field.options().pitch_rate_gust) result.series.q_g_radps.reserve(count);
+    series = &result.series;
+  }
+  DisturbedOpenLoopProblem<Derivatives> problem(
+      derivatives, &field, &field_segments, &elevator, config.start_height_m, config.reference_speed_mps,
+      TouchdownHeight(model, config), StallSpeed(model, config), series);
+  const InitialOffsets& o = config.initial_offsets;
+  OdeState<DisturbedOpenLoopProblem<Derivatives>::kDimension> x0{};
+  // Started in the mean wind's equilibrium: airspeed u0 + the offset (docs/model.md §9).
+  const double start_height_m = config.start_height_m + o.delta_height_m;
+  x0[kDeltaU] = MeanWindAt(config.disturbance.wind_20ft_mps, start_height_m, config.disturbance.wind_shear) +
+                o.delta_speed_mps;
+  x0[kDeltaW] = o.delta_normal_velocity_mps;
+  x0[kPitchRate] = o.pitch_rate_radps;
+  x0[kDeltaTheta] = o.delta_pitch_rad;
+  x0[kDeltaH] = o.delta_height_m;
+  const DisturbanceField::State field_start = field.InitialState();
+  std::copy(field_start.begin(), field_start.end(), x0.begin() + 5);
+  const auto run = Integrate(problem, x0, 0.0, config.duration_s, breakpoints, options);
+  FillSummary(result.summary, run, problem, config);
   return result;
 }
 
@@ -258,6 +458,7 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
     }
   }
   ValidateIntegratorOptions(config.integrator, source);
+  ValidateDisturbanceOptions(FieldOptions(model, config), source);
   const IntegratorOptions& integrator = config.integrator;
   // An adaptive run without a largest step has no step count known before it runs; its steps are
   // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
@@ -275,6 +476,21 @@ OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopCo
   ValidateOpenLoopConfig(model, config, "open-loop config");
   const double h0 = config.start_height_m;
   const double u0 = config.reference_speed_mps;
+  const DisturbanceField field(FieldOptions(model, config), config.seed, config.run_index);
+  if (field.active()) {
+    if (config.freeze_derivatives) {
+      // A and B at the start condition: H0 + ΔH(0) and the airspeed u0 + Δu(0) offset.
+      const double height_m = h0 + config.initial_offsets.delta_height_m;
+      const double speed_mps = u0 + config.initial_offsets.delta_speed_mps;
+      return RunDisturbed(FrozenDerivatives{model.DerivativesAt(height_m, speed_mps)}, field, model, config,
+                          cancel);
+    }
+    if (config.generic_derivative_path || model.options().interpolation != Interpolation::kLinear) {
+      return RunDisturbed(ModelDerivatives{&model}, field, model, config, cancel);
+    }
+    const LinearDerivativeTable table(model);
+    return RunDisturbed(TableDerivatives{&table, table.SegmentOf(h0)}, field, model, config, cancel);
+  }
   if (config.freeze_derivatives) {
     // A and B at the start condition H0 + ΔH(0), u0 + Δu(0), through the generic path.
     const double height_m = h0 + config.initial_offsets.delta_height_m;

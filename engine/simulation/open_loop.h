@@ -6,12 +6,14 @@
 /// column q, row ΔH column Δθ, and the Mẇ·u0 of row q) stay at the reference u0. The run ends at
 /// touchdown, stall, the time limit, or when the state stops being finite (diverged).
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "engine/common/describe.h"
+#include "engine/disturbance/disturbance_options.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/simulation/integrator.h"
 
@@ -82,6 +84,14 @@ struct OpenLoopConfig {
   bool generic_derivative_path = false;
   std::optional<double> stall_speed_mps;     ///< default: the aircraft's stall speed, m/s
   std::optional<double> touchdown_height_m;  ///< default: the aircraft's wheel-contact height, m
+  /// The moving atmosphere (docs/model.md §9); the default is still air, where the run is the one
+  /// above bit for bit. With a mean wind the run starts in its equilibrium: Δu(0) = W(H0) +
+  /// initial_delta_u_mps, so that the airspeed is u0 + initial_delta_u_mps. The span of the
+  /// pitch-rate gust is the aircraft's.
+  DisturbanceOptions disturbance;
+  /// The run's turbulence is RunNoise(seed, run_index) (docs/disturbance.md); a sweep sets both.
+  std::uint64_t seed = 0;
+  std::uint64_t run_index = 0;
 
   /// The settings a person gives (describe.h): [analyses.open_loop] and the flags of `gesweep
   /// simulate`. The start condition, the input's amplitude and length are a sweep's run parameters
@@ -152,6 +162,7 @@ struct OpenLoopConfig {
           .Limit("open_loop.initial_delta_h_m")
           .CommandLineOnly()
           .Doc("Initial offset of H, m (the derivatives see H0 + offset)"));
+    disturbance.Describe(v);
   }
 };
 
@@ -170,6 +181,7 @@ enum class OpenLoopEndEvent {
   kTimeLimit,  ///< duration_s reached
   kDiverged,   ///< the state became non-finite (or the adaptive step underflowed)
 };
+// With a disturbance, kStall is the airspeed u0 + Δu − u_g falling to the stall speed.
 
 /// "touchdown" / "stall" / "time_limit" / "diverged", in code order (the archive's levels).
 template <>
@@ -241,6 +253,12 @@ struct OpenLoopSeries {
   std::vector<double> height_m;
   std::vector<double> speed_mps;
   std::vector<double> elevator_rad;  ///< the input the step producing the sample used
+  /// The air motion the airplane met (docs/model.md §9), only when the run has a disturbance (else
+  /// empty): u_g (mean wind + turbulence + a u gust, positive forward: a headwind is negative) and
+  /// w_g (positive down), m/s; q_g, rad/s, only with the pitch-rate gust.
+  std::vector<double> u_g_mps;
+  std::vector<double> w_g_mps;
+  std::vector<double> q_g_radps;
 };
 
 /// A run's result: the summary, and the series when series_interval_s > 0 (else empty).

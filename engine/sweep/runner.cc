@@ -155,7 +155,8 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
       return;
     }
   }
-  const RunContext context{workspace.parameters, model, cancel};
+  // The run's global index in the design: its turbulence is RunNoise(seed, design_index).
+  const RunContext context{workspace.parameters, model, cancel, static_cast<std::uint64_t>(design_index)};
   OutputRow output(&block.results, &plan.schema(), row);
   for (const auto& analysis : plan.study().analyses) {
     AnalysisOutcome outcome;

@@ -465,6 +465,32 @@ def hardening_cases():
             "--speeds-mps = 1e+308: expected a number in [1, 300] m/s")
         run("land --glide-slope-deg 45", ["land", "--aircraft", str(ANCE), "--glide-slope-deg", "45"],
             "--glide-slope-deg = 45: expected a number in (0, 10] deg")
+        # The moving atmosphere (docs/model.md section 9): each flag in its words.
+        run("simulate --turbulence foo", ["simulate", "--aircraft", str(ANCE), "--height-m", "2", "--speed-mps",
+                                          "32", "--turbulence", "foo"],
+            "--turbulence = 'foo': expected none or dryden")
+        run("simulate --turbulence-sigma-w-mps -1", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
+                                                     "--speed-mps", "32", "--turbulence", "dryden",
+                                                     "--turbulence-sigma-w-mps", "-1"],
+            "--turbulence-sigma-w-mps = -1: expected a finite number >= 0 (m/s)")
+        run("simulate --gust-half-length-m 0", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
+                                                "--speed-mps", "32", "--gust-half-length-m", "0"],
+            "--gust-half-length-m = 0: expected a number in (0, 10000] m")
+        run("simulate --wind-20ft-mps 1e308", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
+                                               "--speed-mps", "32", "--wind-20ft-mps", "1e308"],
+            "--wind-20ft-mps = 1e308: expected a number in [-50, 50] m/s")
+        run("land --turbulence foo", ["land", "--aircraft", str(ANCE), "--turbulence", "foo"],
+            "--turbulence = 'foo': expected none or dryden")
+        run("land --turbulence-sigma-w-mps -0.5", ["land", "--aircraft", str(ANCE), "--turbulence", "dryden",
+                                                   "--turbulence-sigma-w-mps", "-0.5"],
+            "--turbulence-sigma-w-mps = -0.5: expected a finite number >= 0 (m/s)")
+        run("land --gust-half-length-m 0", ["land", "--aircraft", str(ANCE), "--gust-half-length-m", "0"],
+            "--gust-half-length-m = 0: expected a number in (0, 10000] m")
+        run("land --flare-asymptote-m 10", ["land", "--aircraft", str(ANCE), "--flare-asymptote-m", "10"],
+            "--flare-asymptote-m = 10: expected a height in [0, flare_height_m = 10 m)")
+        run("land --turbulent-integrator euler", ["land", "--aircraft", str(ANCE), "--turbulent-integrator",
+                                                  "euler"],
+            "--turbulent-integrator = 'euler': expected rk4 or dopri5")
         run("run --threads 0", ["run", str(study), "-o", "{out}/out.h5", "--threads", "0"],
             "--threads = 0: expected 1 to 4096 worker threads")
         (tmp / "past.csv").write_text("height_m\n2.0\n1e999\n")
