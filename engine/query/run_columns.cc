@@ -241,6 +241,19 @@ std::vector<int> ColumnCatalog::Expand(const std::string& name, const std::strin
   return matches;
 }
 
+std::size_t MarkCompleteRuns(const ArchiveReader& archive, std::int64_t first, std::int64_t count,
+                             std::vector<char>& keep) {
+  const auto n = static_cast<std::size_t>(count);
+  const std::vector<std::int8_t> status = archive.ReadStatus(first, count);
+  keep.assign(n, 0);
+  std::size_t complete = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    keep[i] = status[i] != 0;
+    complete += keep[i] != 0;
+  }
+  return complete;
+}
+
 void ReadColumn(const ArchiveReader& archive, const RunColumn& column, std::int64_t first, std::int64_t count,
                 ColumnValues& out) {
   const auto n = static_cast<std::size_t>(count);
