@@ -170,6 +170,7 @@ std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* 
   const std::vector<std::string> candidates = Candidates(name);
   if (candidates.size() > 1) {
     std::vector<std::string> shown;
+    shown.reserve(candidates.size());
     for (const auto& path : candidates)
       shown.push_back(columns_[static_cast<std::size_t>(*FindPath(path))].name);
     *problem = "ambiguous column '" + name + "': it matches " + Join(shown, ", ") + "; write one of them";
