@@ -119,6 +119,7 @@ ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<
   Check(H5Tset_size(type.get(), H5T_VARIABLE), "string size");
   Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
   std::vector<const char*> pointers;
+  pointers.reserve(values.size());
   for (const auto& value : values) pointers.push_back(value.c_str());
   const hsize_t dims[1] = {values.size()};
   Handle space(H5Screate_simple(1, dims, nullptr), "dataspace of " + name);

@@ -245,6 +245,7 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
   Handle attribute(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
                    "create attribute " + name);
   std::vector<const char*> pointers;
+  pointers.reserve(values.size());
   for (const auto& value : values) pointers.push_back(value.c_str());
   if (pointers.empty()) return;  // an empty list: nothing to write
   Check(H5Awrite(attribute.get(), type.get(), pointers.data()), "write attribute " + name);

@@ -42,6 +42,7 @@ std::string_view ModelParameter::Unit() const { return NamesOf(kind).unit; }
 
 std::vector<ModelParameter> LocalSensitivityParameters() {
   std::vector<ModelParameter> parameters;
+  parameters.reserve(kCoefficientCount + 4);  // the coefficient scales, CDo, mass, inertia, speed
   for (int c = 0; c < kCoefficientCount; ++c) {
     parameters.push_back({ModelParameterKind::kCoefficientScale, static_cast<Coefficient>(c)});
   }

@@ -115,6 +115,7 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   GESWEEP_DEMAND(request.chunk_rows > 0);
 
   std::vector<const RunColumn*> shown_columns;
+  shown_columns.reserve(output.size());
   for (int c : output) shown_columns.push_back(&catalog.column(c));
   sink.Begin(shown_columns);
 
