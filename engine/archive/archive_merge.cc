@@ -203,6 +203,7 @@ void CheckMergeOutput(const std::vector<std::filesystem::path>& inputs, const st
   // The one output check of every command (engine/common/output_guard.h): not an input (the same
   // file, a hard link or a symlink to it), and a regular file when it exists.
   std::vector<NamedInput> named;
+  named.reserve(inputs.size());
   for (const auto& input : inputs) named.push_back({input, "shard archive"});
   CheckOutputPath(output, OutputKind::kFile, named, "output", {output.string() + ".partial"});
   if (std::filesystem::exists(output, ec) && !force) {
