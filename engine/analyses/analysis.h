@@ -198,10 +198,30 @@ struct AnalysisEntry {
   std::string_view description;
   bool needs_model;         ///< the factory is called with a non-null aircraft only when true
   AnalysisFactory factory;  ///< null when not available in this build
-  std::string_view unavailable_reason;
+  /// Its place in the registry, and so the place of its columns in an archive: the registry lists
+  /// the analyses by this key, whatever the order in which their files register (static
+  /// initialisation). Keys are unique; a new analysis takes a free key between its neighbours'.
+  int order = 0;
+  std::string_view unavailable_reason = {};
 };
 
-/// Every analysis the engine knows, available or not (analysis_registry.cc).
+/// Every analysis the engine knows, available or not, by AnalysisEntry::order (each adapter file
+/// registers its own with an AnalysisRegistrar).
 const std::vector<AnalysisEntry>& AnalysisRegistry();
+
+/// Adds an analysis to the registry at static-initialisation time: one line in its adapter's file,
+///
+///     const AnalysisRegistrar kRegistrar{{"modes", "eigenvalues ...", true, &MakeModes, 100}};
+///
+/// GESWEEP_DEMAND that its name and its order key are new. gesweep_analyses is linked whole
+/// (engine/analyses/CMakeLists.txt), so an adapter that nothing names is still in every program.
+struct AnalysisRegistrar {
+  explicit AnalysisRegistrar(const AnalysisEntry& entry);
+};
+
+/// The registered analysis `name` built from `settings` (its factory); GESWEEP_DEMAND that it is
+/// registered and available. For the engine's own synthetic studies and for tests.
+std::unique_ptr<Analysis> MakeAnalysis(std::string_view name, const TomlSection& settings,
+                                       const Aircraft* aircraft);
 
 }  // namespace gesweep

@@ -1,22 +1,42 @@
-// The analyses a study can name, in the order their columns appear in an archive.
-#include "engine/analyses/analysis_adapters.h"
+// The registry of the analyses a study can name (analysis.h): each adapter file adds its own entry
+// with an AnalysisRegistrar; the list is kept sorted by the entries' order keys, which is the order
+// of the analyses' columns in an archive.
+#include <algorithm>
+
+#include "engine/analyses/analysis.h"
+#include "engine/common/errors.h"
 
 namespace gesweep {
+namespace {
 
-const std::vector<AnalysisEntry>& AnalysisRegistry() {
-  static const std::vector<AnalysisEntry> registry = {
-      {"modes", "eigenvalues, modes and stability margin at the run's height and speed", true,
-       &MakeModesAnalysis, ""},
-      {"flying_qualities", "MIL-F-8785C Category C levels of the short period and phugoid", true,
-       &MakeFlyingQualitiesAnalysis, ""},
-      {"boundary", "the stability boundary H* of the run's model at its speed", true, &MakeBoundaryAnalysis,
-       ""},
-      {"open_loop", "the time response to an elevator pulse", true, &MakeOpenLoopAnalysis, ""},
-      {"landing", "the closed-loop landing: glide slope and flare", true, &MakeLandingAnalysis, ""},
-      {"ishigami", "verification model: the Ishigami function of x1..x3", false, &MakeIshigamiAnalysis, ""},
-      {"linear", "verification model: a linear function of x1..x8", false, &MakeLinearAnalysis, ""},
-  };
+// Built on first use, so that registrars in other files may run before or after this file's
+// static initialisation.
+std::vector<AnalysisEntry>& MutableRegistry() {
+  static std::vector<AnalysisEntry> registry;
   return registry;
+}
+
+}  // namespace
+
+const std::vector<AnalysisEntry>& AnalysisRegistry() { return MutableRegistry(); }
+
+AnalysisRegistrar::AnalysisRegistrar(const AnalysisEntry& entry) {
+  std::vector<AnalysisEntry>& registry = MutableRegistry();
+  GESWEEP_DEMAND(std::none_of(registry.begin(), registry.end(), [&](const AnalysisEntry& e) {
+    return e.name == entry.name || e.order == entry.order;
+  }));
+  const auto at = std::upper_bound(registry.begin(), registry.end(), entry.order,
+                                   [](int order, const AnalysisEntry& e) { return order < e.order; });
+  registry.insert(at, entry);
+}
+
+std::unique_ptr<Analysis> MakeAnalysis(std::string_view name, const TomlSection& settings,
+                                       const Aircraft* aircraft) {
+  const auto& registry = AnalysisRegistry();
+  const auto entry =
+      std::find_if(registry.begin(), registry.end(), [&](const AnalysisEntry& e) { return e.name == name; });
+  GESWEEP_DEMAND(entry != registry.end() && entry->factory != nullptr);
+  return entry->factory(settings, aircraft);
 }
 
 }  // namespace gesweep

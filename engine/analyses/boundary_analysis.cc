@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/modal/boundary.h"
 
 namespace gesweep {
@@ -78,8 +78,6 @@ class BoundaryAnalysis final : public Analysis {
       certified_ = 0;
 };
 
-}  // namespace
-
 std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, const Aircraft* aircraft) {
   settings.RejectUnknownKeys(
       {"lower_height_m", "upper_height_m", "tolerance_m", "samples_per_segment", "method"});
@@ -122,5 +120,11 @@ std::unique_ptr<Analysis> MakeBoundaryAnalysis(const TomlSection& settings, cons
   }
   return std::make_unique<BoundaryAnalysis>(*aircraft, options);
 }
+
+}  // namespace
+
+const AnalysisRegistrar kRegistrar{
+    {"boundary", "The stability boundary H* of the run's model at its speed_mps (docs/model.md section 6).",
+     true, &MakeBoundaryAnalysis, 300}};
 
 }  // namespace gesweep

@@ -4,7 +4,7 @@
 // than reading the `modes` columns, so it stands alone in a study.
 #include <sstream>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/modal/flying_qualities.h"
 
 namespace gesweep {
@@ -74,11 +74,17 @@ class FlyingQualitiesAnalysis final : public Analysis {
   int short_period_damping_ = 0, phugoid_damping_ = 0, phugoid_time_to_double_ = 0;
 };
 
-}  // namespace
-
 std::unique_ptr<Analysis> MakeFlyingQualitiesAnalysis(const TomlSection& settings, const Aircraft*) {
   settings.RejectUnknownKeys({});
   return std::make_unique<FlyingQualitiesAnalysis>();
 }
+
+}  // namespace
+
+const AnalysisRegistrar kRegistrar{
+    {"flying_qualities",
+     "MIL-F-8785C Category C levels of the short period (3.2.2.1.2) and the phugoid (3.2.1.2) at the run's "
+     "height_m and speed_mps, and the worse of the two (docs/model.md section 11).",
+     true, &MakeFlyingQualitiesAnalysis, 200}};
 
 }  // namespace gesweep

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/control/landing_simulation.h"
 
 namespace gesweep {
@@ -335,5 +335,10 @@ std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const
   number("series_duration_s", series_duration_s);
   return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
 }
+
+const AnalysisRegistrar kRegistrar{{"landing",
+                                    "The closed-loop automatic landing from height_m at speed_mps "
+                                    "(docs/model.md section 8, the paper's Fig. 6-9); docs/landing.md.",
+                                    true, &MakeLandingAnalysis, 500}};
 
 }  // namespace gesweep

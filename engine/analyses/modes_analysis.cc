@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/modal/modal_analysis.h"
 
 namespace gesweep {
@@ -35,14 +35,9 @@ class ModesAnalysis final : public Analysis {
         "(docs/model.md §6); stable when < 0"));
     stable_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, "results/modes/stable", "1",
                                                "1 when sigma < 0, else 0", {"false", "true"}));
-    std::vector<std::string> classes;
-    for (auto c : {ModeClassification::kStandard, ModeClassification::kPhugoidSplit,
-                   ModeClassification::kShortPeriodSplit, ModeClassification::kAllReal}) {
-      classes.emplace_back(ToString(c));
-    }
-    classification_ = schema.Add(
-        OutputColumn::Integer(ColumnType::kInt8, "results/modes/classification", "1",
-                              "How the eigenvalues were assigned to modes (levels attribute)", classes));
+    classification_ = schema.Add(OutputColumn::Integer(
+        ColumnType::kInt8, "results/modes/classification", "1",
+        "How the eigenvalues were assigned to modes (levels attribute)", EnumLevels<ModeClassification>()));
     height_over_span_ =
         schema.Add(OutputColumn::Real("results/modes/height_over_span", "1", "H/b of the run's height_m"));
     const std::array<const char*, 3> modes = {"short_period", "phugoid", "height"};
@@ -116,11 +111,16 @@ class ModesAnalysis final : public Analysis {
   std::array<ModeColumns, 3> mode_columns_{};
 };
 
-}  // namespace
-
 std::unique_ptr<Analysis> MakeModesAnalysis(const TomlSection& settings, const Aircraft* aircraft) {
   settings.RejectUnknownKeys({});
   return std::make_unique<ModesAnalysis>(*aircraft);
 }
+
+}  // namespace
+
+const AnalysisRegistrar kRegistrar{
+    {"modes",
+     "Eigenvalues, modes and stability margin at the run's height_m and speed_mps (docs/model.md section 6).",
+     true, &MakeModesAnalysis, 100}};
 
 }  // namespace gesweep

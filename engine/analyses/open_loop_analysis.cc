@@ -5,7 +5,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/analyses/described_columns.h"
 #include "engine/common/describe_toml.h"
 #include "engine/common/input_limits.h"
@@ -169,5 +169,10 @@ std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, cons
   }
   return std::make_unique<OpenLoopAnalysis>(std::move(config));
 }
+
+const AnalysisRegistrar kRegistrar{{"open_loop",
+                                    "Open-loop time response to an elevator input from height_m at speed_mps "
+                                    "(docs/model.md section 7, the paper's Fig. 4).",
+                                    true, &MakeOpenLoopAnalysis, 400}};
 
 }  // namespace gesweep

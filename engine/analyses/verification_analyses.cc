@@ -7,7 +7,7 @@
 //  - linear: f = intercept + Σ cᵢ xᵢ; Morris' μ* of xᵢ over [0, 1] is |cᵢ|.
 #include <cmath>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/estimators/ishigami.h"
 
 namespace gesweep {
@@ -70,8 +70,6 @@ class LinearAnalysis final : public Analysis {
   int output_ = 0;
 };
 
-}  // namespace
-
 std::unique_ptr<Analysis> MakeIshigamiAnalysis(const TomlSection& settings, const Aircraft*) {
   settings.RejectUnknownKeys({"a", "b"});
   return std::make_unique<IshigamiAnalysis>(settings.OptionalNumber("a").value_or(kIshigamiA),
@@ -87,5 +85,14 @@ std::unique_ptr<Analysis> MakeLinearAnalysis(const TomlSection& settings, const 
   return std::make_unique<LinearAnalysis>(std::move(coefficients),
                                           settings.OptionalNumber("intercept").value_or(0.0));
 }
+
+}  // namespace
+
+const AnalysisRegistrar kIshigamiRegistrar{
+    {"ishigami", "Verification: the Ishigami function of x1..x3 (output results/ishigami/ishigami).", false,
+     &MakeIshigamiAnalysis, 900}};
+const AnalysisRegistrar kLinearRegistrar{
+    {"linear", "Verification: intercept + sum c_i x_i (output results/linear/linear).", false,
+     &MakeLinearAnalysis, 910}};
 
 }  // namespace gesweep

@@ -14,73 +14,51 @@ static_assert(std::is_same_v<hid_t, std::int64_t>, "ProductGroup holds HDF5 iden
 using hdf5::Check;
 using hdf5::Handle;
 
+// The file (little-endian) and memory types of a stored number type.
+struct NumberTypes {
+  hid_t file;
+  hid_t memory;
+};
 template <typename T>
-hid_t FileType();
-template <>
-hid_t FileType<double>() {
-  return H5T_IEEE_F64LE;
-}
-template <>
-hid_t FileType<std::int8_t>() {
-  return H5T_STD_I8LE;
-}
-template <>
-hid_t FileType<std::int32_t>() {
-  return H5T_STD_I32LE;
-}
-template <>
-hid_t FileType<std::int64_t>() {
-  return H5T_STD_I64LE;
-}
-
-template <typename T>
-hid_t MemoryType();
-template <>
-hid_t MemoryType<double>() {
-  return H5T_NATIVE_DOUBLE;
-}
-template <>
-hid_t MemoryType<std::int8_t>() {
-  return H5T_NATIVE_INT8;
-}
-template <>
-hid_t MemoryType<std::int32_t>() {
-  return H5T_NATIVE_INT32;
-}
-template <>
-hid_t MemoryType<std::int64_t>() {
-  return H5T_NATIVE_INT64;
+NumberTypes TypesOf() {
+  if constexpr (std::is_same_v<T, double>) {
+    return {H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE};
+  } else if constexpr (std::is_same_v<T, std::int8_t>) {
+    return {H5T_STD_I8LE, H5T_NATIVE_INT8};
+  } else if constexpr (std::is_same_v<T, std::int32_t>) {
+    return {H5T_STD_I32LE, H5T_NATIVE_INT32};
+  } else {
+    static_assert(std::is_same_v<T, std::int64_t>, "a product stores double, int8, int32 or int64");
+    return {H5T_STD_I64LE, H5T_NATIVE_INT64};
+  }
 }
 
 }  // namespace
 
-#define GESWEEP_PRODUCT_ATTRIBUTES(Class)                                                                  \
-  void Class::Attribute(const std::string& name, const std::string& value) {                               \
-    hdf5::WriteAttribute(id_, name, value);                                                                \
-  }                                                                                                        \
-  void Class::Attribute(const std::string& name, const char* value) {                                      \
-    hdf5::WriteAttribute(id_, name, value);                                                                \
-  }                                                                                                        \
-  void Class::Attribute(const std::string& name, std::int64_t value) {                                     \
-    hdf5::WriteAttribute(id_, name, value);                                                                \
-  }                                                                                                        \
-  void Class::Attribute(const std::string& name, double value) { hdf5::WriteAttribute(id_, name, value); } \
-  void Class::Attribute(const std::string& name, const std::vector<std::string>& values) {                 \
-    hdf5::WriteAttribute(id_, name, values);                                                               \
-  }                                                                                                        \
-  void Class::Attribute(const std::string& name, const std::vector<double>& values) {                      \
-    hdf5::WriteAttribute(id_, name, values);                                                               \
-  }                                                                                                        \
-  void Class::Attribute(const std::string& name, const std::vector<std::int64_t>& values) {                \
-    hdf5::WriteAttribute(id_, name, values);                                                               \
-  }
-
-GESWEEP_PRODUCT_ATTRIBUTES(ProductDataset)
-GESWEEP_PRODUCT_ATTRIBUTES(ProductGroup)
-#undef GESWEEP_PRODUCT_ATTRIBUTES
+void ProductObject::Attribute(const std::string& name, const std::string& value) {
+  hdf5::WriteAttribute(id_, name, value);
+}
+void ProductObject::Attribute(const std::string& name, const char* value) {
+  hdf5::WriteAttribute(id_, name, value);
+}
+void ProductObject::Attribute(const std::string& name, std::int64_t value) {
+  hdf5::WriteAttribute(id_, name, value);
+}
+void ProductObject::Attribute(const std::string& name, double value) {
+  hdf5::WriteAttribute(id_, name, value);
+}
+void ProductObject::Attribute(const std::string& name, const std::vector<std::string>& values) {
+  hdf5::WriteAttribute(id_, name, values);
+}
+void ProductObject::Attribute(const std::string& name, const std::vector<double>& values) {
+  hdf5::WriteAttribute(id_, name, values);
+}
+void ProductObject::Attribute(const std::string& name, const std::vector<std::int64_t>& values) {
+  hdf5::WriteAttribute(id_, name, values);
+}
 
 ProductGroup::ProductGroup(ProductGroup&& other) noexcept
-    : id_(other.id_), datasets_(std::move(other.datasets_)) {
+    : ProductObject(other.id_), datasets_(std::move(other.datasets_)) {
   other.id_ = H5I_INVALID_HID;
   other.datasets_.clear();
 }
@@ -108,11 +86,11 @@ ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<
   Handle space(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr),
                "dataspace of " + name);
   const hid_t id =
-      H5Dcreate2(id_, name.c_str(), FileType<T>(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      H5Dcreate2(id_, name.c_str(), TypesOf<T>().file, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   Check(id, "create " + name);
   datasets_.push_back(id);
   if (count > 0)
-    Check(H5Dwrite(id, MemoryType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
+    Check(H5Dwrite(id, TypesOf<T>().memory, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
   ProductDataset dataset(id);
   dataset.Attribute("units", units);
   dataset.Attribute("description", description);
@@ -141,6 +119,7 @@ ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<
   Check(H5Tset_size(type.get(), H5T_VARIABLE), "string size");
   Check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "string charset");
   std::vector<const char*> pointers;
+  pointers.reserve(values.size());
   for (const auto& value : values) pointers.push_back(value.c_str());
   const hsize_t dims[1] = {values.size()};
   Handle space(H5Screate_simple(1, dims, nullptr), "dataspace of " + name);

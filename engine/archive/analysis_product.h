@@ -16,8 +16,8 @@
 
 namespace gesweep {
 
-/// A dataset of a product being written: more attributes can be added.
-class ProductDataset {
+/// An HDF5 object of a product being written (a dataset or a group): its attributes.
+class ProductObject {
  public:
   void Attribute(const std::string& name, const std::string& value);
   void Attribute(const std::string& name, const char* value);
@@ -27,23 +27,22 @@ class ProductDataset {
   void Attribute(const std::string& name, const std::vector<double>& values);
   void Attribute(const std::string& name, const std::vector<std::int64_t>& values);
 
+ protected:
+  explicit ProductObject(std::int64_t id) : id_(id) {}
+  std::int64_t id_;  // the open object (an HDF5 identifier)
+};
+
+/// A dataset of a product being written: more attributes can be added. Its identifier is owned by
+/// the group that made it.
+class ProductDataset : public ProductObject {
  private:
   friend class ProductGroup;
-  explicit ProductDataset(std::int64_t id) : id_(id) {}
-  std::int64_t id_;  // the open dataset (an HDF5 identifier, owned by the group that made it)
+  explicit ProductDataset(std::int64_t id) : ProductObject(id) {}
 };
 
 /// A group of a product being written (valid only inside WriteAnalysisProduct's callback).
-class ProductGroup {
+class ProductGroup : public ProductObject {
  public:
-  void Attribute(const std::string& name, const std::string& value);
-  void Attribute(const std::string& name, const char* value);
-  void Attribute(const std::string& name, std::int64_t value);
-  void Attribute(const std::string& name, double value);
-  void Attribute(const std::string& name, const std::vector<std::string>& values);
-  void Attribute(const std::string& name, const std::vector<double>& values);
-  void Attribute(const std::string& name, const std::vector<std::int64_t>& values);
-
   /// A dataset of `values` (row-major) of shape `dims` (empty: 1-D of values.size()), stored as
   /// little-endian float64 / int8 / int32 / int64, with its units and description.
   template <typename T>
@@ -64,8 +63,7 @@ class ProductGroup {
  private:
   friend void WriteAnalysisProduct(const std::filesystem::path&, const std::string&, const std::string&,
                                    const std::function<void(ProductGroup&)>&);
-  explicit ProductGroup(std::int64_t id) : id_(id) {}
-  std::int64_t id_;                     // the open group (an HDF5 identifier)
+  explicit ProductGroup(std::int64_t id) : ProductObject(id) {}
   std::vector<std::int64_t> datasets_;  // datasets made here, closed with the group
 };
 

@@ -187,12 +187,10 @@ void WriteCopy(hid_t file, const std::string& path, const std::vector<Shard>& sh
   }
 }
 
-}  // namespace
-
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
-                          const std::filesystem::path& output, bool force, const std::string& command_line,
-                          MergeKind kind, const MergeScope& scope) {
-  hdf5::Quiet();
+// The output's checks, before any shard is read: its directory exists, it is none of the inputs
+// (engine/common/output_guard.h), and it does not exist unless `force`.
+void CheckMergeOutput(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
+                      bool force) {
   const std::string shown = output.string();
   if (inputs.empty()) throw InputError("command line", "ARCHIVES", "", "expected one or more shard archives");
   std::filesystem::path directory = output.parent_path();
@@ -205,13 +203,16 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
   // The one output check of every command (engine/common/output_guard.h): not an input (the same
   // file, a hard link or a symlink to it), and a regular file when it exists.
   std::vector<NamedInput> named;
+  named.reserve(inputs.size());
   for (const auto& input : inputs) named.push_back({input, "shard archive"});
   CheckOutputPath(output, OutputKind::kFile, named, "output", {output.string() + ".partial"});
   if (std::filesystem::exists(output, ec) && !force) {
     throw RequestError("command line", "output", shown, "already exists", "force");
   }
+}
 
-  // Open every shard and check it belongs.
+// Opens every shard, refusing one whose sweep is still writing it or was killed.
+std::vector<Shard> OpenShards(const std::vector<std::filesystem::path>& inputs) {
   std::vector<Shard> shards;
   for (const auto& input : inputs) {
     Shard shard;
@@ -229,6 +230,12 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
     shard.shard = reader.StringAttribute("shard");
     shards.push_back(std::move(shard));
   }
+  return shards;
+}
+
+// Refuses shards that do not come from the same study and engine as the first, or whose designs differ
+// in size.
+void CheckSameStudy(const std::vector<Shard>& shards) {
   const ArchiveReader& reference = *shards.front().reader;
   for (const char* key : {"study_fingerprint", "engine_version", "git_commit"}) {
     for (const auto& shard : shards) {
@@ -248,6 +255,21 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
                        "expected " + std::to_string(design_runs) + " as in " + shards.front().path.string());
     }
   }
+}
+
+}  // namespace
+
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line,
+                          MergeKind kind, const MergeScope& scope) {
+  hdf5::Quiet();
+  CheckMergeOutput(inputs, output, force);
+  std::vector<Shard> shards = OpenShards(inputs);
+  CheckSameStudy(shards);
+  const ArchiveReader& reference = *shards.front().reader;
+  const std::int64_t design_runs = reference.IntegerAttribute("design_runs");
+  const std::string shown = output.string();
+  std::error_code ec;
 
   // Coverage: exactly once.
   std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });

@@ -294,34 +294,34 @@ Handle OpenObject(hid_t file, const std::string& path) {
   return Handle(H5Oopen(file, path.c_str(), H5P_DEFAULT), "open " + path);
 }
 
+// read(object) on the object at `path`; no value (nullopt, an empty list) when there is none.
+template <class Read>
+auto ReadOf(hid_t file, const std::string& path, Read read) -> decltype(read(hid_t{})) {
+  Handle o = OpenObject(file, path);
+  if (!o) return {};
+  return read(o.get());
+}
+
 }  // namespace
 
 std::optional<std::string> ArchiveReader::StringAttributeOf(const std::string& object,
                                                             const std::string& name) const {
-  Handle o = OpenObject(file_.get(), object);
-  if (!o) return std::nullopt;
-  return hdf5::ReadStringAttribute(o.get(), name);
+  return ReadOf(file_.get(), object, [&](hid_t o) { return hdf5::ReadStringAttribute(o, name); });
 }
 
 std::optional<std::int64_t> ArchiveReader::IntegerAttributeOf(const std::string& object,
                                                               const std::string& name) const {
-  Handle o = OpenObject(file_.get(), object);
-  if (!o) return std::nullopt;
-  return hdf5::ReadIntegerAttribute(o.get(), name);
+  return ReadOf(file_.get(), object, [&](hid_t o) { return hdf5::ReadIntegerAttribute(o, name); });
 }
 
 std::optional<double> ArchiveReader::DoubleAttributeOf(const std::string& object,
                                                        const std::string& name) const {
-  Handle o = OpenObject(file_.get(), object);
-  if (!o) return std::nullopt;
-  return hdf5::ReadDoubleAttribute(o.get(), name);
+  return ReadOf(file_.get(), object, [&](hid_t o) { return hdf5::ReadDoubleAttribute(o, name); });
 }
 
 std::vector<std::string> ArchiveReader::StringListAttributeOf(const std::string& object,
                                                               const std::string& name) const {
-  Handle o = OpenObject(file_.get(), object);
-  if (!o) return {};
-  return hdf5::ReadStringListAttribute(o.get(), name);
+  return ReadOf(file_.get(), object, [&](hid_t o) { return hdf5::ReadStringListAttribute(o, name); });
 }
 
 std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& object,

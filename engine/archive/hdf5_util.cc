@@ -122,30 +122,39 @@ Handle FileAccess() {
   return fapl;
 }
 
-bool Exists(hid_t location, const std::string& path) {
+namespace {
+
+// Calls `visit` with each prefix of the path `path` ("a", "a/b", "a/b/c" for "/a/b/c") until it
+// returns false; returns whether it never did.
+template <class Visit>
+bool VisitPathPrefixes(const std::string& path, Visit visit) {
   std::string partial;
   std::stringstream stream(path);
   std::string part;
   while (std::getline(stream, part, '/')) {
     if (part.empty()) continue;
     partial += (partial.empty() ? "" : "/") + part;
-    const htri_t exists = H5Lexists(location, partial.c_str(), H5P_DEFAULT);
-    if (exists <= 0) return false;
+    if (!visit(partial)) return false;
   }
   return true;
 }
 
+}  // namespace
+
+bool Exists(hid_t location, const std::string& path) {
+  return VisitPathPrefixes(path, [&](const std::string& partial) {
+    return H5Lexists(location, partial.c_str(), H5P_DEFAULT) > 0;
+  });
+}
+
 void CreateGroups(hid_t location, const std::string& path) {
-  std::string partial;
-  std::stringstream stream(path);
-  std::string part;
-  while (std::getline(stream, part, '/')) {
-    if (part.empty()) continue;
-    partial += (partial.empty() ? "" : "/") + part;
-    if (H5Lexists(location, partial.c_str(), H5P_DEFAULT) > 0) continue;
-    Handle group(H5Gcreate2(location, partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                 "create group " + partial);
-  }
+  VisitPathPrefixes(path, [&](const std::string& partial) {
+    if (H5Lexists(location, partial.c_str(), H5P_DEFAULT) <= 0) {
+      Handle group(H5Gcreate2(location, partial.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                   "create group " + partial);
+    }
+    return true;
+  });
 }
 
 void ReplaceGroup(hid_t file, const std::string& path, const std::function<void(const std::string&)>& write) {
@@ -236,6 +245,7 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
   Handle attribute(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
                    "create attribute " + name);
   std::vector<const char*> pointers;
+  pointers.reserve(values.size());
   for (const auto& value : values) pointers.push_back(value.c_str());
   if (pointers.empty()) return;  // an empty list: nothing to write
   Check(H5Awrite(attribute.get(), type.get(), pointers.data()), "write attribute " + name);

@@ -300,15 +300,8 @@ void PrintCurveSummary(const BoundaryCurve& curve) {
   }
 }
 
+// The flags are checked (RunBoundary).
 int RunArchiveBoundary(const BoundaryFlags& flags) {
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
-  if (flags.sensitivities && flags.format == "csv") {
-    throw InputError(
-        "command line", "--format", "csv",
-        "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
-  }
   try {
     // Claim the archive before reading it, so no sweep starts writing it meanwhile; refused while
     // one writes it.
@@ -383,7 +376,6 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
 }
 
 int RunBoundary(const BoundaryFlags& flags) {
-  if (!flags.archive.empty()) return RunArchiveBoundary(flags);
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
     throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
   }
@@ -392,6 +384,7 @@ int RunBoundary(const BoundaryFlags& flags) {
         "command line", "--format", "csv",
         "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
   }
+  if (!flags.archive.empty()) return RunArchiveBoundary(flags);
   const BoundaryOptions search = SearchOptions(flags);  // validated before anything is printed
   std::vector<double> speeds;
   std::optional<BoundaryCurve> curve;

@@ -12,7 +12,9 @@
 #include "engine/analyses/parameter_catalog.h"
 #include "engine/archive/archive_format.h"
 #include "engine/cli/command.h"
+#include "engine/common/enum_names.h"
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 #include "engine/common/toml_reader.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -34,6 +36,12 @@ constexpr std::pair<std::string_view, std::string_view> kRequiredSettings[] = {
     {"linear", "coefficients = [1.0]"},
 };
 
+// The analyses whose [analyses.<name>] settings are still read by hand, not from a description
+// (describe.h): the manifest gives null for their settings, and their part of
+// schemas/study.schema.json is written by hand. Every other analysis's settings are its
+// SettingsFields() (none for an analysis that has no settings).
+constexpr std::string_view kSettingsByHand[] = {"boundary", "landing", "ishigami", "linear"};
+
 // The settings table `name` is built with: its required settings, or none.
 toml::table SettingsOf(std::string_view name) {
   for (const auto& [analysis, text] : kRequiredSettings) {
@@ -43,44 +51,24 @@ toml::table SettingsOf(std::string_view name) {
   return toml::table{};
 }
 
-std::string_view TypeName(ColumnType type) {
-  switch (type) {
-    case ColumnType::kFloat64:
-      return "float64";
-    case ColumnType::kInt32:
-      return "int32";
-    case ColumnType::kInt8:
-      return "int8";
-    case ColumnType::kComplex:
-      return "complex128";
-  }
-  GESWEEP_UNREACHABLE();
-}
+// The manifest's names of the column types and of the parameters' kinds and groups.
+constexpr EnumName<ColumnType> kTypeNames[] = {{ColumnType::kFloat64, "float64"},
+                                               {ColumnType::kInt32, "int32"},
+                                               {ColumnType::kInt8, "int8"},
+                                               {ColumnType::kComplex, "complex128"}};
+constexpr EnumName<ParameterKind> kKindNames[] = {
+    {ParameterKind::kReal, "real"}, {ParameterKind::kBoolean, "boolean"}, {ParameterKind::kChoice, "choice"}};
+constexpr EnumName<ParameterGroup> kGroupNames[] = {{ParameterGroup::kFlight, "flight"},
+                                                    {ParameterGroup::kModel, "model"},
+                                                    {ParameterGroup::kOpenLoop, "open_loop"},
+                                                    {ParameterGroup::kLanding, "landing"},
+                                                    {ParameterGroup::kVerification, "verification"}};
 
-std::string_view KindName(ParameterKind kind) {
-  switch (kind) {
-    case ParameterKind::kReal:
-      return "real";
-    case ParameterKind::kBoolean:
-      return "boolean";
-    case ParameterKind::kChoice:
-      return "choice";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::string_view GroupName(ParameterGroup group) {
-  switch (group) {
-    case ParameterGroup::kFlight:
-      return "flight";
-    case ParameterGroup::kModel:
-      return "model";
-    case ParameterGroup::kOpenLoop:
-      return "open_loop";
-    case ParameterGroup::kLanding:
-      return "landing";
-    case ParameterGroup::kVerification:
-      return "verification";
+// The name of `value` in `table`, which lists every value.
+template <class E, std::size_t N>
+std::string_view NameIn(const EnumName<E> (&table)[N], E value) {
+  for (const auto& entry : table) {
+    if (entry.value == value) return entry.name;
   }
   GESWEEP_UNREACHABLE();
 }
@@ -116,7 +104,7 @@ Json ColumnJson(const OutputColumn& column, const std::string& analysis) {
               {"name", name},
               {"units", column.units},
               {"description", column.description},
-              {"type", TypeName(column.type)},
+              {"type", NameIn(kTypeNames, column.type)},
               {"width", column.width}};
   out["levels"] = column.levels;
   out["component_names"] = column.component_names;
@@ -140,6 +128,51 @@ Json AxisJson(const TimeAxis& axis) {
           {"first_s", axis.times_s.front()},
           {"step_s", step},
           {"last_s", axis.times_s.back()}};
+}
+
+// One described setting as the JSON Schema of its key in [analyses.<name>]: what
+// schemas/study.schema.json states for it (scripts/schemas/sync_schemas.py copies it there).
+Json SettingSchema(const FieldRecord& field) {
+  Json out;
+  switch (field.kind) {
+    case FieldKind::kNumber:
+      out = {{"default", *field.number}, {"type", "number"}};
+      break;
+    case FieldKind::kInteger:
+      out = {{"default", static_cast<long long>(*field.number)}, {"type", "integer"}};
+      break;
+    case FieldKind::kBoolean:
+      out = {{"default", field.default_text == "true"}, {"type", "boolean"}};
+      break;
+    case FieldKind::kChoice:
+      out = {{"default", field.default_text}, {"enum", field.choices}};
+      break;
+    case FieldKind::kText:
+      out = {{"type", "string"}};
+      break;
+    case FieldKind::kArray:
+      GESWEEP_UNREACHABLE();  // not a study key (SettingsJson leaves arrays out)
+  }
+  out["description"] = std::string(field.attributes.doc);
+  if (field.attributes.limit.empty()) return out;
+  const InputLimit& limit = RequireInputLimit(field.attributes.limit);
+  out[limit.minimum_exclusive ? "exclusiveMinimum" : "minimum"] = limit.minimum;
+  if (!limit.allows_infinity) out[limit.maximum_exclusive ? "exclusiveMaximum" : "maximum"] = limit.maximum;
+  return out;
+}
+
+// The JSON Schema properties of [analyses.<name>], from the analysis's described settings; null for
+// an analysis of kSettingsByHand.
+Json SettingsJson(std::string_view name, const Analysis& analysis) {
+  for (std::string_view by_hand : kSettingsByHand) {
+    if (by_hand == name) return nullptr;
+  }
+  Json properties = Json::object();
+  for (const FieldRecord& field : analysis.SettingsFields()) {
+    if (!InScope(field.attributes, true) || field.kind == FieldKind::kArray) continue;
+    properties[std::string(field.attributes.key)] = SettingSchema(field);
+  }
+  return properties;
 }
 
 // The bookkeeping datasets every archive has (engine/archive/archive_writer.cc writes the same
@@ -189,8 +222,8 @@ Json DesignJson() {
                       {"units", info.units},
                       {"description", info.description},
                       {"type", "float64"},
-                      {"kind", KindName(info.kind)},
-                      {"group", GroupName(info.group)},
+                      {"kind", NameIn(kKindNames, info.kind)},
+                      {"group", NameIn(kGroupNames, info.group)},
                       {"levels", info.levels}});
   }
   return design;
@@ -221,6 +254,7 @@ Json Manifest(const Aircraft& aircraft) {
                         {"description", entry.description},
                         {"needs_model", entry.needs_model},
                         {"parameters_used", parameters},
+                        {"settings", SettingsJson(entry.name, *analysis)},
                         {"columns", columns},
                         {"time_axes", axes}});
   }

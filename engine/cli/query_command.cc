@@ -36,6 +36,17 @@ struct QueryFlags {
   bool memory_given = false, max_groups_given = false;
 };
 
+// The fields a row query and an aggregate query share, from the flags.
+template <class Request>
+Request RequestOf(const QueryFlags& flags) {
+  Request request;
+  request.where = flags.where;
+  request.sort = flags.sort;
+  request.descending = flags.descending;
+  request.limit = flags.limit;
+  return request;
+}
+
 // Root attributes too long for a listing: shown by their size.
 bool LongText(const std::string& name) { return name == "study_text" || name == "aircraft_text"; }
 
@@ -175,25 +186,17 @@ int RunQueryCommand(const QueryFlags& flags) {
         throw InputError("command line", "--max-groups", std::to_string(flags.max_groups),
                          "expected a count >= 1");
       }
-      AggregateRequest request;
-      request.where = flags.where;
+      auto request = RequestOf<AggregateRequest>(flags);
       request.group_by = flags.group_by;
       request.aggregates = flags.aggregates;
-      request.sort = flags.sort;
-      request.descending = flags.descending;
-      request.limit = flags.limit;
       request.memory_bytes = static_cast<std::int64_t>(flags.memory_mb) << 20;
       request.max_groups = flags.max_groups;
       const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
       RunAggregateQuery(archive, catalog, request, *writer);
       return 0;
     }
-    QueryRequest request;
-    request.where = flags.where;
+    auto request = RequestOf<QueryRequest>(flags);
     request.columns = flags.columns;
-    request.sort = flags.sort;
-    request.descending = flags.descending;
-    request.limit = flags.limit;
     const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
     RunQuery(archive, catalog, request, *writer);
   } catch (const ArchiveError& e) {

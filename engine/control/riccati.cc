@@ -95,22 +95,6 @@ LqrResult Failure(RiccatiStatus status, std::string message) {
 
 }  // namespace
 
-std::string_view ToString(RiccatiStatus status) {
-  switch (status) {
-    case RiccatiStatus::kOk:
-      return "ok";
-    case RiccatiStatus::kInvalidWeights:
-      return "invalid_weights";
-    case RiccatiStatus::kNotStabilizable:
-      return "not_stabilizable";
-    case RiccatiStatus::kNotDetectable:
-      return "not_detectable";
-    case RiccatiStatus::kSolverFailed:
-      return "solver_failed";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
 PbhTest CheckStabilizable(const MatrixXd& A, const MatrixXd& B, const RiccatiTolerances& tolerances) {
   GESWEEP_DEMAND(A.rows() == A.cols() && B.rows() == A.rows());
   const Eigen::Index n = A.rows();

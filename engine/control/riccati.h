@@ -13,6 +13,8 @@
 #include <string>
 #include <string_view>
 
+#include "engine/common/enum_names.h"
+
 namespace gesweep {
 
 /// Outcome of a Riccati/LQR solve.
@@ -24,8 +26,15 @@ enum class RiccatiStatus {
   kSolverFailed,     ///< SB02OD returned INFO ≠ 0, or its S did not stabilise A − BK
 };
 
-/// "ok", "invalid_weights", "not_stabilizable", "not_detectable", "solver_failed".
-std::string_view ToString(RiccatiStatus status);
+/// The name of each status (in messages and the landing's design_failed reason).
+template <>
+struct EnumNames<RiccatiStatus> {
+  static constexpr EnumName<RiccatiStatus> kTable[] = {{RiccatiStatus::kOk, "ok"},
+                                                       {RiccatiStatus::kInvalidWeights, "invalid_weights"},
+                                                       {RiccatiStatus::kNotStabilizable, "not_stabilizable"},
+                                                       {RiccatiStatus::kNotDetectable, "not_detectable"},
+                                                       {RiccatiStatus::kSolverFailed, "solver_failed"}};
+};
 
 /// The result of Lqr / Lqry / SolveContinuousRiccati.
 struct LqrResult {

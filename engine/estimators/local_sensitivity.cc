@@ -151,18 +151,10 @@ double ImplicitBoundaryDerivative(const Matrix5d& A, const Matrix5d& dA_dp, cons
 }
 
 std::string HeightDerivativeUnit(const ModelParameter& p) {
-  switch (p.kind) {
-    case ModelParameterKind::kCoefficientScale:
-    case ModelParameterKind::kCDoScale:
-      return "m";
-    case ModelParameterKind::kMass:
-      return "m/kg";
-    case ModelParameterKind::kPitchInertia:
-      return "m/(kg m^2)";
-    case ModelParameterKind::kSpeed:
-      return "m/(m/s)";
-  }
-  return "";
+  const std::string unit(p.Unit());
+  if (unit == "1") return "m";
+  // A compound unit goes in parentheses: "m/(kg m^2)", "m/(m/s)".
+  return unit.find_first_of(" /") == std::string::npos ? "m/" + unit : "m/(" + unit + ")";
 }
 
 BoundarySensitivities ComputeBoundarySensitivities(const LongitudinalModel& model,

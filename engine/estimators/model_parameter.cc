@@ -8,39 +8,41 @@
 
 namespace gesweep {
 
-std::string ModelParameter::Name() const {
-  switch (kind) {
-    case ModelParameterKind::kCoefficientScale:
-      return "scale." + std::string(kCoefficientNames[Index(coefficient)]);
-    case ModelParameterKind::kCDoScale:
-      return "scale.CDo";
-    case ModelParameterKind::kMass:
-      return "mass_kg";
-    case ModelParameterKind::kPitchInertia:
-      return "pitch_inertia_kgm2";
-    case ModelParameterKind::kSpeed:
-      return "speed_mps";
+namespace {
+
+// The name and unit of each kind of parameter; a coefficient scale's name is this prefix and the
+// coefficient's name.
+struct KindNames {
+  ModelParameterKind kind;
+  std::string_view name;
+  std::string_view unit;
+};
+constexpr KindNames kKindNames[] = {{ModelParameterKind::kCoefficientScale, "scale.", "1"},
+                                    {ModelParameterKind::kCDoScale, "scale.CDo", "1"},
+                                    {ModelParameterKind::kMass, "mass_kg", "kg"},
+                                    {ModelParameterKind::kPitchInertia, "pitch_inertia_kgm2", "kg m^2"},
+                                    {ModelParameterKind::kSpeed, "speed_mps", "m/s"}};
+
+const KindNames& NamesOf(ModelParameterKind kind) {
+  for (const KindNames& names : kKindNames) {
+    if (names.kind == kind) return names;
   }
-  return "unknown";
+  GESWEEP_UNREACHABLE();
 }
 
-std::string_view ModelParameter::Unit() const {
-  switch (kind) {
-    case ModelParameterKind::kCoefficientScale:
-    case ModelParameterKind::kCDoScale:
-      return "1";
-    case ModelParameterKind::kMass:
-      return "kg";
-    case ModelParameterKind::kPitchInertia:
-      return "kg m^2";
-    case ModelParameterKind::kSpeed:
-      return "m/s";
-  }
-  return "";
+}  // namespace
+
+std::string ModelParameter::Name() const {
+  std::string name(NamesOf(kind).name);
+  if (kind == ModelParameterKind::kCoefficientScale) name += kCoefficientNames[Index(coefficient)];
+  return name;
 }
+
+std::string_view ModelParameter::Unit() const { return NamesOf(kind).unit; }
 
 std::vector<ModelParameter> LocalSensitivityParameters() {
   std::vector<ModelParameter> parameters;
+  parameters.reserve(kCoefficientCount + 4);  // the coefficient scales, CDo, mass, inertia, speed
   for (int c = 0; c < kCoefficientCount; ++c) {
     parameters.push_back({ModelParameterKind::kCoefficientScale, static_cast<Coefficient>(c)});
   }

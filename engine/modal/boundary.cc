@@ -784,20 +784,6 @@ SampledSearchResult SampledCrossingSearch(const std::function<Matrix5d(double)>&
   return result;
 }
 
-std::string_view ToString(CrossingKind kind) {
-  switch (kind) {
-    case CrossingKind::kHopf:
-      return "hopf";
-    case CrossingKind::kReal:
-      return "real";
-    case CrossingKind::kDiscontinuity:
-      return "table_row";
-    case CrossingKind::kSigma:
-      return "sigma";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
 CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, double wingspan_m,
                                     EigenvalueSolver solver) {
   GESWEEP_DEMAND(!segments.empty());

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/enum_names.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/modal/modal_analysis.h"
 
@@ -55,7 +56,13 @@ enum class CrossingKind {
   kDiscontinuity,  ///< stability changes across the jump of the table at its last row (no root)
   kSigma,          ///< a sign change of σ found by BoundaryMethod::kSampled (not classified)
 };
-std::string_view ToString(CrossingKind kind);
+template <>
+struct EnumNames<CrossingKind> {
+  static constexpr EnumName<CrossingKind> kTable[] = {{CrossingKind::kHopf, "hopf"},
+                                                      {CrossingKind::kReal, "real"},
+                                                      {CrossingKind::kDiscontinuity, "table_row"},
+                                                      {CrossingKind::kSigma, "sigma"}};
+};
 
 /// One crossing of the imaginary axis along height.
 struct BoundaryCrossing {

@@ -106,20 +106,6 @@ std::array<std::complex<double>, 5> Eigenvalues5(const Matrix5d& A, EigenvalueSo
   return {};
 }
 
-std::string_view ToString(ModeClassification classification) {
-  switch (classification) {
-    case ModeClassification::kStandard:
-      return "standard";
-    case ModeClassification::kPhugoidSplit:
-      return "phugoid_split";
-    case ModeClassification::kShortPeriodSplit:
-      return "short_period_split";
-    case ModeClassification::kAllReal:
-      return "all_real";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
 ModeProperties DescribeMode(std::complex<double> lambda) {
   ModeProperties mode;
   mode.oscillatory = !IsReal(lambda);

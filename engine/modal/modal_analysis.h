@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "engine/common/enum_names.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/modal/eigenvalues5.h"
 
@@ -34,7 +35,14 @@ enum class ModeClassification {
   kShortPeriodSplit,  ///< the short-period pair split into two real roots
   kAllReal,           ///< both pairs split; assigned by magnitude
 };
-std::string_view ToString(ModeClassification classification);
+template <>
+struct EnumNames<ModeClassification> {
+  static constexpr EnumName<ModeClassification> kTable[] = {
+      {ModeClassification::kStandard, "standard"},
+      {ModeClassification::kPhugoidSplit, "phugoid_split"},
+      {ModeClassification::kShortPeriodSplit, "short_period_split"},
+      {ModeClassification::kAllReal, "all_real"}};
+};
 
 /// The result of one eigen-analysis.
 struct ModalAnalysis {

@@ -50,6 +50,125 @@ std::string Number(double value) {
   return out.str();
 }
 
+// The boundary's key axes (every swept parameter but height_m): those of `by` first, in its order,
+// then the others in design order. Throws for a `by` that is height_m or not swept.
+std::vector<int> KeyColumns(const ColumnCatalog& catalog, int height_column,
+                            const std::vector<std::string>& by) {
+  std::vector<int> key_columns;
+  std::vector<std::string> swept;
+  for (int c : catalog.design_columns()) {
+    if (c != height_column) swept.push_back(catalog.column(c).name);
+  }
+  for (const std::string& name : by) {
+    const auto c = catalog.FindPath(archive::DesignPath(name));
+    if (c == height_column) {
+      throw RequestError("command line", "by", name, "the boundary is located along height_m",
+                         "by_other_parameters");
+    }
+    if (!c || std::find(catalog.design_columns().begin(), catalog.design_columns().end(), *c) ==
+                  catalog.design_columns().end()) {
+      std::string list;
+      for (const auto& s : swept) list += (list.empty() ? "" : ", ") + s;
+      throw InputError(
+          "command line", "by", name,
+          "expected a parameter the design sweeps besides height_m" +
+              (list.empty() ? std::string(" (it sweeps none: one boundary)") : " (" + list + ")"));
+    }
+    if (std::find(key_columns.begin(), key_columns.end(), *c) == key_columns.end()) key_columns.push_back(*c);
+  }
+  for (int c : catalog.design_columns()) {
+    if (c != height_column && std::find(key_columns.begin(), key_columns.end(), c) == key_columns.end()) {
+      key_columns.push_back(c);
+    }
+  }
+  return key_columns;
+}
+
+// Why a group's heights (ascending) and margins hold no bracket with unstable below and stable above.
+std::string NoBracketReason(const std::vector<double>& h, const std::vector<double>& s, int crossings) {
+  if (h.size() < 2) return "fewer than two heights with a finite stability margin";
+  const std::string range = Metres(h.front()) + " to " + Metres(h.back());
+  if (std::all_of(s.begin(), s.end(), [](double v) { return v < 0; }))
+    return "stable at every grid height from " + range;
+  if (std::all_of(s.begin(), s.end(), [](double v) { return v >= 0; }))
+    return "unstable at every grid height from " + range;
+  return "no grid height has unstable below and stable above (" + std::to_string(crossings) +
+         " sign changes from " + range + ")";
+}
+
+// Refines `point`'s grid bracket [grid_lower_height_m, grid_upper_height_m], whose archived margins
+// are `stored` (lower, upper), on the run's model rebuilt from the archive: sets height_m, its
+// H/b and bracket width, or the reason why not (the model does not reproduce the archived margins,
+// or the refinement finds no boundary).
+void RefineBracket(const LongitudinalModel& model, double speed_mps, std::pair<double, double> stored,
+                   double tolerance_m, double wingspan_m, ArchiveBoundaryPoint& point) {
+  const double lower = point.grid_lower_height_m, upper = point.grid_upper_height_m;
+  // The rebuilt model must reproduce the archived σ at both ends of the bracket.
+  for (const auto& [height, margin] : {std::pair{lower, stored.first}, std::pair{upper, stored.second}}) {
+    const double again = StabilityMargin(model, height, speed_mps);
+    if (!(std::abs(again - margin) <=
+          kMarginRelativeAgreement * std::abs(margin) + kMarginAbsoluteAgreement)) {
+      point.reason = "the model rebuilt from the archive gives sigma = " + Number(again) +
+                     " 1/s at H = " + Metres(height) + " where the archive has " + Number(margin) +
+                     " 1/s (made by another engine version?); not refined";
+      return;
+    }
+  }
+  BoundaryOptions refine;
+  refine.lower_height_m = lower;
+  refine.upper_height_m = upper;
+  refine.samples_per_segment = kRefineSamplesPerSegment;
+  refine.tolerance_m = tolerance_m;
+  point.refined = FindBoundary(model, speed_mps, refine);
+  if (!point.refined.height_m) {
+    point.reason = "refinement inside the grid bracket " + Metres(lower) + " to " + Metres(upper) +
+                   " found none: " + point.refined.reason;
+    return;
+  }
+  point.height_m = point.refined.height_m;
+  point.height_over_span = *point.refined.height_m / wingspan_m;
+  for (const auto& crossing : point.refined.crossings) {
+    if (crossing.height_m == *point.height_m) point.bracket_width_m = crossing.bracket_width_m;
+  }
+}
+
+// Every complete ok run's height and σ with the index of its group (its values of the key axes,
+// appended to `group_keys` in order of first appearance), sorted by group then height; counts the
+// runs used and skipped in `boundary`. Reads block by block.
+std::vector<Sample> ReadSamples(const ArchiveReader& archive, const ColumnCatalog& catalog, int height_column,
+                                int margin_column, const std::vector<int>& key_columns,
+                                std::vector<std::vector<double>>& group_keys, ArchiveBoundary& boundary) {
+  std::map<std::vector<double>, std::uint32_t> groups;
+  std::vector<Sample> samples;
+  std::vector<ColumnValues> keys(key_columns.size());
+  ColumnValues heights, margins;
+  std::vector<double> key(key_columns.size());
+  for (std::int64_t first = 0; first < archive.run_count(); first += kChunkRows) {
+    const std::int64_t count = std::min(kChunkRows, archive.run_count() - first);
+    const std::vector<std::int8_t> status = archive.ReadStatus(first, count);  // before the values: snapshots
+    ReadColumn(archive, catalog.column(height_column), first, count, heights);
+    ReadColumn(archive, catalog.column(margin_column), first, count, margins);
+    for (std::size_t k = 0; k < key_columns.size(); ++k) {
+      ReadColumn(archive, catalog.column(key_columns[k]), first, count, keys[k]);
+    }
+    for (std::size_t r = 0; r < static_cast<std::size_t>(count); ++r) {
+      if (status[r] != 1 || !std::isfinite(margins.numbers[r]) || !std::isfinite(heights.numbers[r])) {
+        ++boundary.runs_skipped;
+        continue;
+      }
+      for (std::size_t k = 0; k < key_columns.size(); ++k) key[k] = keys[k].numbers[r];
+      auto [it, inserted] = groups.try_emplace(key, static_cast<std::uint32_t>(group_keys.size()));
+      if (inserted) group_keys.push_back(key);
+      samples.push_back(Sample{heights.numbers[r], margins.numbers[r], it->second});
+      ++boundary.runs_used;
+    }
+  }
+  std::sort(samples.begin(), samples.end(), [](const Sample& a, const Sample& b) {
+    return a.group != b.group ? a.group < b.group : a.height_m < b.height_m;
+  });
+  return samples;
+}
+
 }  // namespace
 
 ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalog& catalog,
@@ -78,34 +197,7 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
   boundary.tolerance_m = options.tolerance_m;
   boundary.snapshot = archive.snapshot();
 
-  // The other axes: --by first, then the remaining design parameters in design order.
-  std::vector<int> key_columns;
-  std::vector<std::string> swept;
-  for (int c : catalog.design_columns()) {
-    if (c != *height_column) swept.push_back(catalog.column(c).name);
-  }
-  for (const std::string& name : options.by) {
-    const auto c = catalog.FindPath(archive::DesignPath(name));
-    if (c == height_column) {
-      throw RequestError("command line", "by", name, "the boundary is located along height_m",
-                         "by_other_parameters");
-    }
-    if (!c || std::find(catalog.design_columns().begin(), catalog.design_columns().end(), *c) ==
-                  catalog.design_columns().end()) {
-      std::string list;
-      for (const auto& s : swept) list += (list.empty() ? "" : ", ") + s;
-      throw InputError(
-          "command line", "by", name,
-          "expected a parameter the design sweeps besides height_m" +
-              (list.empty() ? std::string(" (it sweeps none: one boundary)") : " (" + list + ")"));
-    }
-    if (std::find(key_columns.begin(), key_columns.end(), *c) == key_columns.end()) key_columns.push_back(*c);
-  }
-  for (int c : catalog.design_columns()) {
-    if (c != *height_column && std::find(key_columns.begin(), key_columns.end(), c) == key_columns.end()) {
-      key_columns.push_back(c);
-    }
-  }
+  const std::vector<int> key_columns = KeyColumns(catalog, *height_column, options.by);
   for (int c : key_columns) {
     boundary.key_names.push_back(
         catalog.column(c).path.substr(std::string(archive::kDesignGroup).size() + 1));
@@ -113,36 +205,9 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
     boundary.key_levels.push_back(catalog.column(c).levels);
   }
 
-  // Read every complete ok run's height, σ and axes, block by block.
-  std::map<std::vector<double>, std::uint32_t> groups;
   std::vector<std::vector<double>> group_keys;
-  std::vector<Sample> samples;
-  std::vector<ColumnValues> keys(key_columns.size());
-  ColumnValues heights, margins;
-  std::vector<double> key(key_columns.size());
-  for (std::int64_t first = 0; first < archive.run_count(); first += kChunkRows) {
-    const std::int64_t count = std::min(kChunkRows, archive.run_count() - first);
-    const std::vector<std::int8_t> status = archive.ReadStatus(first, count);  // before the values: snapshots
-    ReadColumn(archive, catalog.column(*height_column), first, count, heights);
-    ReadColumn(archive, catalog.column(*margin_column), first, count, margins);
-    for (std::size_t k = 0; k < key_columns.size(); ++k) {
-      ReadColumn(archive, catalog.column(key_columns[k]), first, count, keys[k]);
-    }
-    for (std::size_t r = 0; r < static_cast<std::size_t>(count); ++r) {
-      if (status[r] != 1 || !std::isfinite(margins.numbers[r]) || !std::isfinite(heights.numbers[r])) {
-        ++boundary.runs_skipped;
-        continue;
-      }
-      for (std::size_t k = 0; k < key_columns.size(); ++k) key[k] = keys[k].numbers[r];
-      auto [it, inserted] = groups.try_emplace(key, static_cast<std::uint32_t>(group_keys.size()));
-      if (inserted) group_keys.push_back(key);
-      samples.push_back(Sample{heights.numbers[r], margins.numbers[r], it->second});
-      ++boundary.runs_used;
-    }
-  }
-  std::sort(samples.begin(), samples.end(), [](const Sample& a, const Sample& b) {
-    return a.group != b.group ? a.group < b.group : a.height_m < b.height_m;
-  });
+  const std::vector<Sample> samples =
+      ReadSamples(archive, catalog, *height_column, *margin_column, key_columns, group_keys, boundary);
 
   // Where each key axis sits in the design's columns (to rebuild a run's design values).
   const std::vector<ParameterId>& design_ids = models.design_parameters();
@@ -186,55 +251,17 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
     }
     design_values[static_cast<std::size_t>(height_slot)] = h.front();
     point.parameters = models.Parameters(design_values);
-    const std::string range = h.empty() ? std::string() : Metres(h.front()) + " to " + Metres(h.back());
     if (!bracket) {
-      if (h.size() < 2) {
-        point.reason = "fewer than two heights with a finite stability margin";
-      } else if (std::all_of(s.begin(), s.end(), [](double v) { return v < 0; })) {
-        point.reason = "stable at every grid height from " + range;
-      } else if (std::all_of(s.begin(), s.end(), [](double v) { return v >= 0; })) {
-        point.reason = "unstable at every grid height from " + range;
-      } else {
-        point.reason = "no grid height has unstable below and stable above (" +
-                       std::to_string(point.grid_crossings) + " sign changes from " + range + ")";
-      }
+      point.reason = NoBracketReason(h, s, point.grid_crossings);
       begin = end;
       continue;
     }
     const double lower = h[*bracket], upper = h[*bracket + 1];
     point.grid_lower_height_m = lower;
     point.grid_upper_height_m = upper;
-    const LongitudinalModel& model = models.Model(point.parameters);
     const double speed_mps = point.parameters[static_cast<std::size_t>(*speed_id)];
-    // The rebuilt model must reproduce the archived σ at both ends of the bracket.
-    for (const auto& [height, stored] : {std::pair{lower, s[*bracket]}, std::pair{upper, s[*bracket + 1]}}) {
-      const double again = StabilityMargin(model, height, speed_mps);
-      if (!(std::abs(again - stored) <=
-            kMarginRelativeAgreement * std::abs(stored) + kMarginAbsoluteAgreement)) {
-        point.reason = "the model rebuilt from the archive gives sigma = " + Number(again) +
-                       " 1/s at H = " + Metres(height) + " where the archive has " + Number(stored) +
-                       " 1/s (made by another engine version?); not refined";
-        break;
-      }
-    }
-    if (point.reason.empty()) {
-      BoundaryOptions refine;
-      refine.lower_height_m = lower;
-      refine.upper_height_m = upper;
-      refine.samples_per_segment = kRefineSamplesPerSegment;
-      refine.tolerance_m = options.tolerance_m;
-      point.refined = FindBoundary(model, speed_mps, refine);
-      if (point.refined.height_m) {
-        point.height_m = point.refined.height_m;
-        point.height_over_span = *point.refined.height_m / boundary.wingspan_m;
-        for (const auto& crossing : point.refined.crossings) {
-          if (crossing.height_m == *point.height_m) point.bracket_width_m = crossing.bracket_width_m;
-        }
-      } else {
-        point.reason = "refinement inside the grid bracket " + Metres(lower) + " to " + Metres(upper) +
-                       " found none: " + point.refined.reason;
-      }
-    }
+    RefineBracket(models.Model(point.parameters), speed_mps, {s[*bracket], s[*bracket + 1]},
+                  options.tolerance_m, boundary.wingspan_m, point);
     begin = end;
   }
   std::sort(points.begin(), points.end(), [](const ArchiveBoundaryPoint& a, const ArchiveBoundaryPoint& b) {

@@ -1,6 +1,6 @@
 #include "engine/products/run_model.h"
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/column_reader.h"
@@ -44,7 +44,8 @@ ArchiveRunModels ArchiveRunModels::Of(const ArchiveReader& archive) {
   study.aircraft = ParseAircraft(
       text, (aircraft_path.empty() ? source : aircraft_path) + " (as stored in " + source + ")");
   const toml::table empty;
-  study.analyses.push_back(MakeModesAnalysis(TomlSection(empty, source, "analyses.modes"), &*study.aircraft));
+  study.analyses.push_back(
+      MakeAnalysis("modes", TomlSection(empty, source, "analyses.modes"), &*study.aircraft));
   study.design.kind = DesignKind::kSingle;
 
   ArchiveRunModels models;

@@ -481,14 +481,7 @@ class Aggregator {
     for (std::int64_t first = 0; first < summary_.runs; first += request_.chunk_rows) {
       const std::int64_t count = std::min(request_.chunk_rows, summary_.runs - first);
       const auto n = static_cast<std::size_t>(count);
-      // Statuses first: a nonzero status vouches for values written before it (snapshot safety).
-      const std::vector<std::int8_t> status = archive_.ReadStatus(first, count);
-      keep.assign(n, 0);
-      std::size_t complete = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        keep[i] = status[i] != 0;
-        complete += keep[i] != 0;
-      }
+      const std::size_t complete = MarkCompleteRuns(archive_, first, count, keep);
       summary_.complete += static_cast<std::int64_t>(complete);
       if (complete == 0) continue;
       if (filter_) {

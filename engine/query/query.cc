@@ -115,6 +115,7 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   GESWEEP_DEMAND(request.chunk_rows > 0);
 
   std::vector<const RunColumn*> shown_columns;
+  shown_columns.reserve(output.size());
   for (int c : output) shown_columns.push_back(&catalog.column(c));
   sink.Begin(shown_columns);
 
@@ -139,14 +140,7 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   for (std::int64_t first = 0; first < summary.runs; first += request.chunk_rows) {
     const std::int64_t count = std::min(request.chunk_rows, summary.runs - first);
     const auto n = static_cast<std::size_t>(count);
-    // Statuses first: a nonzero status vouches for values written before it (snapshot safety).
-    const std::vector<std::int8_t> status = archive.ReadStatus(first, count);
-    keep.assign(n, 0);
-    std::size_t complete = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      keep[i] = status[i] != 0;
-      complete += keep[i] != 0;
-    }
+    const std::size_t complete = MarkCompleteRuns(archive, first, count, keep);
     summary.complete += static_cast<std::int64_t>(complete);
     if (complete == 0) continue;
     if (filter) {

@@ -170,6 +170,7 @@ std::optional<int> ColumnCatalog::Resolve(const std::string& name, std::string* 
   const std::vector<std::string> candidates = Candidates(name);
   if (candidates.size() > 1) {
     std::vector<std::string> shown;
+    shown.reserve(candidates.size());
     for (const auto& path : candidates)
       shown.push_back(columns_[static_cast<std::size_t>(*FindPath(path))].name);
     *problem = "ambiguous column '" + name + "': it matches " + Join(shown, ", ") + "; write one of them";
@@ -239,6 +240,19 @@ std::vector<int> ColumnCatalog::Expand(const std::string& name, const std::strin
     throw RequestError(source, key, name, "the pattern matches no column", "describe_columns");
   }
   return matches;
+}
+
+std::size_t MarkCompleteRuns(const ArchiveReader& archive, std::int64_t first, std::int64_t count,
+                             std::vector<char>& keep) {
+  const auto n = static_cast<std::size_t>(count);
+  const std::vector<std::int8_t> status = archive.ReadStatus(first, count);
+  keep.assign(n, 0);
+  std::size_t complete = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    keep[i] = status[i] != 0;
+    complete += keep[i] != 0;
+  }
+  return complete;
 }
 
 void ReadColumn(const ArchiveReader& archive, const RunColumn& column, std::int64_t first, std::int64_t count,

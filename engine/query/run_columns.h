@@ -126,6 +126,12 @@ class ColumnCatalog {
 void ReadColumn(const ArchiveReader& archive, const RunColumn& column, std::int64_t first, std::int64_t count,
                 ColumnValues& out);
 
+/// Reads the statuses of rows [first, first + count) and sets keep[i] to 1 for a complete run
+/// (nonzero status), 0 otherwise; returns how many are complete. Read the statuses before the
+/// values: a nonzero status vouches for values written before it (snapshot safety).
+std::size_t MarkCompleteRuns(const ArchiveReader& archive, std::int64_t first, std::int64_t count,
+                             std::vector<char>& keep);
+
 /// Renders a number for people and CSV: shortest round-trip form up to `significant` digits;
 /// "nan", "inf", "-inf".
 std::string FormatValue(double value, int significant = 10);

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 
 namespace gesweep {
 namespace {
@@ -23,7 +23,7 @@ SweepPlan ModesPlan() {
   Study study;
   study.path = "<test>";
   study.aircraft = aircraft;
-  study.analyses.push_back(MakeModesAnalysis(TomlSection(empty, "<test>", "analyses.modes"), &aircraft));
+  study.analyses.push_back(MakeAnalysis("modes", TomlSection(empty, "<test>", "analyses.modes"), &aircraft));
   study.design.kind = DesignKind::kGrid;
   DesignParameter heights;
   heights.id = RequireParameter("height_m");

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 
 namespace gesweep {
 namespace {
@@ -27,7 +27,7 @@ SweepPlan ModesPlan() {
   Study study;
   study.path = "<test>";
   study.aircraft = aircraft;
-  study.analyses.push_back(MakeModesAnalysis(TomlSection(empty, "<test>", "analyses.modes"), &aircraft));
+  study.analyses.push_back(MakeAnalysis("modes", TomlSection(empty, "<test>", "analyses.modes"), &aircraft));
   study.design.kind = DesignKind::kGrid;
   std::vector<double> heights;
   for (int i = 0; i < 200; ++i) heights.push_back(1.0 + 0.05 * i);
@@ -66,7 +66,7 @@ TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
   study.path = "<test>";
   study.aircraft = aircraft;
   study.analyses.push_back(
-      MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+      MakeAnalysis("open_loop", TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
   study.fixed = {{RequireParameter("speed_mps"), 32.0208}, {RequireParameter("height_m"), 100.0}};
   const SweepPlan plan(std::move(study), ShardSpec{});
   RunCostOptions options;

@@ -13,7 +13,7 @@
 #include <mutex>
 #include <thread>
 
-#include "engine/analyses/analysis_adapters.h"
+#include "engine/analyses/analysis.h"
 #include "engine/control/landing_simulation.h"
 #include "engine/modal/modal_analysis.h"
 #include "engine/simulation/open_loop.h"
@@ -60,7 +60,7 @@ Study GridStudy(std::vector<std::unique_ptr<Analysis>> analyses, std::vector<Des
 std::unique_ptr<Analysis> Modes() {
   toml::table empty;
   static const Aircraft aircraft = LoadAircraftFile(kAircraft);
-  return MakeModesAnalysis(TomlSection(empty, "<test>", "analyses.modes"), &aircraft);
+  return MakeAnalysis("modes", TomlSection(empty, "<test>", "analyses.modes"), &aircraft);
 }
 
 int ColumnIndex(const SweepPlan& plan, const std::string& path) {
@@ -217,7 +217,8 @@ TEST(Runner, IshigamiRunsGiveTheFunctionValues) {
   toml::table empty;
   Study study;
   study.path = "<test>";
-  study.analyses.push_back(MakeIshigamiAnalysis(TomlSection(empty, "<test>", "analyses.ishigami"), nullptr));
+  study.analyses.push_back(
+      MakeAnalysis("ishigami", TomlSection(empty, "<test>", "analyses.ishigami"), nullptr));
   study.design.kind = DesignKind::kGrid;
   study.design.parameters = {Axis("x1", {-1, 0.5}), Axis("x2", {2}), Axis("x3", {-3, 1})};
   SweepPlan plan(std::move(study), ShardSpec{});
@@ -247,7 +248,8 @@ TEST(Runner, OpenLoopRunsEqualDirectSimulationSummaryAndSeries) {
   toml::table settings;
   settings.insert("duration_s", 20.0);
   std::vector<std::unique_ptr<Analysis>> analyses;
-  analyses.push_back(MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+  analyses.push_back(
+      MakeAnalysis("open_loop", TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
   Study study = GridStudy(std::move(analyses), {Axis("height_m", {1.5561, 5.5922})}, 2);
   study.storage.time_series = true;
   study.storage.output_dt_s = 0.03;
@@ -292,7 +294,8 @@ SweepPlan LongOpenLoopPlan(int chunk_runs) {
   settings.insert("step_s", 1e-3);
   settings.insert("input", "none");
   std::vector<std::unique_ptr<Analysis>> analyses;
-  analyses.push_back(MakeOpenLoopAnalysis(TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
+  analyses.push_back(
+      MakeAnalysis("open_loop", TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
   Study study = GridStudy(std::move(analyses), {Axis("height_m", {100.0, 200.0, 300.0, 400.0})}, chunk_runs);
   study.fixed = {{RequireParameter("speed_mps"), 32.0208}};
   return SweepPlan(std::move(study), ShardSpec{});
@@ -337,7 +340,7 @@ TEST(Runner, LandingRunsEqualDirectSimulationWithAndWithoutHDerivatives) {
   static const Aircraft aircraft = LoadAircraftFile(kAircraft);
   toml::table settings;
   std::vector<std::unique_ptr<Analysis>> analyses;
-  analyses.push_back(MakeLandingAnalysis(TomlSection(settings, "<test>", "analyses.landing"), &aircraft));
+  analyses.push_back(MakeAnalysis("landing", TomlSection(settings, "<test>", "analyses.landing"), &aircraft));
   Study study = GridStudy(std::move(analyses), {Axis("h_derivatives", {1.0, 0.0})}, 2);
   study.fixed = {{RequireParameter("height_m"), 500.0}, {RequireParameter("speed_mps"), 52.21}};
   SweepPlan plan(std::move(study), ShardSpec{});

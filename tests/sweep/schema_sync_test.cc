@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 
+#include "engine/aircraft/aircraft.h"
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/parameter_catalog.h"
 #include "engine/common/input_limits.h"
@@ -155,17 +156,32 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
   EXPECT_GT(checked, 40);
 }
 
-// The analyses whose settings and results are described once (engine/common/describe.h): their part of
-// the schema and of schemas/archive.md is checked against the description.
-const std::vector<std::string> kDescribedAnalyses = {"open_loop"};
-
-std::unique_ptr<Analysis> MakeAnalysis(const std::string& name) {
-  const toml::table empty;
+// schemas/archive.md has a paragraph on each registered analysis ("`<name>` — ..." under /results),
+// so that a new analysis is documented there.
+TEST(ArchiveDocument, HasAParagraphOnEveryAnalysis) {
+  std::ifstream in(std::string(GESWEEP_SOURCE_DIR) + "/schemas/archive.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const auto& entry : AnalysisRegistry()) {
-    if (entry.name == name) return entry.factory(TomlSection(empty, "test", "analyses." + name), nullptr);
+    const std::string name(entry.name);
+    EXPECT_TRUE(text.find("\n`" + name + "` —") != std::string::npos ||
+                text.find("`" + name + "/" + name + "`") != std::string::npos)
+        << "schemas/archive.md has no paragraph on the analysis " << name;
   }
-  ADD_FAILURE() << name << " is not registered";
-  return nullptr;
+}
+
+// The analyses whose settings are described once (engine/common/describe.h; modes and flying_qualities
+// have none): their part of the schema is checked against the description (and generated from it,
+// scripts/schemas/sync.py). Those whose results are described too: their paragraph of
+// schemas/archive.md is checked as well.
+const std::vector<std::string> kDescribedAnalyses = {"modes", "flying_qualities", "open_loop"};
+const std::vector<std::string> kDescribedResults = {"open_loop"};
+
+// The analysis `name` with its default settings (and the ANCE, for one that needs a model).
+std::unique_ptr<Analysis> MakeAnalysis(const std::string& name) {
+  static const Aircraft aircraft =
+      LoadAircraftFile(std::string(GESWEEP_SOURCE_DIR) + "/studies/aircraft/ance.toml");
+  const toml::table empty;
+  return gesweep::MakeAnalysis(name, TomlSection(empty, "test", "analyses." + name), &aircraft);
 }
 
 // Each described setting is a schema property of the same kind, range and default, and the schema
@@ -221,7 +237,7 @@ TEST(StudySchema, DescribedSettingsAreTheSchemaProperties) {
 TEST(ArchiveDocument, NamesTheDescribedColumnsInOrder) {
   std::ifstream in(std::string(GESWEEP_SOURCE_DIR) + "/schemas/archive.md");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (const std::string& name : kDescribedAnalyses) {
+  for (const std::string& name : kDescribedResults) {
     const auto analysis = MakeAnalysis(name);
     ASSERT_TRUE(analysis);
     OutputSchema schema;
