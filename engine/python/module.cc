@@ -65,8 +65,9 @@ std::string Repr(py::handle value) { return py::repr(value).cast<std::string>();
 
 /// A Python number as a double; InputError naming `key` when it is not one.
 double ToNumber(py::handle value, const std::string& key) {
-  if (py::isinstance<py::bool_>(value) || !(py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value) ||
-                                            py::hasattr(value, "__float__"))) {
+  if (py::isinstance<py::bool_>(value) ||
+      !(py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value) ||
+        py::hasattr(value, "__float__"))) {
     throw InputError(kArguments, key, Repr(value), "expected a number");
   }
   return value.cast<double>();
@@ -103,8 +104,9 @@ class PyAircraft {
  private:
   static bool Same(const ModelOptions& a, const ModelOptions& b) {
     return a.h_derivatives == b.h_derivatives && a.cdh == b.cdh && a.interpolation == b.interpolation &&
-           a.coefficient_scale == b.coefficient_scale && a.CDo_scale == b.CDo_scale && a.mass_kg == b.mass_kg &&
-           a.pitch_inertia_kgm2 == b.pitch_inertia_kgm2 && a.cg_shift_over_chord == b.cg_shift_over_chord;
+           a.coefficient_scale == b.coefficient_scale && a.CDo_scale == b.CDo_scale &&
+           a.mass_kg == b.mass_kg && a.pitch_inertia_kgm2 == b.pitch_inertia_kgm2 &&
+           a.cg_shift_over_chord == b.cg_shift_over_chord;
   }
 
   Aircraft aircraft_;
@@ -151,7 +153,9 @@ ModelOptions TakeModelOptions(py::dict& kwargs) {
         for (auto n : kCoefficientNames) names += (names.empty() ? "" : ", ") + std::string(n);
         throw InputError(kArguments, "scale", "'" + text + "'", "expected a coefficient name: " + names);
       }
-      options.coefficient_scale[Index(*c)] = ToNumber(factor, "scale." + text);
+      std::string key = "scale.";
+      key += text;
+      options.coefficient_scale[Index(*c)] = ToNumber(factor, key);
     }
   }
   return options;
@@ -168,9 +172,9 @@ void RefuseLeftovers(const py::dict& kwargs, const std::vector<std::string>& kno
 }
 
 const std::vector<std::string>& ModelOptionKeys() {
-  static const std::vector<std::string> keys = {"h_derivatives", "cdh",   "interpolation",      "mass_kg",
-                                                "pitch_inertia_kgm2", "cg_shift_over_chord", "CDo_scale",
-                                                "scale"};
+  static const std::vector<std::string> keys = {
+      "h_derivatives",       "cdh",       "interpolation", "mass_kg", "pitch_inertia_kgm2",
+      "cg_shift_over_chord", "CDo_scale", "scale"};
   return keys;
 }
 
@@ -225,8 +229,10 @@ void RunInterruptible(const std::function<void(const std::atomic<bool>*)>& work,
 // ---------------------------------------------------------------- modes
 
 /// gesweep.modes: the eigen-analysis at every (H, u) pair, in parallel, the GIL released.
-py::dict Modes(const PyAircraft& aircraft, py::array_t<double, py::array::c_style | py::array::forcecast> heights,
-               py::array_t<double, py::array::c_style | py::array::forcecast> speeds, int threads, py::kwargs kwargs) {
+py::dict Modes(const PyAircraft& aircraft,
+               py::array_t<double, py::array::c_style | py::array::forcecast> heights,
+               py::array_t<double, py::array::c_style | py::array::forcecast> speeds, int threads,
+               py::kwargs kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
   RefuseLeftovers(options, ModelOptionKeys());
@@ -246,7 +252,8 @@ py::dict Modes(const PyAircraft& aircraft, py::array_t<double, py::array::c_styl
   }
 
   const char* kModes[] = {"short_period", "phugoid", "height"};
-  const char* kProperties[] = {"natural_frequency_radps", "damping_ratio", "period_s", "time_to_half_or_double_s"};
+  const char* kProperties[] = {"natural_frequency_radps", "damping_ratio", "period_s",
+                               "time_to_half_or_double_s"};
   py::array_t<std::complex<double>> eigenvalues({n, py::ssize_t{5}});
   py::array_t<double> sigma(n), h_over_b(n);
   py::array_t<bool> stable(n);
@@ -358,7 +365,8 @@ py::dict Boundary(const PyAircraft& aircraft, double speed_mps, const std::strin
   py::list crossings, others;
   for (const auto& crossing : result.crossings) {
     crossings.append(CrossingDict(crossing));
-    if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9) others.append(crossing.height_m);
+    if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9)
+      others.append(crossing.height_m);
   }
   py::dict row;
   row["speed_mps"] = speed_mps;
@@ -480,7 +488,8 @@ py::list SettingsList(const T& object, const std::set<std::string>& leave_out) {
   for (const FieldRecord& r : ListFields(object)) {
     const FieldAttributes& a = r.attributes;
     if (!InScope(a, false) || leave_out.count(std::string(a.key))) continue;
-    if (r.kind != FieldKind::kNumber && r.kind != FieldKind::kBoolean && r.kind != FieldKind::kChoice) continue;
+    if (r.kind != FieldKind::kNumber && r.kind != FieldKind::kBoolean && r.kind != FieldKind::kChoice)
+      continue;
     py::dict entry;
     entry["key"] = std::string(a.key);
     entry["unit"] = std::string(a.unit);
@@ -535,7 +544,8 @@ py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps
     throw;
   }
   OpenLoopResult result;
-  RunInterruptible([&](const std::atomic<bool>* cancel) { result = SimulateOpenLoop(*model, config, cancel); });
+  RunInterruptible(
+      [&](const std::atomic<bool>* cancel) { result = SimulateOpenLoop(*model, config, cancel); });
   py::dict run = FieldsDict(config);
   run["aircraft"] = model->aircraft().name;
   run["h_derivatives"] = model->options().h_derivatives;
@@ -574,15 +584,16 @@ struct LandingSetting {
 const std::vector<LandingSetting>& LandingSettings() {
   static const std::vector<LandingSetting> settings = {
       {"start_height_m", "m", "Start height of the mean chord", &LandingConfig::start_height_m},
-      {"start_speed_mps", "m/s", "Start speed, also the plant's reference speed u0", &LandingConfig::start_speed_mps},
+      {"start_speed_mps", "m/s", "Start speed, also the plant's reference speed u0",
+       &LandingConfig::start_speed_mps},
       {"start_pitch_deg", "deg", "Start pitch angle (reference: level)", &LandingConfig::start_pitch_deg},
       {"start_glide_path_offset_m", "m", "Start deviation d from the glide path, positive above",
        &LandingConfig::start_glide_path_offset_m},
       {"glide_slope_deg", "deg", "Glide-slope angle, positive down", &LandingConfig::glide_slope_deg},
       {"design_height_m", "m", "Height of the linear model used for the gain; None: the wheel-contact height",
        nullptr, &LandingConfig::design_height_m},
-      {"design_speed_mps", "m/s", "Speed of the linear model used for the gain; None: start_speed_mps", nullptr,
-       &LandingConfig::design_speed_mps},
+      {"design_speed_mps", "m/s", "Speed of the linear model used for the gain; None: start_speed_mps",
+       nullptr, &LandingConfig::design_speed_mps},
       {"r_weight", "rad^2", "LQR weight on the elevator command", &LandingConfig::r_weight},
       {"actuator_pole_per_s", "1/s", "Elevator actuator pole", &LandingConfig::actuator_pole_per_s},
       {"compensator_pole_per_s", "1/s", "Compensator pole S_d", &LandingConfig::compensator_pole_per_s},
@@ -595,14 +606,16 @@ const std::vector<LandingSetting>& LandingSettings() {
       {"plant_fixed_reference_height_m", "m",
        "Fixed reference height with plant_height_reference='fixed'; None: the top table height", nullptr,
        &LandingConfig::plant_fixed_reference_height_m},
-      {"relative_tolerance", "1", "Dormand-Prince relative tolerance (ode45's)", &LandingConfig::relative_tolerance},
+      {"relative_tolerance", "1", "Dormand-Prince relative tolerance (ode45's)",
+       &LandingConfig::relative_tolerance},
       {"absolute_tolerance", "1", "Dormand-Prince absolute tolerance", &LandingConfig::absolute_tolerance},
       {"max_step_s", "s", "Largest step", &LandingConfig::max_step_s},
       {"time_limit_s", "s",
-       "Time limit (outcome no_touchdown); None: twice the reference trajectory's time to the wheels", nullptr,
-       &LandingConfig::time_limit_s},
+       "Time limit (outcome no_touchdown); None: twice the reference trajectory's time to the wheels",
+       nullptr, &LandingConfig::time_limit_s},
       {"output_interval_s", "s", "Series sampling interval", &LandingConfig::output_interval_s},
-      {"divergence_pitch_deg", "deg", "|pitch| that ends the run as diverged", &LandingConfig::divergence_pitch_deg},
+      {"divergence_pitch_deg", "deg", "|pitch| that ends the run as diverged",
+       &LandingConfig::divergence_pitch_deg},
   };
   return settings;
 }
@@ -639,7 +652,8 @@ py::list LandingSettingsList() {
   py::dict p;
   p["key"] = "plant_height_reference";
   p["unit"] = "1";
-  p["doc"] = "What the plant's h-derivative terms measure dH from: 'path' (the reference trajectory) or 'fixed'";
+  p["doc"] =
+      "What the plant's h-derivative terms measure dH from: 'path' (the reference trajectory) or 'fixed'";
   p["default"] = std::string(ToString(defaults.plant_height_reference));
   out.append(p);
   return out;
@@ -705,7 +719,8 @@ py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs)
   design["h_derivatives"] = r.design.design_h_derivatives;
   if (r.design.ok()) {
     py::dict gain;
-    for (int i = 0; i < kLandingStateCount; ++i) gain[py::str(std::string(LandingStateNames()[i]))] = r.design.gain[i];
+    for (int i = 0; i < kLandingStateCount; ++i)
+      gain[py::str(std::string(LandingStateNames()[i]))] = r.design.gain[i];
     design["gain"] = gain;
   } else {
     design["gain"] = py::none();
@@ -757,9 +772,18 @@ py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs)
   if (!summary_only) {
     const auto& s = r.series;
     const auto n = static_cast<py::ssize_t>(s.size());
-    const char* names[] = {"time_s",           "height_m",         "reference_height_m", "tracking_error_m",
-                           "speed_mps",        "delta_w_mps",      "pitch_rate_degps",   "pitch_deg",
-                           "sink_rate_mps",    "elevator_deg",     "elevator_command_deg", "compensator_m_s",
+    const char* names[] = {"time_s",
+                           "height_m",
+                           "reference_height_m",
+                           "tracking_error_m",
+                           "speed_mps",
+                           "delta_w_mps",
+                           "pitch_rate_degps",
+                           "pitch_deg",
+                           "sink_rate_mps",
+                           "elevator_deg",
+                           "elevator_command_deg",
+                           "compensator_m_s",
                            "error_integral_m_s"};
     std::vector<py::array_t<double>> columns;
     for (std::size_t c = 0; c < std::size(names); ++c) columns.emplace_back(n);
@@ -794,9 +818,11 @@ py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs)
 
 py::dict Run(const std::string& study_path, const std::string& archive_path, int threads, py::object progress,
              bool resume, bool force, const std::string& shard_text) {
-  if (resume && force) throw InputError(kArguments, "force", "True", "cannot be combined with resume=True (choose one)");
+  if (resume && force)
+    throw InputError(kArguments, "force", "True", "cannot be combined with resume=True (choose one)");
   if (threads < 0 || threads > 4096)
-    throw InputError(kArguments, "threads", std::to_string(threads), "expected 1 to 4096 worker threads, or None");
+    throw InputError(kArguments, "threads", std::to_string(threads),
+                     "expected 1 to 4096 worker threads, or None");
   ShardSpec shard;
   if (!shard_text.empty()) shard = ParseShard(shard_text, "shard");
   Study study = LoadStudy(study_path);
@@ -814,10 +840,10 @@ py::dict Run(const std::string& study_path, const std::string& archive_path, int
   call += ")";
   {
     py::gil_scoped_release release;
-    writer = ArchiveWriter::Open(archive_path, plan, RunProvenance{call, workers},
-                                 resume ? ArchiveOpenMode::kResume
-                                        : (force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
-                                 &opened);
+    writer = ArchiveWriter::Open(
+        archive_path, plan, RunProvenance{call, workers},
+        resume ? ArchiveOpenMode::kResume : (force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
+        &opened);
   }
   SweepProgress state;
   state.runs_skipped = opened.runs_complete;
@@ -955,8 +981,8 @@ PYBIND11_MODULE(_gesweep, m) {
       PyExc_ValueError, nullptr));
   m.attr("InputError") = InputErrorType();
   ArchiveErrorType() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
-      "gesweep.ArchiveError", "An archive could not be written or read (I/O, disk full, damage).", PyExc_OSError,
-      nullptr));
+      "gesweep.ArchiveError", "An archive could not be written or read (I/O, disk full, damage).",
+      PyExc_OSError, nullptr));
   m.attr("ArchiveError") = ArchiveErrorType();
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -975,10 +1001,13 @@ PYBIND11_MODULE(_gesweep, m) {
   });
 
   py::class_<PyAircraft, std::shared_ptr<PyAircraft>>(m, "NativeAircraft")
-      .def_static("load", [](const std::string& path) { return std::make_shared<PyAircraft>(LoadAircraftFile(path)); })
+      .def_static(
+          "load",
+          [](const std::string& path) { return std::make_shared<PyAircraft>(LoadAircraftFile(path)); })
       .def("facts", &AircraftFacts)
       .def("table", &AircraftTable);
-  m.def("modes", &Modes, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"), py::arg("threads") = 0);
+  m.def("modes", &Modes, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),
+        py::arg("threads") = 0);
   m.def("boundary", &Boundary, py::arg("aircraft"), py::arg("speed_mps"), py::arg("method") = "hurwitz",
         py::arg("sensitivities") = false);
   m.def("simulate", &Simulate, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),
