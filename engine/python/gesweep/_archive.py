@@ -169,8 +169,10 @@ def _axis_coordinate(dataset):
     attrs = _attrs(dataset)
     attrs.pop("axis_values", None)
     if levels is not None:
-        names = np.array(_text(list(levels)), dtype=object)
-        return names[values.astype(int)], attrs
+        names = _text(list(levels))
+        if names == ["false", "true"]:  # a boolean: True and False
+            return values.astype(bool), attrs
+        return np.array(names, dtype=object)[values.astype(int)], attrs
     return values, attrs
 
 
@@ -181,7 +183,7 @@ def open_archive(path, product=None):
     list_products(path)), e.g. "boundary", for that product as a Dataset of its own.
 
     A grid design gives one dimension per swept parameter, in the design's order, with its axis values
-    as the coordinate (a choice's level names, a boolean's 0/1), so that
+    as the coordinate (a choice's level names, a boolean's True and False), so that
     ``ds.stability_margin_per_s.sel(speed_mps=32, method="nearest").plot()`` works; any other design a
     `run` dimension with the design columns as coordinates. Every results/<analysis>/<name> is a
     variable named <name> ('/' as '_'; <analysis>_<name> where analyses share a name), every
