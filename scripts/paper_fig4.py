@@ -43,14 +43,14 @@ for h, r in responses.items():
     print(f"{h:8.4f} {s['end_event']:>11} {s['end_time_s']:9.3f} {s['min_height_m']:10.4f}")
 
 # %% Fig. 4: height against time, one panel per start height
-fig, axes = plt.subplots(2, 5, figsize=(16, 6), sharex=True)
+fig, axes = plt.subplots(2, 5, figsize=(16, 6))
 for ax, (h, r) in zip(axes.ravel(), responses.items()):
     series = r.series
     ax.plot(series["time_s"], series["height_m"], lw=0.8)
     ax.axhline(ance.wheel_contact_height_m, color="k", lw=0.6, ls=":")
     ax.axhline(boundary, color="tab:red", lw=0.6, ls="--")
     ax.set_title(f"H0 = {h:g} m ({r.summary['end_event']})", fontsize=9)
-    ax.set_xlim(0, 300)
+    ax.set_xlim(0, max(r.summary["end_time_s"], 2.0))  # the first dives end within 2 s
 for ax in axes[1]:
     ax.set_xlabel("time_s")
 for ax in axes[:, 0]:

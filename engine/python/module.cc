@@ -118,6 +118,7 @@ class PyAircraft {
 /// every key it takes is removed from `kwargs`.
 ModelOptions TakeModelOptions(py::dict& kwargs) {
   ModelOptions options;
+  if (kwargs.empty()) return options;
   auto take = [&](const char* key) -> std::optional<py::object> {
     if (!kwargs.contains(key)) return std::nullopt;
     py::object value = kwargs[key];
@@ -163,6 +164,7 @@ ModelOptions TakeModelOptions(py::dict& kwargs) {
 
 /// Refuses keyword arguments nothing took.
 void RefuseLeftovers(const py::dict& kwargs, const std::vector<std::string>& known) {
+  if (kwargs.empty()) return;
   for (auto [key, value] : kwargs) {
     const std::string name = py::str(key).cast<std::string>();
     std::string list;

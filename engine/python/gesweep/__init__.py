@@ -132,7 +132,9 @@ def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **mo
     A list of speeds gives a list of such dicts.
     Model options (keywords):
 """
-    options = _given(model_options)
+    options = _given(model_options) if model_options else model_options
+    if isinstance(speed_mps, (float, int)):  # the common case, without NumPy's conversion
+        return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
     if _np.ndim(speed_mps) > 0:
         return [_gesweep.boundary(aircraft._native, float(u), method, sensitivities, **options)
                 for u in _np.asarray(speed_mps, dtype=float).ravel()]
