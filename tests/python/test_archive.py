@@ -159,3 +159,20 @@ def test_keyboard_interrupt_then_resume_is_bit_identical(gesweep, tmp_path):
     assert a.keys() == b.keys()
     for name in a:
         assert a[name] == b[name], name
+
+
+def test_analysis_products_as_datasets(gesweep, tmp_path):
+    archive = tmp_path / "grid3.h5"
+    gesweep.run(HERE / "grid3.toml", archive)
+    cli("boundary", "--archive", archive)
+    assert "boundary" in gesweep.list_products(archive)
+    with h5py.File(archive, "r") as f:
+        raw = {name: f["analysis/boundary"][name][()] for name in f["analysis/boundary"]
+               if isinstance(f["analysis/boundary"][name], h5py.Dataset)}
+    product = gesweep.open_archive(archive, product="boundary")
+    for name, values in raw.items():
+        if values.dtype.kind == "f":
+            np.testing.assert_array_equal(product[name].values, values, err_msg=name)
+    product.close()
+    with pytest.raises(gesweep.InputError, match="product = nothing: expected one of"):
+        gesweep.open_archive(archive, product="nothing")
