@@ -16,6 +16,7 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -193,25 +194,25 @@ std::shared_ptr<const LongitudinalModel> ModelOf(const PyAircraft& aircraft, py:
 void RunInterruptible(const std::function<void(const std::atomic<bool>*)>& work,
                       const std::function<void()>& tick = {}) {
   std::atomic<bool> cancel{false};
-  std::atomic<bool> done{false};
-  std::exception_ptr failure;
+  std::promise<void> finished;
+  std::future<void> done = finished.get_future();
   std::thread worker([&] {
     try {
       work(&cancel);
+      finished.set_value();
     } catch (...) {
-      failure = std::current_exception();
+      finished.set_exception(std::current_exception());
     }
-    done = true;
   });
   std::exception_ptr interrupted;
-  while (!done) {
+  while (true) {
+    bool ready = false;
     {
       py::gil_scoped_release release;
-      const auto until = std::chrono::steady_clock::now() + kPollInterval;
-      while (!done && std::chrono::steady_clock::now() < until)
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      ready = done.wait_for(kPollInterval) == std::future_status::ready;  // returns as soon as it ends
     }
-    if (done || interrupted) continue;
+    if (ready) break;
+    if (interrupted) continue;
     try {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
       if (tick) tick();
@@ -220,12 +221,9 @@ void RunInterruptible(const std::function<void(const std::atomic<bool>*)>& work,
       cancel = true;
     }
   }
-  {
-    py::gil_scoped_release release;
-    worker.join();
-  }
+  worker.join();
   if (interrupted) std::rethrow_exception(interrupted);
-  if (failure) std::rethrow_exception(failure);
+  done.get();  // the work's exception, if any
 }
 
 // ---------------------------------------------------------------- modes
