@@ -30,10 +30,21 @@ constexpr Wording kWordings[] = {
     {"no_write", "", " pass --no-write to only print {}"},
 };
 
-}  // namespace
+// The same remedies as the Python module words them: the keyword arguments of gesweep.run.
+constexpr Wording kPythonWordings[] = {
+    {"force", "", "; pass force=True to replace it"},
+    {"force_use", "", "; pass force=True to replace it"},
+    {"force_or_other_output", "", "; pass force=True to replace it, or another archive_path"},
+    {"resume_or_force", "", "; pass resume=True to continue it or force=True to replace it"},
+    {"resume_shard_first", "", "; finish it with gesweep.run(..., shard=\"{}\", resume=True) first"},
+    {"resume_shard", "", "; finish it with gesweep.run(..., shard=\"{}\", resume=True)"},
+    {"resume_repairs", "", ": gesweep.run(study, \"{}\", resume=True) repairs it and goes on"},
+    {"finish_sweep", "", "; finish the sweep with gesweep.run(study, \"{}\", resume=True)"},
+};
 
-std::optional<std::string> WordRemedy(const RequestError& error) {
-  for (const Wording& w : kWordings) {
+template <std::size_t N>
+std::optional<std::string> Word(const RequestError& error, const Wording (&wordings)[N]) {
+  for (const Wording& w : wordings) {
     if (error.remedy() != w.remedy) continue;
     std::string after = w.after;
     if (const auto at = after.find("{}"); at != std::string::npos)
@@ -41,6 +52,19 @@ std::optional<std::string> WordRemedy(const RequestError& error) {
     return w.before + error.expected() + after;
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> WordRemedy(const RequestError& error) { return Word(error, kWordings); }
+
+InputError ForPython(const InputError& error) {
+  const auto* request = dynamic_cast<const RequestError*>(&error);
+  if (request == nullptr) return error;
+  std::optional<std::string> worded = Word(*request, kPythonWordings);
+  if (!worded) worded = WordRemedy(*request);
+  if (!worded) return error;
+  return InputError(error.source(), error.key(), error.value(), *worded, error.line());
 }
 
 const FlagNames& CommandLineFlags() {

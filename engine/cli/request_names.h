@@ -31,4 +31,10 @@ std::optional<std::string> WordRemedy(const RequestError& error);
 InputError ForCommandLine(const InputError& error);
 InputError ForCommandLine(const InputError& error, const FlagNames& flags);
 
+/// `error` as the Python module gesweep shows it (engine/python, docs/python.md): the key is the
+/// request field, which is also the Python argument's name; the remedy of a RequestError is worded as
+/// the keyword argument that gives it (force=True, resume=True), or, for a remedy with no Python
+/// equivalent, as the command line words it.
+InputError ForPython(const InputError& error);
+
 }  // namespace gesweep::cli

@@ -13,6 +13,8 @@ GESWEEP_PACKAGES=(
   libopenmpi-dev openmpi-bin
   clang-format clang-tidy  # tests/layout: the formatting check (hygiene.clang_format) and the tidy check
   python3 python3-numpy python3-scipy python3-h5py python3-matplotlib python3-jsonschema
+  pybind11-dev python3-pybind11 python3-dev  # engine/python: the module gesweep (docs/python.md)
+  python3-xarray python3-h5netcdf python3-pandas python3-pytest netcdf-bin  # its API and tests/python
   chromium  # headless, for tests/report: the report page loads and shows every figure
 )
 

@@ -1,0 +1,237 @@
+"""gesweep from Python: the engine's functions on NumPy arrays, and the archives as xarray Datasets.
+
+    import gesweep                                   # PYTHONPATH=build/python (docs/python.md)
+    ance = gesweep.Aircraft.load("studies/aircraft/ance.toml")
+    b = gesweep.boundary(ance, 32.0208)              # H*, every crossing (and sensitivities=True)
+    m = gesweep.modes(ance, heights, speeds)         # vectorised: eigenvalues N x 5, sigma, modes
+    r = gesweep.simulate(ance, 2.5935, 32.0208, pulse_amplitude_deg=5, pulse_duration_s=0.2)
+    gesweep.run("studies/stability_map.toml", "results/stability_map.h5")
+    ds = gesweep.open_archive("results/stability_map.h5")
+
+Every function calls the engine, not the command line (no process per call), and releases the GIL
+while it computes. Bad input raises gesweep.InputError (a ValueError) with the one line the gesweep
+command prints. docs/python.md documents the whole API.
+"""
+
+import inspect as _inspect
+from collections import namedtuple as _namedtuple
+
+import numpy as _np
+
+from . import _gesweep
+from ._gesweep import ArchiveError, InputError
+from ._archive import list_products, open_archive
+
+__version__ = _gesweep.__version__
+__all__ = ["Aircraft", "modes", "boundary", "simulate", "land", "run", "open_archive", "list_products",
+           "InputError", "ArchiveError", "MODEL_OPTIONS", "CLASSIFICATION_LEVELS"]
+
+#: The model options of docs/model.md that modes, boundary, simulate and land take as keywords:
+#: (key, default, description).
+MODEL_OPTIONS = (
+    ("h_derivatives", True, "Include Xh, Zh and Mh (docs/model.md section 4); False leaves them out"),
+    ("cdh", "polar", "CDh model: 'polar' (d(k CLo^2)/dh) or 'zero'"),
+    ("interpolation", "linear", "Table interpolation: 'linear' or 'pchip'"),
+    ("mass_kg", None, "Mass override, kg (None: the aircraft's)"),
+    ("pitch_inertia_kgm2", None, "Pitch inertia Iy override, kg m^2 (None: the aircraft's)"),
+    ("cg_shift_over_chord", 0.0, "CG moved aft by this fraction of the mean chord"),
+    ("CDo_scale", 1.0, "Factor on CDo"),
+    ("scale", None, "Factors on coefficient columns, e.g. {'CLh': 1.1} (names of the aircraft file)"),
+)
+assert [k for k, _, _ in MODEL_OPTIONS] == list(_gesweep.model_option_keys())
+
+#: The names of the codes of modes(...)["classification"] (0, 1, 2, 3).
+CLASSIFICATION_LEVELS = tuple(_gesweep.classification_levels())
+
+_MODEL_DOC = "\n".join(f"    {k} = {d!r}: {doc}" for k, d, doc in MODEL_OPTIONS)
+
+
+def _model_parameters():
+    return [_inspect.Parameter(k, _inspect.Parameter.KEYWORD_ONLY, default=d) for k, d, _ in MODEL_OPTIONS]
+
+
+def _given(options):
+    """The keyword arguments given, less those left at None (the engine's default)."""
+    return {k: v for k, v in options.items() if v is not None}
+
+
+class Aircraft:
+    """An aircraft file, loaded and validated once (schemas/aircraft.schema.json).
+
+    Attributes: name, source_path, wingspan_m, mean_chord_m, wing_area_m2, mass_kg, pitch_inertia_kgm2,
+    cg_over_chord, CDo, stall_speed_mps, wheel_contact_height_m, field_elevation_m (SI units).
+    """
+
+    def __init__(self, native):
+        self._native = native
+        for key, value in native.facts().items():
+            setattr(self, key, value)
+
+    @classmethod
+    def load(cls, path):
+        """Loads an aircraft file (TOML). Raises InputError naming the file, key, value and line."""
+        return cls(_gesweep.NativeAircraft.load(str(path)))
+
+    @property
+    def table(self):
+        """The coefficient table against height as a pandas DataFrame: a column height_m (the
+        free-flight row last, height inf) and one column per tabulated coefficient, named as in the
+        aircraft file; units in ``table.attrs["units"]`` (per radian and dimensionless; CLh, CMh are
+        derivatives with respect to h = H/c)."""
+        import pandas as pd
+        frame = pd.DataFrame(self._native.table())
+        units = {name: "1" for name in frame.columns}
+        units["height_m"] = "m"
+        frame.attrs["units"] = units
+        frame.attrs["aircraft"] = self.name
+        return frame
+
+    def __repr__(self):
+        return f"gesweep.Aircraft({self.name!r} from {self.source_path!r})"
+
+
+def modes(aircraft, height_m, speed_mps, *, threads=None, **model_options):
+    """The eigen-analysis of Eq. (1) at every (height_m, speed_mps) pair (docs/model.md section 6).
+
+    height_m, speed_mps: numbers or arrays (broadcast together; inf is free flight), m and m/s.
+    Runs in parallel on `threads` threads (None: all cores) with the GIL released, no Python per point.
+    Returns a dict of NumPy arrays of the broadcast shape S, named as the archive's results/modes columns:
+      eigenvalues (S + (5,), complex, 1/s): short period (2), phugoid (2), height (1), a pair Im > 0 first
+      stability_margin_per_s (1/s): sigma, the largest Re, the neutral height root left out
+      stable (bool): sigma < 0;  classification (int8): codes of CLASSIFICATION_LEVELS
+      height_over_span (1)
+      <mode>/eigenvalue_re_per_s, <mode>/eigenvalue_im_per_s (1/s), <mode>/natural_frequency_radps,
+      <mode>/damping_ratio (1), <mode>/period_s (s), <mode>/time_to_half_or_double_s (s),
+      <mode>/oscillatory, <mode>/neutral (bool), for <mode> in short_period, phugoid, height.
+    Model options (keywords):
+"""
+    h, u = _np.broadcast_arrays(_np.asarray(height_m, dtype=float), _np.asarray(speed_mps, dtype=float))
+    shape = h.shape
+    out = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
+                         int(threads or 0), **_given(model_options))
+    return {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
+
+
+modes.__doc__ += _MODEL_DOC
+modes.__signature__ = _inspect.Signature(
+    [_inspect.Parameter(n, _inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in ("aircraft", "height_m", "speed_mps")]
+    + [_inspect.Parameter("threads", _inspect.Parameter.KEYWORD_ONLY, default=None)] + _model_parameters())
+
+
+def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **model_options):
+    """The stability boundary H*(u0) at one speed (docs/model.md section 6), as `gesweep boundary`.
+
+    method: 'hurwitz' (every crossing of the imaginary axis, certified) or 'sampled' (the former search).
+    sensitivities: also dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by
+    |p dH*/dp| (docs/sensitivity.md).
+    Returns a dict with the keys of `gesweep boundary --format json`'s rows: speed_mps, height_m (H*, m;
+    nan when none), height_over_span, other_crossings_m, crossings (list of dicts: height_m, kind,
+    mode, eigenvalue (complex), stable_above, ...), method, certified, certificate, scanned_range_m,
+    reason ('' when there is a boundary), and with sensitivities: sensitivities (list of dicts),
+    sensitivity_mode, dsigma_dH_per_s_per_m, no_effect_parameters.
+    A list of speeds gives a list of such dicts.
+    Model options (keywords):
+"""
+    options = _given(model_options) if model_options else model_options
+    if isinstance(speed_mps, (float, int)):  # the common case, without NumPy's conversion
+        return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
+    if _np.ndim(speed_mps) > 0:
+        return [_gesweep.boundary(aircraft._native, float(u), method, sensitivities, **options)
+                for u in _np.asarray(speed_mps, dtype=float).ravel()]
+    return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
+
+
+boundary.__doc__ += _MODEL_DOC
+boundary.__signature__ = _inspect.Signature(
+    [_inspect.Parameter(n, _inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in ("aircraft", "speed_mps")]
+    + [_inspect.Parameter("method", _inspect.Parameter.KEYWORD_ONLY, default="hurwitz"),
+       _inspect.Parameter("sensitivities", _inspect.Parameter.KEYWORD_ONLY, default=False)]
+    + _model_parameters())
+
+#: What simulate and land return: the settings used (dict), the summary (dict) and the series
+#: (pandas DataFrame, columns named with their units as in the CSV; None with summary_only=True).
+Response = _namedtuple("Response", ["run", "summary", "series"])
+
+
+def _frame(columns):
+    if columns is None:
+        return None
+    import pandas as pd
+    return pd.DataFrame(columns)
+
+
+def _settings_doc(settings):
+    lines = []
+    for s in settings:
+        unit = f" [{s['unit']}]" if s.get("unit") not in (None, "1") else ""
+        choices = f" (one of {', '.join(s['choices'])})" if s.get("choices") else ""
+        allowed = f"; {s['range']}" if s.get("range") else ""
+        lines.append(f"    {s['key']} = {s['default']!r}{unit}: {s['doc']}{choices}{allowed}")
+    return "\n".join(lines)
+
+
+_SIMULATE_SETTINGS = _gesweep.simulate_settings()
+_LAND_SETTINGS = _gesweep.land_settings()
+
+
+def simulate(aircraft, height_m, speed_mps, *, summary_only=False, output_dt_s=None, **options):
+    """One open-loop time response of Eq. (1) after an elevator input, the derivatives re-evaluated at
+    the current height and speed (docs/model.md section 7, docs/simulation.md), as `gesweep simulate`.
+
+    height_m: start height H0, m; speed_mps: reference speed u0, m/s. output_dt_s: the series' sampling
+    interval, s (None: the step). Ctrl-C (KeyboardInterrupt) stops it within a step.
+    Returns Response(run, summary, series): run and summary are dicts with the keys of
+    `gesweep simulate --format json` (numbers in the key's unit; nan where the JSON has null), series a
+    pandas DataFrame with the CSV's columns (time_s, delta_speed_mps, delta_normal_velocity_mps,
+    pitch_rate_radps, delta_pitch_rad, delta_height_m, height_m, speed_mps, elevator_rad), or None with
+    summary_only=True.
+    Settings (keywords; the fields of the engine's OpenLoopConfig, as `gesweep simulate --help`):
+"""
+    run_, summary, series = _gesweep.simulate(aircraft._native, height_m, speed_mps, summary_only, output_dt_s,
+                                              **_given(options))
+    return Response(run_, summary, _frame(series))
+
+
+simulate.__doc__ += _settings_doc(_SIMULATE_SETTINGS) + "\n    Model options (keywords):\n" + _MODEL_DOC
+simulate.__signature__ = _inspect.Signature(
+    [_inspect.Parameter(n, _inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in ("aircraft", "height_m", "speed_mps")]
+    + [_inspect.Parameter("summary_only", _inspect.Parameter.KEYWORD_ONLY, default=False),
+       _inspect.Parameter("output_dt_s", _inspect.Parameter.KEYWORD_ONLY, default=None)]
+    + [_inspect.Parameter(s["key"], _inspect.Parameter.KEYWORD_ONLY, default=s["default"]) for s in _SIMULATE_SETTINGS]
+    + _model_parameters())
+
+
+def land(aircraft, *, summary_only=False, **options):
+    """The closed-loop automatic landing (docs/model.md section 8, docs/landing.md), as `gesweep land`.
+
+    Returns Response(run, summary, series): summary with the keys of `gesweep land --format json`
+    (outcome: landed, no_touchdown, stall, diverged or design_failed; design: the gain and the
+    closed-loop eigenvalues), series a DataFrame with the CSV's columns (angles in degrees) and phase.
+    A failed design is data (outcome 'design_failed'), not an exception.
+    Settings (keywords; the names ValidateLandingConfig uses):
+"""
+    run_, summary, series = _gesweep.land(aircraft._native, summary_only, **_given(options))
+    return Response(run_, summary, _frame(series))
+
+
+land.__doc__ += _settings_doc(_LAND_SETTINGS) + "\n    Model options (keywords):\n" + _MODEL_DOC
+land.__signature__ = _inspect.Signature(
+    [_inspect.Parameter("aircraft", _inspect.Parameter.POSITIONAL_OR_KEYWORD),
+     _inspect.Parameter("summary_only", _inspect.Parameter.KEYWORD_ONLY, default=False)]
+    + [_inspect.Parameter(s["key"], _inspect.Parameter.KEYWORD_ONLY, default=s["default"]) for s in _LAND_SETTINGS]
+    + _model_parameters())
+
+
+def run(study_path, archive_path, *, threads=None, progress=None, resume=False, force=False, shard=None):
+    """Runs a study file's sweep into an HDF5 archive (schemas/archive.md), as `gesweep run`.
+
+    threads: worker threads (None: all cores). progress: called as progress(done, to_do) about every
+    50 ms and at the end. resume=True continues an existing archive; force=True replaces one; shard:
+    "i/N". The GIL is released while the sweep runs. KeyboardInterrupt (Ctrl-C) stops it between two
+    integration steps, closes the archive with every complete batch kept, and is raised again:
+    run(..., resume=True) completes it, equal bit for bit to an uninterrupted run.
+    Failed runs are data (status 2 in the archive), counted in the result: a dict with archive, runs,
+    runs_run, runs_ok, runs_failed, runs_pending, cancelled, threads, seconds.
+    """
+    return _gesweep.run(str(study_path), str(archive_path), int(threads or 0), progress, bool(resume),
+                        bool(force), shard or "")

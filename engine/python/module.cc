@@ -1,0 +1,1032 @@
+// The native part of the Python module gesweep (docs/python.md): the engine's functions through
+// pybind11, with the GIL released while they compute. engine/python/gesweep/__init__.py wraps it in
+// the public API (signatures, docstrings from the described fields, DataFrames, open_archive).
+#include <pybind11/complex.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "engine/archive/archive_error.h"
+#include "engine/archive/archive_writer.h"
+#include "engine/cli/request_names.h"
+#include "engine/common/describe.h"
+#include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
+#include "engine/common/output_guard.h"
+#include "engine/control/landing_simulation.h"
+#include "engine/estimators/local_sensitivity.h"
+#include "engine/modal/boundary.h"
+#include "engine/modal/modal_analysis.h"
+#include "engine/simulation/open_loop.h"
+#include "engine/sweep/runner.h"
+#include "engine/sweep/study.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace py = pybind11;
+
+namespace gesweep::python {
+namespace {
+
+/// The source an error about a function's argument names (the CLI's is "command line").
+constexpr const char* kArguments = "argument";
+
+/// How often a waiting call looks at Python's signals and calls the progress callback.
+constexpr auto kPollInterval = std::chrono::milliseconds(50);
+
+py::object& InputErrorType() {
+  static py::object type;
+  return type;
+}
+py::object& ArchiveErrorType() {
+  static py::object type;
+  return type;
+}
+
+std::string Repr(py::handle value) { return py::repr(value).cast<std::string>(); }
+
+/// A Python number as a double; InputError naming `key` when it is not one.
+double ToNumber(py::handle value, const std::string& key) {
+  if (py::isinstance<py::bool_>(value) ||
+      !(py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value) ||
+        py::hasattr(value, "__float__"))) {
+    throw InputError(kArguments, key, Repr(value), "expected a number");
+  }
+  return value.cast<double>();
+}
+
+bool ToBool(py::handle value, const std::string& key) {
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+  if (py::hasattr(value, "dtype") && py::str(value.attr("dtype")).cast<std::string>() == "bool")
+    return value.cast<bool>();
+  throw InputError(kArguments, key, Repr(value), "expected True or False");
+}
+
+std::string ToText(py::handle value, const std::string& key) {
+  if (!py::isinstance<py::str>(value)) throw InputError(kArguments, key, Repr(value), "expected a string");
+  return value.cast<std::string>();
+}
+
+// ---------------------------------------------------------------- the model
+
+/// An aircraft file loaded once, and the model of the options used last (a boundary search or a
+/// modes call at the same options builds nothing).
+class PyAircraft {
+ public:
+  explicit PyAircraft(Aircraft aircraft) : aircraft_(std::move(aircraft)) {}
+  const Aircraft& aircraft() const { return aircraft_; }
+
+  std::shared_ptr<const LongitudinalModel> Model(const ModelOptions& options) const {
+    std::lock_guard lock(mutex_);
+    if (model_ && Same(model_->options(), options)) return model_;
+    model_ = std::make_shared<const LongitudinalModel>(aircraft_, options);
+    return model_;
+  }
+
+ private:
+  static bool Same(const ModelOptions& a, const ModelOptions& b) {
+    return a.h_derivatives == b.h_derivatives && a.cdh == b.cdh && a.interpolation == b.interpolation &&
+           a.coefficient_scale == b.coefficient_scale && a.CDo_scale == b.CDo_scale &&
+           a.mass_kg == b.mass_kg && a.pitch_inertia_kgm2 == b.pitch_inertia_kgm2 &&
+           a.cg_shift_over_chord == b.cg_shift_over_chord;
+  }
+
+  Aircraft aircraft_;
+  mutable std::mutex mutex_;
+  mutable std::shared_ptr<const LongitudinalModel> model_;
+};
+
+/// The model options of docs/model.md from keyword arguments (the keys of gesweep.MODEL_OPTIONS);
+/// every key it takes is removed from `kwargs`.
+ModelOptions TakeModelOptions(py::dict& kwargs) {
+  ModelOptions options;
+  if (kwargs.empty()) return options;
+  auto take = [&](const char* key) -> std::optional<py::object> {
+    if (!kwargs.contains(key)) return std::nullopt;
+    py::object value = kwargs[key];
+    PyDict_DelItemString(kwargs.ptr(), key);
+    if (value.is_none()) return std::nullopt;
+    return value;
+  };
+  if (auto v = take("h_derivatives")) options.h_derivatives = ToBool(*v, "h_derivatives");
+  if (auto v = take("cdh")) {
+    const std::string text = ToText(*v, "cdh");
+    const auto mode = ParseCdhMode(text);
+    if (!mode) throw InputError(kArguments, "cdh", "'" + text + "'", "expected polar or zero");
+    options.cdh = *mode;
+  }
+  if (auto v = take("interpolation")) {
+    const std::string text = ToText(*v, "interpolation");
+    const auto kind = ParseInterpolation(text);
+    if (!kind) throw InputError(kArguments, "interpolation", "'" + text + "'", "expected linear or pchip");
+    options.interpolation = *kind;
+  }
+  if (auto v = take("mass_kg")) options.mass_kg = ToNumber(*v, "mass_kg");
+  if (auto v = take("pitch_inertia_kgm2")) options.pitch_inertia_kgm2 = ToNumber(*v, "pitch_inertia_kgm2");
+  if (auto v = take("cg_shift_over_chord")) options.cg_shift_over_chord = ToNumber(*v, "cg_shift_over_chord");
+  if (auto v = take("CDo_scale")) options.CDo_scale = ToNumber(*v, "CDo_scale");
+  if (auto v = take("scale")) {
+    if (!py::isinstance<py::dict>(*v))
+      throw InputError(kArguments, "scale", Repr(*v), "expected a dict of coefficient name -> factor");
+    for (auto [name, factor] : v->cast<py::dict>()) {
+      const std::string text = py::str(name).cast<std::string>();
+      const auto c = CoefficientFromName(text);
+      if (!c) {
+        std::string names;
+        for (auto n : kCoefficientNames) names += (names.empty() ? "" : ", ") + std::string(n);
+        throw InputError(kArguments, "scale", "'" + text + "'", "expected a coefficient name: " + names);
+      }
+      std::string key = "scale.";
+      key += text;
+      options.coefficient_scale[Index(*c)] = ToNumber(factor, key);
+    }
+  }
+  return options;
+}
+
+/// Refuses keyword arguments nothing took.
+void RefuseLeftovers(const py::dict& kwargs, const std::vector<std::string>& known) {
+  if (kwargs.empty()) return;
+  for (auto [key, value] : kwargs) {
+    const std::string name = py::str(key).cast<std::string>();
+    std::string list;
+    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw InputError(kArguments, name, Repr(value), "unknown option; expected one of: " + list);
+  }
+}
+
+const std::vector<std::string>& ModelOptionKeys() {
+  static const std::vector<std::string> keys = {
+      "h_derivatives",       "cdh",       "interpolation", "mass_kg", "pitch_inertia_kgm2",
+      "cg_shift_over_chord", "CDo_scale", "scale"};
+  return keys;
+}
+
+std::shared_ptr<const LongitudinalModel> ModelOf(const PyAircraft& aircraft, py::dict& kwargs) {
+  return aircraft.Model(TakeModelOptions(kwargs));
+}
+
+// ---------------------------------------------------------------- running with the GIL released
+
+/// Runs `work(cancel)` on a thread of its own while this one, holding the GIL between waits, looks
+/// at Python's signals every kPollInterval and calls `tick` (may be empty). A KeyboardInterrupt (or
+/// any exception a signal handler or `tick` raises) sets `cancel`, waits for the work to stop, and is
+/// raised again; an exception of the work is raised here.
+void RunInterruptible(const std::function<void(const std::atomic<bool>*)>& work,
+                      const std::function<void()>& tick = {}) {
+  std::atomic<bool> cancel{false};
+  std::promise<void> finished;
+  std::future<void> done = finished.get_future();
+  std::thread worker([&] {
+    try {
+      work(&cancel);
+      finished.set_value();
+    } catch (...) {
+      finished.set_exception(std::current_exception());
+    }
+  });
+  std::exception_ptr interrupted;
+  while (true) {
+    bool ready = false;
+    {
+      py::gil_scoped_release release;
+      ready = done.wait_for(kPollInterval) == std::future_status::ready;  // returns as soon as it ends
+    }
+    if (ready) break;
+    if (interrupted) continue;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (tick) tick();
+    } catch (...) {
+      interrupted = std::current_exception();
+      cancel = true;
+    }
+  }
+  worker.join();
+  if (interrupted) std::rethrow_exception(interrupted);
+  done.get();  // the work's exception, if any
+}
+
+// ---------------------------------------------------------------- modes
+
+/// gesweep.modes: the eigen-analysis at every (H, u) pair, in parallel, the GIL released.
+py::dict Modes(const PyAircraft& aircraft,
+               py::array_t<double, py::array::c_style | py::array::forcecast> heights,
+               py::array_t<double, py::array::c_style | py::array::forcecast> speeds, int threads,
+               py::kwargs kwargs) {
+  py::dict options = kwargs;
+  const auto model = ModelOf(aircraft, options);
+  RefuseLeftovers(options, ModelOptionKeys());
+  const py::ssize_t n = heights.size();
+  if (speeds.size() != n) throw InputError(kArguments, "speed_mps", "", "expected as many speeds as heights");
+  const double* h = heights.data();
+  const double* u = speeds.data();
+  const double wheel = aircraft.aircraft().wheel_contact_height_m;
+  for (py::ssize_t i = 0; i < n; ++i) {
+    if (!std::isinf(h[i])) CheckInputLimit("height_m", h[i], kArguments, "height_m");
+    if (h[i] < wheel) {
+      throw InputError(kArguments, "height_m", ShortNumber(h[i]),
+                       "expected heights >= the wheel-contact height " + ShortNumber(wheel) + " m of " +
+                           aircraft.aircraft().source_path);
+    }
+    CheckInputLimit("speed_mps", u[i], kArguments, "speed_mps");
+  }
+
+  const char* kModes[] = {"short_period", "phugoid", "height"};
+  const char* kProperties[] = {"natural_frequency_radps", "damping_ratio", "period_s",
+                               "time_to_half_or_double_s"};
+  py::array_t<std::complex<double>> eigenvalues({n, py::ssize_t{5}});
+  py::array_t<double> sigma(n), h_over_b(n);
+  py::array_t<bool> stable(n);
+  py::array_t<std::int8_t> classification(n);
+  std::vector<py::array_t<double>> properties;  // [mode][property], then re, im
+  std::vector<py::array_t<bool>> flags;         // [mode][oscillatory, neutral]
+  for (int m = 0; m < 3; ++m) {
+    for (int p = 0; p < 6; ++p) properties.emplace_back(n);
+    for (int f = 0; f < 2; ++f) flags.emplace_back(n);
+  }
+  auto* eig = eigenvalues.mutable_data();
+  double* sig = sigma.mutable_data();
+  double* hb = h_over_b.mutable_data();
+  bool* st = stable.mutable_data();
+  std::int8_t* cl = classification.mutable_data();
+  std::vector<double*> prop;
+  std::vector<bool*> flag;
+  for (auto& a : properties) prop.push_back(a.mutable_data());
+  for (auto& a : flags) flag.push_back(a.mutable_data());
+  const double span = aircraft.aircraft().wingspan_m;
+  {
+    py::gil_scoped_release release;
+    auto body = [&](const tbb::blocked_range<py::ssize_t>& range) {
+      for (py::ssize_t i = range.begin(); i != range.end(); ++i) {
+        const ModalAnalysis modal = AnalyzeModes(model->StateMatrix(h[i], u[i]));
+        for (int k = 0; k < 5; ++k) eig[i * 5 + k] = modal.eigenvalues[k];
+        sig[i] = modal.stability_margin_per_s;
+        st[i] = modal.stable;
+        cl[i] = static_cast<std::int8_t>(modal.classification);
+        hb[i] = h[i] / span;
+        const ModeProperties* modes[] = {&modal.short_period, &modal.phugoid, &modal.height};
+        for (int m = 0; m < 3; ++m) {
+          const ModeProperties& mode = *modes[m];
+          prop[m * 6 + 0][i] = mode.natural_frequency_radps;
+          prop[m * 6 + 1][i] = mode.damping_ratio;
+          prop[m * 6 + 2][i] = mode.period_s;
+          prop[m * 6 + 3][i] = mode.time_to_half_or_double_s;
+          prop[m * 6 + 4][i] = mode.eigenvalue.real();
+          prop[m * 6 + 5][i] = mode.eigenvalue.imag();
+          flag[m * 2 + 0][i] = mode.oscillatory;
+          flag[m * 2 + 1][i] = mode.neutral;
+        }
+      }
+    };
+    const int workers = threads > 0 ? threads : tbb::info::default_concurrency();
+    if (workers == 1 || n < 1024) {
+      body(tbb::blocked_range<py::ssize_t>(0, n));
+    } else {
+      tbb::task_arena arena(workers);
+      arena.execute([&] { tbb::parallel_for(tbb::blocked_range<py::ssize_t>(0, n, 4096), body); });
+    }
+  }
+  py::dict out;
+  out["eigenvalues"] = eigenvalues;
+  out["stability_margin_per_s"] = sigma;
+  out["stable"] = stable;
+  out["classification"] = classification;
+  out["height_over_span"] = h_over_b;
+  for (int m = 0; m < 3; ++m) {
+    const std::string prefix = std::string(kModes[m]) + "/";
+    out[py::str(prefix + "eigenvalue_re_per_s")] = properties[m * 6 + 4];
+    out[py::str(prefix + "eigenvalue_im_per_s")] = properties[m * 6 + 5];
+    for (int p = 0; p < 4; ++p) out[py::str(prefix + kProperties[p])] = properties[m * 6 + p];
+    out[py::str(prefix + "oscillatory")] = flags[m * 2 + 0];
+    out[py::str(prefix + "neutral")] = flags[m * 2 + 1];
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- boundary
+
+py::dict CrossingDict(const BoundaryCrossing& c) {
+  py::dict row;
+  row["height_m"] = c.height_m;
+  row["height_over_span"] = c.height_over_span;
+  row["kind"] = std::string(ToString(c.kind));
+  row["stable_below"] = c.stable_below;
+  row["stable_above"] = c.stable_above;
+  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
+    row["mode"] = c.mode;
+    row["eigenvalue"] = c.eigenvalue;
+    row["eigenvalue_height_derivative_per_s_per_m"] = c.eigenvalue_height_derivative;
+    row["mode_stable_above"] = c.mode_stable_above;
+    row["bracket_width_m"] = c.bracket_width_m;
+  }
+  return row;
+}
+
+py::dict Boundary(const PyAircraft& aircraft, double speed_mps, const std::string& method, bool sensitivities,
+                  py::kwargs kwargs) {
+  py::dict options_in = kwargs;
+  const auto model = ModelOf(aircraft, options_in);
+  RefuseLeftovers(options_in, ModelOptionKeys());
+  CheckInputLimit("speed_mps", speed_mps, kArguments, "speed_mps");
+  BoundaryOptions options;
+  if (method == "sampled") {
+    options.method = BoundaryMethod::kSampled;
+  } else if (method != "hurwitz") {
+    throw InputError(kArguments, "method", "'" + method + "'", "expected hurwitz or sampled");
+  }
+  BoundaryResult result;
+  std::optional<BoundarySensitivities> s;
+  {
+    py::gil_scoped_release release;
+    result = FindBoundary(*model, speed_mps, options);
+    if (sensitivities) s = ComputeBoundarySensitivities(*model, result);
+  }
+  const double nan = std::nan("");
+  py::list crossings, others;
+  for (const auto& crossing : result.crossings) {
+    crossings.append(CrossingDict(crossing));
+    if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9)
+      others.append(crossing.height_m);
+  }
+  py::dict row;
+  row["speed_mps"] = speed_mps;
+  row["height_m"] = result.height_m ? *result.height_m : nan;
+  row["height_over_span"] = result.height_m ? *result.height_m / model->aircraft().wingspan_m : nan;
+  row["other_crossings_m"] = others;
+  row["crossings"] = crossings;
+  row["method"] = method;
+  row["certified"] = result.certified;
+  row["certificate"] = result.certificate;
+  row["scanned_range_m"] = py::make_tuple(result.lower_height_m, result.upper_height_m);
+  row["reason"] = result.reason;
+  if (s) {
+    py::list list;
+    if (s->valid) {
+      for (const auto& p : RankByRelativeEffect(*s)) {
+        py::dict entry;
+        entry["parameter"] = p.parameter.Name();
+        entry["value"] = p.value;
+        entry["value_unit"] = std::string(p.parameter.Unit());
+        entry["dH_dp"] = p.height_derivative;
+        entry["dH_dp_unit"] = HeightDerivativeUnit(p.parameter);
+        entry["dH_dp_implicit"] = p.implicit_height_derivative;
+        entry["p_dH_dp_m"] = p.relative_height_derivative_m;
+        entry["dsigma_dp_per_s"] = p.margin_derivative;
+        entry["method"] = p.method == DerivativeMethod::kExact ? "exact" : "central_difference";
+        list.append(entry);
+      }
+      py::list no_effect;
+      for (const auto& p : s->parameters) {
+        if (!p.enters_state_matrix) no_effect.append(p.parameter.Name());
+      }
+      row["sensitivity_mode"] = s->mode;
+      row["dsigma_dH_per_s_per_m"] = s->margin_height_derivative_per_s_per_m;
+      row["no_effect_parameters"] = no_effect;
+    } else {
+      row["sensitivities_reason"] = s->reason;
+    }
+    row["sensitivities"] = list;
+  }
+  return row;
+}
+
+// ---------------------------------------------------------------- described options and results
+
+/// The settings of a described struct (describe.h) from keyword arguments, by key, in the key's unit;
+/// every key it takes is removed from `kwargs`. The same fields as the command line's flags.
+struct KwargsReader {
+  py::dict* kwargs;
+  std::vector<std::string>* keys;
+  template <class U>
+  void operator()(const Field<U>& field) {
+    const FieldAttributes& a = field.attributes();
+    if constexpr (DoubleArray<U> || std::same_as<U, std::string> || IntegerValue<U>) {
+      return;  // results, never settings
+    } else {
+      if (!InScope(a, false)) return;
+      const std::string key(a.key);
+      keys->push_back(key);
+      if (!kwargs->contains(key)) return;
+      py::object value = (*kwargs)[key.c_str()];
+      PyDict_DelItemString(kwargs->ptr(), key.c_str());
+      if (value.is_none()) return;
+      if constexpr (std::same_as<U, bool>) {
+        *field.value() = ToBool(value, key);
+      } else if constexpr (NamedEnum<U>) {
+        const std::string text = ToText(value, key);
+        const auto parsed = ParseEnum<U>(text);
+        if (!parsed) throw InputError(kArguments, key, "'" + text + "'", "expected " + EnumChoices<U>());
+        *field.value() = *parsed;
+      } else {
+        static_assert(std::floating_point<U>);
+        *field.value() = ToNumber(value, key) * a.scale;
+      }
+    }
+  }
+};
+
+/// A described result as a dict, each field under its key, numbers in the key's unit (as FieldsJson,
+/// with NaN where the JSON has null). Array fields give a list and "<key>_names".
+struct DictWriter {
+  py::dict* out;
+  template <class U>
+  void operator()(const Field<U>& field) {
+    const FieldAttributes& a = field.attributes();
+    if (!a.in_output) return;
+    const std::string key(a.key);
+    const U& v = *field.value();
+    if constexpr (std::same_as<U, bool> || IntegerValue<U> || std::same_as<U, std::string>) {
+      (*out)[py::str(key)] = v;
+    } else if constexpr (NamedEnum<U>) {
+      (*out)[py::str(key)] = std::string(ToString(v));
+    } else if constexpr (std::floating_point<U>) {
+      (*out)[py::str(key)] = v / a.scale;
+    } else {
+      static_assert(DoubleArray<U>);
+      py::list values, names;
+      for (int c = 0; c < static_cast<int>(v.size()); ++c) values.append(static_cast<double>(v[c]));
+      for (const FieldComponent& component : a.components) names.append(std::string(component.name));
+      (*out)[py::str(key)] = values;
+      (*out)[py::str(key + "_names")] = names;
+    }
+  }
+};
+
+template <class T>
+py::dict FieldsDict(const T& object) {
+  py::dict out;
+  DictWriter writer{&out};
+  DescribeConst(object, writer);
+  return out;
+}
+
+/// The settings of a described struct for the Python signature and docstring: key, unit, doc,
+/// default (a Python value), choices; the positional keys left out.
+template <class T>
+py::list SettingsList(const T& object, const std::set<std::string>& leave_out) {
+  py::list out;
+  for (const FieldRecord& r : ListFields(object)) {
+    const FieldAttributes& a = r.attributes;
+    if (!InScope(a, false) || leave_out.count(std::string(a.key))) continue;
+    if (r.kind != FieldKind::kNumber && r.kind != FieldKind::kBoolean && r.kind != FieldKind::kChoice)
+      continue;
+    py::dict entry;
+    entry["key"] = std::string(a.key);
+    entry["unit"] = std::string(a.unit);
+    entry["doc"] = std::string(a.doc);
+    entry["limit"] = std::string(a.limit);
+    entry["default_text"] = r.default_text;
+    if (r.kind == FieldKind::kNumber) {
+      entry["default"] = *r.number;
+    } else if (r.kind == FieldKind::kBoolean) {
+      entry["default"] = r.default_text == "true";
+    } else {
+      entry["default"] = r.default_text;
+      entry["choices"] = r.choices;
+    }
+    if (!a.limit.empty()) {
+      if (const InputLimit* limit = FindInputLimit(a.limit)) entry["range"] = DescribeLimit(*limit);
+    }
+    out.append(entry);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- simulate
+
+py::array_t<double> Array(const std::vector<double>& values) {
+  return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
+}
+
+py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps, bool summary_only,
+                   std::optional<double> output_dt_s, py::kwargs kwargs) {
+  py::dict options = kwargs;
+  const auto model = ModelOf(aircraft, options);
+  OpenLoopConfig config;
+  config.start_height_m = height_m;
+  config.reference_speed_mps = speed_mps;
+  std::vector<std::string> keys;
+  KwargsReader reader{&options, &keys};
+  config.Describe(reader);
+  keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
+  RefuseLeftovers(options, keys);
+  if (!summary_only) {
+    const double output_dt = output_dt_s ? *output_dt_s : config.integrator.step_s;
+    if (output_dt_s) CheckInputLimit("output_dt_s", output_dt, kArguments, "output_dt_s");
+    if (config.duration_s / output_dt > 1e7)
+      throw InputError(kArguments, "output_dt_s", ShortNumber(output_dt), "expected at most 1e7 samples");
+    config.series_interval_s = output_dt;
+  }
+  try {
+    ValidateOpenLoopConfig(*model, config, kArguments);
+  } catch (const InputError& e) {
+    if (e.key() == "series_interval_s") throw InputError(kArguments, "output_dt_s", e.value(), e.expected());
+    throw;
+  }
+  OpenLoopResult result;
+  RunInterruptible(
+      [&](const std::atomic<bool>* cancel) { result = SimulateOpenLoop(*model, config, cancel); });
+  py::dict run = FieldsDict(config);
+  run["aircraft"] = model->aircraft().name;
+  run["h_derivatives"] = model->options().h_derivatives;
+  run["cdh"] = std::string(ToString(model->options().cdh));
+  run["interpolation"] = std::string(ToString(model->options().interpolation));
+  py::object series = py::none();
+  if (!summary_only) {
+    const OpenLoopSeries& s = result.series;
+    py::dict columns;
+    columns["time_s"] = Array(s.time_s);
+    columns["delta_speed_mps"] = Array(s.delta_speed_mps);
+    columns["delta_normal_velocity_mps"] = Array(s.delta_normal_velocity_mps);
+    columns["pitch_rate_radps"] = Array(s.pitch_rate_radps);
+    columns["delta_pitch_rad"] = Array(s.delta_pitch_rad);
+    columns["delta_height_m"] = Array(s.delta_height_m);
+    columns["height_m"] = Array(s.height_m);
+    columns["speed_mps"] = Array(s.speed_mps);
+    columns["elevator_rad"] = Array(s.elevator_rad);
+    series = columns;
+  }
+  return py::make_tuple(run, FieldsDict(result.summary), series);
+}
+
+// ---------------------------------------------------------------- land
+
+/// The landing's settings (LandingConfig, which lists its keys by hand, not by Describe): key, unit,
+/// description, and where its value goes. The keys are those ValidateLandingConfig names.
+struct LandingSetting {
+  const char* key;
+  const char* unit;
+  const char* doc;
+  double LandingConfig::*number = nullptr;
+  std::optional<double> LandingConfig::*optional = nullptr;
+};
+
+const std::vector<LandingSetting>& LandingSettings() {
+  static const std::vector<LandingSetting> settings = {
+      {"start_height_m", "m", "Start height of the mean chord", &LandingConfig::start_height_m},
+      {"start_speed_mps", "m/s", "Start speed, also the plant's reference speed u0",
+       &LandingConfig::start_speed_mps},
+      {"start_pitch_deg", "deg", "Start pitch angle (reference: level)", &LandingConfig::start_pitch_deg},
+      {"start_glide_path_offset_m", "m", "Start deviation d from the glide path, positive above",
+       &LandingConfig::start_glide_path_offset_m},
+      {"glide_slope_deg", "deg", "Glide-slope angle, positive down", &LandingConfig::glide_slope_deg},
+      {"design_height_m", "m", "Height of the linear model used for the gain; None: the wheel-contact height",
+       nullptr, &LandingConfig::design_height_m},
+      {"design_speed_mps", "m/s", "Speed of the linear model used for the gain; None: start_speed_mps",
+       nullptr, &LandingConfig::design_speed_mps},
+      {"r_weight", "rad^2", "LQR weight on the elevator command", &LandingConfig::r_weight},
+      {"actuator_pole_per_s", "1/s", "Elevator actuator pole", &LandingConfig::actuator_pole_per_s},
+      {"compensator_pole_per_s", "1/s", "Compensator pole S_d", &LandingConfig::compensator_pole_per_s},
+      {"flare_height_m", "m", "Flare height Ho", &LandingConfig::flare_height_m},
+      {"flare_time_constant_s", "s",
+       "Flare time constant; None: Ho/(u0 sin(glide slope)), continuous sink rate at Ho", nullptr,
+       &LandingConfig::flare_time_constant_s},
+      {"elevator_min_deg", "deg", "Lower elevator limit", &LandingConfig::elevator_min_deg},
+      {"elevator_max_deg", "deg", "Upper elevator limit", &LandingConfig::elevator_max_deg},
+      {"plant_fixed_reference_height_m", "m",
+       "Fixed reference height with plant_height_reference='fixed'; None: the top table height", nullptr,
+       &LandingConfig::plant_fixed_reference_height_m},
+      {"relative_tolerance", "1", "Dormand-Prince relative tolerance (ode45's)",
+       &LandingConfig::relative_tolerance},
+      {"absolute_tolerance", "1", "Dormand-Prince absolute tolerance", &LandingConfig::absolute_tolerance},
+      {"max_step_s", "s", "Largest step", &LandingConfig::max_step_s},
+      {"time_limit_s", "s",
+       "Time limit (outcome no_touchdown); None: twice the reference trajectory's time to the wheels",
+       nullptr, &LandingConfig::time_limit_s},
+      {"output_interval_s", "s", "Series sampling interval", &LandingConfig::output_interval_s},
+      {"divergence_pitch_deg", "deg", "|pitch| that ends the run as diverged",
+       &LandingConfig::divergence_pitch_deg},
+  };
+  return settings;
+}
+
+py::list LandingSettingsList() {
+  const LandingConfig defaults;
+  py::list out;
+  for (const LandingSetting& s : LandingSettings()) {
+    py::dict entry;
+    entry["key"] = s.key;
+    entry["unit"] = s.unit;
+    entry["doc"] = s.doc;
+    if (s.number) {
+      entry["default"] = defaults.*s.number;
+    } else {
+      entry["default"] = py::none();
+    }
+    out.append(entry);
+  }
+  py::dict q;
+  q["key"] = "q_weights";
+  q["unit"] = "SI";
+  std::string names;
+  for (auto name : LandingStateNames()) names += (names.empty() ? "" : ", ") + std::string(name);
+  q["doc"] = "9 LQR output weights >= 0 on " + names;
+  q["default"] = py::cast(std::vector<double>(defaults.q_weights.begin(), defaults.q_weights.end()));
+  out.append(q);
+  py::dict d;
+  d["key"] = "design_h_derivatives";
+  d["unit"] = "1";
+  d["doc"] = "Include Xh, Zh, Mh in the design model (the plant follows h_derivatives)";
+  d["default"] = defaults.design_h_derivatives;
+  out.append(d);
+  py::dict p;
+  p["key"] = "plant_height_reference";
+  p["unit"] = "1";
+  p["doc"] =
+      "What the plant's h-derivative terms measure dH from: 'path' (the reference trajectory) or 'fixed'";
+  p["default"] = std::string(ToString(defaults.plant_height_reference));
+  out.append(p);
+  return out;
+}
+
+double Degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
+
+py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs) {
+  py::dict options = kwargs;
+  const auto model = ModelOf(aircraft, options);
+  LandingConfig config;
+  std::vector<std::string> keys;
+  for (const LandingSetting& s : LandingSettings()) {
+    keys.push_back(s.key);
+    if (!options.contains(s.key)) continue;
+    py::object value = options[s.key];
+    PyDict_DelItemString(options.ptr(), s.key);
+    if (s.number) {
+      config.*s.number = ToNumber(value, s.key);
+    } else if (!value.is_none()) {
+      config.*s.optional = ToNumber(value, s.key);
+    }
+  }
+  for (const char* key : {"q_weights", "design_h_derivatives", "plant_height_reference"}) keys.push_back(key);
+  if (options.contains("q_weights")) {
+    py::object value = options["q_weights"];
+    PyDict_DelItemString(options.ptr(), "q_weights");
+    const auto weights = value.cast<std::vector<double>>();
+    if (weights.size() != static_cast<std::size_t>(kLandingStateCount)) {
+      throw InputError(kArguments, "q_weights", Repr(value), "expected 9 weights >= 0");
+    }
+    for (int i = 0; i < kLandingStateCount; ++i) config.q_weights[i] = weights[i];
+  }
+  if (options.contains("design_h_derivatives")) {
+    config.design_h_derivatives = ToBool(options["design_h_derivatives"], "design_h_derivatives");
+    PyDict_DelItemString(options.ptr(), "design_h_derivatives");
+  }
+  if (options.contains("plant_height_reference")) {
+    const std::string text = ToText(options["plant_height_reference"], "plant_height_reference");
+    PyDict_DelItemString(options.ptr(), "plant_height_reference");
+    const auto reference = ParsePlantHeightReference(text);
+    if (!reference)
+      throw InputError(kArguments, "plant_height_reference", "'" + text + "'", "expected path or fixed");
+    config.plant_height_reference = *reference;
+  }
+  keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
+  RefuseLeftovers(options, keys);
+  if (summary_only) config.output_interval_s = 0.0;
+  ValidateLandingConfig(config, model->aircraft(), kArguments);
+  const double time_limit_s = LandingTimeLimit(config, model->aircraft().wheel_contact_height_m);
+  if (config.output_interval_s > 0.0 && time_limit_s / config.output_interval_s > 1e7) {
+    throw InputError(kArguments, "output_interval_s", ShortNumber(config.output_interval_s),
+                     "expected at most 1e7 samples");
+  }
+  LandingResult r;
+  RunInterruptible([&](const std::atomic<bool>* cancel) { r = SimulateLanding(*model, config, cancel); });
+
+  py::dict design;
+  design["status"] = std::string(ToString(r.design.status));
+  design["message"] = r.design.message;
+  design["design_height_m"] = r.design.design_height_m;
+  design["design_speed_mps"] = r.design.design_speed_mps;
+  design["h_derivatives"] = r.design.design_h_derivatives;
+  if (r.design.ok()) {
+    py::dict gain;
+    for (int i = 0; i < kLandingStateCount; ++i)
+      gain[py::str(std::string(LandingStateNames()[i]))] = r.design.gain[i];
+    design["gain"] = gain;
+  } else {
+    design["gain"] = py::none();
+  }
+  py::list eigenvalues;
+  for (Eigen::Index i = 0; i < r.design.closed_loop_eigenvalues.size(); ++i)
+    eigenvalues.append(std::complex<double>(r.design.closed_loop_eigenvalues(i)));
+  design["closed_loop_eigenvalues_per_s"] = eigenvalues;
+
+  py::dict summary;
+  summary["outcome"] = std::string(ToString(r.outcome));
+  summary["message"] = r.message;
+  summary["touchdown_time_s"] = r.touchdown_time_s;
+  summary["touchdown_distance_past_transmitter_m"] = r.touchdown_distance_past_transmitter_m;
+  summary["touchdown_sink_rate_mps"] = r.touchdown_sink_rate_mps;
+  summary["touchdown_pitch_deg"] = r.touchdown_pitch_deg;
+  summary["touchdown_speed_mps"] = r.touchdown_speed_mps;
+  summary["flare_start_time_s"] = r.flare_start_time_s;
+  summary["glide_path_error_at_flare_m"] = r.glide_path_error_at_flare_m;
+  summary["max_abs_elevator_deg"] = r.max_abs_elevator_deg;
+  summary["max_abs_elevator_command_deg"] = r.max_abs_elevator_command_deg;
+  summary["max_abs_pitch_rate_degps"] = r.max_abs_pitch_rate_degps;
+  summary["saturated_time_s"] = r.saturated_time_s;
+  summary["longest_saturation_s"] = r.longest_saturation_s;
+  summary["min_speed_mps"] = r.min_speed_mps;
+  summary["max_speed_mps"] = r.max_speed_mps;
+  summary["final_time_s"] = r.final_time_s;
+  summary["final_height_m"] = r.final_height_m;
+  summary["steps"] = r.accepted_steps;
+  summary["rejected_steps"] = r.rejected_steps;
+  summary["rhs_calls"] = r.rhs_calls;
+  summary["design"] = design;
+
+  py::dict run;
+  run["aircraft"] = model->aircraft().name;
+  for (const LandingSetting& s : LandingSettings()) {
+    if (s.number) run[s.key] = config.*s.number;
+  }
+  run["glide_slope_deg"] = r.glide_slope_deg;
+  run["flare_height_m"] = r.flare_height_m;
+  run["flare_time_constant_s"] = r.flare_time_constant_s;
+  run["time_limit_s"] = r.time_limit_s;
+  run["plant_height_reference"] = std::string(ToString(config.plant_height_reference));
+  run["h_derivatives"] = model->options().h_derivatives;
+  run["cdh"] = std::string(ToString(model->options().cdh));
+  run["interpolation"] = std::string(ToString(model->options().interpolation));
+
+  py::object series = py::none();
+  if (!summary_only) {
+    const auto& s = r.series;
+    const auto n = static_cast<py::ssize_t>(s.size());
+    const char* names[] = {"time_s",
+                           "height_m",
+                           "reference_height_m",
+                           "tracking_error_m",
+                           "speed_mps",
+                           "delta_w_mps",
+                           "pitch_rate_degps",
+                           "pitch_deg",
+                           "sink_rate_mps",
+                           "elevator_deg",
+                           "elevator_command_deg",
+                           "compensator_m_s",
+                           "error_integral_m_s"};
+    std::vector<py::array_t<double>> columns;
+    for (std::size_t c = 0; c < std::size(names); ++c) columns.emplace_back(n);
+    py::list phase;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const LandingSample& x = s[static_cast<std::size_t>(i)];
+      const double values[] = {x.time_s,
+                               x.height_m,
+                               x.reference_height_m,
+                               x.tracking_error_m,
+                               x.speed_mps,
+                               x.delta_w_mps,
+                               Degrees(x.pitch_rate_radps),
+                               Degrees(x.pitch_rad),
+                               x.sink_rate_mps,
+                               Degrees(x.elevator_rad),
+                               Degrees(x.elevator_command_rad),
+                               x.compensator,
+                               x.error_integral};
+      for (std::size_t c = 0; c < std::size(names); ++c) columns[c].mutable_data()[i] = values[c];
+      phase.append(std::string(ToString(x.phase)));
+    }
+    py::dict out;
+    for (std::size_t c = 0; c < std::size(names); ++c) out[names[c]] = columns[c];
+    out["phase"] = phase;
+    series = out;
+  }
+  return py::make_tuple(run, summary, series);
+}
+
+// ---------------------------------------------------------------- run
+
+py::dict Run(const std::string& study_path, const std::string& archive_path, int threads, py::object progress,
+             bool resume, bool force, const std::string& shard_text) {
+  if (resume && force)
+    throw InputError(kArguments, "force", "True", "cannot be combined with resume=True (choose one)");
+  if (threads < 0 || threads > 4096)
+    throw InputError(kArguments, "threads", std::to_string(threads),
+                     "expected 1 to 4096 worker threads, or None");
+  ShardSpec shard;
+  if (!shard_text.empty()) shard = ParseShard(shard_text, "shard");
+  Study study = LoadStudy(study_path);
+  CheckOutputPath(archive_path, OutputKind::kFile, study.inputs, "archive_path",
+                  {archive_path + ".partial", archive_path + ".lock"});
+  SweepPlan plan(std::move(study), shard);
+  const int workers = threads > 0 ? threads : tbb::info::default_concurrency();
+  ArchiveOpenReport opened;
+  std::unique_ptr<ArchiveWriter> writer;
+  std::string call = "gesweep.run(" + Repr(py::str(study_path)) + ", " + Repr(py::str(archive_path));
+  if (threads > 0) call += ", threads=" + std::to_string(threads);
+  if (!shard_text.empty()) call += ", shard=" + Repr(py::str(shard_text));
+  if (resume) call += ", resume=True";
+  if (force) call += ", force=True";
+  call += ")";
+  {
+    py::gil_scoped_release release;
+    writer = ArchiveWriter::Open(
+        archive_path, plan, RunProvenance{call, workers},
+        resume ? ArchiveOpenMode::kResume : (force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
+        &opened);
+  }
+  SweepProgress state;
+  state.runs_skipped = opened.runs_complete;
+  state.runs_to_do = plan.run_count() - opened.runs_complete;
+  SweepOutcome outcome;
+  const auto start = std::chrono::steady_clock::now();
+  auto tick = [&] {
+    if (!progress.is_none()) progress(state.runs_done.load(), state.runs_to_do.load());
+  };
+  std::exception_ptr interrupted;
+  try {
+    RunInterruptible(
+        [&](const std::atomic<bool>* cancel) {
+          RunnerOptions options;
+          options.threads = workers;
+          options.cancel = cancel;
+          outcome = RunSweep(plan, opened.pending_blocks, *writer, options, &state);
+        },
+        tick);
+  } catch (py::error_already_set&) {
+    interrupted = std::current_exception();  // KeyboardInterrupt, or the callback's exception
+  }
+  {
+    py::gil_scoped_release release;
+    writer->Finish();  // closes the archive: what is complete stays for resume=True
+  }
+  if (interrupted) std::rethrow_exception(interrupted);
+  tick();
+  py::dict out;
+  out["archive"] = archive_path;
+  out["runs"] = plan.run_count();
+  out["runs_run"] = state.runs_done.load();
+  out["runs_ok"] = writer->runs_ok();
+  out["runs_failed"] = writer->runs_failed();
+  out["runs_pending"] = writer->runs_pending();
+  out["cancelled"] = outcome.cancelled;
+  out["threads"] = workers;
+  out["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+// ---------------------------------------------------------------- the baselines of scripts/bench --python
+
+/// Discards every batch: the compute-only sweep of tests/bench/sweep_throughput.cc.
+class DiscardingSink final : public ResultSink {
+ public:
+  void Write(const ResultBlock& block) override { runs_ += block.rows; }
+  std::int64_t runs() const { return runs_; }
+
+ private:
+  std::int64_t runs_ = 0;
+};
+
+/// Seconds of a study's whole sweep with its batches discarded (`gesweep run` compute-only), and
+/// the runs computed.
+py::tuple BenchSweepComputeOnly(const std::string& study_path, int threads) {
+  SweepPlan plan(LoadStudy(study_path), ShardSpec{});
+  std::vector<std::int64_t> blocks(static_cast<std::size_t>(plan.block_count()));
+  for (std::size_t b = 0; b < blocks.size(); ++b) blocks[b] = static_cast<std::int64_t>(b);
+  DiscardingSink sink;
+  RunnerOptions options;
+  options.threads = threads;
+  double seconds = 0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    RunSweep(plan, blocks, sink, options, nullptr);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return py::make_tuple(seconds, sink.runs());
+}
+
+/// Seconds per call of the engine's boundary search alone (FindBoundary in a C++ loop), the model
+/// built once, as gesweep.boundary reuses it.
+double BenchBoundarySearch(const PyAircraft& aircraft, double speed_mps, int repetitions) {
+  const auto model = aircraft.Model(ModelOptions{});
+  py::gil_scoped_release release;
+  double sink = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < repetitions; ++i) sink += FindBoundary(*model, speed_mps).height_m.value_or(0.0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  GESWEEP_DEMAND(sink == sink);
+  return seconds / repetitions;
+}
+
+py::dict AircraftFacts(const PyAircraft& a) {
+  const Aircraft& x = a.aircraft();
+  py::dict out;
+  out["name"] = x.name;
+  out["source_path"] = x.source_path;
+  out["wingspan_m"] = x.wingspan_m;
+  out["mean_chord_m"] = x.mean_chord_m;
+  out["wing_area_m2"] = x.wing_area_m2;
+  out["mass_kg"] = x.mass_kg;
+  out["pitch_inertia_kgm2"] = x.pitch_inertia_kgm2;
+  out["cg_over_chord"] = x.cg_over_chord;
+  out["CDo"] = x.CDo;
+  out["stall_speed_mps"] = x.stall_speed_mps;
+  out["wheel_contact_height_m"] = x.wheel_contact_height_m;
+  out["field_elevation_m"] = x.field_elevation_m;
+  return out;
+}
+
+/// The coefficient table: height_m (the free-flight row last, as inf) and one column per tabulated
+/// coefficient (aircraft-file names), and CDh as the model derives it with the default options.
+py::dict AircraftTable(const PyAircraft& a) {
+  const Aircraft& x = a.aircraft();
+  std::vector<double> heights = x.table_heights_m;
+  heights.push_back(std::numeric_limits<double>::infinity());
+  py::dict out;
+  out["height_m"] = Array(heights);
+  for (int c = 0; c < kTabulatedCount; ++c) {
+    std::vector<double> column;
+    for (const auto& row : x.rows) column.push_back(row[c]);
+    column.push_back(x.free_flight[c]);
+    out[py::str(std::string(kCoefficientNames[c]))] = Array(column);
+  }
+  return out;
+}
+
+}  // namespace
+}  // namespace gesweep::python
+
+PYBIND11_MODULE(_gesweep, m) {
+  using namespace gesweep;
+  using namespace gesweep::python;
+  m.doc() = "The native part of the gesweep module (docs/python.md); use `import gesweep`.";
+  m.attr("__version__") = GESWEEP_VERSION;
+  m.attr("git_commit") = GESWEEP_GIT_COMMIT;
+
+  InputErrorType() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "gesweep.InputError",
+      "Bad input from a person: names the source (a file, or 'argument'), the key, the value and what was "
+      "expected, in one line, as the gesweep command prints it.",
+      PyExc_ValueError, nullptr));
+  m.attr("InputError") = InputErrorType();
+  ArchiveErrorType() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "gesweep.ArchiveError", "An archive could not be written or read (I/O, disk full, damage).",
+      PyExc_OSError, nullptr));
+  m.attr("ArchiveError") = ArchiveErrorType();
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      const InputError worded = cli::ForPython(e);
+      py::object error = InputErrorType()(py::str(worded.what()));
+      error.attr("source") = worded.source();
+      error.attr("key") = worded.key();
+      error.attr("value") = worded.value();
+      error.attr("expected") = worded.expected();
+      PyErr_SetObject(InputErrorType().ptr(), error.ptr());
+    } catch (const ArchiveError& e) {
+      PyErr_SetString(ArchiveErrorType().ptr(), e.what());
+    }
+  });
+
+  py::class_<PyAircraft, std::shared_ptr<PyAircraft>>(m, "NativeAircraft")
+      .def_static(
+          "load",
+          [](const std::string& path) { return std::make_shared<PyAircraft>(LoadAircraftFile(path)); })
+      .def("facts", &AircraftFacts)
+      .def("table", &AircraftTable);
+  m.def("modes", &Modes, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),
+        py::arg("threads") = 0);
+  m.def("boundary", &Boundary, py::arg("aircraft"), py::arg("speed_mps"), py::arg("method") = "hurwitz",
+        py::arg("sensitivities") = false);
+  m.def("simulate", &Simulate, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),
+        py::arg("summary_only") = false, py::arg("output_dt_s") = py::none());
+  m.def("land", &Land, py::arg("aircraft"), py::arg("summary_only") = false);
+  m.def("run", &Run, py::arg("study_path"), py::arg("archive_path"), py::arg("threads") = 0,
+        py::arg("progress") = py::none(), py::arg("resume") = false, py::arg("force") = false,
+        py::arg("shard") = "");
+  m.def("_bench_sweep_compute_only", &BenchSweepComputeOnly, py::arg("study_path"), py::arg("threads"));
+  m.def("_bench_boundary_search", &BenchBoundarySearch, py::arg("aircraft"), py::arg("speed_mps"),
+        py::arg("repetitions"));
+  m.def("simulate_settings", [] { return SettingsList(OpenLoopConfig{}, {"height_m", "speed_mps"}); });
+  m.def("land_settings", &LandingSettingsList);
+  m.def("model_option_keys", [] { return ModelOptionKeys(); });
+  m.def("classification_levels", [] {
+    std::vector<std::string> levels;
+    for (auto c : {ModeClassification::kStandard, ModeClassification::kPhugoidSplit,
+                   ModeClassification::kShortPeriodSplit, ModeClassification::kAllReal})
+      levels.emplace_back(ToString(c));
+    return levels;
+  });
+}
