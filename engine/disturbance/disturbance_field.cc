@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "engine/common/errors.h"
@@ -13,12 +14,34 @@ namespace gesweep {
 
 DisturbanceField::DisturbanceField(const DisturbanceOptions& options, std::uint64_t study_seed,
                                    std::uint64_t run_index)
-    : options_(options), noise_(study_seed, run_index) {
+    : options_(options),
+      noise_(study_seed, run_index),
+      cached_height_m_(std::numeric_limits<double>::quiet_NaN()) {
   ValidateDisturbanceOptions(options_, "disturbance options");
   sigma_w_mps_ = EffectiveSigmaW(options_);
   turbulent_ = options_.turbulence == TurbulenceModel::kDryden;
   has_gust_ = options_.gust_amplitude_mps != 0.0;
   noise_scale_ = 1.0 / std::sqrt(options_.turbulence_sample_interval_s);
+  // MeanWindAt holds its value from the ceiling up, LowAltitudeDrydenScales clamps to [floor, ceiling]:
+  // at the clamped heights these are the values they return.
+  ceiling_mean_wind_mps_ = MeanWindAt(options_.wind_20ft_mps, kLowAltitudeCeiling_m, options_.wind_shear);
+  ceiling_scales_ = LowAltitudeDrydenScales(kLowAltitudeCeiling_m, sigma_w_mps_);
+  floor_scales_ = LowAltitudeDrydenScales(kDrydenFloorHeight_m, sigma_w_mps_);
+}
+
+void DisturbanceField::UpdateHeightTerms(double height_m) const {
+  if (height_m == cached_height_m_) return;  // false for NaN: it is computed (and propagates)
+  if (height_m >= kLowAltitudeCeiling_m) {
+    cached_mean_wind_mps_ = ceiling_mean_wind_mps_;
+    cached_scales_ = ceiling_scales_;
+  } else {
+    cached_mean_wind_mps_ = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
+    if (turbulent_) {
+      cached_scales_ =
+          height_m <= kDrydenFloorHeight_m ? floor_scales_ : LowAltitudeDrydenScales(height_m, sigma_w_mps_);
+    }
+  }
+  cached_height_m_ = height_m;
 }
 
 DisturbanceField::State DisturbanceField::InitialState() const {
@@ -85,7 +108,8 @@ AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, do
                                      const State& x, State& dxdt) const {
   AirMotion m;
   dxdt.fill(0.0);
-  m.mean_wind_mps = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
+  UpdateHeightTerms(height_m);
+  m.mean_wind_mps = cached_mean_wind_mps_;
   double gust_slope = 0.0;
   if (has_gust_) {
     m.gust_mps =
@@ -95,7 +119,7 @@ AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, do
   }
   DrydenScales scales;
   if (turbulent_) {
-    scales = LowAltitudeDrydenScales(height_m, sigma_w_mps_);
+    scales = cached_scales_;
     m.turbulence_u_mps = scales.sigma_u_mps * x[kTurbulenceU];
     m.turbulence_w_mps = sigma_w_mps_ * DrydenWOutput(x[kTurbulenceW1], x[kTurbulenceW2]);
   }
