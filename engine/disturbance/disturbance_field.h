@@ -94,6 +94,9 @@ class DisturbanceField {
   /// the same height, at a step's end, its restart, its event check and its monitor).
   AirMotion Evaluate(const Segment& segment, double height_m, double inertial_speed_mps, const State& x,
                      State& dxdt) const;
+  /// The air motion alone, as Evaluate gives it but without the state derivatives and ẇ_g
+  /// (w_g_dot_mps2 is NaN): what a controller, an event or a monitor reads, at less cost.
+  AirMotion Motion(const Segment& segment, double height_m, double inertial_speed_mps, const State& x) const;
 
  private:
   DisturbanceOptions options_;
@@ -113,6 +116,13 @@ class DisturbanceField {
   mutable double cached_mean_wind_mps_ = 0;
   mutable DrydenScales cached_scales_;
   mutable std::int64_t cached_index_ = -1;
+  // The filters' rates and the square roots of their noise gains at the last (height, airspeed).
+  mutable double cached_rates_height_m_;
+  mutable double cached_rates_airspeed_mps_ = 0;
+  mutable double cached_a_u_ = 0;
+  mutable double cached_a_w_ = 0;
+  mutable double cached_gain_u_ = 0;
+  mutable double cached_gain_w_ = 0;
   mutable double cached_u_ = 0;
   mutable double cached_w_ = 0;
 };
