@@ -115,8 +115,7 @@ class LandingProblem {
   /// vane measure: the deviations from the trim it was designed about, docs/landing.md §6).
   double Command(double t, const State& x, int segment) const {
     if constexpr (kAir) {
-      DisturbanceField::State unused;
-      const AirMotion air = Air(x, segment, unused);
+      const AirMotion air = Motion(x, segment);
       return Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
     } else {
       (void)segment;
@@ -147,6 +146,21 @@ class LandingProblem {
       return field_->Evaluate((*field_segments_)[static_cast<std::size_t>(segment)], x[kSimH],
                               u0_ + x[kSimDu], xf, field_dxdt);
     } else {
+      AirMotion still;
+      still.airspeed_mps = u0_ + x[kSimDu];
+      return still;
+    }
+  }
+
+  /// The air motion alone (no field derivatives, no ẇ_g): for the controller, events and monitors.
+  AirMotion Motion(const State& x, int segment) const {
+    if constexpr (kAir) {
+      DisturbanceField::State xf;
+      std::copy(x.begin() + kSimField, x.end(), xf.begin());
+      return field_->Motion((*field_segments_)[static_cast<std::size_t>(segment)], x[kSimH], u0_ + x[kSimDu],
+                            xf);
+    } else {
+      (void)segment;
       AirMotion still;
       still.airspeed_mps = u0_ + x[kSimDu];
       return still;
@@ -197,8 +211,7 @@ class LandingProblem {
     g[kTouchdownEvent] = x[kSimH] - touchdown_height_m_;
     double command = 0.0;
     if constexpr (kAir) {
-      DisturbanceField::State unused;
-      const AirMotion air = Air(x, segment, unused);
+      const AirMotion air = Motion(x, segment);
       g[kStallEvent] = air.airspeed_mps - stall_speed_mps_;  // the airspeed stalls
       command = Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
     } else {
@@ -266,8 +279,7 @@ class LandingProblem {
     s.error_integral = x[kSimIntegral];
     if constexpr (kAir) {
       s.distance_past_transmitter_m = x[kSimGround] - path_start_m_ / gamma_rad_;
-      DisturbanceField::State unused;
-      const AirMotion air = Air(x, segment, unused);
+      const AirMotion air = Motion(x, segment);
       s.u_g_mps = air.u_g_mps;
       s.w_g_mps = air.w_g_mps;
       s.q_g_radps = air.q_g_radps;
@@ -439,8 +451,7 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
           // The glide path meets H = 0 at x_g = (H0 − d0)/γ; the ground position is a state.
           result.touchdown_distance_past_transmitter_m =
               xf[kSimGround] - (config.start_height_m - config.start_glide_path_offset_m) / gamma_rad;
-          DisturbanceField::State unused;
-          result.touchdown_airspeed_mps = problem.Air(xf, run.final_segment, unused).airspeed_mps;
+          result.touchdown_airspeed_mps = problem.Motion(xf, run.final_segment).airspeed_mps;
         } else {
           const double transmitter_time_s = (config.start_height_m - config.start_glide_path_offset_m) /
                                             (config.start_speed_mps * gamma_rad);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "engine/common/errors.h"
@@ -13,12 +14,35 @@ namespace gesweep {
 
 DisturbanceField::DisturbanceField(const DisturbanceOptions& options, std::uint64_t study_seed,
                                    std::uint64_t run_index)
-    : options_(options), noise_(study_seed, run_index) {
+    : options_(options),
+      noise_(study_seed, run_index),
+      cached_height_m_(std::numeric_limits<double>::quiet_NaN()),
+      cached_rates_height_m_(std::numeric_limits<double>::quiet_NaN()) {
   ValidateDisturbanceOptions(options_, "disturbance options");
   sigma_w_mps_ = EffectiveSigmaW(options_);
   turbulent_ = options_.turbulence == TurbulenceModel::kDryden;
   has_gust_ = options_.gust_amplitude_mps != 0.0;
   noise_scale_ = 1.0 / std::sqrt(options_.turbulence_sample_interval_s);
+  // MeanWindAt holds its value from the ceiling up, LowAltitudeDrydenScales clamps to [floor, ceiling]:
+  // at the clamped heights these are the values they return.
+  ceiling_mean_wind_mps_ = MeanWindAt(options_.wind_20ft_mps, kLowAltitudeCeiling_m, options_.wind_shear);
+  ceiling_scales_ = LowAltitudeDrydenScales(kLowAltitudeCeiling_m, sigma_w_mps_);
+  floor_scales_ = LowAltitudeDrydenScales(kDrydenFloorHeight_m, sigma_w_mps_);
+}
+
+void DisturbanceField::UpdateHeightTerms(double height_m) const {
+  if (height_m == cached_height_m_) return;  // false for NaN: it is computed (and propagates)
+  if (height_m >= kLowAltitudeCeiling_m) {
+    cached_mean_wind_mps_ = ceiling_mean_wind_mps_;
+    cached_scales_ = ceiling_scales_;
+  } else {
+    cached_mean_wind_mps_ = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
+    if (turbulent_) {
+      cached_scales_ =
+          height_m <= kDrydenFloorHeight_m ? floor_scales_ : LowAltitudeDrydenScales(height_m, sigma_w_mps_);
+    }
+  }
+  cached_height_m_ = height_m;
 }
 
 DisturbanceField::State DisturbanceField::InitialState() const {
@@ -81,53 +105,76 @@ double DisturbanceField::HeldNoise(NoiseStream stream, std::int64_t sample_index
   return noise_.StandardNormal(stream, static_cast<std::uint64_t>(sample_index)) * noise_scale_;
 }
 
-AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, double inertial_speed_mps,
-                                     const State& x, State& dxdt) const {
+AirMotion DisturbanceField::Motion(const Segment& segment, double height_m, double inertial_speed_mps,
+                                   const State& x) const {
+  (void)segment;
   AirMotion m;
-  dxdt.fill(0.0);
-  m.mean_wind_mps = MeanWindAt(options_.wind_20ft_mps, height_m, options_.wind_shear);
-  double gust_slope = 0.0;
+  UpdateHeightTerms(height_m);
+  m.mean_wind_mps = cached_mean_wind_mps_;
   if (has_gust_) {
     m.gust_mps =
         OneMinusCosineGust(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
-    gust_slope =
-        OneMinusCosineGustSlope(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
   }
-  DrydenScales scales;
   if (turbulent_) {
-    scales = LowAltitudeDrydenScales(height_m, sigma_w_mps_);
-    m.turbulence_u_mps = scales.sigma_u_mps * x[kTurbulenceU];
+    m.turbulence_u_mps = cached_scales_.sigma_u_mps * x[kTurbulenceU];
     m.turbulence_w_mps = sigma_w_mps_ * DrydenWOutput(x[kTurbulenceW1], x[kTurbulenceW2]);
   }
   const bool u_gust = options_.gust_axis == GustAxis::kU;
   m.u_g_mps = m.mean_wind_mps + m.turbulence_u_mps + (u_gust ? m.gust_mps : 0.0);
   m.w_g_mps = m.turbulence_w_mps + (u_gust ? 0.0 : m.gust_mps);
   m.airspeed_mps = inertial_speed_mps - m.u_g_mps;
+  if (options_.pitch_rate_gust) {
+    // q_g = −(s/V)/(1 + τ s)·w_g with τ = 4b/(πV): with the lag p = w_g/(1 + τ s),
+    // q_g = −ṗ/V = −(w_g − p)·π/(4b), ṗ = (w_g − p)·πV/(4b).
+    const double k = std::numbers::pi / (4.0 * options_.wing_span_m);
+    m.q_g_radps = -(m.w_g_mps - x[kPitchRateLag]) * k;
+  }
+  m.w_g_dot_mps2 = std::numeric_limits<double>::quiet_NaN();  // not computed here (Evaluate)
+  return m;
+}
 
+AirMotion DisturbanceField::Evaluate(const Segment& segment, double height_m, double inertial_speed_mps,
+                                     const State& x, State& dxdt) const {
+  AirMotion m = Motion(segment, height_m, inertial_speed_mps, x);
+  m.w_g_dot_mps2 = 0.0;
+  dxdt.fill(0.0);
+  const bool u_gust = options_.gust_axis == GustAxis::kU;
   if (turbulent_) {
     if (segment.sample_index != cached_index_) {
       cached_u_ = HeldNoise(NoiseStream::kTurbulenceU, segment.sample_index);
       cached_w_ = HeldNoise(NoiseStream::kTurbulenceW, segment.sample_index);
       cached_index_ = segment.sample_index;
     }
-    const DrydenFilterRates rates = DrydenRates(scales, m.airspeed_mps);
-    dxdt[kTurbulenceU] = DrydenUDerivative(rates.a_u_per_s, x[kTurbulenceU], cached_u_);
-    DrydenWDerivative(rates.a_w_per_s, x[kTurbulenceW1], x[kTurbulenceW2], cached_w_, &dxdt[kTurbulenceW1],
-                      &dxdt[kTurbulenceW2]);
+    // The rates and their square roots depend on the height and the airspeed alone: a step's end and
+    // the restart at a sample instant share them (the same doubles as DrydenRates and the filters' √).
+    if (!(height_m == cached_rates_height_m_ && m.airspeed_mps == cached_rates_airspeed_mps_)) {
+      const DrydenFilterRates rates = DrydenRates(cached_scales_, m.airspeed_mps);
+      cached_a_u_ = rates.a_u_per_s;
+      cached_a_w_ = rates.a_w_per_s;
+      cached_gain_u_ = std::sqrt(2.0 * rates.a_u_per_s);
+      cached_gain_w_ = std::sqrt(rates.a_w_per_s);
+      cached_rates_height_m_ = height_m;
+      cached_rates_airspeed_mps_ = m.airspeed_mps;
+    }
+    // DrydenUDerivative and DrydenWDerivative (dryden.h) with their square roots taken above.
+    dxdt[kTurbulenceU] = -cached_a_u_ * x[kTurbulenceU] + cached_gain_u_ * cached_u_;
+    dxdt[kTurbulenceW1] = -cached_a_w_ * x[kTurbulenceW1] + cached_gain_w_ * cached_w_;
+    dxdt[kTurbulenceW2] = cached_a_w_ * (x[kTurbulenceW1] - x[kTurbulenceW2]);
     // σ_w does not vary with height, so ẇ_g of the turbulence is σ_w times the output's rate.
     m.w_g_dot_mps2 = sigma_w_mps_ * DrydenWOutput(dxdt[kTurbulenceW1], dxdt[kTurbulenceW2]);
   }
   if (has_gust_ && segment.gust_started) {
     dxdt[kGustDistance] = m.airspeed_mps;  // the gust is frozen in the air mass
-    if (!u_gust) m.w_g_dot_mps2 += gust_slope * m.airspeed_mps;
+    if (!u_gust) {
+      const double gust_slope =
+          OneMinusCosineGustSlope(x[kGustDistance], options_.gust_amplitude_mps, options_.gust_half_length_m);
+      m.w_g_dot_mps2 += gust_slope * m.airspeed_mps;
+    }
   }
   if (options_.pitch_rate_gust) {
-    // q_g = −(s/V)/(1 + τ s)·w_g with τ = 4b/(πV): with the lag p = w_g/(1 + τ s),
-    // q_g = −ṗ/V = −(w_g − p)·π/(4b), ṗ = (w_g − p)·πV/(4b).
     const double k = std::numbers::pi / (4.0 * options_.wing_span_m);
     const double lead = m.w_g_mps - x[kPitchRateLag];
     dxdt[kPitchRateLag] = lead * k * std::max(m.airspeed_mps, 0.0);
-    m.q_g_radps = -lead * k;
   }
   return m;
 }

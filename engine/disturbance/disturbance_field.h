@@ -13,7 +13,7 @@
 ///   then Eq. (1) with air.u_g_mps, air.w_g_mps, air.q_g_radps, air.w_g_dot_mps2.
 /// The white noise is sampled every Δt_n from t = 0 and held (a function of time alone), so every
 /// integrator that honours the breakpoints sees the same input whatever its steps. Not thread-safe
-/// (a one-sample cache of the noise): one field per run.
+/// (a one-sample cache of the noise and a one-height cache of the height's terms): one field per run.
 
 #include <array>
 #include <cstdint>
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "engine/disturbance/disturbance_options.h"
+#include "engine/disturbance/dryden.h"
 #include "engine/disturbance/run_noise.h"
 
 namespace gesweep {
@@ -88,9 +89,14 @@ class DisturbanceField {
   double HeldNoise(NoiseStream stream, std::int64_t sample_index) const;
 
   /// Air motion at the airplane and the field's state derivatives, at height H (m) and inertial
-  /// speed u0 + Δu (m/s), for field state x. Pure but for the noise cache.
+  /// speed u0 + Δu (m/s), for field state x. Pure but for the caches (the noise sample, and the mean
+  /// wind and Dryden scales of the last height: an integrator evaluates the field several times at
+  /// the same height, at a step's end, its restart, its event check and its monitor).
   AirMotion Evaluate(const Segment& segment, double height_m, double inertial_speed_mps, const State& x,
                      State& dxdt) const;
+  /// The air motion alone, as Evaluate gives it but without the state derivatives and ẇ_g
+  /// (w_g_dot_mps2 is NaN): what a controller, an event or a monitor reads, at less cost.
+  AirMotion Motion(const Segment& segment, double height_m, double inertial_speed_mps, const State& x) const;
 
  private:
   DisturbanceOptions options_;
@@ -99,7 +105,24 @@ class DisturbanceField {
   bool turbulent_ = false;
   bool has_gust_ = false;
   double noise_scale_ = 0;  // 1/√Δt_n
+  // The terms that depend on the height alone, at the last height (NaN: none yet; a NaN height never
+  // hits), and their values at and above the ceiling (and the scales at and below the floor), where
+  // the formulas clamp the height: the same doubles without a log or pow.
+  void UpdateHeightTerms(double height_m) const;
+  double ceiling_mean_wind_mps_ = 0;
+  DrydenScales ceiling_scales_;
+  DrydenScales floor_scales_;
+  mutable double cached_height_m_;
+  mutable double cached_mean_wind_mps_ = 0;
+  mutable DrydenScales cached_scales_;
   mutable std::int64_t cached_index_ = -1;
+  // The filters' rates and the square roots of their noise gains at the last (height, airspeed).
+  mutable double cached_rates_height_m_;
+  mutable double cached_rates_airspeed_mps_ = 0;
+  mutable double cached_a_u_ = 0;
+  mutable double cached_a_w_ = 0;
+  mutable double cached_gain_u_ = 0;
+  mutable double cached_gain_w_ = 0;
   mutable double cached_u_ = 0;
   mutable double cached_w_ = 0;
 };

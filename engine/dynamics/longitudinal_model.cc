@@ -51,30 +51,6 @@ Vector5d AssembleInputMatrix(const DimensionalDerivatives& d) {
   return B;
 }
 
-Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double u0, const Vector5d& x,
-                               double elevator_rad, const AirVelocity& air) {
-  // Written in the order of Equation1Derivative (derivative_kernel.h) so that still air gives the
-  // same doubles: Δu − 0 and Δw − 0 are exact, and the gust terms of row q are added only when present.
-  const double du_a = x[kDeltaU] - air.u_g_mps;
-  const double dw_a = x[kDeltaW] - air.w_g_mps;
-  const double q = x[kPitchRate], dtheta = x[kDeltaTheta], dh = x[kDeltaH];
-  const double m_u = d.Mu + d.Mw_dot * d.Zu;
-  const double m_w = d.Mw + d.Mw_dot * d.Zw;
-  const double m_q = d.Mq + d.Mw_dot * u0;
-  const double m_h = d.Mh + d.Mw_dot * d.Zh;
-  const double m_de = d.Mde + d.Mw_dot * d.Zde;
-  Vector5d dxdt;
-  dxdt[kDeltaU] = d.Xu * du_a + d.Xw * dw_a - kGravity_mps2 * dtheta + d.Xh * dh + d.Xde * elevator_rad;
-  dxdt[kDeltaW] = d.Zu * du_a + d.Zw * dw_a + u0 * q + d.Zh * dh + d.Zde * elevator_rad;
-  dxdt[kPitchRate] = m_u * du_a + m_w * dw_a + m_q * q + m_h * dh + m_de * elevator_rad;
-  if (air.q_g_radps != 0.0 || air.w_g_dot_mps2 != 0.0) {
-    dxdt[kPitchRate] -= d.Mq * air.q_g_radps + d.Mw_dot * air.w_g_dot_mps2;
-  }
-  dxdt[kDeltaTheta] = q;
-  dxdt[kDeltaH] = -x[kDeltaW] + u0 * dtheta;
-  return dxdt;
-}
-
 LongitudinalModel::LongitudinalModel(Aircraft aircraft, const ModelOptions& options)
     : aircraft_(std::move(aircraft)), options_(options), table_(aircraft_, options_) {
   auto require_positive = [&](const std::optional<double>& value, const char* key) {

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/aircraft/atmosphere.h"
 #include "engine/dynamics/coefficient_table.h"
 #include "engine/dynamics/model_options.h"
 
@@ -59,8 +60,30 @@ struct AirVelocity {
 /// u0·Δθ − Δw keep the inertial velocities. d are the derivatives at the current H and airspeed,
 /// u0 the kinematic reference speed. With AirVelocity{} the result is ẋ = A x + B δe, computed by
 /// the same operations as Equation1Derivative of engine/simulation/derivative_kernel.h.
-Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double reference_speed_mps, const Vector5d& x,
-                               double elevator_rad, const AirVelocity& air);
+/// Inline: it is on every right-hand side of a landing in a moving atmosphere.
+inline Vector5d AirRelativeDerivative(const DimensionalDerivatives& d, double u0, const Vector5d& x,
+                                      double elevator_rad, const AirVelocity& air) {
+  // Written in the order of Equation1Derivative (derivative_kernel.h) so that still air gives the
+  // same doubles: Δu − 0 and Δw − 0 are exact, and the gust terms of row q are added only when present.
+  const double du_a = x[kDeltaU] - air.u_g_mps;
+  const double dw_a = x[kDeltaW] - air.w_g_mps;
+  const double q = x[kPitchRate], dtheta = x[kDeltaTheta], dh = x[kDeltaH];
+  const double m_u = d.Mu + d.Mw_dot * d.Zu;
+  const double m_w = d.Mw + d.Mw_dot * d.Zw;
+  const double m_q = d.Mq + d.Mw_dot * u0;
+  const double m_h = d.Mh + d.Mw_dot * d.Zh;
+  const double m_de = d.Mde + d.Mw_dot * d.Zde;
+  Vector5d dxdt;
+  dxdt[kDeltaU] = d.Xu * du_a + d.Xw * dw_a - kGravity_mps2 * dtheta + d.Xh * dh + d.Xde * elevator_rad;
+  dxdt[kDeltaW] = d.Zu * du_a + d.Zw * dw_a + u0 * q + d.Zh * dh + d.Zde * elevator_rad;
+  dxdt[kPitchRate] = m_u * du_a + m_w * dw_a + m_q * q + m_h * dh + m_de * elevator_rad;
+  if (air.q_g_radps != 0.0 || air.w_g_dot_mps2 != 0.0) {
+    dxdt[kPitchRate] -= d.Mq * air.q_g_radps + d.Mw_dot * air.w_g_dot_mps2;
+  }
+  dxdt[kDeltaTheta] = q;
+  dxdt[kDeltaH] = -x[kDeltaW] + u0 * dtheta;
+  return dxdt;
+}
 
 /// One aircraft under one set of model options.
 class LongitudinalModel {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
@@ -144,6 +145,64 @@ TEST(DisturbanceField, ReplayedBySeedAndRunIndex) {
     differ += a[i].w_g_mps != other[i].w_g_mps;
   }
   EXPECT_EQ(differ, static_cast<int>(a.size()));
+}
+
+// The field's caches (the height's terms, the filters' rates, the noise sample) and its values at
+// the clamped heights change no bit: every call of a field with a history equals the same call of a
+// fresh field, and Motion equals Evaluate's air motion. At the ceiling and the floor the scales are
+// checked against the specification's formulas by hand.
+TEST(DisturbanceField, CachesAndClampedHeightsChangeNoBit) {
+  DisturbanceOptions o = Turbulent();
+  o.gust_axis = GustAxis::kW;
+  o.gust_amplitude_mps = -3.0;
+  o.gust_half_length_m = 20.0;
+  o.pitch_rate_gust = true;
+  o.wing_span_m = 12.0;
+  const DisturbanceField used(o, 7, 3);
+  const DisturbanceField::State x = {0.3, -0.7, 0.2, 0.05, 11.0};
+  struct Call {
+    double height_m, speed_mps;
+    std::int64_t sample;
+  };
+  // Repeated heights and airspeeds with a new sample (a step's end and its restart), heights above the
+  // 1000 ft ceiling, at and below the 10 ft floor, below z0, and back.
+  const std::vector<Call> calls = {{50.0, 45.0, 0},  {50.0, 45.0, 1}, {50.0, 46.0, 1},  {400.0, 45.0, 1},
+                                   {304.8, 45.0, 2}, {1e6, 45.0, 2},  {3.048, 45.0, 2}, {1.0, 45.0, 3},
+                                   {0.01, 45.0, 3},  {50.0, 45.0, 0}, {-1.0, 45.0, 4},  {400.0, 45.0, 4},
+                                   {50.0, -5.0, 4},  {50.0, 45.0, 4}};
+  for (const Call& c : calls) {
+    const DisturbanceField fresh(o, 7, 3);
+    const Segment segment{c.sample, true};
+    DisturbanceField::State d_used, d_fresh;
+    const AirMotion a = used.Evaluate(segment, c.height_m, c.speed_mps, x, d_used);
+    const AirMotion b = fresh.Evaluate(segment, c.height_m, c.speed_mps, x, d_fresh);
+    const AirMotion m = used.Motion(segment, c.height_m, c.speed_mps, x);
+    for (const AirMotion* other : {&b, &m}) {
+      EXPECT_EQ(a.u_g_mps, other->u_g_mps) << c.height_m;
+      EXPECT_EQ(a.w_g_mps, other->w_g_mps) << c.height_m;
+      EXPECT_EQ(a.q_g_radps, other->q_g_radps) << c.height_m;
+      EXPECT_EQ(a.airspeed_mps, other->airspeed_mps) << c.height_m;
+      EXPECT_EQ(a.mean_wind_mps, other->mean_wind_mps) << c.height_m;
+      EXPECT_EQ(a.turbulence_u_mps, other->turbulence_u_mps) << c.height_m;
+      EXPECT_EQ(a.turbulence_w_mps, other->turbulence_w_mps) << c.height_m;
+      EXPECT_EQ(a.gust_mps, other->gust_mps) << c.height_m;
+    }
+    EXPECT_EQ(a.w_g_dot_mps2, b.w_g_dot_mps2) << c.height_m;
+    EXPECT_TRUE(std::isnan(m.w_g_dot_mps2)) << "Motion does not compute the rate of w_g";
+    for (int i = 0; i < DisturbanceField::kStateCount; ++i) EXPECT_EQ(d_used[i], d_fresh[i]) << c.height_m;
+  }
+  // By hand (MIL-F-8785C low altitude, h in ft clamped to [10, 1000]): at 1000 ft the base
+  // 0.177 + 0.000823·1000 is 1, so σ_u = σ_w; at 10 ft it is 0.18523, σ_u = σ_w/0.18523^0.4; the
+  // mean wind above 1000 ft is W20·ln(1000/0.15)/ln(20/0.15).
+  constexpr double kRelativeTolerance = 1e-14;  // a few roundings of the formulas
+  const double sigma_w = 0.1 * 15.433;
+  DisturbanceField::State unused;
+  const AirMotion high = used.Evaluate({5, true}, 1e4, 45.0, x, unused);
+  EXPECT_NEAR(high.turbulence_u_mps, sigma_w * x[0], kRelativeTolerance * sigma_w);
+  EXPECT_NEAR(high.mean_wind_mps, -15.433 * std::log(1000.0 / 0.15) / std::log(20.0 / 0.15),
+              kRelativeTolerance * 15.433 * 2);
+  const AirMotion low = used.Evaluate({5, true}, 0.5, 45.0, x, unused);
+  EXPECT_NEAR(low.turbulence_u_mps, sigma_w / std::pow(0.18523, 0.4) * x[0], kRelativeTolerance * sigma_w);
 }
 
 TEST(DisturbanceField, GustThroughTheField) {
