@@ -457,7 +457,7 @@ class Dispersion(Checks):
             self.assertEqual(len(quoted), len(engine), f"{wind} kt, {plant}: {quoted}")
             for i, (q, e) in enumerate(zip(quoted, engine)):
                 self.agrees(q, e, what=f"{wind} kt, {plant}, number {i + 1} of the row")
-        said = claim(r"with minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
+        said = claim(r"With minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
                      r"and (?P<d30>[−+][\d.]+) m/s at 30 kt \(standard errors (?P<s15>[\d.]+) and (?P<s30>[\d.]+) m/s\)")
         for shard, wind in ((0, "15"), (1, "30")):
             d, s = sink_difference(groups[shard])
@@ -557,7 +557,7 @@ class DispersionSample(Checks):
             self.mean_agrees(q[17], q[18], big_n, e[17], e[0], f"{cell}: mean distance")
             for start, what in ((5, limits[0]), (9, limits[1]), (13, limits[2]), (19, limits[3]), (23, limits[4])):
                 self.count_agrees(q[start + 2], q[start + 3], e[start], e[start + 1], f"{cell}: {what}")
-        said = claim(r"with minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
+        said = claim(r"With minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
                      r"and (?P<d30>[−+][\d.]+) m/s at 30 kt \(standard errors (?P<s15>[\d.]+) and (?P<s30>[\d.]+) m/s\)")
         for shard, wind in ((0, "15"), (1, "30")):
             d, s = sink_difference(groups[shard])
