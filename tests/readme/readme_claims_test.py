@@ -13,9 +13,9 @@ Usage: readme_claims_test.py GESWEEP_BINARY [fast|sobol|dispersion|dispersion_sa
   fast (default): everything but the Sobol study and the landing dispersion, a few seconds;
   sobol: the Sobol paragraph (327,680 boundary runs, about 15 s of CPU);
   dispersion: the landing dispersion section, on its full study (8000 turbulent landings, about
-    75 s of CPU): its output block and cell table, digit for digit;
+    3 min of CPU): its output block and cell table, digit for digit;
   dispersion_sample: the same section's statistically robust claims against an independent sample
-    of 200 landings per cell (studies/paper/landing_dispersion_sample.toml, about 8 s of CPU), with
+    of 200 landings per cell (studies/paper/landing_dispersion_sample.toml, about 20 s of CPU), with
     tolerances from the two sample sizes.
 """
 import json
