@@ -486,7 +486,7 @@ class Dispersion(Checks):
         # the tails: normal and Gumbel rejected at 1 % everywhere, the GEV bounded; at 30 kt the GEV inside
         # the Clopper-Pearson intervals at 1 and 1.83 m/s, the normal and Gumbel outside the second; at 3.05
         # m/s the orders of magnitude quoted
-        said = claim(r"at 30 kt, normal of order 10⁻(?P<n>\d), GEV 10⁻(?P<g>\d), Gumbel 10⁻(?P<u>\d)\)")
+        said = claim(r"at 30 kt, normal of order 10⁻(?P<n>[⁰¹²³⁴⁵⁶⁷⁸⁹]), GEV 10⁻(?P<g>[⁰¹²³⁴⁵⁶⁷⁸⁹]), Gumbel 10⁻(?P<u>[⁰¹²³⁴⁵⁶⁷⁸⁹])\)")
         superscript = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")
         for shard in (0, 1):
             for value in (0.0, 1.0):
