@@ -9,11 +9,17 @@ README shows; this test runs those commands with the real gesweep binary and com
   fails here until its check is edited too; the numbers themselves come from README and the engine,
   none from this file (the paper's 2.5935 m and 2.4912 m are the paper's).
 
-Usage: readme_claims_test.py GESWEEP_BINARY [fast|sobol]
-  fast (default): everything but the Sobol study, a few seconds;
-  sobol: the Sobol paragraph (327,680 boundary runs, about 15 s of CPU).
+Usage: readme_claims_test.py GESWEEP_BINARY [fast|sobol|dispersion|dispersion_sample]
+  fast (default): everything but the Sobol study and the landing dispersion, a few seconds;
+  sobol: the Sobol paragraph (327,680 boundary runs, about 15 s of CPU);
+  dispersion: the landing dispersion section, on its full study (8000 turbulent landings, about
+    3 min of CPU): its output block and cell table, digit for digit;
+  dispersion_sample: the same section's statistically robust claims against an independent sample
+    of 200 landings per cell (studies/paper/landing_dispersion_sample.toml, about 20 s of CPU), with
+    tolerances from the two sample sizes.
 """
 import json
+import math
 import os
 import re
 import shlex
@@ -23,8 +29,11 @@ import sys
 import tempfile
 import unittest
 
+from scipy import stats
+
 GESWEEP = os.path.abspath(sys.argv.pop(1))
-PART = sys.argv.pop(1) if len(sys.argv) > 1 and sys.argv[1] in ("fast", "sobol") else "fast"
+PARTS = ("fast", "sobol", "dispersion", "dispersion_sample")
+PART = sys.argv.pop(1) if len(sys.argv) > 1 and sys.argv[1] in PARTS else "fast"
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 WORK = tempfile.mkdtemp(prefix="gesweep_readme_")
 ANCE = "studies/aircraft/ance.toml"
@@ -48,6 +57,18 @@ NEGLIGIBLE = 0.01
 STRONG_INTERACTION = 0.1
 # Free-flight phugoid crossover: bisection on the speed to this (m/s), well below the quoted digit.
 CROSSOVER_RESOLUTION_MPS = 1e-3
+
+# The landing dispersion sample (200 runs per cell) against README's full study (2000 per cell), two
+# independent samples of the same cells: a mean may differ from README's by at most SAMPLE_SIGMAS
+# standard errors of the difference, sd·√(1/n + 1/N), plus README's rounding. 4.5 standard errors is a
+# two-sided 7e-6 for a normal mean, so the ~20 checks of a correct engine fail together with probability
+# below 2e-4, while a broken turbulence (no noise: sd 0; another intensity: means moved by several sd/√n)
+# fails them.
+SAMPLE_SIGMAS = 4.5
+# A count k of n beyond a limit agrees with README's probability when a binomial test at the nearest
+# end of README's 95 % Clopper–Pearson interval does not reject it at this level (one side), the same
+# 7e-6 as above on the other tail of the normal.
+SAMPLE_BINOMIAL_LEVEL = 3.5e-6
 
 NUMBER = re.compile(r"[-+−]?(?:\d[\d,]*\.?\d*|\.\d+)(?:e[-+]?\d+)?")
 
@@ -367,8 +388,187 @@ class Sobol(Checks):
             self.assertLess(indices[parameter][3], NEGLIGIBLE, f"{parameter}: 'not at all'")
 
 
+# The landing dispersion section (issue 17): README's cell table, its rows "| 15 kt, with | ..." after
+# this mark, and the dispersion commands of its first sh block.
+DISPERSION_TABLE = "**The four cells.**"
+DISPERSION_RUN = "studies/paper/landing_dispersion.toml --shard 0/2"
+DISPERSION_CELLS = (("15", "with", 0, 1.0), ("15", "without", 0, 0.0), ("30", "with", 1, 1.0), ("30", "without", 1, 0.0))
+
+
+def dispersion_table():
+    """README's cell table: (wind kt, plant) -> the number strings of its row, in order."""
+    part = README.split(DISPERSION_TABLE)[1].split("\n\n|")[1].split("\n\n")[0]
+    rows = {}
+    for line in part.splitlines():
+        match = re.match(r"\| (\d+) kt, (with|without) \| (.*) \|$", line)
+        if match:
+            rows[(match.group(1), match.group(2))] = NUMBER.findall(match.group(3).replace("·", ""))
+    assert len(rows) == 4, f"README's dispersion table has rows {sorted(rows)}"
+    return rows
+
+
+def dispersion_limits():
+    """The --limit arguments of README's cell-table command (the one run on both shards)."""
+    line = claim(r"```sh (?P<c>for w in 15kt 30kt; do \./build/gesweep dispersion .*?; done) ```")["c"]
+    return re.findall(r"--limit '([^']+)'", line)
+
+
+def dispersion_json(archive, limits):
+    text = gesweep("dispersion", archive, "--group-by", "h_derivatives", "--format", "json", "--no-write",
+                   *[a for limit in limits for a in ("--limit", limit)])
+    return {group["value"]: group for group in json.loads(text)["groups"]}
+
+
+def cell_values(group):
+    """The numbers of a README table row from the engine's group, in the row's order: landed of runs;
+    sink rate mean, sd, p99.9; the three sink limits (k, n, Clopper–Pearson low, high); distance mean,
+    sd; the distance limit; the pitch limit."""
+    columns = {c["column"]: c for c in group["columns"]}
+    sink, distance = columns["touchdown_sink_rate_mps"], columns["touchdown_distance_past_transmitter_m"]
+    limits = [[l["exceed"], l["values"], *l["clopper_pearson"]] for l in group["limits"]]
+    return [sink["values"], sink["runs"], sink["mean"], sink["standard_deviation"], sink["percentiles"][-1],
+            *limits[0], *limits[1], *limits[2], distance["mean"], distance["standard_deviation"], *limits[3],
+            *limits[4]]
+
+
+def run_dispersion_study(study, stem):
+    """The two shards (one per wind level) of a landing dispersion study, in the test's directory."""
+    archives = []
+    for shard in (0, 1):
+        archive = os.path.join(WORK, f"{stem}_{shard}.h5")
+        gesweep("run", study, "--shard", f"{shard}/2", "-o", archive, "-q", "--threads", "2")
+        archives.append(archive)
+    return archives
+
+
+class Dispersion(Checks):
+    def test_output_block_and_cell_table(self):
+        commands, expected = output_block_after(DISPERSION_RUN)
+        printed = "".join(gesweep(*readme_command(c)) for c in commands).replace(WORK + "/", "results/")
+        printed = printed.splitlines()
+        self.assertEqual(len(expected), len(printed), "\n".join(printed))
+        for readme_line, engine_line in zip(expected, printed):
+            self.same_lines(readme_line, engine_line)
+        limits = dispersion_limits()
+        table = dispersion_table()
+        groups = [dispersion_json(os.path.join(WORK, f"landing_dispersion_{w}.h5"), limits) for w in ("15kt", "30kt")]
+        for wind, plant, shard, value in DISPERSION_CELLS:
+            quoted, engine = table[(wind, plant)], cell_values(groups[shard][value])
+            self.assertEqual(len(quoted), len(engine), f"{wind} kt, {plant}: {quoted}")
+            for i, (q, e) in enumerate(zip(quoted, engine)):
+                self.agrees(q, e, what=f"{wind} kt, {plant}, number {i + 1} of the row")
+        said = claim(r"With minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
+                     r"and (?P<d30>[−+][\d.]+) m/s at 30 kt \(standard errors (?P<s15>[\d.]+) and (?P<s30>[\d.]+) m/s\)")
+        for shard, wind in ((0, "15"), (1, "30")):
+            d, s = sink_difference(groups[shard])
+            self.agrees(said["d" + wind], d, what=f"difference of the mean sink rates at {wind} kt")
+            self.agrees(said["s" + wind], s, what=f"its standard error at {wind} kt")
+        self.assertLess(abs(number(said["d15"])), number(said["s15"]), "within one standard error")
+        self.assertLess(abs(number(said["d30"])), number(said["s30"]), "within one standard error")
+        # "1.83 m/s exceeded in 2 to 3 % of the 30 kt landings either way"; none beyond 3.05 m/s or 518 m
+        claim(r"no long landing and no 3\.05 m/s landing in any cell \(below 1\.8·10⁻³ each\), 1\.83 m/s exceeded in "
+              r"2 to 3 % of the 30 kt landings either way")
+        for shard in (0, 1):
+            for value in (0.0, 1.0):
+                limits = groups[shard][value]["limits"]
+                self.assertEqual((limits[2]["exceed"], limits[3]["exceed"]), (0, 0))
+                self.assertLess(limits[2]["clopper_pearson"][1], 1.85e-3)
+                if shard == 1:
+                    self.assertTrue(0.02 <= limits[1]["probability"] <= 0.03, limits[1])
+        # the ratio of the turbulent mean sink rates to the still-air landing's
+        said = claim(r"turbulence multiplies the mean sink rate by (?P<r15>[\d.]+) \(15 kt\) and (?P<r30>[\d.]+) \(30 kt\)")
+        still = json.loads(gesweep("land", "--aircraft", ANCE, "--summary-only", "--format", "json"))["summary"]
+        for shard, wind in ((0, "15"), (1, "30")):
+            for value in (0.0, 1.0):
+                sink = {c["column"]: c for c in groups[shard][value]["columns"]}["touchdown_sink_rate_mps"]
+                self.agrees(said["r" + wind], sink["mean"] / still["touchdown_sink_rate_mps"], units=1.0,
+                            what=f"{wind} kt, h_derivatives {value}: mean sink rate over still air's")
+        # the tails: normal and Gumbel rejected at 1 % everywhere, the GEV bounded; at 30 kt the GEV inside
+        # the Clopper-Pearson intervals at 1 and 1.83 m/s, the normal and Gumbel outside the second; at 3.05
+        # m/s the orders of magnitude quoted
+        said = claim(r"at 30 kt, normal of order 10⁻(?P<n>[⁰¹²³⁴⁵⁶⁷⁸⁹]), GEV 10⁻(?P<g>[⁰¹²³⁴⁵⁶⁷⁸⁹]), Gumbel 10⁻(?P<u>[⁰¹²³⁴⁵⁶⁷⁸⁹])\)")
+        superscript = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")
+        for shard in (0, 1):
+            for value in (0.0, 1.0):
+                group = groups[shard][value]
+                sink = {c["column"]: c for c in group["columns"]}["touchdown_sink_rate_mps"]
+                fits = {f["law"]: f for f in sink["fits"]}
+                self.assertEqual(fits["normal"]["rejected_at_percent"], 1.0)
+                self.assertEqual(fits["gumbel_max"]["rejected_at_percent"], 1.0)
+                self.assertLess(fits["gev_max"]["shape"], 0)
+                if shard == 1:
+                    firm, hard, harder = group["limits"][:3]
+                    for limit in (firm, hard):
+                        low, high = limit["clopper_pearson"]
+                        self.assertTrue(low <= limit["gev_probability"] <= high, limit)
+                    low, high = hard["clopper_pearson"]
+                    self.assertFalse(low <= hard["normal_probability"] <= high, hard)
+                    self.assertFalse(low <= hard["gumbel_probability"] <= high, hard)
+                    for key, law in (("n", "normal"), ("g", "gev"), ("u", "gumbel")):
+                        order = math.floor(math.log10(harder[law + "_probability"]))
+                        self.assertEqual(order, -int(said[key].translate(superscript)), f"{law} at 3.05 m/s")
+        # the one stall
+        claim(r"One stall\*\* in 8000 runs \(30 kt, without h-derivatives, run 6714\)")
+        stalls = gesweep("query", os.path.join(WORK, "landing_dispersion_30kt.h5"), "--where", "outcome == 'stall'",
+                         "--columns", "index,h_derivatives").split("\n")[1:-1]
+        self.assertEqual([line.split() for line in stalls if not line.startswith("#")], [["6714", "false"]])
+        self.assertEqual(gesweep("query", os.path.join(WORK, "landing_dispersion_15kt.h5"), "--where",
+                                 "outcome != 'landed'", "--aggregate", "count").split()[1], "0")
+        replay = json.loads(gesweep("land", "--aircraft", ANCE, "--summary-only", "--format", "json", "--wind-20ft-mps",
+                                    "-15.433333", "--turbulence", "dryden", "--seed", "714", "--run-index", "6714"))
+        self.assertEqual(replay["summary"]["outcome"], "stall", "with the h-derivatives it stalls as well")
+
+
+def sink_difference(groups):
+    """Mean sink rate with minus without h-derivatives, and the standard error of the difference."""
+    a, b = ({c["column"]: c for c in groups[v]["columns"]}["touchdown_sink_rate_mps"] for v in (1.0, 0.0))
+    return a["mean"] - b["mean"], (a["standard_deviation"] ** 2 / a["values"] + b["standard_deviation"] ** 2 / b["values"]) ** 0.5
+
+
+class DispersionSample(Checks):
+    def mean_agrees(self, quoted_mean, quoted_sd, big_n, mean, n, what):
+        tolerance = SAMPLE_SIGMAS * number(quoted_sd) * (1 / n + 1 / big_n) ** 0.5 + ROUNDED * last_digit(quoted_mean)
+        self.assertLessEqual(abs(mean - number(quoted_mean)), tolerance,
+                             f"{what}: README {quoted_mean} (sd {quoted_sd}, n {big_n}), sample {mean} of {n}")
+
+    def count_agrees(self, low, high, k, n, what):
+        """k of n consistent with a probability in README's interval [low, high]."""
+        upper = stats.binom.sf(k - 1, n, number(high)) if k > 0 else 1.0  # P(K >= k) at the interval's top
+        lower = stats.binom.cdf(k, n, number(low))                          # P(K <= k) at its bottom
+        self.assertGreater(min(upper, lower), SAMPLE_BINOMIAL_LEVEL,
+                           f"{what}: {k} of {n} against README's interval {low}-{high}")
+
+    def test_sample_against_the_cell_table(self):
+        table = dispersion_table()
+        limits = dispersion_limits()
+        archives = run_dispersion_study("studies/paper/landing_dispersion_sample.toml", "sample")
+        groups = [dispersion_json(a, limits) for a in archives]
+        for wind, plant, shard, value in DISPERSION_CELLS:
+            q, e = table[(wind, plant)], cell_values(groups[shard][value])
+            cell = f"{wind} kt, {plant}"
+            big_n, n = number(q[1]), e[1]
+            self.assertEqual(n, 200, cell)
+            # the runs that did not land, against README's count through its Clopper–Pearson interval
+            k_big = big_n - number(q[0])
+            low = stats.beta.ppf(0.025, k_big, big_n - k_big + 1) if k_big > 0 else 0.0
+            high = stats.beta.ppf(0.975, k_big + 1, big_n - k_big) if k_big < big_n else 1.0
+            self.count_agrees(repr(low), repr(high), n - e[0], n, f"{cell}: runs without a touchdown")
+            self.mean_agrees(q[2], q[3], big_n, e[2], e[0], f"{cell}: mean sink rate")
+            self.mean_agrees(q[17], q[18], big_n, e[17], e[0], f"{cell}: mean distance")
+            for start, what in ((5, limits[0]), (9, limits[1]), (13, limits[2]), (19, limits[3]), (23, limits[4])):
+                self.count_agrees(q[start + 2], q[start + 3], e[start], e[start + 1], f"{cell}: {what}")
+        said = claim(r"With minus without h-derivatives, the mean sink rate differs by (?P<d15>[−+][\d.]+) m/s at 15 kt "
+                     r"and (?P<d30>[−+][\d.]+) m/s at 30 kt \(standard errors (?P<s15>[\d.]+) and (?P<s30>[\d.]+) m/s\)")
+        for shard, wind in ((0, "15"), (1, "30")):
+            d, s = sink_difference(groups[shard])
+            tolerance = SAMPLE_SIGMAS * (s ** 2 + number(said["s" + wind]) ** 2) ** 0.5
+            self.assertLessEqual(abs(d - number(said["d" + wind])), tolerance,
+                                 f"{wind} kt: sample difference {d} against README's {said['d' + wind]}")
+
+
 if __name__ == "__main__":
-    suite = unittest.defaultTestLoader.loadTestsFromTestCase(Fast if PART == "fast" else Sobol)
+    case = {"fast": Fast, "sobol": Sobol, "dispersion": Dispersion, "dispersion_sample": DispersionSample}[PART]
+    suite = unittest.defaultTestLoader.loadTestsFromTestCase(case)
     result = unittest.TextTestRunner(verbosity=2).run(suite)
     shutil.rmtree(WORK, ignore_errors=True)
     sys.exit(0 if result.wasSuccessful() else 1)
