@@ -369,8 +369,7 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
         std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
     }
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
+    return ArchiveFailure(e);
   }
   return 0;
 }

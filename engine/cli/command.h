@@ -4,7 +4,9 @@
 /// registry. Subcommands parse, call the engine and print; they hold no physics.
 
 #include <CLI/CLI.hpp>
+#include <exception>
 #include <functional>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -25,5 +27,12 @@ std::vector<Command>& CommandRegistry();
 struct CommandRegistrar {
   explicit CommandRegistrar(Command command) { CommandRegistry().push_back(std::move(command)); }
 };
+
+/// How a command ends on an archive it cannot use (ArchiveError: unreadable, not an archive of this
+/// format, locked): the message on one line of stderr, exit code 1.
+inline int ArchiveFailure(const std::exception& error) {
+  std::cerr << "gesweep: error: " << error.what() << "\n";
+  return 1;
+}
 
 }  // namespace gesweep::cli

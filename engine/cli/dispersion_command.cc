@@ -272,8 +272,7 @@ int RunDispersion(const DispersionFlags& flags) {
   } catch (const InputError& e) {
     throw ForCommandLine(e, names);
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
+    return ArchiveFailure(e);
   }
   return 0;
 }

@@ -46,8 +46,7 @@ int Merge(const MergeFlags& flags) {
       }
     }
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
+    return ArchiveFailure(e);
   }
   return 0;
 }

@@ -200,8 +200,7 @@ int RunQueryCommand(const QueryFlags& flags) {
     const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
     RunQuery(archive, catalog, request, *writer);
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
+    return ArchiveFailure(e);
   }
   return 0;
 }

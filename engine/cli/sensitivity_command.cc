@@ -297,8 +297,7 @@ int Sensitivity(const SensitivityFlags& flags) {
     // The engine names the request's fields (the source is the archive): this command's flags.
     throw ForCommandLine(e, {{"output", "--output"}, {"method", "--method"}});
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: " << e.what() << "\n";
-    return 1;
+    return ArchiveFailure(e);
   }
   return 0;
 }

@@ -388,6 +388,21 @@ class Dispatcher {
   bool stopped_ = false;
 };
 
+// Inside a catch (...): the code of the failure this rank agrees on with the others (AgreeOnError), 2
+// for an InputError (worded by describe_input_error when given), 1 for an ArchiveError, with its
+// message in `error`; anything else is rethrown.
+int ErrorOfThisRank(const MpiRunOptions& options, std::string& error) {
+  try {
+    throw;
+  } catch (const InputError& e) {
+    error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
+    return 2;
+  } catch (const ArchiveError& e) {
+    error = e.what();
+    return 1;
+  }
+}
+
 bool Cancelled(const MpiRunOptions& options) { return options.cancel != nullptr && options.cancel->load(); }
 
 std::string ErrorText(const std::exception_ptr& error) {
@@ -546,12 +561,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       }
       writer->set_block_row_offset(range.first * plan.chunk_runs());
       for (const std::int64_t local : opened.pending_blocks) pending_mine.push_back(range.first + local);
-    } catch (const InputError& e) {
-      code = 2;
-      error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
-    } catch (const ArchiveError& e) {
-      code = 1;
-      error = e.what();
+    } catch (...) {
+      code = ErrorOfThisRank(options, error);
     }
   }
   if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
@@ -866,12 +877,8 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
             MergeArchives(shards, options.output, /*force=*/true,
                           options.command_line + " (merge of the node shards)", options.merge, scope);
         merged = 1;
-      } catch (const InputError& e) {
-        code = 2;
-        error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
-      } catch (const ArchiveError& e) {
-        code = 1;
-        error = e.what();
+      } catch (...) {
+        code = ErrorOfThisRank(options, error);
       }
       report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }

@@ -244,12 +244,16 @@ class StudyParser {
     return static_cast<std::uint64_t>(*seed);
   }
 
-  // [[design.parameter]] entries: name plus, for a grid, values/linspace/logspace; for a sampled
-  // design, uniform/loguniform bounds.
-  void ParseDesignParameters(const TomlSection& design, bool grid) {
+  // The [[design.parameter]] tables of `design`: each a table of the keys `allowed` naming a catalogue
+  // parameter not named before (`per` and `duplicate` word those two errors for the design's kind).
+  // `read(entry, name, parameter)` reads the rest of the entry; the parameter is then appended to the
+  // design.
+  template <typename Read>
+  void ReadDesignParameters(const TomlSection& design, const std::string& per, const std::string& duplicate,
+                            const std::vector<std::string>& allowed, const Read& read) {
     const toml::node* node = design.table().get("parameter");
     if (node == nullptr) {
-      design.Fail("parameter", "", "missing [[design.parameter]] entries (one per swept parameter)");
+      design.Fail("parameter", "", "missing [[design.parameter]] entries (" + per + ")");
     }
     const toml::array* array = node->as_array();
     if (array == nullptr || array->empty()) {
@@ -264,31 +268,52 @@ class StudyParser {
                          NodeLine(*array->get(i)));
       }
       const TomlSection entry(*table, source_, prefix);
-      if (grid) {
-        entry.RejectUnknownKeys({"name", "values", "linspace", "logspace"});
-      } else {
-        entry.RejectUnknownKeys({"name", "uniform", "loguniform"});
-      }
+      entry.RejectUnknownKeys(allowed);
       const std::string name = entry.String("name");
       DesignParameter parameter;
       parameter.id = ParameterIdOf(name, entry.KeyOf("name"), entry.LineOf("name"));
       if (!seen.insert(parameter.id).second) {
-        entry.Fail("name", Quote(name),
-                   "expected each parameter once in the design (it is a duplicate axis)");
+        entry.Fail("name", Quote(name), "expected each parameter once in the design (" + duplicate + ")");
       }
       swept_lines_[parameter.id] = entry.LineOf("name");
-      const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
-      if (grid) {
-        ParseGridAxis(entry, parameter);
-      } else {
-        if (info.kind != ParameterKind::kReal) {
-          entry.Fail("name", Quote(name),
-                     "expected a real-valued parameter: a " + std::string(ToString(study_.design.kind)) +
-                         " design samples numbers; sweep " + name + " in a grid or list design");
-        }
-        ParseBounds(entry, parameter);
-      }
+      read(entry, name, parameter);
       study_.design.parameters.push_back(std::move(parameter));
+    }
+  }
+
+  // [[design.parameter]] entries: name plus, for a grid, values/linspace/logspace; for a sampled
+  // design, uniform/loguniform bounds.
+  void ParseDesignParameters(const TomlSection& design, bool grid) {
+    const std::vector<std::string> allowed =
+        grid ? std::vector<std::string>{"name", "values", "linspace", "logspace"}
+             : std::vector<std::string>{"name", "uniform", "loguniform"};
+    ReadDesignParameters(
+        design, "one per swept parameter", "it is a duplicate axis", allowed,
+        [&](const TomlSection& entry, const std::string& name, DesignParameter& parameter) {
+          const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
+          if (grid) {
+            ParseGridAxis(entry, parameter);
+          } else {
+            if (info.kind != ParameterKind::kReal) {
+              entry.Fail("name", Quote(name),
+                         "expected a real-valued parameter: a " + std::string(ToString(study_.design.kind)) +
+                             " design samples numbers; sweep " + name + " in a grid or list design");
+            }
+            ParseBounds(entry, parameter);
+          }
+        });
+  }
+
+  // The entry's `values = [...]` (non-empty), each checked against the parameter, into its values.
+  void ReadValues(const TomlSection& entry, DesignParameter& parameter) const {
+    const toml::array* array = entry.table().get("values")->as_array();
+    if (array == nullptr || array->empty()) {
+      entry.Fail("values", DescribeNode(*entry.table().get("values")),
+                 "expected a non-empty array of values");
+    }
+    for (std::size_t k = 0; k < array->size(); ++k) {
+      parameter.values.push_back(ParameterValue(parameter.id, *array->get(k),
+                                                entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
     }
   }
 
@@ -301,15 +326,7 @@ class StudyParser {
     }
     const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
     if (entry.Has("values")) {
-      const toml::array* array = entry.table().get("values")->as_array();
-      if (array == nullptr || array->empty()) {
-        entry.Fail("values", DescribeNode(*entry.table().get("values")),
-                   "expected a non-empty array of values");
-      }
-      for (std::size_t k = 0; k < array->size(); ++k) {
-        parameter.values.push_back(ParameterValue(parameter.id, *array->get(k),
-                                                  entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
-      }
+      ReadValues(entry, parameter);
     } else {
       const char* key = entry.Has("linspace") ? "linspace" : "logspace";
       if (info.kind != ParameterKind::kReal) {
@@ -364,87 +381,64 @@ class StudyParser {
 
   // [[design.parameter]] entries of a monte_carlo design: name and exactly one distribution.
   void ParseMonteCarloParameters(const TomlSection& design) {
-    const toml::node* node = design.table().get("parameter");
-    if (node == nullptr) {
-      design.Fail("parameter", "", "missing [[design.parameter]] entries (one per sampled parameter)");
-    }
-    const toml::array* array = node->as_array();
-    if (array == nullptr || array->empty()) {
-      design.Fail("parameter", DescribeNode(*node), "expected one or more [[design.parameter]] tables");
-    }
     static const std::vector<std::string> kContinuous = {"normal", "truncated_normal", "uniform",
                                                          "loguniform", "lognormal"};
-    std::set<ParameterId> seen;
-    for (std::size_t i = 0; i < array->size(); ++i) {
-      const std::string prefix = "design.parameter[" + std::to_string(i) + "]";
-      const toml::table* table = array->get(i)->as_table();
-      if (table == nullptr) {
-        throw InputError(source_, prefix, DescribeNode(*array->get(i)), "expected a table",
-                         NodeLine(*array->get(i)));
-      }
-      const TomlSection entry(*table, source_, prefix);
-      entry.RejectUnknownKeys(
-          {"name", "normal", "truncated_normal", "uniform", "loguniform", "lognormal", "values", "weights"});
-      const std::string name = entry.String("name");
-      DesignParameter parameter;
-      parameter.id = ParameterIdOf(name, entry.KeyOf("name"), entry.LineOf("name"));
-      if (!seen.insert(parameter.id).second) {
-        entry.Fail("name", Quote(name), "expected each parameter once in the design (it is a duplicate)");
-      }
-      swept_lines_[parameter.id] = entry.LineOf("name");
-      int given = entry.Has("values");
-      std::string key = "values";
-      for (const auto& distribution : kContinuous) {
-        if (entry.Has(distribution)) {
-          ++given;
-          key = distribution;
-        }
-      }
-      if (given != 1) {
-        entry.Fail("name", Quote(name),
-                   "expected exactly one distribution: normal = [mean, sigma], truncated_normal = [mean, "
-                   "sigma, lower, upper], uniform = [lower, upper], loguniform = [lower, upper], lognormal "
-                   "= [mean of log, sigma of log], or values = [...] with optional weights = [...]");
-      }
-      if (entry.Has("weights") && key != "values") {
-        entry.Fail("weights", "[...]",
-                   "expected weights only beside values = [...] (a discrete distribution)");
-      }
-      const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
-      const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
-      if (key == "values") {
-        ParseDiscrete(entry, parameter);
-      } else {
-        if (info.kind != ParameterKind::kReal) {
-          entry.Fail(key, "[...]",
-                     "expected values = [...] (with optional weights = [...]) for " + name +
-                         ": a continuous distribution needs a real-valued parameter (" +
-                         DescribeAllowedValues(parameter.id) + ")");
-        }
-        if (key == "uniform" || key == "loguniform") {
-          ParseBounds(entry, parameter);  // checks both bounds against the parameter
-          study_.design.parameters.push_back(std::move(parameter));
-          continue;
-        }
-        ParseNormalKind(entry, key, parameter);
-        // The reach: the smallest and largest value any draw can take, checked against the parameter.
-        parameter.lower = MonteCarloValue(parameter, kMonteCarloUnitLow);
-        parameter.upper = MonteCarloValue(parameter, kMonteCarloUnitHigh);
-        for (double value : {parameter.lower, parameter.upper}) {
-          const std::string problem = CheckParameterValue(parameter.id, value, aircraft);
-          if (!problem.empty()) {
-            entry.Fail(
-                key, "[...]",
-                "the distribution reaches " + FormatNumber(value) +
-                    " (its value at probability 2^-53 from an end, the furthest a draw can go), " + "and " +
-                    name + ": " + problem +
-                    (key == "normal" || key == "lognormal" ? "; truncate it (truncated_normal) or narrow it"
-                                                           : ""));
+    ReadDesignParameters(
+        design, "one per sampled parameter", "it is a duplicate",
+        {"name", "normal", "truncated_normal", "uniform", "loguniform", "lognormal", "values", "weights"},
+        [&](const TomlSection& entry, const std::string& name, DesignParameter& parameter) {
+          int given = entry.Has("values");
+          std::string key = "values";
+          for (const auto& distribution : kContinuous) {
+            if (entry.Has(distribution)) {
+              ++given;
+              key = distribution;
+            }
           }
-        }
-      }
-      study_.design.parameters.push_back(std::move(parameter));
-    }
+          if (given != 1) {
+            entry.Fail(
+                "name", Quote(name),
+                "expected exactly one distribution: normal = [mean, sigma], truncated_normal = [mean, "
+                "sigma, lower, upper], uniform = [lower, upper], loguniform = [lower, upper], lognormal "
+                "= [mean of log, sigma of log], or values = [...] with optional weights = [...]");
+          }
+          if (entry.Has("weights") && key != "values") {
+            entry.Fail("weights", "[...]",
+                       "expected weights only beside values = [...] (a discrete distribution)");
+          }
+          const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
+          const Aircraft* aircraft = study_.aircraft ? &*study_.aircraft : nullptr;
+          if (key == "values") {
+            ParseDiscrete(entry, parameter);
+          } else {
+            if (info.kind != ParameterKind::kReal) {
+              entry.Fail(key, "[...]",
+                         "expected values = [...] (with optional weights = [...]) for " + name +
+                             ": a continuous distribution needs a real-valued parameter (" +
+                             DescribeAllowedValues(parameter.id) + ")");
+            }
+            if (key == "uniform" || key == "loguniform") {
+              ParseBounds(entry, parameter);  // checks both bounds against the parameter
+              return;
+            }
+            ParseNormalKind(entry, key, parameter);
+            // The reach: the smallest and largest value any draw can take, checked against the parameter.
+            parameter.lower = MonteCarloValue(parameter, kMonteCarloUnitLow);
+            parameter.upper = MonteCarloValue(parameter, kMonteCarloUnitHigh);
+            for (double value : {parameter.lower, parameter.upper}) {
+              const std::string problem = CheckParameterValue(parameter.id, value, aircraft);
+              if (!problem.empty()) {
+                entry.Fail(key, "[...]",
+                           "the distribution reaches " + FormatNumber(value) +
+                               " (its value at probability 2^-53 from an end, the furthest a draw can go), " +
+                               "and " + name + ": " + problem +
+                               (key == "normal" || key == "lognormal"
+                                    ? "; truncate it (truncated_normal) or narrow it"
+                                    : ""));
+              }
+            }
+          }
+        });
   }
 
   void ParseNormalKind(const TomlSection& entry, const std::string& key, DesignParameter& parameter) {
@@ -484,15 +478,7 @@ class StudyParser {
 
   void ParseDiscrete(const TomlSection& entry, DesignParameter& parameter) {
     parameter.distribution = Distribution::kDiscrete;
-    const toml::array* array = entry.table().get("values")->as_array();
-    if (array == nullptr || array->empty()) {
-      entry.Fail("values", DescribeNode(*entry.table().get("values")),
-                 "expected a non-empty array of values");
-    }
-    for (std::size_t k = 0; k < array->size(); ++k) {
-      parameter.values.push_back(ParameterValue(parameter.id, *array->get(k),
-                                                entry.KeyOf("values") + "[" + std::to_string(k) + "]"));
-    }
+    ReadValues(entry, parameter);
     std::vector<double> sorted = parameter.values;
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
