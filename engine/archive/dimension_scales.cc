@@ -20,7 +20,8 @@ constexpr const char* kNotAVariable = "This is a netCDF dimension but not a netC
 
 // A dimension without values at the root: a float32 dataset of `length` elements that is never
 // written (no storage is allocated), marked as a scale with netCDF's NAME.
-void CreatePureDimension(hid_t file, const std::string& name, std::int64_t length) {
+void CreatePureDimension(hid_t file, const std::string& name, std::int64_t length,
+                         const std::string& description) {
   const hsize_t dims[1] = {static_cast<hsize_t>(length)};
   Handle space(H5Screate_simple(1, dims, nullptr), "dimension space");
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "dimension creation properties");
@@ -30,6 +31,8 @@ void CreatePureDimension(hid_t file, const std::string& name, std::int64_t lengt
   char label[96];
   std::snprintf(label, sizeof(label), "%s%10lld", kNotAVariable, static_cast<long long>(length));
   Check(H5DSset_scale(d.get(), label), "make " + name + " a dimension");
+  hdf5::WriteAttribute(d.get(), "units", "1");
+  hdf5::WriteAttribute(d.get(), "description", description);
 }
 
 bool IsVectorOrSeries(hid_t dataset) { return hdf5::Dimensions(dataset).size() == 2; }
@@ -49,7 +52,8 @@ bool IsDimensionScaleAttribute(const std::string& name) {
 }
 
 void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std::string>& paths) {
-  CreatePureDimension(file, kRunDimension, runs);
+  CreatePureDimension(file, kRunDimension, runs,
+                      "The netCDF dimension of the runs: axis 0 of every per-run dataset; no stored values");
   std::map<std::string, Handle> scales;
   scales.emplace(kRunDimension, Handle(H5Dopen2(file, kRunDimension, H5P_DEFAULT), "open dimension run"));
   auto scale = [&](const std::string& path) -> hid_t { return scales.at(path).get(); };
@@ -71,7 +75,9 @@ void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std:
     } else {
       dimension = VectorDimensionName(path);
       if (scales.find(dimension) == scales.end()) {
-        CreatePureDimension(file, dimension, hdf5::Dimensions(d.get())[1]);
+        CreatePureDimension(
+            file, dimension, hdf5::Dimensions(d.get())[1],
+            "The netCDF dimension of axis 1 of " + path + " (its component_names); no stored values");
         scales.emplace(dimension,
                        Handle(H5Dopen2(file, dimension.c_str(), H5P_DEFAULT), "open " + dimension));
       }
