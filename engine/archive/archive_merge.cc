@@ -6,6 +6,7 @@
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
+#include "engine/archive/dimension_scales.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/output_guard.h"
@@ -43,6 +44,14 @@ void CopyGroupAttributes(hid_t from_file, hid_t to_file, const std::string& grou
   Handle from(H5Gopen2(from_file, group.c_str(), H5P_DEFAULT), "open group " + group);
   Handle to(H5Gopen2(to_file, group.c_str(), H5P_DEFAULT), "open group " + group);
   hdf5::CopyAttributes(from.get(), to.get());
+}
+
+// A copied time axis keeps no dimension scale attribute of its shard (they refer to the shard's objects).
+void DropDimensionScaleAttributes(hid_t file, const std::string& path) {
+  Handle d(H5Dopen2(file, path.c_str(), H5P_DEFAULT), "open " + path);
+  for (const char* name : {"CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST"}) {
+    if (H5Aexists(d.get(), name) > 0) Check(H5Adelete(d.get(), name), "drop attribute " + std::string(name));
+  }
 }
 
 // The chunk rows of a chunked dataset (1 when it is not chunked).
@@ -405,23 +414,29 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
       hdf5::WriteAttribute(file.get(), "merge_kind", "copy");
     }
     for (auto& shard : shards) shard.first -= origin;  // rows of the merged archive from here on
+    std::vector<std::string> per_run;
     for (const std::string& path : reference.Datasets()) {
       if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
-        continue;  // derived: recompute after merge
+        continue;                                         // derived: recompute after merge
+      if (path.find('/') == std::string::npos) continue;  // a root dimension: made again below
       Handle source(H5Dopen2(reference.file(), path.c_str(), H5P_DEFAULT), "open " + path);
       const auto dims = hdf5::Dimensions(source.get());
       hdf5::CreateGroups(file.get(), path.substr(0, path.rfind('/')));
       if (!PerRun(path, dims)) {
         Check(H5Ocopy(reference.file(), path.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
               "copy " + path);
+        DropDimensionScaleAttributes(file.get(), path);
         continue;
       }
+      per_run.push_back(path);
       if (kind == MergeKind::kVirtual) {
         WriteVirtual(file.get(), path, shards, report.sources, total);
       } else {
         WriteCopy(file.get(), path, shards, total, report);
       }
     }
+    // The netCDF view of the merged rows (the shards' scales refer to the shards' own objects).
+    archive::AttachDimensionScales(file.get(), total, per_run);
     file.Close("close " + temporary.string());
   }
   for (auto& shard : shards) shard.reader->Close();

@@ -12,6 +12,7 @@
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
+#include "engine/archive/dimension_scales.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
@@ -326,6 +327,10 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   }
   Handle design(H5Gopen2(file, archive::kDesignGroup, H5P_DEFAULT), "open design group");
   WriteDesignAttributes(design.get(), plan_);
+  // The netCDF view: named dimensions, in the layout's order (object references are addresses).
+  std::vector<std::string> paths;
+  for (const archive::StoredDataset& stored : layout_.datasets()) paths.push_back(stored.path);
+  archive::AttachDimensionScales(file, n, paths);
 }
 
 void ArchiveWriter::OpenDatasets() {

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <sstream>
 
+#include "engine/archive/dimension_scales.h"
+
 namespace gesweep::hdf5 {
 namespace {
 
@@ -331,6 +333,8 @@ struct CopyContext {
 
 herr_t CopyOne(hid_t location, const char* name, const H5A_info_t*, void* data) {
   auto* context = static_cast<CopyContext*>(data);
+  // Dimension scale attributes hold object references into their own file: the copy gets its own.
+  if (archive::IsDimensionScaleAttribute(name)) return 0;
   try {
     Handle attribute(H5Aopen(location, name, H5P_DEFAULT), std::string("open attribute ") + name);
     Handle type(H5Aget_type(attribute.get()), "attribute type");

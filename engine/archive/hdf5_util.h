@@ -97,7 +97,8 @@ std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string
 std::optional<double> ReadDoubleAttribute(hid_t object, const std::string& name);
 std::vector<std::string> ReadStringListAttribute(hid_t object, const std::string& name);
 
-/// Copies every attribute of `from` to `to` (values and types as stored).
+/// Copies every attribute of `from` to `to` (values and types as stored), but for the dimension
+/// scale attributes (archive::IsDimensionScaleAttribute).
 void CopyAttributes(hid_t from, hid_t to);
 
 /// The compound {re, im} of two doubles (h5py reads it as complex128).

@@ -93,7 +93,7 @@ class Snapshot:
             self.dataset_attributes = {}
             for name in self.paths:
                 dataset = handle[name]
-                self.dataset_attributes[name] = {k: _plain(v) for k, v in dataset.attrs.items()}
+                self.dataset_attributes[name] = _attributes(handle, dataset)
                 if name == STATUS:
                     continue
                 if is_per_run(name, dataset, self.run_count):
@@ -102,7 +102,7 @@ class Snapshot:
                     self.shared[name] = np.ascontiguousarray(dataset[()]).tobytes()
             self.group_attributes = {}
             handle.visititems(lambda name, obj: self.group_attributes.__setitem__(
-                name, {k: _plain(v) for k, v in obj.attrs.items()}) if isinstance(obj, h5py.Group) else None)
+                name, _attributes(handle, obj)) if isinstance(obj, h5py.Group) else None)
             for required in (STATUS, INDEX, RUN_ID):
                 if required not in self.rows:
                     raise ArchiveProblem(f"{path}: no per-run dataset {required}")
@@ -113,6 +113,21 @@ class Snapshot:
     def complete(self):
         """Rows whose run is complete (nonzero status)."""
         return np.nonzero(self.status != 0)[0]
+
+
+def _attributes(handle, obj):
+    """An object's attributes as plain values; the object references of the dimension scale attributes
+    (schemas/archive.md, "netCDF view") as the paths they refer to."""
+    return {k: _references(handle, v) if k in ("DIMENSION_LIST", "REFERENCE_LIST") else _plain(v)
+            for k, v in obj.attrs.items()}
+
+
+def _references(handle, value):
+    if isinstance(value, h5py.Reference):
+        return handle[value].name if value else None
+    if isinstance(value, (np.ndarray, np.void, list, tuple)):
+        return tuple(_references(handle, v) for v in (value.tolist() if isinstance(value, np.void) else value))
+    return _plain(value)
 
 
 def _plain(value):

@@ -59,6 +59,18 @@ def attribute_bytes(value):
     return array.dtype.str, array.shape, array.tobytes() if array.dtype != object else repr(value).encode()
 
 
+def referenced(obj, value):
+    """The dimension scale attributes (schemas/archive.md, "netCDF view") with each object reference
+    replaced by the path it refers to."""
+    if isinstance(value, h5py.Reference):
+        return obj.file[value].name if value else None
+    if isinstance(value, np.void):
+        value = value.tolist()
+    if isinstance(value, (np.ndarray, list, tuple)):
+        return tuple(referenced(obj, v) for v in value)
+    return repr(value)
+
+
 def compare_attributes(path, reference, candidate, problems, is_root=False):
     names = set(reference.attrs) | set(candidate.attrs)
     for name in sorted(names):
@@ -67,6 +79,13 @@ def compare_attributes(path, reference, candidate, problems, is_root=False):
         if name not in reference.attrs or name not in candidate.attrs:
             problems.append(f"{path}: attribute {name} only in "
                             f"{'reference' if name in reference.attrs else 'candidate'}")
+            continue
+        if name in ("DIMENSION_LIST", "REFERENCE_LIST"):  # object references: compare the paths they name
+            # (a scale's list in any order: a merge attaches in path order, a sweep in layout order)
+            order = sorted if name == "REFERENCE_LIST" else tuple
+            if order(referenced(reference, reference.attrs[name])) != order(
+                    referenced(candidate, candidate.attrs[name])):
+                problems.append(f"{path}: attribute {name} refers to other objects")
             continue
         if attribute_bytes(reference.attrs[name]) != attribute_bytes(candidate.attrs[name]):
             problems.append(f"{path}: attribute {name} differs: {reference.attrs[name]!r} vs "

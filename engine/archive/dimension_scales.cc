@@ -1,0 +1,89 @@
+#include "engine/archive/dimension_scales.h"
+
+#include <hdf5_hl.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <map>
+
+#include "engine/archive/hdf5_util.h"
+
+namespace gesweep::archive {
+namespace {
+
+using hdf5::Check;
+using hdf5::Handle;
+
+// netCDF-4's mark of a dimension that is not a variable (netCDF-C's nc4hdf.c writes the dimension's
+// length after it, as "%10d"; readers compare the prefix).
+constexpr const char* kNotAVariable = "This is a netCDF dimension but not a netCDF variable.";
+
+// A dimension without values at the root: a float32 dataset of `length` elements that is never
+// written (no storage is allocated), marked as a scale with netCDF's NAME.
+void CreatePureDimension(hid_t file, const std::string& name, std::int64_t length,
+                         const std::string& description) {
+  const hsize_t dims[1] = {static_cast<hsize_t>(length)};
+  Handle space(H5Screate_simple(1, dims, nullptr), "dimension space");
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), "dimension creation properties");
+  Check(H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER), "dimension fill time");
+  Handle d(H5Dcreate2(file, name.c_str(), H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+           "create dimension " + name);
+  char label[96];
+  std::snprintf(label, sizeof(label), "%s%10lld", kNotAVariable, static_cast<long long>(length));
+  Check(H5DSset_scale(d.get(), label), "make " + name + " a dimension");
+  hdf5::WriteAttribute(d.get(), "units", "1");
+  hdf5::WriteAttribute(d.get(), "description", description);
+}
+
+bool IsVectorOrSeries(hid_t dataset) { return hdf5::Dimensions(dataset).size() == 2; }
+
+}  // namespace
+
+std::string VectorDimensionName(const std::string& path) {
+  std::string below = path.substr(path.find('/') + 1);  // <analysis>/<name>
+  for (char& c : below) {
+    if (c == '/') c = '_';
+  }
+  return below + "_index";
+}
+
+bool IsDimensionScaleAttribute(const std::string& name) {
+  return name == "CLASS" || name == "NAME" || name == "REFERENCE_LIST" || name == "DIMENSION_LIST";
+}
+
+void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std::string>& paths) {
+  CreatePureDimension(file, kRunDimension, runs,
+                      "The netCDF dimension of the runs: axis 0 of every per-run dataset; no stored values");
+  std::map<std::string, Handle> scales;
+  scales.emplace(kRunDimension, Handle(H5Dopen2(file, kRunDimension, H5P_DEFAULT), "open dimension run"));
+  auto scale = [&](const std::string& path) -> hid_t { return scales.at(path).get(); };
+  for (const std::string& path : paths) {
+    Handle d(H5Dopen2(file, path.c_str(), H5P_DEFAULT), "open " + path);
+    Check(H5DSattach_scale(d.get(), scale(kRunDimension), 0), "attach run to " + path);
+    if (!IsVectorOrSeries(d.get())) continue;
+    const auto axis = hdf5::ReadStringAttribute(d.get(), "time_axis");
+    std::string dimension;
+    if (axis) {
+      dimension = *axis;
+      if (scales.find(dimension) == scales.end()) {
+        Handle t(H5Dopen2(file, dimension.c_str(), H5P_DEFAULT), "open time axis " + dimension);
+        // A coordinate variable: a scale whose NAME is its own name.
+        const std::string leaf = dimension.substr(dimension.rfind('/') + 1);
+        Check(H5DSset_scale(t.get(), leaf.c_str()), "make " + dimension + " a dimension");
+        scales.emplace(dimension, std::move(t));
+      }
+    } else {
+      dimension = VectorDimensionName(path);
+      if (scales.find(dimension) == scales.end()) {
+        CreatePureDimension(
+            file, dimension, hdf5::Dimensions(d.get())[1],
+            "The netCDF dimension of axis 1 of " + path + " (its component_names); no stored values");
+        scales.emplace(dimension,
+                       Handle(H5Dopen2(file, dimension.c_str(), H5P_DEFAULT), "open " + dimension));
+      }
+    }
+    Check(H5DSattach_scale(d.get(), scale(dimension), 1), "attach " + dimension + " to " + path);
+  }
+}
+
+}  // namespace gesweep::archive
