@@ -528,6 +528,15 @@ py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps
   std::vector<std::string> keys;
   KwargsReader reader{&options, &keys};
   config.Describe(reader);
+  // The turbulence is RunNoise(seed, run_index), as `gesweep simulate --seed --run-index`.
+  for (auto [key, target] : {std::pair{"seed", &config.seed}, std::pair{"run_index", &config.run_index}}) {
+    if (!options.contains(key)) continue;
+    const double value = ToNumber(options[key], key);
+    if (!(value >= 0 && value <= 9007199254740992.0 && value == std::floor(value)))
+      throw InputError(kArguments, key, ShortNumber(value), "expected a whole number >= 0");
+    *target = static_cast<std::uint64_t>(value);
+    PyDict_DelItemString(options.ptr(), key);
+  }
   keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
   RefuseLeftovers(options, keys);
   if (!summary_only) {
@@ -551,6 +560,8 @@ py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps
   run["h_derivatives"] = model->options().h_derivatives;
   run["cdh"] = std::string(ToString(model->options().cdh));
   run["interpolation"] = std::string(ToString(model->options().interpolation));
+  run["seed"] = config.seed;
+  run["run_index"] = config.run_index;
   py::object series = py::none();
   if (!summary_only) {
     const OpenLoopSeries& s = result.series;
@@ -564,6 +575,11 @@ py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps
     columns["height_m"] = Array(s.height_m);
     columns["speed_mps"] = Array(s.speed_mps);
     columns["elevator_rad"] = Array(s.elevator_rad);
+    if (!s.u_g_mps.empty()) {  // the air motion met, as the CSV has it: only with a disturbance
+      columns["u_g_mps"] = Array(s.u_g_mps);
+      columns["w_g_mps"] = Array(s.w_g_mps);
+    }
+    if (!s.q_g_radps.empty()) columns["q_g_radps"] = Array(s.q_g_radps);
     series = columns;
   }
   return py::make_tuple(run, FieldsDict(result.summary), series);
@@ -738,6 +754,9 @@ py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs)
   summary["touchdown_sink_rate_mps"] = r.touchdown_sink_rate_mps;
   summary["touchdown_pitch_deg"] = r.touchdown_pitch_deg;
   summary["touchdown_speed_mps"] = r.touchdown_speed_mps;
+  summary["touchdown_airspeed_mps"] = r.touchdown_airspeed_mps;
+  summary["flare_max_abs_elevator_deg"] = r.flare_max_abs_elevator_deg;
+  summary["flare_max_abs_pitch_rate_degps"] = r.flare_max_abs_pitch_rate_degps;
   summary["flare_start_time_s"] = r.flare_start_time_s;
   summary["glide_path_error_at_flare_m"] = r.glide_path_error_at_flare_m;
   summary["max_abs_elevator_deg"] = r.max_abs_elevator_deg;

@@ -27,6 +27,7 @@ Exit 0 pass, 1 fail.
 
 import argparse
 import hashlib
+import glob
 import os
 import re
 import signal
@@ -206,6 +207,35 @@ def check_interrupted(args, study, work):
     print(f"SIGTERM mid-run: exit {process.returncode}, archive closed; --resume under MPI: equal to the reference")
 
 
+def kill_every_rank(output):
+    """SIGKILLs every live process whose command line names `output` and waits until none is left.
+    The ranks are not all in mpirun's process group (OpenMPI's daemon starts them), so killing the
+    group can leave ranks running that hold their node shard's lock; a --resume started then is
+    refused ("archive in use"). A zombie has released its locks, so it counts as gone."""
+    deadline = time.monotonic() + TIMEOUT_S
+    while time.monotonic() < deadline:
+        alive = []
+        for proc in glob.glob("/proc/[0-9]*"):
+            try:
+                with open(proc + "/cmdline", "rb") as f:
+                    cmdline = f.read()
+                with open(proc + "/stat") as f:
+                    state = f.read().rsplit(")", 1)[1].split()[0]
+            except OSError:
+                continue
+            if output.encode() in cmdline and state != "Z":
+                alive.append(int(proc.rsplit("/", 1)[1]))
+        if not alive:
+            return
+        for pid in alive:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        time.sleep(0.02)
+    raise Failure(f"processes writing {output} still alive {TIMEOUT_S} s after SIGKILL")
+
+
 def check_killed(args, study, work):
     """SIGKILL to mpirun and every rank mid-run, then --resume under MPI: equal to the reference."""
     import h5py
@@ -228,6 +258,7 @@ def check_killed(args, study, work):
             complete = 0
     os.killpg(os.getpgid(process.pid), signal.SIGKILL)
     process.wait(timeout=TIMEOUT_S)
+    kill_every_rank(candidate)
     if complete < 500:
         raise Failure(f"the MPI run ended (or wrote nothing) before it could be killed ({complete} runs complete)")
     with h5py.File(reference, "r") as ref:

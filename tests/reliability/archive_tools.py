@@ -130,6 +130,10 @@ def _references(handle, value):
     return _plain(value)
 
 
+# What a NaN attribute value compares as: NaN != NaN would make equal archives differ.
+NAN = ("NaN",)
+
+
 def _plain(value):
     if isinstance(value, bytes):
         return value.decode("utf-8", "replace")
@@ -138,7 +142,9 @@ def _plain(value):
     if isinstance(value, (list, tuple)):
         return tuple(_plain(v) for v in value)
     if isinstance(value, np.generic):
-        return value.item()
+        value = value.item()
+    if isinstance(value, float) and value != value:
+        return NAN  # a NaN setting (e.g. turbulence_sigma_w_mps: "0.1·|W20|") equals itself here
     return value
 
 
