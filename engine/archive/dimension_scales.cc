@@ -2,10 +2,12 @@
 
 #include <hdf5_hl.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <map>
 
+#include "engine/archive/archive_format.h"
 #include "engine/archive/hdf5_util.h"
 
 namespace gesweep::archive {
@@ -36,6 +38,44 @@ void CreatePureDimension(hid_t file, const std::string& name, std::int64_t lengt
 }
 
 bool IsVectorOrSeries(hid_t dataset) { return hdf5::Dimensions(dataset).size() == 2; }
+
+std::string Parent(const std::string& path) { return path.substr(0, path.rfind('/')); }
+std::string Leaf(const std::string& path) { return path.substr(path.rfind('/') + 1); }
+
+bool Below(const std::string& path, const char* group) {
+  const std::string prefix = std::string(group) + "/";
+  return path.compare(0, prefix.size(), prefix) == 0;
+}
+
+// The design columns as coordinates of `run` in every results/<analysis> and series/<analysis>
+// group: netCDF groups do not share variables, so each group gets hard links to the design
+// datasets (the same objects: no copy) and CF's `coordinates` attribute on its data variables.
+// A design column whose name a group already uses (series/open_loop/height_m) is not linked there.
+void LinkDesignCoordinates(hid_t file, const std::vector<std::string>& paths) {
+  std::vector<std::string> design;
+  std::map<std::string, std::vector<std::string>> groups;  // group -> its per-run data variables
+  for (const std::string& path : paths) {
+    if (Below(path, kDesignGroup)) design.push_back(path);
+    if (Below(path, kResultsGroup) || Below(path, kSeriesGroup)) groups[Parent(path)].push_back(path);
+  }
+  // In name order: the same attribute for a run's layout order and a merge's listing order.
+  std::sort(design.begin(), design.end());
+  for (const auto& [group, variables] : groups) {
+    std::string names;
+    for (const std::string& column : design) {
+      const std::string link = group + "/" + Leaf(column);
+      if (hdf5::Exists(file, link)) continue;
+      Check(H5Lcreate_hard(file, column.c_str(), file, link.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+            "link " + column + " as " + link);
+      names += (names.empty() ? "" : " ") + Leaf(column);
+    }
+    if (names.empty()) continue;
+    for (const std::string& path : variables) {
+      Handle d(H5Dopen2(file, path.c_str(), H5P_DEFAULT), "open " + path);
+      hdf5::WriteAttribute(d.get(), "coordinates", names);
+    }
+  }
+}
 
 }  // namespace
 
@@ -84,6 +124,7 @@ void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std:
     }
     Check(H5DSattach_scale(d.get(), scale(dimension), 1), "attach " + dimension + " to " + path);
   }
+  LinkDesignCoordinates(file, paths);
 }
 
 }  // namespace gesweep::archive

@@ -20,7 +20,10 @@ std::string VectorDimensionName(const std::string& path);
 /// Creates the dimensions of the per-run datasets `paths` of `file` (which hold `runs` rows each) and
 /// attaches them, in the order of `paths`: /run (a netCDF dimension without values) to axis 0 of
 /// every dataset; a series' `time_axis` dataset, made a coordinate variable, to axis 1 of the series;
-/// a root dimension without values (VectorDimensionName) to axis 1 of any other vector. The
+/// a root dimension without values (VectorDimensionName) to axis 1 of any other vector. Then it
+/// links every design column into each results/<analysis> and series/<analysis> group and names
+/// them in CF's `coordinates` attribute of the group's datasets (netCDF readers make them
+/// coordinates of `run`; a name the group already uses is not linked). The
 /// attributes hold object references (file addresses): call it in a fixed order before any run data,
 /// and before SWMR writing starts.
 void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std::string>& paths);

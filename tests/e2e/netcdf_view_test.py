@@ -54,6 +54,15 @@ def check(path, runs):
             got = got["re"] + 1j * got["im"]
         assert np.array_equal(got, eigenvalues["re"] + 1j * eigenvalues["im"] if eigenvalues.dtype.names
                               else eigenvalues, equal_nan=True)
+        # The design columns are coordinates of `run` in every results group (hard links to design/*,
+        # named by CF's `coordinates` attribute): the same objects, so the same values.
+        for name in ("speed_mps", "height_m"):
+            assert name in modes.coords and modes[name].dims == ("run",), (name, list(modes.coords))
+            assert np.array_equal(modes[name].values, f[f"design/{name}"][:]), name
+            assert f[f"results/modes/{name}"] == f[f"design/{name}"], name  # a link, not a copy
+        picked = modes["stability_margin_per_s"].where(
+            (modes.speed_mps == f["design/speed_mps"][0]) & (modes.height_m == f["design/height_m"][0]), drop=True)
+        assert picked.size == 1 and picked.values[0] == f["results/modes/stability_margin_per_s"][0]
         modes.close()
 
         series = open_group(path, "series/open_loop")
@@ -63,6 +72,10 @@ def check(path, runs):
         assert np.allclose(series["time_s"].values, np.arange(SAMPLES) * OUTPUT_DT_S, rtol=0, atol=1e-12)
         assert series["height_m"].dims == ("run", "time_s")
         assert np.array_equal(series["height_m"].values, f["series/open_loop/height_m"][:], equal_nan=True)
+        # series/open_loop/height_m and speed_mps are trajectories: the design's columns of the same
+        # names are not linked over them (and so are not coordinates there).
+        for name in ("speed_mps", "height_m"):
+            assert name not in series.coords and f[f"series/open_loop/{name}"] != f[f"design/{name}"], name
         series.close()
 
         runs_group = open_group(path, "runs")

@@ -79,11 +79,17 @@ def text(value):
     return value
 
 
+def design_link(file, path, obj):
+    """The netCDF view's link results|series/<analysis>/<x> -> design/<x> (schemas/archive.md)."""
+    other = file.get("design/" + path.rsplit("/", 1)[-1])
+    return not path.startswith("design/") and isinstance(other, h5py.Dataset) and other == obj
+
+
 def datasets(file, prefix):
     found = {}
 
     def visit(name, obj):  # returns None: visititems stops at the first other value
-        if isinstance(obj, h5py.Dataset):
+        if isinstance(obj, h5py.Dataset) and not design_link(file, prefix + "/" + name, obj):
             found[prefix + "/" + name] = obj
 
     file[prefix].visititems(visit)

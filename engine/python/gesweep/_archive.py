@@ -128,6 +128,13 @@ def _lazy(array):
     return indexing.LazilyIndexedArray(array)
 
 
+def _design_link(f, obj, name):
+    """Whether `obj` at results|series/<analysis>/`name` is the netCDF view's link to design/`name`
+    (schemas/archive.md, "netCDF view"), not a column of its own."""
+    other = f.get("design/" + name) if "/" not in name else None
+    return isinstance(other, h5py.Dataset) and other == obj
+
+
 def _names(f):
     """Variable name of each results/<analysis>/<leaf> and series/<analysis>/<leaf>: the leaf (with
     '/' as '_'), or '<analysis>_<leaf>' where two analyses, or a design column, share a leaf."""
@@ -137,7 +144,7 @@ def _names(f):
             continue
         for analysis in f[group]:
             def visit(name, obj, group=group, analysis=analysis):
-                if isinstance(obj, h5py.Dataset):
+                if isinstance(obj, h5py.Dataset) and not _design_link(f, obj, name):
                     entries.append((group, analysis, name))
             f[group][analysis].visititems(visit)
     taken = set(f["design"]) if "design" in f else set()
