@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "engine/analyses/analysis.h"
+#include "engine/analyses/described_columns.h"
+#include "engine/common/describe_toml.h"
 #include "engine/control/landing_simulation.h"
 
 namespace gesweep {
@@ -38,50 +40,11 @@ class LandingAnalysis final : public Analysis {
     return ids;
   }
   double nominal_run_cost_us() const override { return kLandingCost_us; }
+  std::vector<FieldRecord> SettingsFields() const override { return ListFields(config_); }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
     const std::string base = "results/landing/";
-    std::vector<std::string> outcomes;
-    for (auto o : {LandingOutcome::kLanded, LandingOutcome::kNoTouchdown, LandingOutcome::kStall,
-                   LandingOutcome::kDiverged, LandingOutcome::kDesignFailed}) {
-      outcomes.emplace_back(ToString(o));
-    }
-    outcome_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "outcome", "1",
-                                                "How the landing ended (levels attribute)", outcomes));
-    auto real = [&](const char* name, const char* units, const char* description) {
-      scalars_.push_back(schema.Add(OutputColumn::Real(base + name, units, description)));
-    };
-    real("touchdown_time_s", "s", "Time of touchdown (NaN when there was none)");
-    real("touchdown_distance_past_transmitter_m", "m",
-         "Along-track distance from the glide-slope transmitter to the touchdown point, positive past it");
-    real("touchdown_sink_rate_mps", "m/s", "Sink rate -dH/dt at touchdown, positive down");
-    real("touchdown_pitch_deg", "deg", "Pitch angle at touchdown");
-    real("touchdown_speed_mps", "m/s", "Speed at touchdown");
-    real("flare_start_time_s", "s", "When H fell to the flare height (NaN when it did not)");
-    real("glide_path_error_at_flare_m", "m", "Glide-path deviation d at the flare switch, positive above");
-    real("max_abs_elevator_deg", "deg", "Largest |elevator deflection| (actuator position)");
-    real("max_abs_elevator_command_deg", "deg", "Largest |elevator command| before the limits");
-    real("max_abs_pitch_rate_degps", "deg/s", "Largest |q|");
-    real("saturated_time_s", "s", "Total time the elevator command was beyond a limit");
-    real("longest_saturation_s", "s", "Longest single interval of saturation");
-    real("min_speed_mps", "m/s", "Lowest speed");
-    real("max_speed_mps", "m/s", "Highest speed");
-    real("final_time_s", "s", "End of the run");
-    real("final_height_m", "m", "H at the end of the run");
-    real("flare_time_constant_s", "s", "Flare time constant tau used");
-    real("time_limit_s", "s", "Time limit used");
-    real("design_height_m", "m", "Height of the linear model the gain was designed on");
-    real("closed_loop_max_real_per_s", "1/s",
-         "Largest real part of the design model's closed-loop eigenvalues");
-    real("touchdown_airspeed_mps", "m/s",
-         "Airspeed u0 + Delta u - u_g at touchdown (the speed in still air)");
-    real("flare_max_abs_elevator_deg", "deg",
-         "Largest |elevator deflection| in the flare phase (NaN without a flare)");
-    real("flare_max_abs_pitch_rate_degps", "deg/s", "Largest |q| in the flare phase (NaN without a flare)");
-    steps_ =
-        schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
-    rhs_calls_ = schema.Add(
-        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    summary_.Declare(schema, base);
     OutputColumn gain = OutputColumn::Real(
         base + "gain", "rad per unit state",
         "LQR gain K on the 9 states of Eq. (14), eta_e = -K z (component_names attribute)");
@@ -140,35 +103,7 @@ class LandingAnalysis final : public Analysis {
     config.run_index = context.run_index;
     const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
     if (r.cancelled) return AnalysisOutcome::Cancelled();
-    row.Set(outcome_, static_cast<double>(static_cast<int>(r.outcome)));
-    const double values[] = {r.touchdown_time_s,
-                             r.touchdown_distance_past_transmitter_m,
-                             r.touchdown_sink_rate_mps,
-                             r.touchdown_pitch_deg,
-                             r.touchdown_speed_mps,
-                             r.flare_start_time_s,
-                             r.glide_path_error_at_flare_m,
-                             r.max_abs_elevator_deg,
-                             r.max_abs_elevator_command_deg,
-                             r.max_abs_pitch_rate_degps,
-                             r.saturated_time_s,
-                             r.longest_saturation_s,
-                             r.min_speed_mps,
-                             r.max_speed_mps,
-                             r.final_time_s,
-                             r.final_height_m,
-                             r.flare_time_constant_s,
-                             r.time_limit_s,
-                             r.design.design_height_m,
-                             r.design.closed_loop_eigenvalues.size()
-                                 ? r.design.closed_loop_eigenvalues[0].real()
-                                 : std::numeric_limits<double>::quiet_NaN(),
-                             r.touchdown_airspeed_mps,
-                             r.flare_max_abs_elevator_deg,
-                             r.flare_max_abs_pitch_rate_degps};
-    for (std::size_t i = 0; i < scalars_.size(); ++i) row.Set(scalars_[i], values[i]);
-    row.Set(steps_, static_cast<double>(r.accepted_steps));
-    row.Set(rhs_calls_, static_cast<double>(r.rhs_calls));
+    summary_.Fill(r, row);
     if (r.design.ok()) {
       double* gain = row.Slot(gain_);
       for (int i = 0; i < kLandingStateCount; ++i) gain[i] = r.design.gain[static_cast<std::size_t>(i)];
@@ -191,7 +126,7 @@ class LandingAnalysis final : public Analysis {
     config.start_speed_mps = at(speed_);
     config.glide_slope_deg = at(glide_slope_);
     config.flare_height_m = at(flare_height_);
-    if (!std::isnan(at(flare_tau_))) config.flare_time_constant_s = at(flare_tau_);
+    config.flare_time_constant_s = at(flare_tau_);  // NaN: automatic
     for (int i = 0; i < kLandingStateCount; ++i) {
       config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
     }
@@ -240,8 +175,9 @@ class LandingAnalysis final : public Analysis {
   ParameterId flare_tau_ = RequireParameter("flare_tau_s");
   ParameterId r_ = RequireParameter("lqr.r");
   std::vector<ParameterId> q_;
-  int outcome_ = 0, steps_ = 0, rhs_calls_ = 0, gain_ = 0;
-  std::vector<int> scalars_, series_;
+  DescribedColumns<LandingResult> summary_;
+  int gain_ = 0;
+  std::vector<int> series_;
   int samples_ = 0;
   double dt_s_ = 0;
 };
@@ -249,90 +185,18 @@ class LandingAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys({"start_pitch_deg",
-                              "start_glide_path_offset_m",
-                              "design_height_m",
-                              "design_speed_mps",
-                              "design_h_derivatives",
-                              "actuator_pole_per_s",
-                              "compensator_pole_per_s",
-                              "elevator_min_deg",
-                              "elevator_max_deg",
-                              "plant_height_reference",
-                              "plant_fixed_reference_height_m",
-                              "relative_tolerance",
-                              "absolute_tolerance",
-                              "max_step_s",
-                              "time_limit_s",
-                              "divergence_pitch_deg",
-                              "series_duration_s",
-                              "flare_asymptote_m",
-                              "reset_compensator_at_flare",
-                              "turbulence_sample_interval_s",
-                              "pitch_rate_gust",
-                              "turbulent_integrator"});
   LandingConfig config;
-  // Every number against the limits table (docs/limits.md), with the study's file and line; what
-  // depends on the run's parameters is checked on the design's extreme runs (CheckRun).
-  auto number = [&](const char* key, double& field) {
-    if (const auto value = settings.OptionalLimitedNumber(key, "landing." + std::string(key))) field = *value;
-  };
-  number("start_pitch_deg", config.start_pitch_deg);
-  number("start_glide_path_offset_m", config.start_glide_path_offset_m);
-  if (const auto value = settings.OptionalLimitedNumber("design_height_m", "landing.design_height_m")) {
-    config.design_height_m = *value;
+  // Every key of LandingConfig::Describe, each number against the limits table (docs/limits.md),
+  // with the study's file and line; what depends on the run's parameters is checked on the design's
+  // extreme runs (CheckRun).
+  ReadFields(settings, config, {"series_duration_s"});
+  if (!(std::isfinite(config.flare_asymptote_m) && config.flare_asymptote_m >= 0.0)) {
+    settings.Fail(KeyOf(config, &config.flare_asymptote_m), ShortNumber(config.flare_asymptote_m),
+                  "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
   }
-  if (const auto value = settings.OptionalLimitedNumber("design_speed_mps", "speed_mps")) {
-    config.design_speed_mps = *value;
-  }
-  config.design_h_derivatives = settings.OptionalBool("design_h_derivatives").value_or(true);
-  number("actuator_pole_per_s", config.actuator_pole_per_s);
-  number("compensator_pole_per_s", config.compensator_pole_per_s);
-  number("elevator_min_deg", config.elevator_min_deg);
-  number("elevator_max_deg", config.elevator_max_deg);
-  if (const auto reference = settings.OptionalString("plant_height_reference")) {
-    const auto parsed = ParsePlantHeightReference(*reference);
-    if (!parsed) settings.Fail("plant_height_reference", "\"" + *reference + "\"", "expected path or fixed");
-    config.plant_height_reference = *parsed;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("plant_fixed_reference_height_m",
-                                                        "landing.plant_fixed_reference_height_m")) {
-    config.plant_fixed_reference_height_m = *value;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
-    config.relative_tolerance = *value;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
-    config.absolute_tolerance = *value;
-  }
-  number("max_step_s", config.max_step_s);
-  if (const auto value = settings.OptionalLimitedNumber("time_limit_s", "landing.time_limit_s")) {
-    config.time_limit_s = *value;
-  }
-  number("divergence_pitch_deg", config.divergence_pitch_deg);
-  // The flare's options (docs/landing.md §5) and the settings of the moving atmosphere (the winds
-  // themselves are run parameters: DisturbanceOptions::Describe).
-  if (const auto value = settings.OptionalNumber("flare_asymptote_m")) {
-    if (!(std::isfinite(*value) && *value >= 0.0)) {
-      settings.Fail("flare_asymptote_m", ShortNumber(*value),
-                    "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
-    }
-    config.flare_asymptote_m = *value;
-  }
-  config.reset_compensator_at_flare = settings.OptionalBool("reset_compensator_at_flare").value_or(false);
-  if (const auto value =
-          settings.OptionalLimitedNumber("turbulence_sample_interval_s", "turbulence_sample_interval_s")) {
-    config.disturbance.turbulence_sample_interval_s = *value;
-  }
-  config.disturbance.pitch_rate_gust = settings.OptionalBool("pitch_rate_gust").value_or(false);
-  if (const auto text = settings.OptionalString("turbulent_integrator")) {
-    const auto parsed = ParseEnum<IntegratorKind>(*text);
-    if (!parsed)
-      settings.Fail("turbulent_integrator", "\"" + *text + "\"", "expected " + EnumChoices<IntegratorKind>());
-    config.turbulent_integrator = *parsed;
-  }
-  double series_duration_s = kDefaultSeriesDuration_s;
-  number("series_duration_s", series_duration_s);
+  const double series_duration_s =
+      settings.OptionalLimitedNumber("series_duration_s", "landing.series_duration_s")
+          .value_or(kDefaultSeriesDuration_s);
   return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
 }
 

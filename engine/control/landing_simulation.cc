@@ -475,24 +475,14 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
 
 }  // namespace
 
-std::string_view ToString(LandingOutcome outcome) {
-  switch (outcome) {
-    case LandingOutcome::kLanded:
-      return "landed";
-    case LandingOutcome::kNoTouchdown:
-      return "no_touchdown";
-    case LandingOutcome::kStall:
-      return "stall";
-    case LandingOutcome::kDiverged:
-      return "diverged";
-    case LandingOutcome::kDesignFailed:
-      return "design_failed";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::string_view ToString(LandingPhase phase) {
-  return phase == LandingPhase::kGlideSlope ? "glide_slope" : "flare";
+LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& result) {
+  LandingConfig used = config;
+  used.flare_time_constant_s = result.flare_time_constant_s;
+  used.time_limit_s = result.time_limit_s;
+  used.design_height_m = result.design.design_height_m;
+  used.design_speed_mps = result.design.design_speed_mps;
+  used.plant_fixed_reference_height_m = result.plant_fixed_reference_height_m;
+  return used;
 }
 
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
@@ -505,7 +495,7 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   result.flare_time_constant_s = FlareTimeConstant(config);
   result.glide_slope_deg = config.glide_slope_deg;
   result.plant_fixed_reference_height_m =
-      config.plant_fixed_reference_height_m.value_or(aircraft.table_heights_m.back());
+      SetOr(config.plant_fixed_reference_height_m, aircraft.table_heights_m.back());
   result.plant_h_derivatives = plant.options().h_derivatives;
   result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
   for (double* field :

@@ -9,8 +9,8 @@
     ds = gesweep.open_archive("results/stability_map.h5")
 
 Every function calls the engine, not the command line (no process per call), and releases the GIL
-while it computes. Bad input raises gesweep.InputError (a ValueError) with the one line the gesweep
-command prints. docs/python.md documents the whole API.
+while it computes. Bad input raises gesweep.InputError (a ValueError, and a TypeError for an argument of
+the wrong type) with the one line the gesweep command prints. docs/python.md documents the whole API.
 """
 
 import inspect as _inspect
@@ -204,11 +204,14 @@ simulate.__signature__ = _inspect.Signature(
 def land(aircraft, *, summary_only=False, **options):
     """The closed-loop automatic landing (docs/model.md section 8, docs/landing.md), as `gesweep land`.
 
-    Returns Response(run, summary, series): summary with the keys of `gesweep land --format json`
-    (outcome: landed, no_touchdown, stall, diverged or design_failed; design: the gain and the
-    closed-loop eigenvalues), series a DataFrame with the CSV's columns (angles in degrees) and phase.
-    A failed design is data (outcome 'design_failed'), not an exception.
-    Settings (keywords; the names ValidateLandingConfig uses):
+    Returns Response(run, summary, series): run and summary with the keys of
+    `gesweep land --format json` (outcome: landed, no_touchdown, stall, diverged or design_failed;
+    design: the gain and the closed-loop eigenvalues; nan where the JSON has null), series a DataFrame
+    with the CSV's columns (angles in degrees; u_g_mps, w_g_mps (and q_g_radps) with a disturbance)
+    and phase. A failed design is data (outcome 'design_failed'), not an exception. Ctrl-C
+    (KeyboardInterrupt) stops it within a step.
+    Settings (keywords; the fields of the engine's LandingConfig, as `gesweep land --help`; nan:
+    automatic, as the text says):
 """
     run_, summary, series = _gesweep.land(aircraft._native, summary_only, **_given(options))
     return Response(run_, summary, _frame(series))
