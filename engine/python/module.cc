@@ -591,7 +591,8 @@ py::tuple Simulate(const PyAircraft& aircraft, py::object height_m, py::object s
 
 // ---------------------------------------------------------------- land
 
-double Degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
+// As the command line converts (land_command.cc), so that the two give the same doubles.
+double Degrees(double radians) { return radians * (180.0 / std::numbers::pi); }
 
 /// gesweep.land's settings for its signature and docstring: LandingConfig's (Describe) and q_weights,
 /// the one array, which each front end reads itself.
