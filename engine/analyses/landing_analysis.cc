@@ -3,8 +3,8 @@
 // LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
 // the gain always; time series when the study stores them.
 #include <cmath>
-#include <numbers>
-#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/described_columns.h"
@@ -20,12 +20,23 @@ constexpr double kLandingCost_us = 15000.0;
 // 52.21 m/s down a 2.5° slope lasts about 230 s).
 constexpr double kDefaultSeriesDuration_s = 400.0;
 constexpr double kGridTolerance_s = 1e-9;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+// The run parameters a landing reads besides the LQR's Q weights and the winds, and the setting each
+// fills (a NaN flare_tau_s: the automatic time constant).
+constexpr std::pair<const char*, double LandingConfig::*> kRunSettings[] = {
+    {"height_m", &LandingConfig::start_height_m},
+    {"speed_mps", &LandingConfig::start_speed_mps},
+    {"glide_slope_deg", &LandingConfig::glide_slope_deg},
+    {"flare_height_m", &LandingConfig::flare_height_m},
+    {"flare_tau_s", &LandingConfig::flare_time_constant_s},
+    {"lqr.r", &LandingConfig::r_weight}};
 
 class LandingAnalysis final : public Analysis {
  public:
   LandingAnalysis(LandingConfig config, double series_duration_s)
       : config_(std::move(config)), series_duration_s_(series_duration_s) {
+    for (const auto& [name, setting] : kRunSettings)
+      run_settings_.emplace_back(RequireParameter(name), setting);
     for (std::string_view state : LandingStateNames()) {
       q_.push_back(RequireParameter("lqr.q_" + std::string(state)));
     }
@@ -33,7 +44,8 @@ class LandingAnalysis final : public Analysis {
 
   std::string_view name() const override { return "landing"; }
   std::vector<ParameterId> parameters_used() const override {
-    std::vector<ParameterId> ids = {height_, speed_, glide_slope_, flare_height_, flare_tau_, r_};
+    std::vector<ParameterId> ids;
+    for (const auto& [id, setting] : run_settings_) ids.push_back(id);
     ids.insert(ids.end(), q_.begin(), q_.end());
     const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
     ids.insert(ids.end(), disturbance.begin(), disturbance.end());
@@ -122,15 +134,10 @@ class LandingAnalysis final : public Analysis {
   LandingConfig ConfigFor(const RunParameters& p) const {
     auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
     LandingConfig config = config_;
-    config.start_height_m = at(height_);
-    config.start_speed_mps = at(speed_);
-    config.glide_slope_deg = at(glide_slope_);
-    config.flare_height_m = at(flare_height_);
-    config.flare_time_constant_s = at(flare_tau_);  // NaN: automatic
+    for (const auto& [id, setting] : run_settings_) config.*setting = at(id);
     for (int i = 0; i < kLandingStateCount; ++i) {
       config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
     }
-    config.r_weight = at(r_);
     config.seed = ApplyDisturbanceParameters(p, config.disturbance);
     return config;
   }
@@ -168,12 +175,7 @@ class LandingAnalysis final : public Analysis {
 
   LandingConfig config_;
   double series_duration_s_;
-  ParameterId height_ = RequireParameter("height_m");
-  ParameterId speed_ = RequireParameter("speed_mps");
-  ParameterId glide_slope_ = RequireParameter("glide_slope_deg");
-  ParameterId flare_height_ = RequireParameter("flare_height_m");
-  ParameterId flare_tau_ = RequireParameter("flare_tau_s");
-  ParameterId r_ = RequireParameter("lqr.r");
+  std::vector<std::pair<ParameterId, double LandingConfig::*>> run_settings_;  // kRunSettings
   std::vector<ParameterId> q_;
   DescribedColumns<LandingResult> summary_;
   int gain_ = 0;

@@ -18,12 +18,9 @@
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/control/landing_simulation.h"
-#include "engine/disturbance/disturbance_field.h"
 
 namespace gesweep::cli {
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Ordered JSON keeps the summary's fields in the order written here (also the CSV column order).
 using Json = nlohmann::ordered_json;
@@ -120,46 +117,6 @@ Json SummaryJson(const LandingResult& r) {
   return summary;
 }
 
-// Series columns: name and value of one sample, in CSV and JSON order (angles in degrees at this edge).
-struct Column {
-  const char* name;
-  double (*value)(const LandingSample&);
-};
-constexpr Column kColumns[] = {
-    {"time_s", [](const LandingSample& s) { return s.time_s; }},
-    {"height_m", [](const LandingSample& s) { return s.height_m; }},
-    {"reference_height_m", [](const LandingSample& s) { return s.reference_height_m; }},
-    {"tracking_error_m", [](const LandingSample& s) { return s.tracking_error_m; }},
-    {"speed_mps", [](const LandingSample& s) { return s.speed_mps; }},
-    {"delta_w_mps", [](const LandingSample& s) { return s.delta_w_mps; }},
-    {"pitch_rate_degps", [](const LandingSample& s) { return s.pitch_rate_radps * kDegPerRad; }},
-    {"pitch_deg", [](const LandingSample& s) { return s.pitch_rad * kDegPerRad; }},
-    {"sink_rate_mps", [](const LandingSample& s) { return s.sink_rate_mps; }},
-    {"elevator_deg", [](const LandingSample& s) { return s.elevator_rad * kDegPerRad; }},
-    {"elevator_command_deg", [](const LandingSample& s) { return s.elevator_command_rad * kDegPerRad; }},
-    {"compensator_m_s", [](const LandingSample& s) { return s.compensator; }},
-    {"error_integral_m_s", [](const LandingSample& s) { return s.error_integral; }},
-};
-// The air motion the airplane met (docs/model.md §9), after the columns above when the run had a
-// disturbance; q_g only with the pitch-rate gust.
-constexpr Column kAirColumns[] = {
-    {"u_g_mps", [](const LandingSample& s) { return s.u_g_mps; }},
-    {"w_g_mps", [](const LandingSample& s) { return s.w_g_mps; }},
-    {"q_g_radps", [](const LandingSample& s) { return s.q_g_radps; }},
-};
-
-std::vector<Column> SeriesColumns(const LandingConfig& config) {
-  std::vector<Column> columns(std::begin(kColumns), std::end(kColumns));
-  DisturbanceOptions d = config.disturbance;
-  d.pitch_rate_gust = false;  // needs the aircraft's span; it makes no air motion of its own
-  if (DisturbanceField(d, config.seed, config.run_index).active()) {
-    columns.push_back(kAirColumns[0]);
-    columns.push_back(kAirColumns[1]);
-    if (config.disturbance.pitch_rate_gust) columns.push_back(kAirColumns[2]);
-  }
-  return columns;
-}
-
 // The settings flown (LandingConfig::Describe, the automatic ones as used), the model, and the
 // names earlier versions wrote (rtol, atol, integrator, plant_reference_height_m) and σ_w in force.
 Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model) {
@@ -202,10 +159,10 @@ int RunLand(const LandFlags& flags) {
       series = Json::object();
       Json phase = Json::array();
       for (const LandingSample& s : result.series) phase.push_back(std::string(ToString(s.phase)));
-      for (const Column& column : SeriesColumns(config)) {
+      for (const LandingSeriesColumn& column : LandingSeriesColumns(config)) {
         Json values = Json::array();
         for (const LandingSample& s : result.series) values.push_back(Json(JsonNumber(column.value(s))));
-        series[column.name] = std::move(values);
+        series[std::string(column.name)] = std::move(values);
       }
       series["phase"] = std::move(phase);
     }
@@ -221,20 +178,19 @@ int RunLand(const LandFlags& flags) {
   if (flags.summary_only) {
     out += CsvHeader(result) + "\n" + CsvRow(result, Number) + "\n";
   } else {
-    // The air motion's columns after phase, so that the still-air columns are as before.
-    const std::vector<Column> columns = SeriesColumns(config);
-    for (std::size_t c = 0; c < std::size(kColumns); ++c) out += std::string(columns[c].name) + ",";
-    out += "phase";
-    for (std::size_t c = std::size(kColumns); c < columns.size(); ++c)
-      out += "," + std::string(columns[c].name);
-    out += "\n";
-    for (const LandingSample& s : result.series) {
-      for (std::size_t c = 0; c < std::size(kColumns); ++c) out += Number(columns[c].value(s)) + ",";
-      out += std::string(ToString(s.phase));
-      for (std::size_t c = std::size(kColumns); c < columns.size(); ++c)
-        out += "," + Number(columns[c].value(s));
-      out += "\n";
-    }
+    // phase after the still-air columns, so that they are as before, and the air motion's after it.
+    const std::vector<LandingSeriesColumn> columns = LandingSeriesColumns(config);
+    auto line = [&](auto cell, const std::string& phase) {
+      std::string text;
+      for (std::size_t c = 0; c <= columns.size(); ++c) {
+        if (c > 0) text += ",";
+        text += c < kStillAirSeriesColumns ? cell(c) : c == kStillAirSeriesColumns ? phase : cell(c - 1);
+      }
+      return text + "\n";
+    };
+    out += line([&](std::size_t c) { return std::string(columns[c].name); }, "phase");
+    for (const LandingSample& s : result.series)
+      out += line([&](std::size_t c) { return Number(columns[c].value(s)); }, std::string(ToString(s.phase)));
   }
   std::cout << out;
   if (result.outcome == LandingOutcome::kDesignFailed)

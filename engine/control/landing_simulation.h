@@ -7,6 +7,7 @@
 /// and touchdown are events located in time. docs/landing.md describes every convention.
 
 #include <atomic>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -71,6 +72,21 @@ struct LandingSample {
   double w_g_mps = 0;
   double q_g_radps = 0;
 };
+
+/// A column of a landing's series as `gesweep land` and gesweep.land give it (the CSV's names, angles
+/// in degrees): its name and its value at a sample.
+struct LandingSeriesColumn {
+  std::string_view name;
+  double (*value)(const LandingSample&);
+};
+
+/// How many of the series' columns are those of still air (the CSV writes phase after them).
+inline constexpr std::size_t kStillAirSeriesColumns = 13;
+
+/// The series' columns of a landing flown with `config`, in order: the kStillAirSeriesColumns of still
+/// air, then the air motion the airplane met (u_g_mps, w_g_mps, and q_g_radps with the pitch-rate gust)
+/// when it had a disturbance. The text column phase (ToString(LandingPhase)) goes beside them.
+std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config);
 
 /// The result of one landing. Quantities that did not occur (no touchdown, no flare) are NaN.
 struct LandingResult {

@@ -35,7 +35,6 @@
 #include "engine/common/input_limits.h"
 #include "engine/common/output_guard.h"
 #include "engine/control/landing_simulation.h"
-#include "engine/disturbance/disturbance_field.h"
 #include "engine/estimators/local_sensitivity.h"
 #include "engine/modal/boundary.h"
 #include "engine/modal/modal_analysis.h"
@@ -591,9 +590,6 @@ py::tuple Simulate(const PyAircraft& aircraft, py::object height_m, py::object s
 
 // ---------------------------------------------------------------- land
 
-// As the command line converts (land_command.cc), so that the two give the same doubles.
-double Degrees(double radians) { return radians * (180.0 / std::numbers::pi); }
-
 /// gesweep.land's settings for its signature and docstring: LandingConfig's (Describe) and q_weights,
 /// the one array, which each front end reads itself.
 py::list LandingSettingsList() {
@@ -668,42 +664,15 @@ py::dict LandingRunDict(const LandingConfig& c, const LandingResult& r, const Lo
   return run;
 }
 
-/// The series' columns of `gesweep land`'s CSV and JSON (angles in degrees), and phase.
+/// The series' columns of `gesweep land`'s CSV and JSON (LandingSeriesColumns), and phase.
 py::dict LandingSeriesDict(const LandingConfig& config, const std::vector<LandingSample>& samples) {
   const auto n = static_cast<py::ssize_t>(samples.size());
-  struct Column {
-    const char* name;
-    double (*value)(const LandingSample&);
-  };
-  static constexpr Column kColumns[] = {
-      {"time_s", [](const LandingSample& x) { return x.time_s; }},
-      {"height_m", [](const LandingSample& x) { return x.height_m; }},
-      {"reference_height_m", [](const LandingSample& x) { return x.reference_height_m; }},
-      {"tracking_error_m", [](const LandingSample& x) { return x.tracking_error_m; }},
-      {"speed_mps", [](const LandingSample& x) { return x.speed_mps; }},
-      {"delta_w_mps", [](const LandingSample& x) { return x.delta_w_mps; }},
-      {"pitch_rate_degps", [](const LandingSample& x) { return Degrees(x.pitch_rate_radps); }},
-      {"pitch_deg", [](const LandingSample& x) { return Degrees(x.pitch_rad); }},
-      {"sink_rate_mps", [](const LandingSample& x) { return x.sink_rate_mps; }},
-      {"elevator_deg", [](const LandingSample& x) { return Degrees(x.elevator_rad); }},
-      {"elevator_command_deg", [](const LandingSample& x) { return Degrees(x.elevator_command_rad); }},
-      {"compensator_m_s", [](const LandingSample& x) { return x.compensator; }},
-      {"error_integral_m_s", [](const LandingSample& x) { return x.error_integral; }},
-      {"u_g_mps", [](const LandingSample& x) { return x.u_g_mps; }},
-      {"w_g_mps", [](const LandingSample& x) { return x.w_g_mps; }},
-      {"q_g_radps", [](const LandingSample& x) { return x.q_g_radps; }},
-  };
-  // The air motion met only with a disturbance, q_g only with the pitch-rate gust, as the CLI.
-  DisturbanceOptions still = config.disturbance;
-  still.pitch_rate_gust = false;
-  const bool air = DisturbanceField(still, config.seed, config.run_index).active();
-  const std::size_t count = std::size(kColumns) - (air ? (config.disturbance.pitch_rate_gust ? 0 : 1) : 3);
   py::dict out;
-  for (std::size_t c = 0; c < count; ++c) {
-    py::array_t<double> column(n);
-    double* values = column.mutable_data();
-    for (py::ssize_t i = 0; i < n; ++i) values[i] = kColumns[c].value(samples[static_cast<std::size_t>(i)]);
-    out[kColumns[c].name] = column;
+  for (const LandingSeriesColumn& column : LandingSeriesColumns(config)) {
+    py::array_t<double> values(n);
+    double* data = values.mutable_data();
+    for (py::ssize_t i = 0; i < n; ++i) data[i] = column.value(samples[static_cast<std::size_t>(i)]);
+    out[py::str(std::string(column.name))] = values;
   }
   py::list phase;
   for (const LandingSample& x : samples) phase.append(std::string(ToString(x.phase)));
@@ -854,21 +823,25 @@ double BenchBoundarySearch(const PyAircraft& aircraft, double speed_mps, int rep
   return seconds / repetitions;
 }
 
+/// Aircraft.<fact> of the Python class: the aircraft file's numbers, SI, under their keys.
+constexpr std::pair<const char*, double Aircraft::*> kAircraftNumbers[] = {
+    {"wingspan_m", &Aircraft::wingspan_m},
+    {"mean_chord_m", &Aircraft::mean_chord_m},
+    {"wing_area_m2", &Aircraft::wing_area_m2},
+    {"mass_kg", &Aircraft::mass_kg},
+    {"pitch_inertia_kgm2", &Aircraft::pitch_inertia_kgm2},
+    {"cg_over_chord", &Aircraft::cg_over_chord},
+    {"CDo", &Aircraft::CDo},
+    {"stall_speed_mps", &Aircraft::stall_speed_mps},
+    {"wheel_contact_height_m", &Aircraft::wheel_contact_height_m},
+    {"field_elevation_m", &Aircraft::field_elevation_m}};
+
 py::dict AircraftFacts(const PyAircraft& a) {
   const Aircraft& x = a.aircraft();
   py::dict out;
   out["name"] = x.name;
   out["source_path"] = x.source_path;
-  out["wingspan_m"] = x.wingspan_m;
-  out["mean_chord_m"] = x.mean_chord_m;
-  out["wing_area_m2"] = x.wing_area_m2;
-  out["mass_kg"] = x.mass_kg;
-  out["pitch_inertia_kgm2"] = x.pitch_inertia_kgm2;
-  out["cg_over_chord"] = x.cg_over_chord;
-  out["CDo"] = x.CDo;
-  out["stall_speed_mps"] = x.stall_speed_mps;
-  out["wheel_contact_height_m"] = x.wheel_contact_height_m;
-  out["field_elevation_m"] = x.field_elevation_m;
+  for (const auto& [key, member] : kAircraftNumbers) out[key] = x.*member;
   return out;
 }
 
