@@ -31,10 +31,26 @@ constexpr std::pair<const char*, double LandingConfig::*> kRunSettings[] = {
     {"flare_tau_s", &LandingConfig::flare_time_constant_s},
     {"lqr.r", &LandingConfig::r_weight}};
 
+// The [analyses.landing] table: the landing's settings, and how long its stored series last.
+struct LandingStudySettings {
+  LandingConfig config;
+  double series_duration_s = kDefaultSeriesDuration_s;
+
+  template <class V>
+  void Describe(V& v) {
+    config.Describe(v);
+    v(Field("series_duration_s", &series_duration_s)
+          .Unit("s")
+          .Limit("landing.series_duration_s")
+          .StudyOnly()
+          .Doc("How long the stored series last, s (samples after a run ended are NaN)"));
+  }
+};
+
 class LandingAnalysis final : public Analysis {
  public:
-  LandingAnalysis(LandingConfig config, double series_duration_s)
-      : config_(std::move(config)), series_duration_s_(series_duration_s) {
+  explicit LandingAnalysis(const LandingStudySettings& settings)
+      : settings_(settings), config_(settings.config), series_duration_s_(settings.series_duration_s) {
     for (const auto& [name, setting] : kRunSettings)
       run_settings_.emplace_back(RequireParameter(name), setting);
     for (std::string_view state : LandingStateNames()) {
@@ -52,7 +68,7 @@ class LandingAnalysis final : public Analysis {
     return ids;
   }
   double nominal_run_cost_us() const override { return kLandingCost_us; }
-  std::vector<FieldRecord> SettingsFields() const override { return ListFields(config_); }
+  std::vector<FieldRecord> SettingsFields() const override { return ListFields(settings_); }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
     const std::string base = "results/landing/";
@@ -173,7 +189,8 @@ class LandingAnalysis final : public Analysis {
     return truncated;
   }
 
-  LandingConfig config_;
+  LandingStudySettings settings_;  // as the study gave them
+  LandingConfig config_;           // with the storage's series interval
   double series_duration_s_;
   std::vector<std::pair<ParameterId, double LandingConfig::*>> run_settings_;  // kRunSettings
   std::vector<ParameterId> q_;
@@ -187,19 +204,17 @@ class LandingAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
-  LandingConfig config;
-  // Every key of LandingConfig::Describe, each number against the limits table (docs/limits.md),
-  // with the study's file and line; what depends on the run's parameters is checked on the design's
-  // extreme runs (CheckRun).
-  ReadFields(settings, config, {"series_duration_s"});
-  if (!(std::isfinite(config.flare_asymptote_m) && config.flare_asymptote_m >= 0.0)) {
-    settings.Fail(KeyOf(config, &config.flare_asymptote_m), ShortNumber(config.flare_asymptote_m),
+  LandingStudySettings study;
+  // Every key of LandingConfig::Describe and series_duration_s, each number against the limits table
+  // (docs/limits.md), with the study's file and line; what depends on the run's parameters is checked
+  // on the design's extreme runs (CheckRun).
+  ReadFields(settings, study);
+  const double asymptote_m = study.config.flare_asymptote_m;
+  if (!(std::isfinite(asymptote_m) && asymptote_m >= 0.0)) {
+    settings.Fail(KeyOf(study, &study.config.flare_asymptote_m), ShortNumber(asymptote_m),
                   "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
   }
-  const double series_duration_s =
-      settings.OptionalLimitedNumber("series_duration_s", "landing.series_duration_s")
-          .value_or(kDefaultSeriesDuration_s);
-  return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
+  return std::make_unique<LandingAnalysis>(study);
 }
 
 const AnalysisRegistrar kRegistrar{{"landing",
