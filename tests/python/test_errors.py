@@ -107,6 +107,8 @@ def test_land_setting_outside_its_range_same_as_cli(gesweep, ance):
     (lambda g, a: g.simulate(a, "3", 32.0), "argument: height_m = '3': expected a number"),
     (lambda g, a: g.simulate(a, 3.0, 32.0, output_dt_s="fine"), "argument: output_dt_s = 'fine': expected a number"),
     (lambda g, a: g.boundary(a, "fast"), "argument: speed_mps = 'fast': expected a number"),
+    (lambda g, a: g.boundary(a, [30, "fast"]), "argument: speed_mps = [30, 'fast']: expected a number"),
+    (lambda g, a: g.modes(a, "low", 30.0), "argument: height_m = 'low': expected a number"),
 ])
 def test_wrongly_typed_argument_is_an_input_error(gesweep, ance, call, message):
     """A string where a number goes, an unknown keyword, a wrong list: InputError, one line naming the

@@ -50,6 +50,21 @@ def _model_parameters():
     return [_inspect.Parameter(k, _inspect.Parameter.KEYWORD_ONLY, default=d) for k, d, _ in MODEL_OPTIONS]
 
 
+def _input_error(key, value, expected):
+    """An InputError about an argument, worded as the engine's: "argument: key = value: expected"."""
+    error = InputError(f"argument: {key} = {value!r}: {expected}")
+    error.source, error.key, error.value, error.expected = "argument", key, repr(value), expected
+    return error
+
+
+def _numbers(value, key):
+    """`value` as a float array; InputError naming `key` when it is not numbers."""
+    try:
+        return _np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise _input_error(key, value, "expected a number or an array of numbers") from None
+
+
 def _given(options):
     """The keyword arguments given, less those left at None (the engine's default)."""
     return {k: v for k, v in options.items() if v is not None}
@@ -105,7 +120,7 @@ def modes(aircraft, height_m, speed_mps, *, threads=None, **model_options):
       <mode>/oscillatory, <mode>/neutral (bool), for <mode> in short_period, phugoid, height.
     Model options (keywords):
 """
-    h, u = _np.broadcast_arrays(_np.asarray(height_m, dtype=float), _np.asarray(speed_mps, dtype=float))
+    h, u = _np.broadcast_arrays(_numbers(height_m, "height_m"), _numbers(speed_mps, "speed_mps"))
     shape = h.shape
     out = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
                          int(threads or 0), **_given(model_options))
@@ -137,7 +152,7 @@ def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **mo
         return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
     if _np.ndim(speed_mps) > 0:
         return [_gesweep.boundary(aircraft._native, float(u), method, sensitivities, **options)
-                for u in _np.asarray(speed_mps, dtype=float).ravel()]
+                for u in _numbers(speed_mps, "speed_mps").ravel()]
     return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
 
 
