@@ -3,10 +3,12 @@
 // LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
 // the gain always; time series when the study stores them.
 #include <cmath>
-#include <numbers>
-#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "engine/analyses/analysis.h"
+#include "engine/analyses/described_columns.h"
+#include "engine/common/describe_toml.h"
 #include "engine/control/landing_simulation.h"
 
 namespace gesweep {
@@ -18,12 +20,39 @@ constexpr double kLandingCost_us = 15000.0;
 // 52.21 m/s down a 2.5° slope lasts about 230 s).
 constexpr double kDefaultSeriesDuration_s = 400.0;
 constexpr double kGridTolerance_s = 1e-9;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+// The run parameters a landing reads besides the LQR's Q weights and the winds, and the setting each
+// fills (a NaN flare_tau_s: the automatic time constant).
+constexpr std::pair<const char*, double LandingConfig::*> kRunSettings[] = {
+    {"height_m", &LandingConfig::start_height_m},
+    {"speed_mps", &LandingConfig::start_speed_mps},
+    {"glide_slope_deg", &LandingConfig::glide_slope_deg},
+    {"flare_height_m", &LandingConfig::flare_height_m},
+    {"flare_tau_s", &LandingConfig::flare_time_constant_s},
+    {"lqr.r", &LandingConfig::r_weight}};
+
+// The [analyses.landing] table: the landing's settings, and how long its stored series last.
+struct LandingStudySettings {
+  LandingConfig config;
+  double series_duration_s = kDefaultSeriesDuration_s;
+
+  template <class V>
+  void Describe(V& v) {
+    config.Describe(v);
+    v(Field("series_duration_s", &series_duration_s)
+          .Unit("s")
+          .Limit("landing.series_duration_s")
+          .StudyOnly()
+          .Doc("How long the stored series last, s (samples after a run ended are NaN)"));
+  }
+};
 
 class LandingAnalysis final : public Analysis {
  public:
-  LandingAnalysis(LandingConfig config, double series_duration_s)
-      : config_(std::move(config)), series_duration_s_(series_duration_s) {
+  explicit LandingAnalysis(const LandingStudySettings& settings)
+      : settings_(settings), config_(settings.config), series_duration_s_(settings.series_duration_s) {
+    for (const auto& [name, setting] : kRunSettings)
+      run_settings_.emplace_back(RequireParameter(name), setting);
     for (std::string_view state : LandingStateNames()) {
       q_.push_back(RequireParameter("lqr.q_" + std::string(state)));
     }
@@ -31,57 +60,19 @@ class LandingAnalysis final : public Analysis {
 
   std::string_view name() const override { return "landing"; }
   std::vector<ParameterId> parameters_used() const override {
-    std::vector<ParameterId> ids = {height_, speed_, glide_slope_, flare_height_, flare_tau_, r_};
+    std::vector<ParameterId> ids;
+    for (const auto& [id, setting] : run_settings_) ids.push_back(id);
     ids.insert(ids.end(), q_.begin(), q_.end());
     const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
     ids.insert(ids.end(), disturbance.begin(), disturbance.end());
     return ids;
   }
   double nominal_run_cost_us() const override { return kLandingCost_us; }
+  std::vector<FieldRecord> SettingsFields() const override { return ListFields(settings_); }
 
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
     const std::string base = "results/landing/";
-    std::vector<std::string> outcomes;
-    for (auto o : {LandingOutcome::kLanded, LandingOutcome::kNoTouchdown, LandingOutcome::kStall,
-                   LandingOutcome::kDiverged, LandingOutcome::kDesignFailed}) {
-      outcomes.emplace_back(ToString(o));
-    }
-    outcome_ = schema.Add(OutputColumn::Integer(ColumnType::kInt8, base + "outcome", "1",
-                                                "How the landing ended (levels attribute)", outcomes));
-    auto real = [&](const char* name, const char* units, const char* description) {
-      scalars_.push_back(schema.Add(OutputColumn::Real(base + name, units, description)));
-    };
-    real("touchdown_time_s", "s", "Time of touchdown (NaN when there was none)");
-    real("touchdown_distance_past_transmitter_m", "m",
-         "Along-track distance from the glide-slope transmitter to the touchdown point, positive past it");
-    real("touchdown_sink_rate_mps", "m/s", "Sink rate -dH/dt at touchdown, positive down");
-    real("touchdown_pitch_deg", "deg", "Pitch angle at touchdown");
-    real("touchdown_speed_mps", "m/s", "Speed at touchdown");
-    real("flare_start_time_s", "s", "When H fell to the flare height (NaN when it did not)");
-    real("glide_path_error_at_flare_m", "m", "Glide-path deviation d at the flare switch, positive above");
-    real("max_abs_elevator_deg", "deg", "Largest |elevator deflection| (actuator position)");
-    real("max_abs_elevator_command_deg", "deg", "Largest |elevator command| before the limits");
-    real("max_abs_pitch_rate_degps", "deg/s", "Largest |q|");
-    real("saturated_time_s", "s", "Total time the elevator command was beyond a limit");
-    real("longest_saturation_s", "s", "Longest single interval of saturation");
-    real("min_speed_mps", "m/s", "Lowest speed");
-    real("max_speed_mps", "m/s", "Highest speed");
-    real("final_time_s", "s", "End of the run");
-    real("final_height_m", "m", "H at the end of the run");
-    real("flare_time_constant_s", "s", "Flare time constant tau used");
-    real("time_limit_s", "s", "Time limit used");
-    real("design_height_m", "m", "Height of the linear model the gain was designed on");
-    real("closed_loop_max_real_per_s", "1/s",
-         "Largest real part of the design model's closed-loop eigenvalues");
-    real("touchdown_airspeed_mps", "m/s",
-         "Airspeed u0 + Delta u - u_g at touchdown (the speed in still air)");
-    real("flare_max_abs_elevator_deg", "deg",
-         "Largest |elevator deflection| in the flare phase (NaN without a flare)");
-    real("flare_max_abs_pitch_rate_degps", "deg/s", "Largest |q| in the flare phase (NaN without a flare)");
-    steps_ =
-        schema.Add(OutputColumn::Integer(ColumnType::kInt32, base + "accepted_steps", "1", "Accepted steps"));
-    rhs_calls_ = schema.Add(
-        OutputColumn::Integer(ColumnType::kInt32, base + "rhs_calls", "1", "Right-hand-side evaluations"));
+    summary_.Declare(schema, base);
     OutputColumn gain = OutputColumn::Real(
         base + "gain", "rad per unit state",
         "LQR gain K on the 9 states of Eq. (14), eta_e = -K z (component_names attribute)");
@@ -140,35 +131,7 @@ class LandingAnalysis final : public Analysis {
     config.run_index = context.run_index;
     const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
     if (r.cancelled) return AnalysisOutcome::Cancelled();
-    row.Set(outcome_, static_cast<double>(static_cast<int>(r.outcome)));
-    const double values[] = {r.touchdown_time_s,
-                             r.touchdown_distance_past_transmitter_m,
-                             r.touchdown_sink_rate_mps,
-                             r.touchdown_pitch_deg,
-                             r.touchdown_speed_mps,
-                             r.flare_start_time_s,
-                             r.glide_path_error_at_flare_m,
-                             r.max_abs_elevator_deg,
-                             r.max_abs_elevator_command_deg,
-                             r.max_abs_pitch_rate_degps,
-                             r.saturated_time_s,
-                             r.longest_saturation_s,
-                             r.min_speed_mps,
-                             r.max_speed_mps,
-                             r.final_time_s,
-                             r.final_height_m,
-                             r.flare_time_constant_s,
-                             r.time_limit_s,
-                             r.design.design_height_m,
-                             r.design.closed_loop_eigenvalues.size()
-                                 ? r.design.closed_loop_eigenvalues[0].real()
-                                 : std::numeric_limits<double>::quiet_NaN(),
-                             r.touchdown_airspeed_mps,
-                             r.flare_max_abs_elevator_deg,
-                             r.flare_max_abs_pitch_rate_degps};
-    for (std::size_t i = 0; i < scalars_.size(); ++i) row.Set(scalars_[i], values[i]);
-    row.Set(steps_, static_cast<double>(r.accepted_steps));
-    row.Set(rhs_calls_, static_cast<double>(r.rhs_calls));
+    summary_.Fill(r, row);
     if (r.design.ok()) {
       double* gain = row.Slot(gain_);
       for (int i = 0; i < kLandingStateCount; ++i) gain[i] = r.design.gain[static_cast<std::size_t>(i)];
@@ -187,15 +150,10 @@ class LandingAnalysis final : public Analysis {
   LandingConfig ConfigFor(const RunParameters& p) const {
     auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
     LandingConfig config = config_;
-    config.start_height_m = at(height_);
-    config.start_speed_mps = at(speed_);
-    config.glide_slope_deg = at(glide_slope_);
-    config.flare_height_m = at(flare_height_);
-    if (!std::isnan(at(flare_tau_))) config.flare_time_constant_s = at(flare_tau_);
+    for (const auto& [id, setting] : run_settings_) config.*setting = at(id);
     for (int i = 0; i < kLandingStateCount; ++i) {
       config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
     }
-    config.r_weight = at(r_);
     config.seed = ApplyDisturbanceParameters(p, config.disturbance);
     return config;
   }
@@ -231,17 +189,14 @@ class LandingAnalysis final : public Analysis {
     return truncated;
   }
 
-  LandingConfig config_;
+  LandingStudySettings settings_;  // as the study gave them
+  LandingConfig config_;           // with the storage's series interval
   double series_duration_s_;
-  ParameterId height_ = RequireParameter("height_m");
-  ParameterId speed_ = RequireParameter("speed_mps");
-  ParameterId glide_slope_ = RequireParameter("glide_slope_deg");
-  ParameterId flare_height_ = RequireParameter("flare_height_m");
-  ParameterId flare_tau_ = RequireParameter("flare_tau_s");
-  ParameterId r_ = RequireParameter("lqr.r");
+  std::vector<std::pair<ParameterId, double LandingConfig::*>> run_settings_;  // kRunSettings
   std::vector<ParameterId> q_;
-  int outcome_ = 0, steps_ = 0, rhs_calls_ = 0, gain_ = 0;
-  std::vector<int> scalars_, series_;
+  DescribedColumns<LandingResult> summary_;
+  int gain_ = 0;
+  std::vector<int> series_;
   int samples_ = 0;
   double dt_s_ = 0;
 };
@@ -249,91 +204,17 @@ class LandingAnalysis final : public Analysis {
 }  // namespace
 
 std::unique_ptr<Analysis> MakeLandingAnalysis(const TomlSection& settings, const Aircraft*) {
-  settings.RejectUnknownKeys({"start_pitch_deg",
-                              "start_glide_path_offset_m",
-                              "design_height_m",
-                              "design_speed_mps",
-                              "design_h_derivatives",
-                              "actuator_pole_per_s",
-                              "compensator_pole_per_s",
-                              "elevator_min_deg",
-                              "elevator_max_deg",
-                              "plant_height_reference",
-                              "plant_fixed_reference_height_m",
-                              "relative_tolerance",
-                              "absolute_tolerance",
-                              "max_step_s",
-                              "time_limit_s",
-                              "divergence_pitch_deg",
-                              "series_duration_s",
-                              "flare_asymptote_m",
-                              "reset_compensator_at_flare",
-                              "turbulence_sample_interval_s",
-                              "pitch_rate_gust",
-                              "turbulent_integrator"});
-  LandingConfig config;
-  // Every number against the limits table (docs/limits.md), with the study's file and line; what
-  // depends on the run's parameters is checked on the design's extreme runs (CheckRun).
-  auto number = [&](const char* key, double& field) {
-    if (const auto value = settings.OptionalLimitedNumber(key, "landing." + std::string(key))) field = *value;
-  };
-  number("start_pitch_deg", config.start_pitch_deg);
-  number("start_glide_path_offset_m", config.start_glide_path_offset_m);
-  if (const auto value = settings.OptionalLimitedNumber("design_height_m", "landing.design_height_m")) {
-    config.design_height_m = *value;
+  LandingStudySettings study;
+  // Every key of LandingConfig::Describe and series_duration_s, each number against the limits table
+  // (docs/limits.md), with the study's file and line; what depends on the run's parameters is checked
+  // on the design's extreme runs (CheckRun).
+  ReadFields(settings, study);
+  const double asymptote_m = study.config.flare_asymptote_m;
+  if (!(std::isfinite(asymptote_m) && asymptote_m >= 0.0)) {
+    settings.Fail(KeyOf(study, &study.config.flare_asymptote_m), ShortNumber(asymptote_m),
+                  "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
   }
-  if (const auto value = settings.OptionalLimitedNumber("design_speed_mps", "speed_mps")) {
-    config.design_speed_mps = *value;
-  }
-  config.design_h_derivatives = settings.OptionalBool("design_h_derivatives").value_or(true);
-  number("actuator_pole_per_s", config.actuator_pole_per_s);
-  number("compensator_pole_per_s", config.compensator_pole_per_s);
-  number("elevator_min_deg", config.elevator_min_deg);
-  number("elevator_max_deg", config.elevator_max_deg);
-  if (const auto reference = settings.OptionalString("plant_height_reference")) {
-    const auto parsed = ParsePlantHeightReference(*reference);
-    if (!parsed) settings.Fail("plant_height_reference", "\"" + *reference + "\"", "expected path or fixed");
-    config.plant_height_reference = *parsed;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("plant_fixed_reference_height_m",
-                                                        "landing.plant_fixed_reference_height_m")) {
-    config.plant_fixed_reference_height_m = *value;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("relative_tolerance", "relative_tolerance")) {
-    config.relative_tolerance = *value;
-  }
-  if (const auto value = settings.OptionalLimitedNumber("absolute_tolerance", "absolute_tolerance")) {
-    config.absolute_tolerance = *value;
-  }
-  number("max_step_s", config.max_step_s);
-  if (const auto value = settings.OptionalLimitedNumber("time_limit_s", "landing.time_limit_s")) {
-    config.time_limit_s = *value;
-  }
-  number("divergence_pitch_deg", config.divergence_pitch_deg);
-  // The flare's options (docs/landing.md §5) and the settings of the moving atmosphere (the winds
-  // themselves are run parameters: DisturbanceOptions::Describe).
-  if (const auto value = settings.OptionalNumber("flare_asymptote_m")) {
-    if (!(std::isfinite(*value) && *value >= 0.0)) {
-      settings.Fail("flare_asymptote_m", ShortNumber(*value),
-                    "expected a height >= 0 m below the flare height (0: the ground, the paper's)");
-    }
-    config.flare_asymptote_m = *value;
-  }
-  config.reset_compensator_at_flare = settings.OptionalBool("reset_compensator_at_flare").value_or(false);
-  if (const auto value =
-          settings.OptionalLimitedNumber("turbulence_sample_interval_s", "turbulence_sample_interval_s")) {
-    config.disturbance.turbulence_sample_interval_s = *value;
-  }
-  config.disturbance.pitch_rate_gust = settings.OptionalBool("pitch_rate_gust").value_or(false);
-  if (const auto text = settings.OptionalString("turbulent_integrator")) {
-    const auto parsed = ParseEnum<IntegratorKind>(*text);
-    if (!parsed)
-      settings.Fail("turbulent_integrator", "\"" + *text + "\"", "expected " + EnumChoices<IntegratorKind>());
-    config.turbulent_integrator = *parsed;
-  }
-  double series_duration_s = kDefaultSeriesDuration_s;
-  number("series_duration_s", series_duration_s);
-  return std::make_unique<LandingAnalysis>(std::move(config), series_duration_s);
+  return std::make_unique<LandingAnalysis>(study);
 }
 
 const AnalysisRegistrar kRegistrar{{"landing",

@@ -68,6 +68,13 @@ std::string DescribedFlags::FlagOf(std::string_view key) const {
   return std::string(key);
 }
 
+const std::vector<CLI::Option*>& DescribedFlags::OptionsOf(std::string_view key) const {
+  for (const Entry& entry : entries_) {
+    if (entry.key == key) return entry.options;
+  }
+  GESWEEP_UNREACHABLE();
+}
+
 namespace {
 
 bool IsKeyCharacter(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }

@@ -3,8 +3,9 @@
 ///
 /// The mapping is mechanical: key `step_s` is flag `--step-s` (underscores become hyphens); a
 /// boolean that defaults to false is a switch `--<key>`, one that defaults to true is `--no-<key>`;
-/// an enum field takes one of its names. A number flag is checked against the field's limits-table
-/// range as it is parsed (AddLimitedOption), in the key's unit. The help text is the field's
+/// an enum field takes one of its names; an integer field (a seed) a whole number. Integer fields of
+/// a result struct are never Add()ed: only settings structs are. A number flag is checked against the field's
+/// limits-table range as it is parsed (AddLimitedOption), in the key's unit. The help text is the field's
 /// description and its default. A command may keep older names of a flag as hidden aliases
 /// (FlagAlias); messages name the flag the person typed.
 
@@ -17,6 +18,7 @@
 
 #include "engine/cli/model_flags.h"
 #include "engine/common/describe.h"
+#include "engine/common/described_values.h"
 #include "engine/common/errors.h"
 
 namespace gesweep::cli {
@@ -51,6 +53,10 @@ class DescribedFlags {
   /// itself when no flag has that key.
   std::string FlagOf(std::string_view key) const;
 
+  /// The options of `key`'s flag and its aliases, for a command's constraints on them (`excludes`);
+  /// GESWEEP_DEMAND that `key` has a flag.
+  const std::vector<CLI::Option*>& OptionsOf(std::string_view key) const;
+
   /// Throws `error` again (source "command line") with its key and the keys inside its expectation
   /// ("duration_s = 30 s / step_s = ...") written as the flags the person typed.
   [[noreturn]] void Rethrow(const InputError& error) const;
@@ -83,12 +89,7 @@ class DescribedFlags {
     const std::vector<std::string_view>* required;
     template <class U>
     void operator()(const Field<U>& field) {
-      const FieldAttributes& a = field.attributes();
-      if constexpr (DoubleArray<U> || std::same_as<U, std::string> || IntegerValue<U>) {
-        return;  // results, never settings
-      } else {
-        Visit(field, a);
-      }
+      if constexpr (SettingValue<U>) Visit(field, field.attributes());  // a result's array or text: none
     }
     template <class U>
     void Visit(const Field<U>& field, const FieldAttributes& a) {
@@ -142,8 +143,13 @@ class DescribedFlags {
             if (option->count() > 0) *value = slot * scale;  // untouched defaults keep their exact value
           }
         });
+      } else if constexpr (IntegerValue<U>) {
+        // A count or a seed: CLI11 parses it into the field itself (a whole number in U's range).
+        const std::string help = Help(a, std::to_string(*value), is_required);
+        entry.options.push_back(app->add_option(FlagName(a.key), *value, help));
+        entry.names.push_back(FlagName(a.key));
       } else {
-        static_assert(!sizeof(U*), "a command-line field is a number, a bool or a named enum");
+        static_assert(!sizeof(U*), "a command-line field is a number, an integer, a bool or a named enum");
       }
       if (is_required) entry.options.front()->required();
     }

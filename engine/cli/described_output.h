@@ -7,36 +7,31 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "engine/cli/json_util.h"
 #include "engine/common/describe.h"
+#include "engine/common/described_values.h"
 
 namespace gesweep::cli {
 
 namespace describe_detail {
 
-struct JsonWriter {
-  nlohmann::json* out;
-  template <class U>
-  void operator()(const Field<U>& field) {
-    const FieldAttributes& a = field.attributes();
-    if (!a.in_output) return;
-    const std::string key(a.key);
-    const U& v = *field.value();
-    if constexpr (std::same_as<U, bool> || IntegerValue<U> || std::same_as<U, std::string>) {
-      (*out)[key] = v;
-    } else if constexpr (NamedEnum<U>) {
-      (*out)[key] = std::string(ToString(v));
-    } else if constexpr (std::floating_point<U>) {
-      (*out)[key] = JsonNumber(v / a.scale);
-    } else {
-      static_assert(DoubleArray<U>);
-      nlohmann::json values = nlohmann::json::array(), names = nlohmann::json::array();
-      for (int c = 0; c < static_cast<int>(v.size()); ++c) values.push_back(JsonNumber(v[c]));
-      for (const FieldComponent& component : a.components) names.push_back(std::string(component.name));
-      (*out)[key] = std::move(values);
-      (*out)[key + "_names"] = std::move(names);
-    }
+// FieldsJson's sink of VisitOutputs.
+template <class Json>
+struct JsonSink {
+  Json* out;
+  template <class X>
+  void Plain(const std::string& key, const X& value) {
+    (*out)[key] = value;
+  }
+  void Number(const std::string& key, double value) { (*out)[key] = JsonNumber(value); }
+  void Array(const std::string& key, const std::vector<double>& values,
+             const std::vector<std::string>& names) {
+    Json list = Json::array();
+    for (double v : values) list.push_back(Json(JsonNumber(v)));
+    (*out)[key] = std::move(list);
+    (*out)[key + "_names"] = names;
   }
 };
 
@@ -85,12 +80,13 @@ struct CsvRowWriter {
 
 }  // namespace describe_detail
 
-/// Every output field of `object`: {key: value}. Non-finite numbers are null.
-template <class T>
-nlohmann::json FieldsJson(const T& object) {
-  nlohmann::json out = nlohmann::json::object();
-  describe_detail::JsonWriter writer{&out};
-  DescribeConst(object, writer);
+/// Every output field of `object`: {key: value}. Non-finite numbers are null. `Json` may be
+/// nlohmann::ordered_json, which keeps the fields' order.
+template <class T, class Json = nlohmann::json>
+Json FieldsJson(const T& object) {
+  Json out = Json::object();
+  describe_detail::JsonSink<Json> sink{&out};
+  VisitOutputs(object, sink);
   return out;
 }
 

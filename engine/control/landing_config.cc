@@ -21,20 +21,10 @@ const std::array<std::string_view, kLandingStateCount>& LandingStateNames() {
   return kNames;
 }
 
-std::string_view ToString(PlantHeightReference reference) {
-  return reference == PlantHeightReference::kReferencePath ? "path" : "fixed";
-}
-
-std::optional<PlantHeightReference> ParsePlantHeightReference(std::string_view text) {
-  if (text == "path") return PlantHeightReference::kReferencePath;
-  if (text == "fixed") return PlantHeightReference::kFixedHeight;
-  return std::nullopt;
-}
-
 double FlareTimeConstant(const LandingConfig& config) {
-  if (config.flare_time_constant_s) return *config.flare_time_constant_s;
   const double gamma_rad = config.glide_slope_deg * std::numbers::pi / 180.0;
-  return (config.flare_height_m - config.flare_asymptote_m) / (config.start_speed_mps * std::sin(gamma_rad));
+  return SetOr(config.flare_time_constant_s, (config.flare_height_m - config.flare_asymptote_m) /
+                                                 (config.start_speed_mps * std::sin(gamma_rad)));
 }
 
 double NominalLandingTime(const LandingConfig& config, double wheel_contact_height_m) {
@@ -52,8 +42,7 @@ double NominalLandingTime(const LandingConfig& config, double wheel_contact_heig
 }
 
 double LandingTimeLimit(const LandingConfig& config, double wheel_contact_height_m) {
-  return config.time_limit_s ? *config.time_limit_s
-                             : 2.0 * NominalLandingTime(config, wheel_contact_height_m);
+  return SetOr(config.time_limit_s, 2.0 * NominalLandingTime(config, wheel_contact_height_m));
 }
 
 void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, const std::string& source) {
@@ -83,13 +72,13 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
           "expected |pitch| below divergence_pitch_deg " + Text(c.divergence_pitch_deg));
   limit("landing.start_glide_path_offset_m", "start_glide_path_offset_m", c.start_glide_path_offset_m);
   limit("glide_slope_deg", "glide_slope_deg", c.glide_slope_deg);
-  if (c.design_height_m) {
+  if (!std::isnan(c.design_height_m)) {
     // +inf (free flight) is allowed: the table's free-flight row at sea-level density.
-    limit("landing.design_height_m", "design_height_m", *c.design_height_m);
-    require(*c.design_height_m >= wheel_contact_height_m, "design_height_m", *c.design_height_m,
+    limit("landing.design_height_m", "design_height_m", c.design_height_m);
+    require(c.design_height_m >= wheel_contact_height_m, "design_height_m", c.design_height_m,
             "expected a height >= the wheel-contact height " + contact + " m, or inf");
   }
-  if (c.design_speed_mps) limit("speed_mps", "design_speed_mps", *c.design_speed_mps);
+  if (!std::isnan(c.design_speed_mps)) limit("speed_mps", "design_speed_mps", c.design_speed_mps);
   for (int i = 0; i < kLandingStateCount; ++i) {
     const std::string key = "q_weights." + std::string(LandingStateNames()[i]);
     CheckInputLimit("lqr.q", c.q_weights[i], source, key);
@@ -97,7 +86,8 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   limit("lqr.r", "r_weight", c.r_weight);
   limit("landing.actuator_pole_per_s", "actuator_pole_per_s", c.actuator_pole_per_s);
   limit("landing.compensator_pole_per_s", "compensator_pole_per_s", c.compensator_pole_per_s);
-  if (c.flare_time_constant_s) limit("flare_tau_s", "flare_time_constant_s", *c.flare_time_constant_s);
+  if (!std::isnan(c.flare_time_constant_s))
+    limit("flare_tau_s", "flare_time_constant_s", c.flare_time_constant_s);
   require(std::isfinite(c.flare_asymptote_m) && c.flare_asymptote_m >= 0.0 &&
               c.flare_asymptote_m < c.flare_height_m,
           "flare_asymptote_m", c.flare_asymptote_m,
@@ -109,14 +99,14 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   }
   limit("landing.elevator_min_deg", "elevator_min_deg", c.elevator_min_deg);
   limit("landing.elevator_max_deg", "elevator_max_deg", c.elevator_max_deg);
-  if (c.plant_fixed_reference_height_m) {
+  if (!std::isnan(c.plant_fixed_reference_height_m)) {
     limit("landing.plant_fixed_reference_height_m", "plant_fixed_reference_height_m",
-          *c.plant_fixed_reference_height_m);
+          c.plant_fixed_reference_height_m);
   }
   limit("relative_tolerance", "relative_tolerance", c.relative_tolerance);
   limit("absolute_tolerance", "absolute_tolerance", c.absolute_tolerance);
   limit("landing.max_step_s", "max_step_s", c.max_step_s);
-  if (c.time_limit_s) limit("landing.time_limit_s", "time_limit_s", *c.time_limit_s);
+  if (!std::isnan(c.time_limit_s)) limit("landing.time_limit_s", "time_limit_s", c.time_limit_s);
   require(std::isfinite(c.output_interval_s) && c.output_interval_s >= 0.0, "output_interval_s",
           c.output_interval_s, "expected an interval >= 0 s (0: no series)");
   if (c.output_interval_s > 0.0) limit("output_dt_s", "output_interval_s", c.output_interval_s);
@@ -125,7 +115,7 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   require(std::isfinite(time_limit_s) && time_limit_s > 0.0, "time_limit_s", time_limit_s,
           "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
   CheckStepCount(time_limit_s, c.max_step_s, source,
-                 c.time_limit_s ? "time_limit_s" : "time_limit_s (automatic)", "max_step_s");
+                 std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s", "max_step_s");
 }
 
 }  // namespace gesweep

@@ -4,12 +4,14 @@
 /// integration. Every field has a documented default; docs/landing.md explains each choice.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
-#include <optional>
+#include <limits>
 #include <string>
 #include <string_view>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/common/describe.h"
 #include "engine/disturbance/disturbance_options.h"
 #include "engine/simulation/integrator.h"
 
@@ -32,12 +34,20 @@ enum class PlantHeightReference {
   /// ΔH from its start height.
   kFixedHeight,
 };
-std::string_view ToString(PlantHeightReference reference);
-/// Parses "path" / "fixed"; nullopt otherwise.
-std::optional<PlantHeightReference> ParsePlantHeightReference(std::string_view text);
+/// "path" / "fixed": the study values, flag values and JSON strings.
+template <>
+struct EnumNames<PlantHeightReference> {
+  static constexpr EnumName<PlantHeightReference> kTable[] = {{PlantHeightReference::kReferencePath, "path"},
+                                                              {PlantHeightReference::kFixedHeight, "fixed"}};
+};
+
+/// A setting whose NaN means "automatic" (as DisturbanceOptions::turbulence_sigma_w_mps): `value`
+/// when set, else `automatic`.
+inline double SetOr(double value, double automatic) { return std::isnan(value) ? automatic : value; }
 
 /// Everything SimulateLanding needs besides the aircraft model. Angles are in degrees at this
-/// interface (they are written by people); the engine converts once.
+/// interface (they are written by people); the engine converts once. A setting that is NaN by default
+/// is computed when unset ("automatic", SetOr).
 struct LandingConfig {
   // --- Start state (the paper's Eq. (30): [u0 0 0 0 H0 0 0 0 0]) ---
   double start_height_m = 500.0;  ///< H at t = 0, m (> flare height)
@@ -51,11 +61,11 @@ struct LandingConfig {
   double glide_slope_deg = 2.5;
 
   // --- LQR design (paper: Matlab lqry on Eq. (16), identity weights) ---
-  /// Height of the linear model used for the gain, m. Unset: the aircraft's wheel-contact height, where
+  /// Height of the linear model used for the gain, m. NaN: the aircraft's wheel-contact height, where
   /// the ground effect (and the open-loop instability) is strongest. +∞ designs on the free-flight row.
-  std::optional<double> design_height_m;
-  /// Speed of the linear model used for the gain, m/s. Unset: start_speed_mps.
-  std::optional<double> design_speed_mps;
+  double design_height_m = std::numeric_limits<double>::quiet_NaN();
+  /// Speed of the linear model used for the gain, m/s. NaN: start_speed_mps.
+  double design_speed_mps = std::numeric_limits<double>::quiet_NaN();
   /// Include Xh, Zh, Mh in the design model (the paper's recommendation). Independent of the plant's
   /// model option, so that the paper's experiment flies one gain in two plants.
   bool design_h_derivatives = true;
@@ -68,9 +78,9 @@ struct LandingConfig {
 
   // --- Flare (paper Eq. (22)–(27)) ---
   double flare_height_m = 10.0;  ///< Ho: the flare starts when H falls to it, m
-  /// τ of Ḣ_ref = −(H_ref − h_a)/τ, s. Unset: (Ho − h_a)/(u0·sin γ), so the commanded sink rate is
+  /// τ of Ḣ_ref = −(H_ref − h_a)/τ, s. NaN: (Ho − h_a)/(u0·sin γ), so the commanded sink rate is
   /// continuous at Ho.
-  std::optional<double> flare_time_constant_s;
+  double flare_time_constant_s = std::numeric_limits<double>::quiet_NaN();
   /// The flare's asymptote h_a, m: H_ref = h_a + (Ho − h_a)·e^(−(t − t_f)/τ). 0 (default): the
   /// paper's Eq. (22), H_ref → the ground; the wheel-contact height makes touchdown a long float
   /// (docs/landing.md §5). In [0, Ho).
@@ -86,17 +96,17 @@ struct LandingConfig {
 
   // --- Plant ---
   PlantHeightReference plant_height_reference = PlantHeightReference::kReferencePath;
-  /// Used with kFixedHeight: ΔH = H − this, m. Unset: the aircraft's highest finite table height (where
+  /// Used with kFixedHeight: ΔH = H − this, m. NaN: the aircraft's highest finite table height (where
   /// the h-derivatives start to be non-zero).
-  std::optional<double> plant_fixed_reference_height_m;
+  double plant_fixed_reference_height_m = std::numeric_limits<double>::quiet_NaN();
 
   // --- Integration (adaptive Dormand–Prince 5(4), as the paper's ode45) ---
   double relative_tolerance = 1e-3;  ///< ode45's default, the paper's value
   double absolute_tolerance = 1e-6;  ///< ode45's default
   double max_step_s = 1.0;           ///< bounds the step so that no event is stepped over
-  /// Outcome no_touchdown when reached in flight, s. Unset: twice NominalLandingTime, so that a sweep over
+  /// Outcome no_touchdown when reached in flight, s. NaN: twice NominalLandingTime, so that a sweep over
   /// the glide slope or the start height needs no retuning.
-  std::optional<double> time_limit_s;
+  double time_limit_s = std::numeric_limits<double>::quiet_NaN();
   double output_interval_s = 0.1;  ///< series sampling, s; 0: no series
   /// |Δθ| beyond this ends the run as diverged, deg: the small-angle model no longer means anything.
   double divergence_pitch_deg = 60.0;
@@ -113,6 +123,128 @@ struct LandingConfig {
   /// turbulence_sample_interval_s, so the noise's sample instants are its grid (docs/disturbance.md,
   /// Cost); dopri5 at the tolerances above, stopping at every sample instant (about 1.8× the cost).
   IntegratorKind turbulent_integrator = IntegratorKind::kRk4;
+
+  /// The settings a person gives (describe.h): [analyses.landing], the flags of `gesweep land` and
+  /// the keywords of gesweep.land, under the keys ValidateLandingConfig names. The start condition,
+  /// the glide slope, the flare and the LQR weights are a sweep's run parameters (height_m,
+  /// speed_mps, glide_slope_deg, flare_height_m, flare_tau_s, lqr.r, lqr.q_*), so they are flags
+  /// only; so are the series interval (a study's [storage]) and the turbulence's seed and run index.
+  /// q_weights, an array of 9, is read by each front end itself (--q-weights, q_weights=[...]).
+  template <class V>
+  void Describe(V& v) {
+    v(Field("start_height_m", &start_height_m)
+          .Unit("m")
+          .Limit("height_m")
+          .CommandLineOnly()
+          .Doc("Start height of the mean chord, m"));
+    v(Field("start_speed_mps", &start_speed_mps)
+          .Unit("m/s")
+          .Limit("speed_mps")
+          .CommandLineOnly()
+          .Doc("Start speed, also the reference speed u0 of the plant, m/s"));
+    v(Field("start_pitch_deg", &start_pitch_deg)
+          .Unit("deg")
+          .Limit("landing.start_pitch_deg")
+          .Doc("Start pitch angle (reference: level), deg"));
+    v(Field("start_glide_path_offset_m", &start_glide_path_offset_m)
+          .Unit("m")
+          .Limit("landing.start_glide_path_offset_m")
+          .Doc("Start deviation d from the glide path, m, positive above"));
+    v(Field("glide_slope_deg", &glide_slope_deg)
+          .Unit("deg")
+          .Limit("glide_slope_deg")
+          .CommandLineOnly()
+          .Doc("Glide-slope angle, deg, positive down"));
+    v(Field("flare_height_m", &flare_height_m)
+          .Unit("m")
+          .Limit("flare_height_m")
+          .CommandLineOnly()
+          .Doc("Flare height Ho, m"));
+    v(Field("flare_time_constant_s", &flare_time_constant_s)
+          .Unit("s")
+          .Limit("flare_tau_s")
+          .CommandLineOnly()
+          .Doc(
+              "Flare time constant, s; nan (default): Ho/(u0 sin(glide slope)), continuous sink rate at Ho"));
+    v(Field("r_weight", &r_weight)
+          .Unit("rad^2")
+          .Limit("lqr.r")
+          .CommandLineOnly()
+          .Doc("LQR weight on the elevator command (rad^2)"));
+    v(Field("design_height_m", &design_height_m)
+          .Unit("m")
+          .Limit("landing.design_height_m")
+          .Doc("Height of the linear model used for the gain, m; nan (default): the wheel-contact height"));
+    v(Field("design_speed_mps", &design_speed_mps)
+          .Unit("m/s")
+          .Limit("speed_mps")
+          .Doc("Speed of the linear model used for the gain, m/s; nan (default): the start speed"));
+    v(Field("design_h_derivatives", &design_h_derivatives)
+          .Doc("Include Xh, Zh, Mh in the design model (the plant follows h_derivatives)"));
+    v(Field("actuator_pole_per_s", &actuator_pole_per_s)
+          .Unit("1/s")
+          .Limit("landing.actuator_pole_per_s")
+          .Doc("Elevator actuator pole, 1/s"));
+    v(Field("compensator_pole_per_s", &compensator_pole_per_s)
+          .Unit("1/s")
+          .Limit("landing.compensator_pole_per_s")
+          .Doc("Compensator pole S_d, 1/s"));
+    v(Field("elevator_min_deg", &elevator_min_deg)
+          .Unit("deg")
+          .Limit("landing.elevator_min_deg")
+          .Doc("Lower elevator limit, deg"));
+    v(Field("elevator_max_deg", &elevator_max_deg)
+          .Unit("deg")
+          .Limit("landing.elevator_max_deg")
+          .Doc("Upper elevator limit, deg"));
+    v(Field("plant_height_reference", &plant_height_reference)
+          .Doc("What the plant's h-derivative terms measure dH from: path (the reference trajectory) or "
+               "fixed (plant_fixed_reference_height_m)"));
+    v(Field("plant_fixed_reference_height_m", &plant_fixed_reference_height_m)
+          .Unit("m")
+          .Limit("landing.plant_fixed_reference_height_m")
+          .Doc("Fixed reference height with plant_height_reference fixed, m; nan (default): the top table "
+               "height"));
+    v(Field("relative_tolerance", &relative_tolerance)
+          .Limit("relative_tolerance")
+          .Doc("Dormand-Prince relative tolerance (1e-3: ode45's, the paper's)"));
+    v(Field("absolute_tolerance", &absolute_tolerance)
+          .Limit("absolute_tolerance")
+          .Doc("Dormand-Prince absolute tolerance"));
+    v(Field("max_step_s", &max_step_s).Unit("s").Limit("landing.max_step_s").Doc("Largest step, s"));
+    v(Field("time_limit_s", &time_limit_s)
+          .Unit("s")
+          .Limit("landing.time_limit_s")
+          .Doc(
+              "Time limit, s (outcome no_touchdown); nan (default): twice the reference trajectory's time to "
+              "the wheels"));
+    v(Field("output_interval_s", &output_interval_s)
+          .Unit("s")
+          .Limit("output_dt_s")
+          .CommandLineOnly()
+          .Doc("Series sampling interval, s"));
+    v(Field("divergence_pitch_deg", &divergence_pitch_deg)
+          .Unit("deg")
+          .Limit("landing.divergence_pitch_deg")
+          .Doc("|pitch| that ends the run as diverged, deg"));
+    v(Field("flare_asymptote_m", &flare_asymptote_m)
+          .Unit("m")
+          .Doc("Height the flare's exponential tends to, m, in [0, Ho); 0: the ground, the paper's; the "
+               "wheel-contact height makes touchdown a long float (docs/landing.md)"));
+    v(Field("reset_compensator_at_flare", &reset_compensator_at_flare)
+          .Doc("Restart the compensator and the error integral from zero at the flare switch (default: they "
+               "carry over)"));
+    disturbance.Describe(v);
+    v(Field("turbulent_integrator", &turbulent_integrator)
+          .Doc("Integrator of a landing in turbulence: rk4 (step = turbulence_sample_interval_s) or dopri5 "
+               "(relative_tolerance, absolute_tolerance)"));
+    v(Field("seed", &seed)
+          .CommandLineOnly()
+          .Doc("Seed of the turbulence (a sweep's seed parameter, docs/disturbance.md)"));
+    v(Field("run_index", &run_index)
+          .CommandLineOnly()
+          .Doc("Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep"));
+  }
 };
 
 /// Throws InputError(source, <field name>, value, expectation) when a field is out of range: first the

@@ -50,8 +50,8 @@ void BuildAugmentedSystem(const DimensionalDerivatives& d, double u0, double act
 
 LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config) {
   LandingDesign design;
-  design.design_height_m = config.design_height_m.value_or(model.aircraft().wheel_contact_height_m);
-  design.design_speed_mps = config.design_speed_mps.value_or(config.start_speed_mps);
+  design.design_height_m = SetOr(config.design_height_m, model.aircraft().wheel_contact_height_m);
+  design.design_speed_mps = SetOr(config.design_speed_mps, config.start_speed_mps);
   design.design_h_derivatives = config.design_h_derivatives;
   // The table's derivatives with the h-derivatives in, whatever the plant's option says.
   DimensionalDerivatives d =
@@ -75,6 +75,8 @@ LandingDesign DesignLandingController(const LongitudinalModel& model, const Land
   design.design_gain = lqr.K;
   design.riccati_solution = lqr.S;
   design.closed_loop_eigenvalues = lqr.closed_loop_eigenvalues;
+  if (design.closed_loop_eigenvalues.size() > 0)
+    design.closed_loop_max_real_per_s = design.closed_loop_eigenvalues[0].real();
   // Back to the paper's 9 states: K_ΔH = 0, the rest read off ζ.
   const auto& k = design.design_gain;
   design.gain = {

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <limits>
 #include <string>
 
 #include "engine/control/landing_config.h"
@@ -77,6 +78,8 @@ struct LandingDesign {
       Eigen::Matrix<double, 1, kDesignStateCount>::Zero();
   /// Eigenvalues of A − BK of the design model, largest real part first (empty unless ok).
   Eigen::VectorXcd closed_loop_eigenvalues;
+  /// The largest real part of closed_loop_eigenvalues, 1/s (NaN unless ok).
+  double closed_loop_max_real_per_s = std::numeric_limits<double>::quiet_NaN();
   Eigen::MatrixXd riccati_solution;  ///< S (8×8), empty unless ok
 
   bool ok() const { return status == RiccatiStatus::kOk; }

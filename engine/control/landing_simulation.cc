@@ -475,24 +475,44 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
 
 }  // namespace
 
-std::string_view ToString(LandingOutcome outcome) {
-  switch (outcome) {
-    case LandingOutcome::kLanded:
-      return "landed";
-    case LandingOutcome::kNoTouchdown:
-      return "no_touchdown";
-    case LandingOutcome::kStall:
-      return "stall";
-    case LandingOutcome::kDiverged:
-      return "diverged";
-    case LandingOutcome::kDesignFailed:
-      return "design_failed";
-  }
-  GESWEEP_UNREACHABLE();
+std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config) {
+  constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+  static constexpr LandingSeriesColumn kColumns[] = {
+      {"time_s", [](const LandingSample& s) { return s.time_s; }},
+      {"height_m", [](const LandingSample& s) { return s.height_m; }},
+      {"reference_height_m", [](const LandingSample& s) { return s.reference_height_m; }},
+      {"tracking_error_m", [](const LandingSample& s) { return s.tracking_error_m; }},
+      {"speed_mps", [](const LandingSample& s) { return s.speed_mps; }},
+      {"delta_w_mps", [](const LandingSample& s) { return s.delta_w_mps; }},
+      {"pitch_rate_degps", [](const LandingSample& s) { return s.pitch_rate_radps * kDegPerRad; }},
+      {"pitch_deg", [](const LandingSample& s) { return s.pitch_rad * kDegPerRad; }},
+      {"sink_rate_mps", [](const LandingSample& s) { return s.sink_rate_mps; }},
+      {"elevator_deg", [](const LandingSample& s) { return s.elevator_rad * kDegPerRad; }},
+      {"elevator_command_deg", [](const LandingSample& s) { return s.elevator_command_rad * kDegPerRad; }},
+      {"compensator_m_s", [](const LandingSample& s) { return s.compensator; }},
+      {"error_integral_m_s", [](const LandingSample& s) { return s.error_integral; }},
+      // The air motion the airplane met (docs/model.md §9).
+      {"u_g_mps", [](const LandingSample& s) { return s.u_g_mps; }},
+      {"w_g_mps", [](const LandingSample& s) { return s.w_g_mps; }},
+      {"q_g_radps", [](const LandingSample& s) { return s.q_g_radps; }},
+  };
+  static_assert(std::size(kColumns) == kStillAirSeriesColumns + 3);
+  DisturbanceOptions still = config.disturbance;
+  still.pitch_rate_gust = false;  // needs the aircraft's span; it makes no air motion of its own
+  std::size_t count = kStillAirSeriesColumns;
+  if (DisturbanceField(still, config.seed, config.run_index).active())
+    count += config.disturbance.pitch_rate_gust ? 3 : 2;
+  return {std::begin(kColumns), std::begin(kColumns) + count};
 }
 
-std::string_view ToString(LandingPhase phase) {
-  return phase == LandingPhase::kGlideSlope ? "glide_slope" : "flare";
+LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& result) {
+  LandingConfig used = config;
+  used.flare_time_constant_s = result.flare_time_constant_s;
+  used.time_limit_s = result.time_limit_s;
+  used.design_height_m = result.design.design_height_m;
+  used.design_speed_mps = result.design.design_speed_mps;
+  used.plant_fixed_reference_height_m = result.plant_fixed_reference_height_m;
+  return used;
 }
 
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
@@ -505,7 +525,7 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   result.flare_time_constant_s = FlareTimeConstant(config);
   result.glide_slope_deg = config.glide_slope_deg;
   result.plant_fixed_reference_height_m =
-      config.plant_fixed_reference_height_m.value_or(aircraft.table_heights_m.back());
+      SetOr(config.plant_fixed_reference_height_m, aircraft.table_heights_m.back());
   result.plant_h_derivatives = plant.options().h_derivatives;
   result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
   for (double* field :

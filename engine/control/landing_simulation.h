@@ -7,10 +7,12 @@
 /// and touchdown are events located in time. docs/landing.md describes every convention.
 
 #include <atomic>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "engine/common/describe.h"
 #include "engine/control/landing_config.h"
 #include "engine/control/landing_design.h"
 #include "engine/dynamics/longitudinal_model.h"
@@ -26,13 +28,25 @@ enum class LandingOutcome {
   kDesignFailed,  ///< the LQR design had no stabilising solution (nothing was flown)
 };
 
-/// "landed" / "no_touchdown" / "stall" / "diverged" / "design_failed".
-std::string_view ToString(LandingOutcome outcome);
+/// "landed" / "no_touchdown" / "stall" / "diverged" / "design_failed", in code order (the archive's
+/// levels).
+template <>
+struct EnumNames<LandingOutcome> {
+  static constexpr EnumName<LandingOutcome> kTable[] = {{LandingOutcome::kLanded, "landed"},
+                                                        {LandingOutcome::kNoTouchdown, "no_touchdown"},
+                                                        {LandingOutcome::kStall, "stall"},
+                                                        {LandingOutcome::kDiverged, "diverged"},
+                                                        {LandingOutcome::kDesignFailed, "design_failed"}};
+};
 
 /// Phase of the landing.
 enum class LandingPhase { kGlideSlope = 0, kFlare = 1 };
 /// "glide_slope" / "flare".
-std::string_view ToString(LandingPhase phase);
+template <>
+struct EnumNames<LandingPhase> {
+  static constexpr EnumName<LandingPhase> kTable[] = {{LandingPhase::kGlideSlope, "glide_slope"},
+                                                      {LandingPhase::kFlare, "flare"}};
+};
 
 /// One sample of the time series (SI units; angles in rad).
 struct LandingSample {
@@ -58,6 +72,21 @@ struct LandingSample {
   double w_g_mps = 0;
   double q_g_radps = 0;
 };
+
+/// A column of a landing's series as `gesweep land` and gesweep.land give it (the CSV's names, angles
+/// in degrees): its name and its value at a sample.
+struct LandingSeriesColumn {
+  std::string_view name;
+  double (*value)(const LandingSample&);
+};
+
+/// How many of the series' columns are those of still air (the CSV writes phase after them).
+inline constexpr std::size_t kStillAirSeriesColumns = 13;
+
+/// The series' columns of a landing flown with `config`, in order: the kStillAirSeriesColumns of still
+/// air, then the air motion the airplane met (u_g_mps, w_g_mps, and q_g_radps with the pitch-rate gust)
+/// when it had a disturbance. The text column phase (ToString(LandingPhase)) goes beside them.
+std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config);
 
 /// The result of one landing. Quantities that did not occur (no touchdown, no flare) are NaN.
 struct LandingResult {
@@ -102,7 +131,84 @@ struct LandingResult {
 
   /// Every output_interval_s and at the end (empty when output_interval_s = 0).
   std::vector<LandingSample> series;
+
+  /// The summary (describe.h): archive columns results/landing/<key> (the gain, a 9-wide column, is
+  /// declared beside them) and `gesweep land`'s CSV and JSON summary (the design beside it). The
+  /// archive's order is the columns' as they were added; the fields the output leaves out sit where
+  /// the output's order is unchanged by them.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("outcome", &outcome).Stored(StoredAs::kInt8).Doc("How the landing ended (levels attribute)"));
+    v(Field("message", &message).NotStored().Doc("One sentence on how the run ended"));
+    v(Field("touchdown_time_s", &touchdown_time_s)
+          .Unit("s")
+          .Doc("Time of touchdown (NaN when there was none)"));
+    v(Field("touchdown_distance_past_transmitter_m", &touchdown_distance_past_transmitter_m)
+          .Unit("m")
+          .Doc("Along-track distance from the glide-slope transmitter to the touchdown point, positive past "
+               "it"));
+    v(Field("touchdown_sink_rate_mps", &touchdown_sink_rate_mps)
+          .Unit("m/s")
+          .Doc("Sink rate -dH/dt at touchdown, positive down"));
+    v(Field("touchdown_pitch_deg", &touchdown_pitch_deg).Unit("deg").Doc("Pitch angle at touchdown"));
+    v(Field("touchdown_speed_mps", &touchdown_speed_mps).Unit("m/s").Doc("Speed at touchdown"));
+    v(Field("flare_start_time_s", &flare_start_time_s)
+          .Unit("s")
+          .Doc("When H fell to the flare height (NaN when it did not)"));
+    v(Field("glide_path_error_at_flare_m", &glide_path_error_at_flare_m)
+          .Unit("m")
+          .Doc("Glide-path deviation d at the flare switch, positive above"));
+    v(Field("max_abs_elevator_deg", &max_abs_elevator_deg)
+          .Unit("deg")
+          .Doc("Largest |elevator deflection| (actuator position)"));
+    v(Field("max_abs_elevator_command_deg", &max_abs_elevator_command_deg)
+          .Unit("deg")
+          .Doc("Largest |elevator command| before the limits"));
+    v(Field("max_abs_pitch_rate_degps", &max_abs_pitch_rate_degps).Unit("deg/s").Doc("Largest |q|"));
+    v(Field("saturated_time_s", &saturated_time_s)
+          .Unit("s")
+          .Doc("Total time the elevator command was beyond a limit"));
+    v(Field("longest_saturation_s", &longest_saturation_s)
+          .Unit("s")
+          .Doc("Longest single interval of saturation"));
+    v(Field("min_speed_mps", &min_speed_mps).Unit("m/s").Doc("Lowest speed"));
+    v(Field("max_speed_mps", &max_speed_mps).Unit("m/s").Doc("Highest speed"));
+    v(Field("final_time_s", &final_time_s).Unit("s").Doc("End of the run"));
+    v(Field("final_height_m", &final_height_m).Unit("m").Doc("H at the end of the run"));
+    // What the run used (the output has them in its run and design objects).
+    v(Field("flare_time_constant_s", &flare_time_constant_s)
+          .Unit("s")
+          .NotInOutput()
+          .Doc("Flare time constant tau used"));
+    v(Field("time_limit_s", &time_limit_s).Unit("s").NotInOutput().Doc("Time limit used"));
+    v(Field("design_height_m", &design.design_height_m)
+          .Unit("m")
+          .NotInOutput()
+          .Doc("Height of the linear model the gain was designed on"));
+    v(Field("closed_loop_max_real_per_s", &design.closed_loop_max_real_per_s)
+          .Unit("1/s")
+          .NotInOutput()
+          .Doc("Largest real part of the design model's closed-loop eigenvalues"));
+    v(Field("touchdown_airspeed_mps", &touchdown_airspeed_mps)
+          .Unit("m/s")
+          .Doc("Airspeed u0 + Delta u - u_g at touchdown (the speed in still air)"));
+    v(Field("flare_max_abs_elevator_deg", &flare_max_abs_elevator_deg)
+          .Unit("deg")
+          .Doc("Largest |elevator deflection| in the flare phase (NaN without a flare)"));
+    v(Field("flare_max_abs_pitch_rate_degps", &flare_max_abs_pitch_rate_degps)
+          .Unit("deg/s")
+          .Doc("Largest |q| in the flare phase (NaN without a flare)"));
+    // The accepted steps are the column accepted_steps and the output's steps.
+    v(Field("accepted_steps", &accepted_steps).Stored(StoredAs::kInt32).NotInOutput().Doc("Accepted steps"));
+    v(Field("steps", &accepted_steps).NotStored().Doc("Accepted steps"));
+    v(Field("rejected_steps", &rejected_steps).NotStored().Doc("Rejected trial steps"));
+    v(Field("rhs_calls", &rhs_calls).Stored(StoredAs::kInt32).Doc("Right-hand-side evaluations"));
+  }
 };
+
+/// The settings a landing flew: `config` with each automatic setting (NaN) replaced by the value
+/// `result` used (flare time constant, time limit, design height and speed, plant reference height).
+LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& result);
 
 /// Designs the gain (DesignLandingController) and flies the landing on `plant`. Validates `config`
 /// (throws InputError with source "landing config"); numerical outcomes are in the result, never thrown.

@@ -79,6 +79,15 @@ PbhTest PbhRank(const MatrixXd& A, int n, Build build, const RiccatiTolerances& 
   return result;
 }
 
+/// The PBH matrix [A − λI, B] of stabilizability (B beside A) or [A − λI; C] of detectability (C below).
+MatrixXcd PbhMatrix(const MatrixXd& A, std::complex<double> lambda, const MatrixXd& other, bool below) {
+  MatrixXcd shifted = A.cast<std::complex<double>>();
+  shifted.diagonal().array() -= lambda;
+  MatrixXcd pbh(A.rows() + (below ? other.rows() : 0), A.cols() + (below ? 0 : other.cols()));
+  pbh << shifted, other.cast<std::complex<double>>();
+  return pbh;
+}
+
 /// Symmetric square root of a positive semi-definite matrix (negative rounding eigenvalues → 0).
 MatrixXd SymmetricSqrt(const MatrixXd& m) {
   Eigen::SelfAdjointEigenSolver<MatrixXd> solver(m);
@@ -97,32 +106,16 @@ LqrResult Failure(RiccatiStatus status, std::string message) {
 
 PbhTest CheckStabilizable(const MatrixXd& A, const MatrixXd& B, const RiccatiTolerances& tolerances) {
   GESWEEP_DEMAND(A.rows() == A.cols() && B.rows() == A.rows());
-  const Eigen::Index n = A.rows();
   return PbhRank(
-      A, static_cast<int>(n),
-      [&](std::complex<double> lambda) {
-        MatrixXcd pbh(n, n + B.cols());
-        pbh.leftCols(n) = A.cast<std::complex<double>>();
-        pbh.leftCols(n).diagonal().array() -= lambda;
-        pbh.rightCols(B.cols()) = B.cast<std::complex<double>>();
-        return pbh;
-      },
-      tolerances);
+      A, static_cast<int>(A.rows()),
+      [&](std::complex<double> lambda) { return PbhMatrix(A, lambda, B, false); }, tolerances);
 }
 
 PbhTest CheckDetectable(const MatrixXd& A, const MatrixXd& C, const RiccatiTolerances& tolerances) {
   GESWEEP_DEMAND(A.rows() == A.cols() && C.cols() == A.cols());
-  const Eigen::Index n = A.rows();
   return PbhRank(
-      A, static_cast<int>(n),
-      [&](std::complex<double> lambda) {
-        MatrixXcd pbh(n + C.rows(), n);
-        pbh.topRows(n) = A.cast<std::complex<double>>();
-        pbh.topRows(n).diagonal().array() -= lambda;
-        pbh.bottomRows(C.rows()) = C.cast<std::complex<double>>();
-        return pbh;
-      },
-      tolerances);
+      A, static_cast<int>(A.rows()),
+      [&](std::complex<double> lambda) { return PbhMatrix(A, lambda, C, true); }, tolerances);
 }
 
 double RiccatiResidual(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const MatrixXd& R,

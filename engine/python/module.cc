@@ -30,6 +30,7 @@
 #include "engine/archive/archive_writer.h"
 #include "engine/cli/request_names.h"
 #include "engine/common/describe.h"
+#include "engine/common/described_values.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
 #include "engine/common/output_guard.h"
@@ -84,6 +85,15 @@ bool ToBool(py::handle value, const std::string& key) {
 std::string ToText(py::handle value, const std::string& key) {
   if (!py::isinstance<py::str>(value)) throw InputError(kArguments, key, Repr(value), "expected a string");
   return value.cast<std::string>();
+}
+
+/// A Python whole number >= 0 (a seed, a run index) as U; InputError naming `key` otherwise.
+template <class U>
+U ToCount(py::handle value, const std::string& key) {
+  const double number = ToNumber(value, key);
+  if (!(number >= 0 && number <= 9007199254740992.0 && number == std::floor(number)))
+    throw InputError(kArguments, key, ShortNumber(number), "expected a whole number >= 0");
+  return static_cast<U>(number);
 }
 
 // ---------------------------------------------------------------- the model
@@ -342,8 +352,11 @@ py::dict CrossingDict(const BoundaryCrossing& c) {
   return row;
 }
 
-py::dict Boundary(const PyAircraft& aircraft, double speed_mps, const std::string& method, bool sensitivities,
-                  py::kwargs kwargs) {
+py::dict Boundary(const PyAircraft& aircraft, py::object speed_arg, py::object method_arg,
+                  py::object sensitivities_arg, py::kwargs kwargs) {
+  const double speed_mps = ToNumber(speed_arg, "speed_mps");
+  const std::string method = ToText(method_arg, "method");
+  const bool sensitivities = ToBool(sensitivities_arg, "sensitivities");
   py::dict options_in = kwargs;
   const auto model = ModelOf(aircraft, options_in);
   RefuseLeftovers(options_in, ModelOptionKeys());
@@ -420,9 +433,7 @@ struct KwargsReader {
   template <class U>
   void operator()(const Field<U>& field) {
     const FieldAttributes& a = field.attributes();
-    if constexpr (DoubleArray<U> || std::same_as<U, std::string> || IntegerValue<U>) {
-      return;  // results, never settings
-    } else {
+    if constexpr (SettingValue<U>) {
       if (!InScope(a, false)) return;
       const std::string key(a.key);
       keys->push_back(key);
@@ -437,6 +448,8 @@ struct KwargsReader {
         const auto parsed = ParseEnum<U>(text);
         if (!parsed) throw InputError(kArguments, key, "'" + text + "'", "expected " + EnumChoices<U>());
         *field.value() = *parsed;
+      } else if constexpr (IntegerValue<U>) {
+        *field.value() = ToCount<U>(value, key);
       } else {
         static_assert(std::floating_point<U>);
         *field.value() = ToNumber(value, key) * a.scale;
@@ -446,37 +459,26 @@ struct KwargsReader {
 };
 
 /// A described result as a dict, each field under its key, numbers in the key's unit (as FieldsJson,
-/// with NaN where the JSON has null). Array fields give a list and "<key>_names".
-struct DictWriter {
+/// with NaN where the JSON has null): VisitOutputs' sink. Array fields give a list and "<key>_names".
+struct DictSink {
   py::dict* out;
-  template <class U>
-  void operator()(const Field<U>& field) {
-    const FieldAttributes& a = field.attributes();
-    if (!a.in_output) return;
-    const std::string key(a.key);
-    const U& v = *field.value();
-    if constexpr (std::same_as<U, bool> || IntegerValue<U> || std::same_as<U, std::string>) {
-      (*out)[py::str(key)] = v;
-    } else if constexpr (NamedEnum<U>) {
-      (*out)[py::str(key)] = std::string(ToString(v));
-    } else if constexpr (std::floating_point<U>) {
-      (*out)[py::str(key)] = v / a.scale;
-    } else {
-      static_assert(DoubleArray<U>);
-      py::list values, names;
-      for (int c = 0; c < static_cast<int>(v.size()); ++c) values.append(static_cast<double>(v[c]));
-      for (const FieldComponent& component : a.components) names.append(std::string(component.name));
-      (*out)[py::str(key)] = values;
-      (*out)[py::str(key + "_names")] = names;
-    }
+  template <class X>
+  void Plain(const std::string& key, const X& value) {
+    (*out)[py::str(key)] = value;
+  }
+  void Number(const std::string& key, double value) { Plain(key, value); }
+  void Array(const std::string& key, const std::vector<double>& values,
+             const std::vector<std::string>& names) {
+    Plain(key, values);
+    Plain(key + "_names", names);
   }
 };
 
 template <class T>
 py::dict FieldsDict(const T& object) {
   py::dict out;
-  DictWriter writer{&out};
-  DescribeConst(object, writer);
+  DictSink sink{&out};
+  VisitOutputs(object, sink);
   return out;
 }
 
@@ -488,8 +490,7 @@ py::list SettingsList(const T& object, const std::set<std::string>& leave_out) {
   for (const FieldRecord& r : ListFields(object)) {
     const FieldAttributes& a = r.attributes;
     if (!InScope(a, false) || leave_out.count(std::string(a.key))) continue;
-    if (r.kind != FieldKind::kNumber && r.kind != FieldKind::kBoolean && r.kind != FieldKind::kChoice)
-      continue;
+    if (r.kind == FieldKind::kText || r.kind == FieldKind::kArray) continue;
     py::dict entry;
     entry["key"] = std::string(a.key);
     entry["unit"] = std::string(a.unit);
@@ -498,6 +499,8 @@ py::list SettingsList(const T& object, const std::set<std::string>& leave_out) {
     entry["default_text"] = r.default_text;
     if (r.kind == FieldKind::kNumber) {
       entry["default"] = *r.number;
+    } else if (r.kind == FieldKind::kInteger) {
+      entry["default"] = static_cast<std::int64_t>(*r.number);
     } else if (r.kind == FieldKind::kBoolean) {
       entry["default"] = r.default_text == "true";
     } else {
@@ -518,23 +521,23 @@ py::array_t<double> Array(const std::vector<double>& values) {
   return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
 }
 
-py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps, bool summary_only,
-                   std::optional<double> output_dt_s, py::kwargs kwargs) {
+py::tuple Simulate(const PyAircraft& aircraft, py::object height_m, py::object speed_mps,
+                   py::object summary_only_arg, py::object output_dt_arg, py::kwargs kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
+  const bool summary_only = ToBool(summary_only_arg, "summary_only");
+  std::optional<double> output_dt_s;
+  if (!output_dt_arg.is_none()) output_dt_s = ToNumber(output_dt_arg, "output_dt_s");
   OpenLoopConfig config;
-  config.start_height_m = height_m;
-  config.reference_speed_mps = speed_mps;
+  config.start_height_m = ToNumber(height_m, "height_m");
+  config.reference_speed_mps = ToNumber(speed_mps, "speed_mps");
   std::vector<std::string> keys;
   KwargsReader reader{&options, &keys};
   config.Describe(reader);
   // The turbulence is RunNoise(seed, run_index), as `gesweep simulate --seed --run-index`.
   for (auto [key, target] : {std::pair{"seed", &config.seed}, std::pair{"run_index", &config.run_index}}) {
     if (!options.contains(key)) continue;
-    const double value = ToNumber(options[key], key);
-    if (!(value >= 0 && value <= 9007199254740992.0 && value == std::floor(value)))
-      throw InputError(kArguments, key, ShortNumber(value), "expected a whole number >= 0");
-    *target = static_cast<std::uint64_t>(value);
+    *target = ToCount<std::uint64_t>(options[key], key);
     PyDict_DelItemString(options.ptr(), key);
   }
   keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
@@ -587,70 +590,11 @@ py::tuple Simulate(const PyAircraft& aircraft, double height_m, double speed_mps
 
 // ---------------------------------------------------------------- land
 
-/// The landing's settings (LandingConfig, which lists its keys by hand, not by Describe): key, unit,
-/// description, and where its value goes. The keys are those ValidateLandingConfig names.
-struct LandingSetting {
-  const char* key;
-  const char* unit;
-  const char* doc;
-  double LandingConfig::*number = nullptr;
-  std::optional<double> LandingConfig::*optional = nullptr;
-};
-
-const std::vector<LandingSetting>& LandingSettings() {
-  static const std::vector<LandingSetting> settings = {
-      {"start_height_m", "m", "Start height of the mean chord", &LandingConfig::start_height_m},
-      {"start_speed_mps", "m/s", "Start speed, also the plant's reference speed u0",
-       &LandingConfig::start_speed_mps},
-      {"start_pitch_deg", "deg", "Start pitch angle (reference: level)", &LandingConfig::start_pitch_deg},
-      {"start_glide_path_offset_m", "m", "Start deviation d from the glide path, positive above",
-       &LandingConfig::start_glide_path_offset_m},
-      {"glide_slope_deg", "deg", "Glide-slope angle, positive down", &LandingConfig::glide_slope_deg},
-      {"design_height_m", "m", "Height of the linear model used for the gain; None: the wheel-contact height",
-       nullptr, &LandingConfig::design_height_m},
-      {"design_speed_mps", "m/s", "Speed of the linear model used for the gain; None: start_speed_mps",
-       nullptr, &LandingConfig::design_speed_mps},
-      {"r_weight", "rad^2", "LQR weight on the elevator command", &LandingConfig::r_weight},
-      {"actuator_pole_per_s", "1/s", "Elevator actuator pole", &LandingConfig::actuator_pole_per_s},
-      {"compensator_pole_per_s", "1/s", "Compensator pole S_d", &LandingConfig::compensator_pole_per_s},
-      {"flare_height_m", "m", "Flare height Ho", &LandingConfig::flare_height_m},
-      {"flare_time_constant_s", "s",
-       "Flare time constant; None: Ho/(u0 sin(glide slope)), continuous sink rate at Ho", nullptr,
-       &LandingConfig::flare_time_constant_s},
-      {"elevator_min_deg", "deg", "Lower elevator limit", &LandingConfig::elevator_min_deg},
-      {"elevator_max_deg", "deg", "Upper elevator limit", &LandingConfig::elevator_max_deg},
-      {"plant_fixed_reference_height_m", "m",
-       "Fixed reference height with plant_height_reference='fixed'; None: the top table height", nullptr,
-       &LandingConfig::plant_fixed_reference_height_m},
-      {"relative_tolerance", "1", "Dormand-Prince relative tolerance (ode45's)",
-       &LandingConfig::relative_tolerance},
-      {"absolute_tolerance", "1", "Dormand-Prince absolute tolerance", &LandingConfig::absolute_tolerance},
-      {"max_step_s", "s", "Largest step", &LandingConfig::max_step_s},
-      {"time_limit_s", "s",
-       "Time limit (outcome no_touchdown); None: twice the reference trajectory's time to the wheels",
-       nullptr, &LandingConfig::time_limit_s},
-      {"output_interval_s", "s", "Series sampling interval", &LandingConfig::output_interval_s},
-      {"divergence_pitch_deg", "deg", "|pitch| that ends the run as diverged",
-       &LandingConfig::divergence_pitch_deg},
-  };
-  return settings;
-}
-
+/// gesweep.land's settings for its signature and docstring: LandingConfig's (Describe) and q_weights,
+/// the one array, which each front end reads itself.
 py::list LandingSettingsList() {
   const LandingConfig defaults;
-  py::list out;
-  for (const LandingSetting& s : LandingSettings()) {
-    py::dict entry;
-    entry["key"] = s.key;
-    entry["unit"] = s.unit;
-    entry["doc"] = s.doc;
-    if (s.number) {
-      entry["default"] = defaults.*s.number;
-    } else {
-      entry["default"] = py::none();
-    }
-    out.append(entry);
-  }
+  py::list out = SettingsList(defaults, {});
   py::dict q;
   q["key"] = "q_weights";
   q["unit"] = "SI";
@@ -659,62 +603,93 @@ py::list LandingSettingsList() {
   q["doc"] = "9 LQR output weights >= 0 on " + names;
   q["default"] = py::cast(std::vector<double>(defaults.q_weights.begin(), defaults.q_weights.end()));
   out.append(q);
-  py::dict d;
-  d["key"] = "design_h_derivatives";
-  d["unit"] = "1";
-  d["doc"] = "Include Xh, Zh, Mh in the design model (the plant follows h_derivatives)";
-  d["default"] = defaults.design_h_derivatives;
-  out.append(d);
-  py::dict p;
-  p["key"] = "plant_height_reference";
-  p["unit"] = "1";
-  p["doc"] =
-      "What the plant's h-derivative terms measure dH from: 'path' (the reference trajectory) or 'fixed'";
-  p["default"] = std::string(ToString(defaults.plant_height_reference));
-  out.append(p);
   return out;
 }
 
-double Degrees(double radians) { return radians * 180.0 / std::numbers::pi; }
+/// q_weights: a sequence of 9 numbers.
+void TakeQWeights(py::dict& options, LandingConfig& config) {
+  if (!options.contains("q_weights")) return;
+  py::object value = options["q_weights"];
+  PyDict_DelItemString(options.ptr(), "q_weights");
+  if (value.is_none()) return;
+  const std::string expected = "expected a sequence of 9 weights >= 0";
+  if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value) ||
+      py::len(value) != kLandingStateCount)
+    throw InputError(kArguments, "q_weights", Repr(value), expected);
+  const auto weights = value.cast<py::sequence>();
+  for (int i = 0; i < kLandingStateCount; ++i)
+    config.q_weights[static_cast<std::size_t>(i)] =
+        ToNumber(weights[static_cast<std::size_t>(i)], "q_weights." + std::string(LandingStateNames()[i]));
+}
 
-py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs) {
+py::dict DesignDict(const LandingDesign& d) {
+  py::dict design;
+  design["status"] = std::string(ToString(d.status));
+  design["message"] = d.message;
+  design["design_height_m"] = d.design_height_m;
+  design["design_speed_mps"] = d.design_speed_mps;
+  design["h_derivatives"] = d.design_h_derivatives;
+  if (d.ok()) {
+    py::dict gain;
+    for (int i = 0; i < kLandingStateCount; ++i)
+      gain[py::str(std::string(LandingStateNames()[i]))] = d.gain[static_cast<std::size_t>(i)];
+    design["gain"] = gain;
+  } else {
+    design["gain"] = py::none();
+  }
+  py::list eigenvalues;
+  for (Eigen::Index i = 0; i < d.closed_loop_eigenvalues.size(); ++i)
+    eigenvalues.append(std::complex<double>(d.closed_loop_eigenvalues(i)));
+  design["closed_loop_eigenvalues_per_s"] = eigenvalues;
+  return design;
+}
+
+/// The settings flown, with the keys of `gesweep land --format json`'s run (land_command.cc, RunJson).
+py::dict LandingRunDict(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model) {
+  py::dict run = FieldsDict(SettingsUsed(c, r));
+  run["aircraft"] = model.aircraft().name;
+  run["h_derivatives"] = model.options().h_derivatives;
+  run["cdh"] = std::string(ToString(model.options().cdh));
+  run["interpolation"] = std::string(ToString(model.options().interpolation));
+  py::dict weights;
+  for (int i = 0; i < kLandingStateCount; ++i)
+    weights[py::str(std::string(LandingStateNames()[i]))] = c.q_weights[static_cast<std::size_t>(i)];
+  run["q_weights"] = weights;
+  run["turbulence_sigma_w_mps"] = EffectiveSigmaW(c.disturbance);
+  run["integrator"] = "dopri5";
+  run["rtol"] = c.relative_tolerance;
+  run["atol"] = c.absolute_tolerance;
+  if (c.plant_height_reference == PlantHeightReference::kFixedHeight)
+    run["plant_reference_height_m"] = r.plant_fixed_reference_height_m;
+  return run;
+}
+
+/// The series' columns of `gesweep land`'s CSV and JSON (LandingSeriesColumns), and phase.
+py::dict LandingSeriesDict(const LandingConfig& config, const std::vector<LandingSample>& samples) {
+  const auto n = static_cast<py::ssize_t>(samples.size());
+  py::dict out;
+  for (const LandingSeriesColumn& column : LandingSeriesColumns(config)) {
+    py::array_t<double> values(n);
+    double* data = values.mutable_data();
+    for (py::ssize_t i = 0; i < n; ++i) data[i] = column.value(samples[static_cast<std::size_t>(i)]);
+    out[py::str(std::string(column.name))] = values;
+  }
+  py::list phase;
+  for (const LandingSample& x : samples) phase.append(std::string(ToString(x.phase)));
+  out["phase"] = phase;
+  return out;
+}
+
+py::tuple Land(const PyAircraft& aircraft, py::object summary_only_arg, py::kwargs kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
+  const bool summary_only = ToBool(summary_only_arg, "summary_only");
   LandingConfig config;
   std::vector<std::string> keys;
-  for (const LandingSetting& s : LandingSettings()) {
-    keys.push_back(s.key);
-    if (!options.contains(s.key)) continue;
-    py::object value = options[s.key];
-    PyDict_DelItemString(options.ptr(), s.key);
-    if (s.number) {
-      config.*s.number = ToNumber(value, s.key);
-    } else if (!value.is_none()) {
-      config.*s.optional = ToNumber(value, s.key);
-    }
-  }
-  for (const char* key : {"q_weights", "design_h_derivatives", "plant_height_reference"}) keys.push_back(key);
-  if (options.contains("q_weights")) {
-    py::object value = options["q_weights"];
-    PyDict_DelItemString(options.ptr(), "q_weights");
-    const auto weights = value.cast<std::vector<double>>();
-    if (weights.size() != static_cast<std::size_t>(kLandingStateCount)) {
-      throw InputError(kArguments, "q_weights", Repr(value), "expected 9 weights >= 0");
-    }
-    for (int i = 0; i < kLandingStateCount; ++i) config.q_weights[i] = weights[i];
-  }
-  if (options.contains("design_h_derivatives")) {
-    config.design_h_derivatives = ToBool(options["design_h_derivatives"], "design_h_derivatives");
-    PyDict_DelItemString(options.ptr(), "design_h_derivatives");
-  }
-  if (options.contains("plant_height_reference")) {
-    const std::string text = ToText(options["plant_height_reference"], "plant_height_reference");
-    PyDict_DelItemString(options.ptr(), "plant_height_reference");
-    const auto reference = ParsePlantHeightReference(text);
-    if (!reference)
-      throw InputError(kArguments, "plant_height_reference", "'" + text + "'", "expected path or fixed");
-    config.plant_height_reference = *reference;
-  }
+  KwargsReader reader{&options, &keys};
+  config.Describe(reader);
+  TakeQWeights(options, config);
+  keys.push_back("q_weights");
   keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
   RefuseLeftovers(options, keys);
   if (summary_only) config.output_interval_s = 0.0;
@@ -726,111 +701,11 @@ py::tuple Land(const PyAircraft& aircraft, bool summary_only, py::kwargs kwargs)
   }
   LandingResult r;
   RunInterruptible([&](const std::atomic<bool>* cancel) { r = SimulateLanding(*model, config, cancel); });
-
-  py::dict design;
-  design["status"] = std::string(ToString(r.design.status));
-  design["message"] = r.design.message;
-  design["design_height_m"] = r.design.design_height_m;
-  design["design_speed_mps"] = r.design.design_speed_mps;
-  design["h_derivatives"] = r.design.design_h_derivatives;
-  if (r.design.ok()) {
-    py::dict gain;
-    for (int i = 0; i < kLandingStateCount; ++i)
-      gain[py::str(std::string(LandingStateNames()[i]))] = r.design.gain[i];
-    design["gain"] = gain;
-  } else {
-    design["gain"] = py::none();
-  }
-  py::list eigenvalues;
-  for (Eigen::Index i = 0; i < r.design.closed_loop_eigenvalues.size(); ++i)
-    eigenvalues.append(std::complex<double>(r.design.closed_loop_eigenvalues(i)));
-  design["closed_loop_eigenvalues_per_s"] = eigenvalues;
-
-  py::dict summary;
-  summary["outcome"] = std::string(ToString(r.outcome));
-  summary["message"] = r.message;
-  summary["touchdown_time_s"] = r.touchdown_time_s;
-  summary["touchdown_distance_past_transmitter_m"] = r.touchdown_distance_past_transmitter_m;
-  summary["touchdown_sink_rate_mps"] = r.touchdown_sink_rate_mps;
-  summary["touchdown_pitch_deg"] = r.touchdown_pitch_deg;
-  summary["touchdown_speed_mps"] = r.touchdown_speed_mps;
-  summary["touchdown_airspeed_mps"] = r.touchdown_airspeed_mps;
-  summary["flare_max_abs_elevator_deg"] = r.flare_max_abs_elevator_deg;
-  summary["flare_max_abs_pitch_rate_degps"] = r.flare_max_abs_pitch_rate_degps;
-  summary["flare_start_time_s"] = r.flare_start_time_s;
-  summary["glide_path_error_at_flare_m"] = r.glide_path_error_at_flare_m;
-  summary["max_abs_elevator_deg"] = r.max_abs_elevator_deg;
-  summary["max_abs_elevator_command_deg"] = r.max_abs_elevator_command_deg;
-  summary["max_abs_pitch_rate_degps"] = r.max_abs_pitch_rate_degps;
-  summary["saturated_time_s"] = r.saturated_time_s;
-  summary["longest_saturation_s"] = r.longest_saturation_s;
-  summary["min_speed_mps"] = r.min_speed_mps;
-  summary["max_speed_mps"] = r.max_speed_mps;
-  summary["final_time_s"] = r.final_time_s;
-  summary["final_height_m"] = r.final_height_m;
-  summary["steps"] = r.accepted_steps;
-  summary["rejected_steps"] = r.rejected_steps;
-  summary["rhs_calls"] = r.rhs_calls;
-  summary["design"] = design;
-
-  py::dict run;
-  run["aircraft"] = model->aircraft().name;
-  for (const LandingSetting& s : LandingSettings()) {
-    if (s.number) run[s.key] = config.*s.number;
-  }
-  run["glide_slope_deg"] = r.glide_slope_deg;
-  run["flare_height_m"] = r.flare_height_m;
-  run["flare_time_constant_s"] = r.flare_time_constant_s;
-  run["time_limit_s"] = r.time_limit_s;
-  run["plant_height_reference"] = std::string(ToString(config.plant_height_reference));
-  run["h_derivatives"] = model->options().h_derivatives;
-  run["cdh"] = std::string(ToString(model->options().cdh));
-  run["interpolation"] = std::string(ToString(model->options().interpolation));
-
+  py::dict summary = FieldsDict(r);
+  summary["design"] = DesignDict(r.design);
   py::object series = py::none();
-  if (!summary_only) {
-    const auto& s = r.series;
-    const auto n = static_cast<py::ssize_t>(s.size());
-    const char* names[] = {"time_s",
-                           "height_m",
-                           "reference_height_m",
-                           "tracking_error_m",
-                           "speed_mps",
-                           "delta_w_mps",
-                           "pitch_rate_degps",
-                           "pitch_deg",
-                           "sink_rate_mps",
-                           "elevator_deg",
-                           "elevator_command_deg",
-                           "compensator_m_s",
-                           "error_integral_m_s"};
-    std::vector<py::array_t<double>> columns;
-    for (std::size_t c = 0; c < std::size(names); ++c) columns.emplace_back(n);
-    py::list phase;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      const LandingSample& x = s[static_cast<std::size_t>(i)];
-      const double values[] = {x.time_s,
-                               x.height_m,
-                               x.reference_height_m,
-                               x.tracking_error_m,
-                               x.speed_mps,
-                               x.delta_w_mps,
-                               Degrees(x.pitch_rate_radps),
-                               Degrees(x.pitch_rad),
-                               x.sink_rate_mps,
-                               Degrees(x.elevator_rad),
-                               Degrees(x.elevator_command_rad),
-                               x.compensator,
-                               x.error_integral};
-      for (std::size_t c = 0; c < std::size(names); ++c) columns[c].mutable_data()[i] = values[c];
-      phase.append(std::string(ToString(x.phase)));
-    }
-    py::dict out;
-    for (std::size_t c = 0; c < std::size(names); ++c) out[names[c]] = columns[c];
-    out["phase"] = phase;
-    series = out;
-  }
-  return py::make_tuple(run, summary, series);
+  if (!summary_only) series = LandingSeriesDict(config, r.series);
+  return py::make_tuple(LandingRunDict(config, r, *model), summary, series);
 }
 
 // ---------------------------------------------------------------- run
@@ -948,21 +823,25 @@ double BenchBoundarySearch(const PyAircraft& aircraft, double speed_mps, int rep
   return seconds / repetitions;
 }
 
+/// Aircraft.<fact> of the Python class: the aircraft file's numbers, SI, under their keys.
+constexpr std::pair<const char*, double Aircraft::*> kAircraftNumbers[] = {
+    {"wingspan_m", &Aircraft::wingspan_m},
+    {"mean_chord_m", &Aircraft::mean_chord_m},
+    {"wing_area_m2", &Aircraft::wing_area_m2},
+    {"mass_kg", &Aircraft::mass_kg},
+    {"pitch_inertia_kgm2", &Aircraft::pitch_inertia_kgm2},
+    {"cg_over_chord", &Aircraft::cg_over_chord},
+    {"CDo", &Aircraft::CDo},
+    {"stall_speed_mps", &Aircraft::stall_speed_mps},
+    {"wheel_contact_height_m", &Aircraft::wheel_contact_height_m},
+    {"field_elevation_m", &Aircraft::field_elevation_m}};
+
 py::dict AircraftFacts(const PyAircraft& a) {
   const Aircraft& x = a.aircraft();
   py::dict out;
   out["name"] = x.name;
   out["source_path"] = x.source_path;
-  out["wingspan_m"] = x.wingspan_m;
-  out["mean_chord_m"] = x.mean_chord_m;
-  out["wing_area_m2"] = x.wing_area_m2;
-  out["mass_kg"] = x.mass_kg;
-  out["pitch_inertia_kgm2"] = x.pitch_inertia_kgm2;
-  out["cg_over_chord"] = x.cg_over_chord;
-  out["CDo"] = x.CDo;
-  out["stall_speed_mps"] = x.stall_speed_mps;
-  out["wheel_contact_height_m"] = x.wheel_contact_height_m;
-  out["field_elevation_m"] = x.field_elevation_m;
+  for (const auto& [key, member] : kAircraftNumbers) out[key] = x.*member;
   return out;
 }
 
@@ -993,11 +872,14 @@ PYBIND11_MODULE(_gesweep, m) {
   m.attr("__version__") = GESWEEP_VERSION;
   m.attr("git_commit") = GESWEEP_GIT_COMMIT;
 
+  // A ValueError, and a TypeError too: an argument of the wrong type is an InputError as well, and
+  // code that catches the TypeError Python itself would raise keeps working (docs/python.md).
+  py::tuple input_error_bases = py::make_tuple(py::handle(PyExc_ValueError), py::handle(PyExc_TypeError));
   InputErrorType() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
       "gesweep.InputError",
       "Bad input from a person: names the source (a file, or 'argument'), the key, the value and what was "
-      "expected, in one line, as the gesweep command prints it.",
-      PyExc_ValueError, nullptr));
+      "expected, in one line, as the gesweep command prints it. A ValueError and a TypeError.",
+      input_error_bases.ptr(), nullptr));
   m.attr("InputError") = InputErrorType();
   ArchiveErrorType() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
       "gesweep.ArchiveError", "An archive could not be written or read (I/O, disk full, damage).",

@@ -89,6 +89,56 @@ class Land(unittest.TestCase):
             self.assertEqual(len(out.stderr.strip().splitlines()), 1, out.stderr)
             self.assertIn(flag, out.stderr)
 
+    def test_csv_summary_columns_and_json_keys_unchanged(self):
+        """The summary's columns come from LandingResult's description: the CSV header and the JSON keys
+        are those `gesweep land` wrote before, in the same order."""
+        header = ("outcome,touchdown_time_s,touchdown_distance_past_transmitter_m,touchdown_sink_rate_mps,"
+                  "touchdown_pitch_deg,touchdown_speed_mps,flare_start_time_s,glide_path_error_at_flare_m,"
+                  "max_abs_elevator_deg,max_abs_elevator_command_deg,max_abs_pitch_rate_degps,saturated_time_s,"
+                  "longest_saturation_s,min_speed_mps,max_speed_mps,final_time_s,final_height_m,"
+                  "touchdown_airspeed_mps,flare_max_abs_elevator_deg,flare_max_abs_pitch_rate_degps,steps,"
+                  "rejected_steps,rhs_calls")
+        out = run("--summary-only")
+        self.assertEqual(out.stdout.splitlines()[0], header)
+        doc = json.loads(run("--summary-only", "--format", "json").stdout)
+        self.assertEqual(list(doc["summary"]), header.split(",")[:1] + ["message"] + header.split(",")[1:] + ["design"])
+        for key in ("aircraft", "start_height_m", "start_speed_mps", "start_pitch_deg", "start_glide_path_offset_m",
+                    "glide_slope_deg", "flare_height_m", "flare_time_constant_s", "q_weights", "r_weight",
+                    "actuator_pole_per_s", "compensator_pole_per_s", "elevator_min_deg", "elevator_max_deg",
+                    "plant_height_reference", "h_derivatives", "cdh", "interpolation", "integrator",
+                    "flare_asymptote_m", "reset_compensator_at_flare", "rtol", "atol", "max_step_s", "time_limit_s",
+                    "wind_20ft_mps", "wind_shear", "turbulence", "turbulence_sigma_w_mps",
+                    "turbulence_sample_interval_s", "pitch_rate_gust", "gust_axis", "gust_amplitude_mps",
+                    "gust_half_length_m", "gust_start_s", "seed", "run_index", "turbulent_integrator"):
+            self.assertIn(key, doc["run"])
+        self.assertEqual(doc["run"]["integrator"], "dopri5")
+        self.assertEqual(doc["run"]["turbulence_sigma_w_mps"], 0.0)  # σ_w in force: no turbulence
+
+    def test_older_flag_names_are_aliases(self):
+        """Each flag whose name is not its key's (--speed-mps for start_speed_mps, ...) still works, and
+        gives what the key's own flag gives."""
+        older = ["--speed-mps", "55", "--start-offset-m", "2", "--tau-s", "5", "--plant-height-reference", "fixed",
+                 "--plant-reference-height-m", "12", "--rtol", "1e-4", "--atol", "1e-7", "--output-dt-s", "4",
+                 "--format", "json"]
+        keys = ["--start-speed-mps", "55", "--start-glide-path-offset-m", "2", "--flare-time-constant-s", "5",
+                "--plant-height-reference", "fixed", "--plant-fixed-reference-height-m", "12",
+                "--relative-tolerance", "1e-4", "--absolute-tolerance", "1e-7", "--output-interval-s", "4",
+                "--format", "json"]
+        a, b = run(*older), run(*keys)
+        self.assertEqual(a.returncode, 0, a.stderr)
+        self.assertEqual(a.stdout, b.stdout)
+        doc = json.loads(a.stdout)
+        self.assertEqual(doc["run"]["start_speed_mps"], 55.0)
+        self.assertEqual(doc["run"]["plant_reference_height_m"], 12.0)
+        self.assertEqual(doc["run"]["rtol"], 1e-4)
+        self.assertEqual(doc["series"]["time_s"][1], 4.0)
+        # The error names the flag as typed.
+        self.assertIn("--tau-s = -1", run("--tau-s", "-1").stderr)
+        self.assertIn("--flare-time-constant-s = -1", run("--flare-time-constant-s", "-1").stderr)
+        # --output-dt-s and --summary-only exclude each other, under either name.
+        self.assertEqual(run("--output-dt-s", "1", "--summary-only").returncode, 2)
+        self.assertEqual(run("--output-interval-s", "1", "--summary-only").returncode, 2)
+
     def test_design_failure_exit_3(self):
         out = run("--q-weights", "0,0,0,0,0,0,0,0,0", "--summary-only", "--format", "json")
         self.assertEqual(out.returncode, 3, out.stderr)

@@ -82,3 +82,39 @@ def test_bad_study_file_same_line_as_cli(gesweep, tmp_path):
         gesweep.run(study, tmp_path / "out.h5")
     assert str(error.value) == line
     assert not (tmp_path / "out.h5").exists()
+
+
+def test_land_setting_outside_its_range_same_as_cli(gesweep, ance):
+    line = cli_error("land", "--aircraft", ANCE, "--glide-slope-deg", 45)
+    with pytest.raises(gesweep.InputError) as error:
+        gesweep.land(ance, glide_slope_deg=45)
+    assert str(error.value) == python_wording(line, "--glide-slope-deg", "glide_slope_deg")
+    line = cli_error("land", "--aircraft", ANCE, "--turbulence", "foo")
+    with pytest.raises(gesweep.InputError) as error:
+        gesweep.land(ance, turbulence="foo")
+    assert str(error.value) == python_wording(line, "--turbulence", "turbulence")
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda g, a: g.land(a, glide_slope_deg="steep"), "argument: glide_slope_deg = 'steep': expected a number"),
+    (lambda g, a: g.land(a, summary_only="yes"), "argument: summary_only = 'yes': expected True or False"),
+    (lambda g, a: g.land(a, wind_20ft="3"), "argument: wind_20ft = '3': unknown option; expected one of: "),
+    (lambda g, a: g.land(a, seed=-1), "argument: seed = -1: expected a whole number >= 0"),
+    (lambda g, a: g.land(a, seed="x"), "argument: seed = 'x': expected a number"),
+    (lambda g, a: g.land(a, q_weights=[1, 2]), "argument: q_weights = [1, 2]: expected a sequence of 9 weights"),
+    (lambda g, a: g.land(a, q_weights=[1] * 8 + ["x"]), "argument: q_weights.error_integral = 'x': expected a number"),
+    (lambda g, a: g.land(a, plant_height_reference=1), "argument: plant_height_reference = 1: expected a string"),
+    (lambda g, a: g.simulate(a, "3", 32.0), "argument: height_m = '3': expected a number"),
+    (lambda g, a: g.simulate(a, 3.0, 32.0, output_dt_s="fine"), "argument: output_dt_s = 'fine': expected a number"),
+    (lambda g, a: g.boundary(a, "fast"), "argument: speed_mps = 'fast': expected a number"),
+    (lambda g, a: g.boundary(a, [30, "fast"]), "argument: speed_mps = [30, 'fast']: expected a number"),
+    (lambda g, a: g.modes(a, "low", 30.0), "argument: height_m = 'low': expected a number"),
+])
+def test_wrongly_typed_argument_is_an_input_error(gesweep, ance, call, message):
+    """A string where a number goes, an unknown keyword, a wrong list: InputError, one line naming the
+    argument, the value and the expectation; also a TypeError, for code written against Python's own."""
+    with pytest.raises(gesweep.InputError) as error:
+        call(gesweep, ance)
+    assert str(error.value).startswith(message), str(error.value)
+    assert "\n" not in str(error.value)
+    assert isinstance(error.value, ValueError) and isinstance(error.value, TypeError)

@@ -175,6 +175,64 @@ def test_land_equals_cli(gesweep, ance):
     assert {"time_s", "height_m", "elevator_deg", "pitch_deg"} <= set(series.columns)
 
 
+def same_value(mine, theirs):
+    """A value of the module against the command's JSON: null is NaN, a complex pair a complex, a dict
+    key by key."""
+    if isinstance(theirs, dict):
+        return set(mine) == set(theirs) and all(same_value(mine[k], theirs[k]) for k in theirs)
+    if theirs is None:
+        return isinstance(mine, float) and math.isnan(mine)
+    return mine == theirs
+
+
+def test_land_run_equals_cli(gesweep, ance):
+    """The settings flown (LandingConfig's description, the automatic ones as used) under the same keys,
+    with the same values, as the command's JSON; the automatic flare time constant is Ho/(u0 sin γ)."""
+    args = ("--glide-slope-deg", 3, "--plant-height-reference", "fixed", "--rtol", 1e-4, "--seed", 7)
+    cli = cli_json("land", "--aircraft", ANCE, "--summary-only", *args)
+    r = gesweep.land(ance, summary_only=True, glide_slope_deg=3, plant_height_reference="fixed",
+                     relative_tolerance=1e-4, seed=7)
+    assert set(r.run) == set(cli["run"])
+    for key, value in cli["run"].items():
+        assert same_value(r.run[key], value), key
+    assert r.run["rtol"] == r.run["relative_tolerance"] == 1e-4
+    assert r.run["seed"] == 7
+    # The automatic τ (docs/landing.md): Ho/(u0 sin γ) with the defaults Ho = 10 m, u0 = 52.21 m/s.
+    assert r.run["flare_time_constant_s"] == pytest.approx(10.0 / (52.21 * math.sin(math.radians(3))), rel=1e-12)
+
+
+def test_land_in_a_mean_wind_equals_cli(gesweep, ance):
+    """The disturbance keywords, from DisturbanceOptions' description as simulate's: a 5 m/s headwind
+    without shear is u_g = -5 m/s at every sample, and no vertical air motion (docs/model.md §9)."""
+    args = ("--wind-20ft-mps", -5, "--wind-shear", "none", "--output-dt-s", 2)
+    cli = cli_json("land", "--aircraft", ANCE, *args)
+    r = gesweep.land(ance, wind_20ft_mps=-5, wind_shear="none", output_interval_s=2)
+    for key, value in cli["summary"].items():
+        assert same_value(r.summary[key], value) if key != "design" else True, key
+    assert r.summary["design"]["gain"] == cli["summary"]["design"]["gain"]
+    assert set(r.series.columns) == set(cli["series"])
+    for name, values in cli["series"].items():
+        if name == "phase":
+            assert list(r.series[name]) == values
+        else:
+            np.testing.assert_array_equal(r.series[name].to_numpy(), [nan_for_none(v) for v in values])
+    np.testing.assert_array_equal(r.series["u_g_mps"].to_numpy(), -5.0)
+    np.testing.assert_array_equal(r.series["w_g_mps"].to_numpy(), 0.0)
+    assert "q_g_radps" not in r.series.columns  # only with the pitch-rate gust
+
+
+def test_land_turbulence_replays_a_run(gesweep, ance):
+    """seed and run_index select the noise RunNoise(seed, i), as the command's --seed and --run-index."""
+    options = dict(summary_only=True, wind_20ft_mps=-6, turbulence="dryden", start_height_m=100)
+    a = gesweep.land(ance, seed=3, run_index=2, **options)
+    again = gesweep.land(ance, seed=3, run_index=2, **options)
+    other = gesweep.land(ance, seed=3, run_index=1, **options)
+    cli = cli_json("land", "--aircraft", ANCE, "--summary-only", "--wind-20ft-mps", -6, "--turbulence", "dryden",
+                   "--start-height-m", 100, "--seed", 3, "--run-index", 2)
+    assert a.summary["touchdown_time_s"] == again.summary["touchdown_time_s"] == cli["summary"]["touchdown_time_s"]
+    assert a.summary["touchdown_sink_rate_mps"] != other.summary["touchdown_sink_rate_mps"]
+
+
 def test_help_lists_every_option_with_its_default(gesweep):
     import pydoc
     text = pydoc.render_doc(gesweep.simulate, renderer=pydoc.plaintext)
@@ -185,3 +243,8 @@ def test_help_lists_every_option_with_its_default(gesweep):
     assert "step_s = 0.015 [s]" in text
     land_text = pydoc.render_doc(gesweep.land, renderer=pydoc.plaintext)
     assert "glide_slope_deg = 2.5 [deg]" in land_text
+    for s in gesweep._LAND_SETTINGS:
+        assert f"{s['key']} = {s['default']!r}" in land_text, s["key"]
+    for key in ("wind_20ft_mps", "turbulence", "gust_amplitude_mps", "seed", "run_index", "q_weights",
+                "plant_height_reference", "turbulent_integrator", "design_h_derivatives"):
+        assert key in {s["key"] for s in gesweep._LAND_SETTINGS}, key

@@ -9,8 +9,8 @@
     ds = gesweep.open_archive("results/stability_map.h5")
 
 Every function calls the engine, not the command line (no process per call), and releases the GIL
-while it computes. Bad input raises gesweep.InputError (a ValueError) with the one line the gesweep
-command prints. docs/python.md documents the whole API.
+while it computes. Bad input raises gesweep.InputError (a ValueError, and a TypeError for an argument of
+the wrong type) with the one line the gesweep command prints. docs/python.md documents the whole API.
 """
 
 import inspect as _inspect
@@ -48,6 +48,21 @@ _MODEL_DOC = "\n".join(f"    {k} = {d!r}: {doc}" for k, d, doc in MODEL_OPTIONS)
 
 def _model_parameters():
     return [_inspect.Parameter(k, _inspect.Parameter.KEYWORD_ONLY, default=d) for k, d, _ in MODEL_OPTIONS]
+
+
+def _input_error(key, value, expected):
+    """An InputError about an argument, worded as the engine's: "argument: key = value: expected"."""
+    error = InputError(f"argument: {key} = {value!r}: {expected}")
+    error.source, error.key, error.value, error.expected = "argument", key, repr(value), expected
+    return error
+
+
+def _numbers(value, key):
+    """`value` as a float array; InputError naming `key` when it is not numbers."""
+    try:
+        return _np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise _input_error(key, value, "expected a number or an array of numbers") from None
 
 
 def _given(options):
@@ -105,7 +120,7 @@ def modes(aircraft, height_m, speed_mps, *, threads=None, **model_options):
       <mode>/oscillatory, <mode>/neutral (bool), for <mode> in short_period, phugoid, height.
     Model options (keywords):
 """
-    h, u = _np.broadcast_arrays(_np.asarray(height_m, dtype=float), _np.asarray(speed_mps, dtype=float))
+    h, u = _np.broadcast_arrays(_numbers(height_m, "height_m"), _numbers(speed_mps, "speed_mps"))
     shape = h.shape
     out = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
                          int(threads or 0), **_given(model_options))
@@ -137,7 +152,7 @@ def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **mo
         return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
     if _np.ndim(speed_mps) > 0:
         return [_gesweep.boundary(aircraft._native, float(u), method, sensitivities, **options)
-                for u in _np.asarray(speed_mps, dtype=float).ravel()]
+                for u in _numbers(speed_mps, "speed_mps").ravel()]
     return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
 
 
@@ -204,11 +219,14 @@ simulate.__signature__ = _inspect.Signature(
 def land(aircraft, *, summary_only=False, **options):
     """The closed-loop automatic landing (docs/model.md section 8, docs/landing.md), as `gesweep land`.
 
-    Returns Response(run, summary, series): summary with the keys of `gesweep land --format json`
-    (outcome: landed, no_touchdown, stall, diverged or design_failed; design: the gain and the
-    closed-loop eigenvalues), series a DataFrame with the CSV's columns (angles in degrees) and phase.
-    A failed design is data (outcome 'design_failed'), not an exception.
-    Settings (keywords; the names ValidateLandingConfig uses):
+    Returns Response(run, summary, series): run and summary with the keys of
+    `gesweep land --format json` (outcome: landed, no_touchdown, stall, diverged or design_failed;
+    design: the gain and the closed-loop eigenvalues; nan where the JSON has null), series a DataFrame
+    with the CSV's columns (angles in degrees; u_g_mps, w_g_mps (and q_g_radps) with a disturbance)
+    and phase. A failed design is data (outcome 'design_failed'), not an exception. Ctrl-C
+    (KeyboardInterrupt) stops it within a step.
+    Settings (keywords; the fields of the engine's LandingConfig, as `gesweep land --help`; nan:
+    automatic, as the text says):
 """
     run_, summary, series = _gesweep.land(aircraft._native, summary_only, **_given(options))
     return Response(run_, summary, _frame(series))
