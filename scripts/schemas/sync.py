@@ -171,7 +171,7 @@ def write(path, text):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("--check", action="store_true", help="write nothing; exit 1 if a file differs")
     parser.add_argument("--gesweep", help="the gesweep binary to ask for the manifest (default: $GESWEEP_BINARY, "
                                           "else build/gesweep)")

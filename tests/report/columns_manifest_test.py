@@ -178,6 +178,22 @@ class ColumnsManifest(unittest.TestCase):
             paths |= {c["path"] for c in analysis["columns"]} | {a["path"] for a in analysis["time_axes"]}
         self.assertEqual(paths - printed, set())
 
+    def test_a_script_that_gesweep_starts_asks_that_gesweep(self):
+        # scripts/lib/columns.py, with neither GESWEEP_BINARY nor GESWEEP_COLUMNS_MANIFEST set, in a
+        # script that `gesweep report` starts (GESWEEP_REPORT_SCRIPT): the manifest is that binary's.
+        script = os.path.join(self.work.name, "where.py")
+        with open(script, "w") as f:
+            f.write(f"import sys\nsys.path.insert(0, {os.path.join(ROOT, 'scripts', 'lib')!r})\nimport columns\n"
+                    "print(columns.where())\nprint(','.join(columns.analyses()))\n")
+        env = {k: v for k, v in os.environ.items() if k not in ("GESWEEP_BINARY", "GESWEEP_COLUMNS_MANIFEST")}
+        env["GESWEEP_REPORT_SCRIPT"] = script
+        out = subprocess.run([GESWEEP, "report", self.archives[0], "-o", os.path.join(self.work.name, "r")],
+                             capture_output=True, text=True, timeout=120, cwd=ROOT, env=env)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        where, names = out.stdout.splitlines()
+        self.assertEqual(where, f"`{os.path.realpath(GESWEEP)} columns --json`")
+        self.assertEqual(names.split(","), [a["name"] for a in self.manifest["analyses"]])
+
     def test_bad_aircraft_is_one_line(self):
         missing = os.path.join(tempfile.gettempdir(), "no_such_aircraft_for_gesweep_columns.toml")
         out = gesweep("columns", "--aircraft", missing)
