@@ -1,6 +1,8 @@
 // gesweep columns: the column manifest, every dataset an archive can hold, with its units, description,
-// type, width, levels, component names and time axis (schemas/archive.md; schemas/columns.json is its
-// --json output, checked by tests/report/columns_manifest_test.py). Each analysis of the registry is
+// type, width, levels, component names and time axis (schemas/archive.md, "The column manifest"; its
+// --json output is what scripts/lib/columns.py reads and scripts/schemas/sync.py writes the
+// per-analysis parts of schemas/study.schema.json and schemas/archive.md from; checked against real
+// archives by tests/report/columns_manifest_test.py). Each analysis of the registry is
 // built with its default settings and asked for its columns with time series on, so the manifest is
 // what the analyses declare, not a second list.
 #include <iomanip>
@@ -131,7 +133,7 @@ Json AxisJson(const TimeAxis& axis) {
 }
 
 // One described setting as the JSON Schema of its key in [analyses.<name>]: what
-// schemas/study.schema.json states for it (scripts/schemas/sync_schemas.py copies it there).
+// schemas/study.schema.json states for it (scripts/schemas/sync.py copies it there).
 Json SettingSchema(const FieldRecord& field) {
   Json out;
   switch (field.kind) {
@@ -290,7 +292,7 @@ void PrintText(const Json& manifest) {
               << units << " " << description << (extra.empty() ? "" : "  [" + extra + "]") << "\n";
   };
   std::cout << "# The columns of a gesweep archive (format " << Text(manifest["archive_format_version"])
-            << "); `gesweep columns --json` gives schemas/columns.json.\n";
+            << "); `gesweep columns --json` gives the same as JSON.\n";
   std::cout << "\n## runs (every archive)\n";
   for (const auto& c : manifest["runs"]) {
     row(Text(c["path"]), Text(c["type"]), Text(c["units"]),
@@ -326,11 +328,11 @@ void PrintText(const Json& manifest) {
 }
 
 const CommandRegistrar kRegistrar{Command{
-    "columns", "The column manifest: every dataset an archive can hold (schemas/columns.json is its --json)",
+    "columns", "The column manifest: every dataset an archive can hold (schemas/archive.md)",
     [](CLI::App& app) -> std::function<int()> {
       auto json = std::make_shared<bool>(false);
       auto aircraft = std::make_shared<std::string>(GESWEEP_COLUMNS_AIRCRAFT_DEFAULT);
-      app.add_flag("--json", *json, "JSON (schemas/columns.json) instead of a text table");
+      app.add_flag("--json", *json, "JSON (what scripts read, schemas/archive.md) instead of a text table");
       app.add_option("--aircraft", *aircraft,
                      "Aircraft file the analyses that need one are built with (the columns do not depend on "
                      "it); default: the repository's studies/aircraft/ance.toml");

@@ -1,4 +1,4 @@
-"""The column manifest (schemas/columns.json, the output of `gesweep columns --json`) for scripts.
+"""The column manifest (the output of `gesweep columns --json`) for scripts.
 
 Scripts ask it for an archive path instead of spelling one out, so a column that an analysis renames
 or drops fails here, with one line naming it, and not as a KeyError deep inside h5py:
@@ -11,17 +11,29 @@ or drops fails here, with one line naming it, and not as a KeyError deep inside 
     columns.time_axis("landing")                              # "series/landing/time_s"
 
 An analysis's results and series are asked for apart (`series=True`): the two groups may hold the same
-name. Set GESWEEP_COLUMNS_MANIFEST to read another manifest (a test of a new analysis, say).
-Reference: schemas/archive.md; regenerate the manifest with `gesweep columns --json > schemas/columns.json`.
+name.
+
+The manifest is not a file of the repository: it is what the engine declares, asked of a gesweep
+binary once per process (docs/architecture.md, "Describe once"). The first of these is read:
+- GESWEEP_COLUMNS_MANIFEST: a manifest file (a test of a new analysis, say);
+- GESWEEP_BINARY: the gesweep binary to ask;
+- the gesweep that started this script (`gesweep report` runs scripts/report/report.py);
+- build/gesweep of this repository.
+Reference: schemas/archive.md ("The column manifest").
 """
 
 import functools
 import json
 import os
+import subprocess
 
-MANIFEST_PATH = os.environ.get("GESWEEP_COLUMNS_MANIFEST") or os.path.join(
-    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "schemas", "columns.json")
-# The manifest's own layout version this module reads (`format_version` of columns.json).
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+MANIFEST_ENV, BINARY_ENV = "GESWEEP_COLUMNS_MANIFEST", "GESWEEP_BINARY"
+# The binary asked when nothing else says which (the build directory of README.md and scripts/test).
+DEFAULT_BINARY = os.path.join(ROOT, "build", "gesweep")
+# `gesweep columns --json` builds every analysis and lists its columns: well under a second.
+COLUMNS_TIMEOUT_S = 120
+# The manifest's own layout version this module reads (its `format_version`).
 MANIFEST_FORMAT_VERSION = 1
 # The roles of rated columns (`gesweep columns`: an int8 column whose levels begin "level 1"; the one
 # named "level" is its analysis's overall rating).
@@ -38,18 +50,70 @@ class UnknownColumn(LookupError):
     """A script asked for an analysis or column the manifest does not have."""
 
 
+def launching_gesweep():
+    """The gesweep binary that started this process (`gesweep report`), or None: the executable of
+    the parent process when it is named gesweep (Linux /proc)."""
+    try:
+        executable = os.readlink(f"/proc/{os.getppid()}/exe")
+    except OSError:
+        return None
+    return executable if os.path.basename(executable) == "gesweep" else None
+
+
+def manifest_source():
+    """(kind, path) of where the manifest comes from: ("file", FILE) or ("binary", GESWEEP)."""
+    if os.environ.get(MANIFEST_ENV):
+        return "file", os.environ[MANIFEST_ENV]
+    if os.environ.get(BINARY_ENV):
+        return "binary", os.environ[BINARY_ENV]
+    return "binary", launching_gesweep() or DEFAULT_BINARY
+
+
+def read_manifest(gesweep):
+    """The manifest that the binary `gesweep` prints (`gesweep columns --json`), parsed; raises
+    UnknownColumn, one line, when it cannot be run or fails."""
+    try:
+        out = subprocess.run([gesweep, "columns", "--json"], capture_output=True, text=True,
+                             timeout=COLUMNS_TIMEOUT_S)
+    except (OSError, subprocess.SubprocessError) as error:
+        raise UnknownColumn(f"{gesweep}: cannot run `gesweep columns --json` for the column manifest ({error}); "
+                            f"build it (cmake --build build) or set {BINARY_ENV} to a gesweep binary") from None
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or ["no message"])[-1]
+        raise UnknownColumn(f"{gesweep}: `gesweep columns --json` failed (exit {out.returncode}): {last}")
+    try:
+        data = json.loads(out.stdout)
+    except ValueError as error:
+        raise UnknownColumn(f"{gesweep}: `gesweep columns --json` printed no JSON ({error})") from None
+    return checked(data, gesweep)
+
+
+def checked(data, where):
+    """`data` when it is a manifest of the format this module reads."""
+    if data.get("format") != "gesweep-columns" or data.get("format_version") != MANIFEST_FORMAT_VERSION:
+        raise UnknownColumn(f"{where}: not a gesweep column manifest of format {MANIFEST_FORMAT_VERSION}")
+    return data
+
+
 @functools.cache
 def manifest():
-    """The manifest as parsed JSON (read once)."""
+    """The manifest as parsed JSON (read once; see the module's docstring for where from)."""
+    kind, path = manifest_source()
+    if kind == "binary":
+        return read_manifest(path)
     try:
-        with open(MANIFEST_PATH, encoding="utf-8") as f:
+        with open(path, encoding="utf-8") as f:
             data = json.load(f)
     except (OSError, ValueError) as error:
-        raise UnknownColumn(f"{MANIFEST_PATH}: cannot read the column manifest ({error}); regenerate it with "
-                            f"`gesweep columns --json > schemas/columns.json`") from None
-    if data.get("format") != "gesweep-columns" or data.get("format_version") != MANIFEST_FORMAT_VERSION:
-        raise UnknownColumn(f"{MANIFEST_PATH}: not a gesweep column manifest of format {MANIFEST_FORMAT_VERSION}")
-    return data
+        raise UnknownColumn(f"{path}: cannot read the column manifest ({error}; {MANIFEST_ENV}); write it with "
+                            f"`gesweep columns --json > FILE`") from None
+    return checked(data, path)
+
+
+def where():
+    """What the messages name as the manifest: its file, or `GESWEEP columns --json`."""
+    kind, path = manifest_source()
+    return path if kind == "file" else f"`{path} columns --json`"
 
 
 def analyses():
@@ -62,7 +126,7 @@ def analysis(name):
     for entry in manifest()["analyses"]:
         if entry["name"] == name:
             return entry
-    raise UnknownColumn(f"{MANIFEST_PATH}: no analysis '{name}' (analyses: {', '.join(analyses())})")
+    raise UnknownColumn(f"{where()}: no analysis '{name}' (analyses: {', '.join(analyses())})")
 
 
 def column(analysis_name, name, series=False):
@@ -74,7 +138,7 @@ def column(analysis_name, name, series=False):
         if c["group"] == group and c["name"] == name:
             return c
     known = [c["name"] for c in entry["columns"] if c["group"] == group]
-    raise UnknownColumn(f"{MANIFEST_PATH}: analysis '{analysis_name}' has no {group} column '{name}' "
+    raise UnknownColumn(f"{where()}: analysis '{analysis_name}' has no {group} column '{name}' "
                         f"({group} columns: {', '.join(known) or 'none'})")
 
 
@@ -101,7 +165,7 @@ def time_axis(analysis_name):
     """The path of an analysis's shared time axis (its series' `time_axis`)."""
     axes = analysis(analysis_name)["time_axes"]
     if len(axes) != 1:
-        raise UnknownColumn(f"{MANIFEST_PATH}: analysis '{analysis_name}' has {len(axes)} time axes, not one")
+        raise UnknownColumn(f"{where()}: analysis '{analysis_name}' has {len(axes)} time axes, not one")
     return axes[0]["path"]
 
 
@@ -110,7 +174,7 @@ def design_path(parameter):
     for entry in manifest()["design"]:
         if entry["name"] == parameter:
             return entry["path"]
-    raise UnknownColumn(f"{MANIFEST_PATH}: no design parameter '{parameter}'")
+    raise UnknownColumn(f"{where()}: no design parameter '{parameter}'")
 
 
 def runs_path(name):
@@ -118,7 +182,7 @@ def runs_path(name):
     for entry in manifest()["runs"]:
         if entry["path"].split("/")[-1] == name:
             return entry["path"]
-    raise UnknownColumn(f"{MANIFEST_PATH}: no runs dataset '{name}'")
+    raise UnknownColumn(f"{where()}: no runs dataset '{name}'")
 
 
 def runs_paths():

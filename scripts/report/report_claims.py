@@ -15,7 +15,7 @@ import numpy as np
 _LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
 if _LIB not in sys.path:
     sys.path.insert(0, _LIB)
-import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from schemas/columns.json)
+import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from `gesweep columns --json`)
 
 # The columns the claims read.
 SIGMA = columns.path("modes", "stability_margin_per_s")

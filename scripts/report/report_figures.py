@@ -20,9 +20,9 @@ from matplotlib.text import Text  # noqa: E402
 _LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
 if _LIB not in sys.path:
     sys.path.insert(0, _LIB)
-import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from schemas/columns.json)
+import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from `gesweep columns --json`)
 
-# The columns the figures read (schemas/columns.json; a renamed column fails here, at import).
+# The columns the figures read (the column manifest; a renamed column fails here, at import).
 SIGMA = columns.path("modes", "stability_margin_per_s")
 SIGMA_UNITS = columns.units("modes", "stability_margin_per_s")
 PHUGOID_RE = columns.path("modes", "phugoid/eigenvalue_re_per_s")

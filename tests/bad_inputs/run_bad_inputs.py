@@ -570,7 +570,8 @@ def hardening_cases():
         # The report script itself (run directly) validates the same way and leaves no directory.
         with tempfile.TemporaryDirectory() as out:
             result = subprocess.run(["/usr/bin/python3", str(ROOT.parent.parent / "scripts/report/report.py"), "-o",
-                                     f"{out}/r", "--", str(broken["short"])], capture_output=True, text=True, timeout=120)
+                                     f"{out}/r", "--", str(broken["short"])], capture_output=True, text=True, timeout=120,
+                                     env=dict(os.environ, GESWEEP_BINARY=GESWEEP))  # its column manifest
             global count
             count += 1
             lines = result.stderr.strip().splitlines()

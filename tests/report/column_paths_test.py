@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """No script under scripts/report or scripts/peer spells out an archive column path (issue 15): every
 path comes from the column manifest through scripts/lib/columns.py, every (analysis, name) they ask it
-for is in schemas/columns.json, and they ask with literal names, so that this test sees each one.
+for is in the manifest (`gesweep columns --json` of the build, $GESWEEP_BINARY), and they ask with literal names, so that this test sees each one.
 Also: the manifest module's lookups and its one-line error for an unknown name.
 Run by ctest (tests/report/CMakeLists.txt).
 """
@@ -16,7 +16,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPTS = sorted(glob.glob(os.path.join(ROOT, "scripts", "report", "*.py"))
                  + glob.glob(os.path.join(ROOT, "scripts", "peer", "*.py")))
 sys.path.insert(0, os.path.join(ROOT, "scripts", "lib"))
-os.environ.pop("GESWEEP_COLUMNS_MANIFEST", None)  # the committed manifest
+os.environ.pop("GESWEEP_COLUMNS_MANIFEST", None)  # the engine's manifest, not a test's file
 import columns  # noqa: E402
 
 # A string that begins with a per-run group and a name: an archive column path ("results/modes/...",
@@ -143,7 +143,7 @@ class ColumnsModule(unittest.TestCase):
                 call()
             text = str(raised.exception)
             self.assertNotIn("\n", text)
-            self.assertIn("columns.json", text)
+            self.assertIn("columns --json", text)  # where the manifest came from
             for word in words:
                 self.assertIn(word, text)
 

@@ -4,8 +4,9 @@ heard of, whose int8 columns have the levels "level 1", ... (role "rating" in th
 as a level map over height x speed with its parts' lines and its own section, with no edit of
 scripts/report. The new analysis here ("ride_quality", three parts and no overall rating) is made by
 moving the flying_qualities columns of a real sweep to new names in a copy of the archive, and adding
-its entry to a copy of schemas/columns.json (GESWEEP_COLUMNS_MANIFEST). The oracle is h5py on the
-archive: with no overall column the map is the worst (largest code) of the parts at each cell.
+its entry to the engine's manifest (`gesweep columns --json`) in a file that GESWEEP_COLUMNS_MANIFEST
+names. The oracle is h5py on the archive: with no overall column the map is the worst (largest code)
+of the parts at each cell.
 Run by ctest (tests/report/CMakeLists.txt) with the gesweep binary as the first argument.
 """
 import copy
@@ -60,8 +61,9 @@ def setUpModule():
                 d.attrs[key] = value
             d.attrs["description"] = f"Example standard level of the {part.removesuffix('_level')} (1.2.3)"
         del f["results/flying_qualities"]
-    with open(os.path.join(ROOT, "schemas", "columns.json"), encoding="utf-8") as f:
-        manifest = json.load(f)
+    out = subprocess.run([GESWEEP, "columns", "--json"], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert out.returncode == 0, out.stderr
+    manifest = json.loads(out.stdout)
     template = next(c for a in manifest["analyses"] if a["name"] == "flying_qualities" for c in a["columns"]
                     if c["name"] == "phugoid_level")
     new_columns = []

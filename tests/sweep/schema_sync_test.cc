@@ -1,5 +1,5 @@
-// schemas/study.schema.json documents the same parameters and analyses the engine knows: a
-// parameter or analysis added to one and not the other fails here.
+// schemas/study.schema.json and schemas/archive.md document the same parameters, analyses and columns
+// the engine knows: a parameter, analysis or column added to one and not the other fails here.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -8,11 +8,15 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/parameter_catalog.h"
 #include "engine/common/input_limits.h"
+#include "engine/common/toml_reader.h"
 
 namespace gesweep {
 namespace {
@@ -156,41 +160,10 @@ TEST(StudySchema, StatesTheLimitsTableRanges) {
   EXPECT_GT(checked, 40);
 }
 
-// schemas/archive.md's per-analysis paragraphs ("`<name>` — ..." under /results) are commentary: the
-// reference for every registered analysis's columns is the manifest (schemas/columns.json, generated
-// from the description and checked by report.columns_manifest), so a new analysis needs none. A
-// paragraph that is there names a registered analysis (none is left behind by a removed or renamed
-// one), and the section says where the complete list is.
-TEST(ArchiveDocument, ParagraphsNameRegisteredAnalyses) {
-  std::ifstream in(std::string(GESWEEP_SOURCE_DIR) + "/schemas/archive.md");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::set<std::string> registered;
-  for (const auto& entry : AnalysisRegistry()) registered.insert(std::string(entry.name));
-  const auto results = text.find("### `/results/<analysis>/...`");
-  ASSERT_NE(results, std::string::npos) << "schemas/archive.md has no /results section";
-  const auto results_end = text.find("\n### ", results + 1);
-  const std::string section = text.substr(results, results_end - results);
-  EXPECT_NE(section.find("schemas/columns.json"), std::string::npos)
-      << "schemas/archive.md's /results section does not point to the manifest";
-  int paragraphs = 0;
-  for (auto at = section.find("\n`"); at != std::string::npos; at = section.find("\n`", at + 1)) {
-    const auto close = section.find('`', at + 2);
-    const std::string dash = " —";  // "`<name>` —" opens a paragraph
-    if (close == std::string::npos || section.compare(close + 1, dash.size(), dash) != 0) continue;
-    const std::string name = section.substr(at + 2, close - at - 2);
-    EXPECT_TRUE(registered.count(name))
-        << "schemas/archive.md has a paragraph on '" << name << "', which is not a registered analysis";
-    ++paragraphs;
-  }
-  EXPECT_GT(paragraphs, 0);
-}
-
 // The analyses whose settings are described once (engine/common/describe.h; modes and flying_qualities
 // have none): their part of the schema is checked against the description (and generated from it,
-// scripts/schemas/sync.py). Those whose results are described too: their paragraph of
-// schemas/archive.md is checked as well.
+// scripts/schemas/sync.py).
 const std::vector<std::string> kDescribedAnalyses = {"modes", "flying_qualities", "open_loop"};
-const std::vector<std::string> kDescribedResults = {"open_loop"};
 
 // The analysis `name` with its default settings (and the ANCE, for one that needs a model).
 std::unique_ptr<Analysis> MakeAnalysis(const std::string& name) {
@@ -248,37 +221,97 @@ TEST(StudySchema, DescribedSettingsAreTheSchemaProperties) {
   }
 }
 
-// schemas/archive.md's paragraph of a described analysis names its result columns in order, each
-// integer code column followed by its levels.
-TEST(ArchiveDocument, NamesTheDescribedColumnsInOrder) {
+std::string ArchiveDocument() {
   std::ifstream in(std::string(GESWEEP_SOURCE_DIR) + "/schemas/archive.md");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (const std::string& name : kDescribedResults) {
-    const auto analysis = MakeAnalysis(name);
-    ASSERT_TRUE(analysis);
-    OutputSchema schema;
-    analysis->DeclareOutputs(schema, StorageOptions{});
-    std::vector<std::string> expected;
-    const std::string base = "results/" + name + "/";
-    for (const OutputColumn& column : schema.columns) {
-      if (column.path.rfind(base, 0) != 0) continue;
-      expected.push_back(column.path.substr(base.size()));
-      expected.insert(expected.end(), column.levels.begin(), column.levels.end());
-    }
-    const auto start = text.find("`" + name + "` —");
-    ASSERT_NE(start, std::string::npos) << "schemas/archive.md has no paragraph on " << name;
-    const auto end = text.find("\n\n", start);
-    const std::string paragraph = text.substr(start, end - start);
-    const auto body = paragraph.find(":\n");
-    ASSERT_NE(body, std::string::npos) << name;
-    std::vector<std::string> documented;
-    for (std::size_t at = paragraph.find('`', body); at != std::string::npos; at = paragraph.find('`', at)) {
-      const auto close = paragraph.find('`', at + 1);
-      documented.push_back(paragraph.substr(at + 1, close - at - 1));
-      at = close + 1;
-    }
-    EXPECT_EQ(documented, expected) << "schemas/archive.md, " << name;
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// The marker lines around the generated part of schemas/archive.md (scripts/schemas/sync.py,
+// BEGIN_MARK and END_MARK).
+constexpr std::string_view kGeneratedBegin = "\n<!-- BEGIN generated by scripts/schemas/sync.py ";
+constexpr std::string_view kGeneratedEnd = "\n<!-- END generated by scripts/schemas/sync.py -->\n";
+
+// The cells of a Markdown table row "| a | b |" (an escaped "\|" inside a cell is not a separator).
+std::vector<std::string> Cells(const std::string& row) {
+  std::vector<std::string> cells;
+  std::size_t start = 2;  // after "| "
+  for (auto at = row.find(" | ", start); at != std::string::npos; at = row.find(" | ", start)) {
+    cells.push_back(row.substr(start, at - start));
+    start = at + 3;
   }
+  const auto last = row.rfind(" |");
+  if (last != std::string::npos && last >= start) cells.push_back(row.substr(start, last - start));
+  return cells;
+}
+
+// The settings an analysis needs to be built (its columns do not depend on them); others: none.
+toml::table RequiredSettings(std::string_view name) {
+  return name == "linear" ? ParseToml("coefficients = [1.0]", "test") : toml::table{};
+}
+
+// schemas/archive.md's columns of each analysis are generated from `gesweep columns --json` by
+// scripts/schemas/sync.py (ctest schemas.archive_columns compares them with its output). Checked here
+// against the registry itself, without that script: the generated part has a heading per registered
+// analysis in the registry's order, and under it a row per column the analysis declares (time series
+// on), in the declared order, with its units and its levels as "0 `name`, 1 `name`".
+TEST(ArchiveDocument, GeneratedPartListsEveryDeclaredColumn) {
+  const std::string text = ArchiveDocument();
+  const auto begin = text.find(kGeneratedBegin);
+  const auto end = text.find(kGeneratedEnd);
+  ASSERT_NE(begin, std::string::npos) << "schemas/archive.md has no generated part";
+  ASSERT_NE(end, std::string::npos) << "schemas/archive.md's generated part has no end";
+  const std::string part = text.substr(begin, end - begin);
+  static const Aircraft aircraft =
+      LoadAircraftFile(std::string(GESWEEP_SOURCE_DIR) + "/studies/aircraft/ance.toml");
+  StorageOptions storage;
+  storage.time_series = true;
+  std::size_t at = 0;
+  int rows = 0;
+  for (const AnalysisEntry& entry : AnalysisRegistry()) {
+    const std::string name(entry.name);
+    at = part.find("\n#### `" + name + "`\n", at);
+    ASSERT_NE(at, std::string::npos) << "no heading of " << name << " (or not in the registry's order)";
+    const toml::table settings = RequiredSettings(entry.name);
+    const auto analysis = entry.factory(TomlSection(settings, "test", "analyses." + name),
+                                        entry.needs_model ? &aircraft : nullptr);
+    OutputSchema schema;
+    analysis->DeclareOutputs(schema, storage);
+    for (const OutputColumn& column : schema.columns) {
+      at = part.find("\n| `" + column.path + "` | ", at);
+      ASSERT_NE(at, std::string::npos) << "no row of " << column.path << " (or not in the declared order)";
+      const std::vector<std::string> cells = Cells(part.substr(at + 1, part.find('\n', at + 1) - at - 1));
+      ASSERT_EQ(cells.size(), 6u) << column.path;  // dataset, shape, type, units, levels, meaning
+      EXPECT_EQ(cells[3], column.units) << column.path;
+      std::string levels;
+      for (std::size_t code = 0; code < column.levels.size(); ++code)
+        levels += (code ? ", " : "") + std::to_string(code) + " `" + column.levels[code] + "`";
+      EXPECT_EQ(cells[4], levels) << column.path;
+      EXPECT_FALSE(cells[5].empty()) << column.path;
+      ++rows;
+    }
+  }
+  EXPECT_GT(rows, 100);
+}
+
+// The hand-written notes after the generated part ("- `<name>`: ...") each open with a registered
+// analysis: none is left behind by a removed or renamed one.
+TEST(ArchiveDocument, NotesNameRegisteredAnalyses) {
+  const std::string text = ArchiveDocument();
+  const auto end = text.find(kGeneratedEnd);
+  ASSERT_NE(end, std::string::npos);
+  const auto next = text.find("\n### ", end);
+  const std::string notes = text.substr(end, next - end);
+  std::set<std::string> registered;
+  for (const auto& entry : AnalysisRegistry()) registered.insert(std::string(entry.name));
+  int count = 0;
+  for (auto at = notes.find("\n- `"); at != std::string::npos; at = notes.find("\n- `", at + 1)) {
+    const auto close = notes.find('`', at + 4);
+    const std::string name = notes.substr(at + 4, close - at - 4);
+    EXPECT_TRUE(registered.count(name))
+        << "schemas/archive.md has a note on '" << name << "', which is not a registered analysis";
+    ++count;
+  }
+  EXPECT_GT(count, 0);
 }
 
 }  // namespace
