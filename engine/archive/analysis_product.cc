@@ -97,21 +97,16 @@ ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<
   return dataset;
 }
 
-template ProductDataset ProductGroup::Numbers<double>(const std::string&, const std::vector<double>&,
-                                                      const std::string&, const std::string&,
-                                                      const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int8_t>(const std::string&,
-                                                           const std::vector<std::int8_t>&,
-                                                           const std::string&, const std::string&,
-                                                           const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int32_t>(const std::string&,
-                                                            const std::vector<std::int32_t>&,
-                                                            const std::string&, const std::string&,
-                                                            const std::vector<std::size_t>&);
-template ProductDataset ProductGroup::Numbers<std::int64_t>(const std::string&,
-                                                            const std::vector<std::int64_t>&,
-                                                            const std::string&, const std::string&,
-                                                            const std::vector<std::size_t>&);
+// The element types Numbers stores (analysis_product.h), one explicit instantiation each.
+#define GESWEEP_INSTANTIATE_NUMBERS(T)                                                        \
+  template ProductDataset ProductGroup::Numbers<T>(const std::string&, const std::vector<T>&, \
+                                                   const std::string&, const std::string&,    \
+                                                   const std::vector<std::size_t>&)
+GESWEEP_INSTANTIATE_NUMBERS(double);
+GESWEEP_INSTANTIATE_NUMBERS(std::int8_t);
+GESWEEP_INSTANTIATE_NUMBERS(std::int32_t);
+GESWEEP_INSTANTIATE_NUMBERS(std::int64_t);
+#undef GESWEEP_INSTANTIATE_NUMBERS
 
 ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<std::string>& values,
                                      const std::string& description) {

@@ -1,6 +1,7 @@
 #pragma once
 /// Names of the archive layout (schemas/archive.md is the reference; keep them in step).
 
+#include <cstdint>
 #include <string>
 
 namespace gesweep::archive {
@@ -23,6 +24,16 @@ inline constexpr const char* kAnalysisGroup = "analysis";   ///< derived product
 /// Path of the dataset of a design parameter.
 inline std::string DesignPath(const std::string& parameter) {
   return std::string(kDesignGroup) + "/" + parameter;
+}
+
+/// Value of the root attribute `study_fingerprint`: the study's fingerprint as 16 lowercase hex
+/// digits (written by the writer, compared by the reader when a sweep resumes).
+inline std::string FingerprintText(std::uint64_t fingerprint) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string text(16, '0');
+  for (int i = 15; i >= 0; --i, fingerprint >>= 4)
+    text[static_cast<std::size_t>(i)] = kDigits[fingerprint & 0xf];
+  return text;
 }
 
 }  // namespace gesweep::archive

@@ -39,6 +39,21 @@ FilterPipeline Filters(std::size_t element_size, int level, bool shuffle) {
   return filters;
 }
 
+// A dataset of one T per run, chunked like the batches, shuffled and filled with `fill`.
+template <typename T>
+StoredDataset PerRunDataset(std::string path, ElementKind kind, ValueSource source, T fill, int chunk_runs,
+                            int level) {
+  StoredDataset d;
+  d.path = std::move(path);
+  d.kind = kind;
+  d.source = source;
+  d.element_size = sizeof(T);
+  d.chunk_rows = chunk_runs;
+  d.fill = Bytes(fill);
+  d.filters = Filters(sizeof(T), level, true);
+  return d;
+}
+
 // One thread's zlib state and scratch buffer.
 struct ThreadFilter {
   ChunkFilter filter;
@@ -74,15 +89,9 @@ ArchiveLayout::ArchiveLayout(const SweepPlan& plan) : chunk_runs_(plan.chunk_run
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const auto& parameters = plan.design().spec().parameters;
   for (std::size_t c = 0; c < parameters.size(); ++c) {
-    StoredDataset d;
-    d.path = DesignPath(ParameterNameOf(parameters[c]));
-    d.kind = ElementKind::kFloat64;
-    d.source = ValueSource::kDesign;
+    StoredDataset d = PerRunDataset(DesignPath(ParameterNameOf(parameters[c])), ElementKind::kFloat64,
+                                    ValueSource::kDesign, nan, chunk_runs_, level);
     d.column = static_cast<int>(c);
-    d.element_size = 8;
-    d.chunk_rows = chunk_runs_;
-    d.fill = Bytes(nan);
-    d.filters = Filters(8, level, true);
     datasets_.push_back(std::move(d));
   }
   const auto& columns = plan.schema().columns;
@@ -124,28 +133,10 @@ ArchiveLayout::ArchiveLayout(const SweepPlan& plan) : chunk_runs_(plan.chunk_run
     d.filters = Filters(d.element_size, level, true);
     datasets_.push_back(std::move(d));
   }
-  {
-    StoredDataset d;
-    d.path = kRunIndex;
-    d.kind = ElementKind::kInt64;
-    d.source = ValueSource::kIndex;
-    d.element_size = 8;
-    d.chunk_rows = chunk_runs_;
-    d.fill = Bytes(std::int64_t{-1});
-    d.filters = Filters(8, level, true);
-    datasets_.push_back(std::move(d));
-  }
-  {
-    StoredDataset d;
-    d.path = kRunId;
-    d.kind = ElementKind::kUInt64;
-    d.source = ValueSource::kId;
-    d.element_size = 8;
-    d.chunk_rows = chunk_runs_;
-    d.fill = Bytes(std::uint64_t{0});
-    d.filters = Filters(8, level, true);
-    datasets_.push_back(std::move(d));
-  }
+  datasets_.push_back(PerRunDataset(kRunIndex, ElementKind::kInt64, ValueSource::kIndex, std::int64_t{-1},
+                                    chunk_runs_, level));
+  datasets_.push_back(
+      PerRunDataset(kRunId, ElementKind::kUInt64, ValueSource::kId, std::uint64_t{0}, chunk_runs_, level));
   {
     // Sparse: a batch stores only the message chunks that hold a message; no shuffle (strings).
     StoredDataset d;
@@ -157,17 +148,8 @@ ArchiveLayout::ArchiveLayout(const SweepPlan& plan) : chunk_runs_(plan.chunk_run
     d.filters = Filters(d.element_size, level, false);
     datasets_.push_back(std::move(d));
   }
-  {
-    StoredDataset d;
-    d.path = kRunStatus;
-    d.kind = ElementKind::kInt8;
-    d.source = ValueSource::kStatus;
-    d.element_size = 1;
-    d.chunk_rows = chunk_runs_;
-    d.fill = Bytes(std::int8_t{0});
-    d.filters = Filters(1, level, true);
-    datasets_.push_back(std::move(d));
-  }
+  datasets_.push_back(PerRunDataset(kRunStatus, ElementKind::kInt8, ValueSource::kStatus, std::int8_t{0},
+                                    chunk_runs_, level));
 }
 
 void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t first, std::int64_t count,

@@ -202,19 +202,14 @@ void CheckMergeOutput(const std::vector<std::filesystem::path>& inputs, const st
                       bool force) {
   const std::string shown = output.string();
   if (inputs.empty()) throw InputError("command line", "ARCHIVES", "", "expected one or more shard archives");
-  std::filesystem::path directory = output.parent_path();
-  if (directory.empty()) directory = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(directory, ec)) {
-    throw InputError("command line", "output", shown,
-                     "the directory " + directory.string() + " does not exist");
-  }
+  RequireOutputDirectory(output, "output");
   // The one output check of every command (engine/common/output_guard.h): not an input (the same
   // file, a hard link or a symlink to it), and a regular file when it exists.
   std::vector<NamedInput> named;
   named.reserve(inputs.size());
   for (const auto& input : inputs) named.push_back({input, "shard archive"});
   CheckOutputPath(output, OutputKind::kFile, named, "output", {output.string() + ".partial"});
+  std::error_code ec;
   if (std::filesystem::exists(output, ec) && !force) {
     throw RequestError("command line", "output", shown, "already exists", "force");
   }
@@ -266,22 +261,10 @@ void CheckSameStudy(const std::vector<Shard>& shards) {
   }
 }
 
-}  // namespace
-
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
-                          const std::filesystem::path& output, bool force, const std::string& command_line,
-                          MergeKind kind, const MergeScope& scope) {
-  hdf5::Quiet();
-  CheckMergeOutput(inputs, output, force);
-  std::vector<Shard> shards = OpenShards(inputs);
-  CheckSameStudy(shards);
+// Refuses shards that do not cover runs [origin, origin + total) exactly once (sorted by first run).
+void CheckCoverage(const std::vector<Shard>& shards, std::int64_t origin, std::int64_t total) {
   const ArchiveReader& reference = *shards.front().reader;
   const std::int64_t design_runs = reference.IntegerAttribute("design_runs");
-  const std::string shown = output.string();
-  std::error_code ec;
-
-  // Coverage: exactly once.
-  std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
   const std::int64_t shard_count = reference.IntegerAttribute("shard_count");
   std::int64_t batch_runs = 1;
   for (const auto& shard : shards)
@@ -304,8 +287,6 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
                                      : "shard " + (names.empty() ? std::string("?") : names) + " not given") +
                          ")");
   };
-  const std::int64_t origin = scope.first_run;
-  const std::int64_t total = scope.run_count >= 0 ? scope.run_count : design_runs - origin;
   std::int64_t covered = origin;
   for (std::size_t i = 0; i < shards.size(); ++i) {
     if (shards[i].first > covered) missing(covered, shards[i].first);
@@ -324,12 +305,10 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
         shards.back().path.string(), "shard", shards.back().shard,
         "reaches past run " + std::to_string(origin + total - 1) + ", the end of what is merged");
   }
+}
 
-  // Complete: no pending run in any shard.
-  MergeReport report;
-  report.kind = kind;
-  report.shards = static_cast<int>(shards.size());
-  report.runs = total;
+// Counts the ok and failed runs of every shard into `report`; refuses a shard with a pending run.
+void CountCompleteRuns(const std::vector<Shard>& shards, MergeReport& report) {
   constexpr std::int64_t kStatusStep = 1 << 16;
   for (const auto& shard : shards) {
     std::int64_t pending = 0;
@@ -347,6 +326,121 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
                          "resume_shard", shard.shard);
     }
   }
+}
+
+// The merged file's attributes: the first shard's, less the node's, with the merge's provenance,
+// the runs merged and how (virtual: where the shards are, relative to `output`, into report.sources).
+void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const std::filesystem::path& output,
+                           const std::string& command_line, MergeKind kind, const MergeScope& scope,
+                           std::int64_t origin, std::int64_t total, MergeReport& report) {
+  const ArchiveReader& reference = *shards.front().reader;
+  hdf5::CopyAttributes(reference.file(), file);
+  for (const char* node_attribute : {"node_index", "node_count"}) {
+    if (H5Aexists(file, node_attribute) > 0)
+      Check(H5Adelete(file, node_attribute), "drop the node attribute");
+  }
+  std::vector<std::string> merged_from, shard_notes;
+  std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");
+  for (const auto& shard : shards) {
+    merged_from.push_back(shard.path.string());
+    shard_notes.push_back(
+        shard.shard + ": " + shard.path.string() + ", host " + shard.reader->StringAttribute("host") +
+        ", threads " + std::to_string(shard.reader->IntegerAttribute("threads")) + ", " +
+        shard.reader->StringAttribute("start_time") + " to " + shard.reader->StringAttribute("end_time"));
+    start = std::min(start, shard.reader->StringAttribute("start_time"));
+    end = std::max(end, shard.reader->StringAttribute("end_time"));
+  }
+  hdf5::WriteAttribute(file, "merged_from", merged_from);
+  hdf5::WriteAttribute(file, "merged_shards", shard_notes);
+  hdf5::WriteAttribute(file, "merge_time", UtcTimestamp());
+  hdf5::WriteAttribute(file, "merge_command_line", command_line);
+  hdf5::WriteAttribute(file, "start_time", start);
+  hdf5::WriteAttribute(file, "end_time", end);
+  hdf5::WriteAttribute(file, "shard",
+                       std::to_string(scope.shard_index) + "/" + std::to_string(scope.shard_count));
+  hdf5::WriteAttribute(file, "shard_index", static_cast<std::int64_t>(scope.shard_index));
+  hdf5::WriteAttribute(file, "shard_count", static_cast<std::int64_t>(scope.shard_count));
+  hdf5::WriteAttribute(file, "first_run", origin);
+  hdf5::WriteAttribute(file, "run_count", total);
+  hdf5::WriteAttribute(file, "complete", std::int64_t{1});
+  hdf5::WriteAttribute(file, "runs_ok", report.runs_ok);
+  hdf5::WriteAttribute(file, "runs_failed", report.runs_failed);
+  hdf5::WriteAttribute(file, "runs_pending", std::int64_t{0});
+  for (const char* group : {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup,
+                            archive::kSeriesGroup, archive::kAnalysisGroup}) {
+    CopyGroupAttributes(reference.file(), file, group);
+  }
+  if (kind == MergeKind::kVirtual) {
+    for (const auto& shard : shards) report.sources.push_back(SourceName(shard.path, output));
+    hdf5::WriteAttribute(file, "merge_kind", "virtual");
+    hdf5::WriteAttribute(file, "virtual_sources", report.sources);
+    hdf5::WriteAttribute(
+        file, "virtual_note",
+        "The per-run datasets of this archive are HDF5 virtual datasets over the shard files listed in "
+        "virtual_sources (paths relative to this file's directory): keep them where they are; "
+        "a merge that copies (gesweep merge in its copy mode) makes a self-contained archive");
+  } else {
+    hdf5::WriteAttribute(file, "merge_kind", "copy");
+  }
+}
+
+// The merged file's datasets (shards' `first` are rows of the merged file): the per-run ones
+// merged (virtual or copied), the shared ones (time axes) copied from the first shard, /analysis
+// left out (derived: recomputed after a merge); then the dimension scales of the merged rows.
+void WriteMergedDatasets(hid_t file, const std::vector<Shard>& shards, MergeKind kind, std::int64_t total,
+                         MergeReport& report) {
+  const ArchiveReader& reference = *shards.front().reader;
+  std::vector<std::string> per_run;
+  for (const std::string& path : reference.Datasets()) {
+    if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
+      continue;                                         // derived: recompute after merge
+    if (path.find('/') == std::string::npos) continue;  // a root dimension: made again below
+    Handle source(H5Dopen2(reference.file(), path.c_str(), H5P_DEFAULT), "open " + path);
+    const auto dims = hdf5::Dimensions(source.get());
+    hdf5::CreateGroups(file, path.substr(0, path.rfind('/')));
+    if (!PerRun(path, dims)) {
+      Check(H5Ocopy(reference.file(), path.c_str(), file, path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+            "copy " + path);
+      DropDimensionScaleAttributes(file, path);
+      continue;
+    }
+    per_run.push_back(path);
+    if (kind == MergeKind::kVirtual) {
+      WriteVirtual(file, path, shards, report.sources, total);
+    } else {
+      WriteCopy(file, path, shards, total, report);
+    }
+  }
+  // The netCDF view of the merged rows (the shards' scales refer to the shards' own objects).
+  archive::AttachDimensionScales(file, total, per_run);
+}
+
+}  // namespace
+
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line,
+                          MergeKind kind, const MergeScope& scope) {
+  hdf5::Quiet();
+  CheckMergeOutput(inputs, output, force);
+  std::vector<Shard> shards = OpenShards(inputs);
+  CheckSameStudy(shards);
+  const ArchiveReader& reference = *shards.front().reader;
+  const std::int64_t design_runs = reference.IntegerAttribute("design_runs");
+  const std::string shown = output.string();
+  std::error_code ec;
+
+  // Coverage: exactly once.
+  std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
+  const std::int64_t origin = scope.first_run;
+  const std::int64_t total = scope.run_count >= 0 ? scope.run_count : design_runs - origin;
+  CheckCoverage(shards, origin, total);
+
+  // Complete: no pending run in any shard.
+  MergeReport report;
+  report.kind = kind;
+  report.shards = static_cast<int>(shards.size());
+  report.runs = total;
+  CountCompleteRuns(shards, report);
 
   // Write the merged archive under a temporary name.
   const std::filesystem::path temporary = output.string() + ".partial";
@@ -364,79 +458,9 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
   {
     Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                 "create " + temporary.string());
-    hdf5::CopyAttributes(reference.file(), file.get());
-    for (const char* node_attribute : {"node_index", "node_count"}) {
-      if (H5Aexists(file.get(), node_attribute) > 0)
-        Check(H5Adelete(file.get(), node_attribute), "drop the node attribute");
-    }
-    std::vector<std::string> merged_from, shard_notes;
-    std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");
-    for (const auto& shard : shards) {
-      merged_from.push_back(shard.path.string());
-      shard_notes.push_back(
-          shard.shard + ": " + shard.path.string() + ", host " + shard.reader->StringAttribute("host") +
-          ", threads " + std::to_string(shard.reader->IntegerAttribute("threads")) + ", " +
-          shard.reader->StringAttribute("start_time") + " to " + shard.reader->StringAttribute("end_time"));
-      start = std::min(start, shard.reader->StringAttribute("start_time"));
-      end = std::max(end, shard.reader->StringAttribute("end_time"));
-    }
-    hdf5::WriteAttribute(file.get(), "merged_from", merged_from);
-    hdf5::WriteAttribute(file.get(), "merged_shards", shard_notes);
-    hdf5::WriteAttribute(file.get(), "merge_time", UtcTimestamp());
-    hdf5::WriteAttribute(file.get(), "merge_command_line", command_line);
-    hdf5::WriteAttribute(file.get(), "start_time", start);
-    hdf5::WriteAttribute(file.get(), "end_time", end);
-    hdf5::WriteAttribute(file.get(), "shard",
-                         std::to_string(scope.shard_index) + "/" + std::to_string(scope.shard_count));
-    hdf5::WriteAttribute(file.get(), "shard_index", static_cast<std::int64_t>(scope.shard_index));
-    hdf5::WriteAttribute(file.get(), "shard_count", static_cast<std::int64_t>(scope.shard_count));
-    hdf5::WriteAttribute(file.get(), "first_run", origin);
-    hdf5::WriteAttribute(file.get(), "run_count", total);
-    hdf5::WriteAttribute(file.get(), "complete", std::int64_t{1});
-    hdf5::WriteAttribute(file.get(), "runs_ok", report.runs_ok);
-    hdf5::WriteAttribute(file.get(), "runs_failed", report.runs_failed);
-    hdf5::WriteAttribute(file.get(), "runs_pending", std::int64_t{0});
-    for (const char* group : {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup,
-                              archive::kSeriesGroup, archive::kAnalysisGroup}) {
-      CopyGroupAttributes(reference.file(), file.get(), group);
-    }
-
-    if (kind == MergeKind::kVirtual) {
-      for (const auto& shard : shards) report.sources.push_back(SourceName(shard.path, output));
-      hdf5::WriteAttribute(file.get(), "merge_kind", "virtual");
-      hdf5::WriteAttribute(file.get(), "virtual_sources", report.sources);
-      hdf5::WriteAttribute(
-          file.get(), "virtual_note",
-          "The per-run datasets of this archive are HDF5 virtual datasets over the shard files listed in "
-          "virtual_sources (paths relative to this file's directory): keep them where they are; "
-          "a merge that copies (gesweep merge in its copy mode) makes a self-contained archive");
-    } else {
-      hdf5::WriteAttribute(file.get(), "merge_kind", "copy");
-    }
+    WriteMergedAttributes(file.get(), shards, output, command_line, kind, scope, origin, total, report);
     for (auto& shard : shards) shard.first -= origin;  // rows of the merged archive from here on
-    std::vector<std::string> per_run;
-    for (const std::string& path : reference.Datasets()) {
-      if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
-        continue;                                         // derived: recompute after merge
-      if (path.find('/') == std::string::npos) continue;  // a root dimension: made again below
-      Handle source(H5Dopen2(reference.file(), path.c_str(), H5P_DEFAULT), "open " + path);
-      const auto dims = hdf5::Dimensions(source.get());
-      hdf5::CreateGroups(file.get(), path.substr(0, path.rfind('/')));
-      if (!PerRun(path, dims)) {
-        Check(H5Ocopy(reference.file(), path.c_str(), file.get(), path.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-              "copy " + path);
-        DropDimensionScaleAttributes(file.get(), path);
-        continue;
-      }
-      per_run.push_back(path);
-      if (kind == MergeKind::kVirtual) {
-        WriteVirtual(file.get(), path, shards, report.sources, total);
-      } else {
-        WriteCopy(file.get(), path, shards, total, report);
-      }
-    }
-    // The netCDF view of the merged rows (the shards' scales refer to the shards' own objects).
-    archive::AttachDimensionScales(file.get(), total, per_run);
+    WriteMergedDatasets(file.get(), shards, kind, total, report);
     file.Close("close " + temporary.string());
   }
   for (auto& shard : shards) shard.reader->Close();

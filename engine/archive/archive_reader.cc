@@ -4,7 +4,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <optional>
-#include <sstream>
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_writer.h"
@@ -19,15 +18,6 @@ namespace {
 
 using hdf5::Check;
 using hdf5::Handle;
-
-std::string Hex(std::uint64_t value) {
-  std::ostringstream out;
-  out << std::hex;
-  out.width(16);
-  out.fill('0');
-  out << value;
-  return out.str();
-}
 
 herr_t CollectDataset(hid_t, const char* name, const H5O_info_t* info, void* data) {
   if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->emplace_back(name);
@@ -328,7 +318,7 @@ std::vector<double> ArchiveReader::DoubleListAttributeOf(const std::string& obje
                                                          const std::string& name) const {
   Handle o = OpenObject(file_.get(), object);
   if (!o || H5Aexists(o.get(), name.c_str()) <= 0) return {};
-  Handle attribute(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = hdf5::OpenAttribute(o.get(), name);
   Handle type(H5Aget_type(attribute.get()), "type of attribute " + name);
   const H5T_class_t type_class = H5Tget_class(type.get());
   if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) {
@@ -454,10 +444,10 @@ void ArchiveReader::CheckSameSweep(const SweepPlan& plan, const std::string& sho
                        "cannot resume: the archive has " + what + " " + theirs + " but this run has " + ours,
                        "force_or_other_output");
   };
-  if (StringAttribute("study_fingerprint") != Hex(plan.study().fingerprint)) {
+  if (StringAttribute("study_fingerprint") != archive::FingerprintText(plan.study().fingerprint)) {
     refuse("study fingerprint",
            StringAttribute("study_fingerprint") + " (study " + StringAttribute("study_path") + ")",
-           Hex(plan.study().fingerprint) + " (study " + plan.study().path +
+           archive::FingerprintText(plan.study().fingerprint) + " (study " + plan.study().path +
                "; a changed study or aircraft file)");
   }
   if (StringAttribute("engine_version") != EngineVersion() ||

@@ -8,13 +8,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <sstream>
 
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/dimension_scales.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
 #include "engine/common/request_error.h"
 
 namespace gesweep {
@@ -22,15 +22,6 @@ namespace {
 
 using hdf5::Check;
 using hdf5::Handle;
-
-std::string Hex(std::uint64_t value) {
-  std::ostringstream out;
-  out << std::hex;
-  out.width(16);
-  out.fill('0');
-  out << value;
-  return out.str();
-}
 
 // A dataset creation property list from the layout: chunked, the layout's filters in the layout's
 // order (shuffle, deflate, Fletcher-32 -- the checksum covers the stored bytes, so a damaged chunk is
@@ -143,35 +134,18 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
   hdf5::WriteAttribute(group, "unswept_parameter_units", base_units);
 }
 
-}  // namespace
-
-ArchiveWriter::ArchiveWriter(std::filesystem::path path, const SweepPlan& plan)
-    : path_(std::move(path)), plan_(plan), layout_(plan) {}
-
-ArchiveWriter::~ArchiveWriter() {
-  // A sweep that stopped on an error still closes the file cleanly: the statuses tell which runs
-  // are complete, so --resume continues it.
-  if (!finished_) file_.Reset();
-  if (lock_held_) {
-    std::error_code ec;
-    std::filesystem::remove(path_.string() + ".lock", ec);
-  }
-  if (lock_fd_ >= 0) close(lock_fd_);
-}
-
-void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) {
-  const Study& study = plan_.study();
-  const std::int64_t n = plan_.run_count();
-  const auto rows = static_cast<hsize_t>(n);
-
-  // Provenance (schemas/archive.md, "Root attributes").
+// The root attributes of a new archive of `plan`: provenance and the runs it holds (schemas/archive.md,
+// "Root attributes").
+void WriteRootAttributes(hid_t file, const SweepPlan& plan, const RunProvenance& provenance) {
+  const Study& study = plan.study();
+  const std::int64_t n = plan.run_count();
   hdf5::WriteAttribute(file, "format", archive::kFormatName);
   hdf5::WriteAttribute(file, "format_version", static_cast<std::int64_t>(archive::kFormatVersion));
   hdf5::WriteAttribute(file, "study_name", study.name);
   hdf5::WriteAttribute(file, "study_description", study.description);
   hdf5::WriteAttribute(file, "study_path", study.path);
   hdf5::WriteAttribute(file, "study_text", study.text);
-  hdf5::WriteAttribute(file, "study_fingerprint", Hex(study.fingerprint));
+  hdf5::WriteAttribute(file, "study_fingerprint", archive::FingerprintText(study.fingerprint));
   hdf5::WriteAttribute(file, "aircraft_path", study.aircraft ? study.aircraft->source_path : std::string());
   hdf5::WriteAttribute(file, "aircraft_text", study.aircraft ? study.aircraft->source_text : std::string());
   hdf5::WriteAttribute(file, "aircraft_name", study.aircraft ? study.aircraft->name : std::string());
@@ -190,13 +164,13 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   hdf5::WriteAttribute(file, "threads", static_cast<std::int64_t>(provenance.threads));
   hdf5::WriteAttribute(file, "command_line", provenance.command_line);
   hdf5::WriteAttribute(file, "shard",
-                       std::to_string(plan_.shard().index) + "/" + std::to_string(plan_.shard().count));
-  hdf5::WriteAttribute(file, "shard_index", static_cast<std::int64_t>(plan_.shard().index));
-  hdf5::WriteAttribute(file, "shard_count", static_cast<std::int64_t>(plan_.shard().count));
-  hdf5::WriteAttribute(file, "design_runs", plan_.design_runs());
-  hdf5::WriteAttribute(file, "first_run", plan_.first_run());
+                       std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count));
+  hdf5::WriteAttribute(file, "shard_index", static_cast<std::int64_t>(plan.shard().index));
+  hdf5::WriteAttribute(file, "shard_count", static_cast<std::int64_t>(plan.shard().count));
+  hdf5::WriteAttribute(file, "design_runs", plan.design_runs());
+  hdf5::WriteAttribute(file, "first_run", plan.first_run());
   hdf5::WriteAttribute(file, "run_count", n);
-  hdf5::WriteAttribute(file, "chunk_runs", static_cast<std::int64_t>(plan_.chunk_runs()));
+  hdf5::WriteAttribute(file, "chunk_runs", static_cast<std::int64_t>(plan.chunk_runs()));
   hdf5::WriteAttribute(file, "start_time", UtcTimestamp());
   hdf5::WriteAttribute(file, "end_time", std::string());
   hdf5::WriteAttribute(file, "resumed_at", std::string());
@@ -211,6 +185,109 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     hdf5::WriteAttribute(file, "node_index", static_cast<std::int64_t>(provenance.node_index));
     hdf5::WriteAttribute(file, "node_count", static_cast<std::int64_t>(provenance.node_count));
   }
+}
+
+// The file type of a layout's element kind: little-endian numbers, or the given compound and string types.
+hid_t FileType(archive::ElementKind kind, hid_t complex_type, hid_t message_type) {
+  switch (kind) {
+    case archive::ElementKind::kFloat64:
+      return H5T_IEEE_F64LE;
+    case archive::ElementKind::kInt64:
+      return H5T_STD_I64LE;
+    case archive::ElementKind::kUInt64:
+      return H5T_STD_U64LE;
+    case archive::ElementKind::kInt32:
+      return H5T_STD_I32LE;
+    case archive::ElementKind::kInt8:
+      return H5T_STD_I8LE;
+    case archive::ElementKind::kComplex:
+      return complex_type;
+    case archive::ElementKind::kString:
+      return message_type;
+  }
+  GESWEEP_UNREACHABLE();
+}
+
+// The attributes of the per-run dataset `d` of `stored`: units, description, and what its source adds
+// (levels, fill, distribution and bounds, time axis, component names, ...).
+void DescribeStored(hid_t d, const archive::StoredDataset& stored, const SweepPlan& plan) {
+  const auto& parameters = plan.design().spec().parameters;
+  const auto& columns = plan.schema().columns;
+  switch (stored.source) {
+    case archive::ValueSource::kDesign: {
+      const DesignParameter& parameter = parameters[static_cast<std::size_t>(stored.column)];
+      const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
+      Describe(d, info.units, info.description);
+      if (!info.levels.empty()) hdf5::WriteAttribute(d, "levels", info.levels);
+      const DesignKind kind = plan.design().spec().kind;
+      if (kind == DesignKind::kLhs || kind == DesignKind::kSobol || kind == DesignKind::kMorris) {
+        hdf5::WriteAttribute(d, "distribution", std::string(ToString(parameter.distribution)));
+        hdf5::WriteAttribute(d, "bounds", std::vector<double>{parameter.lower, parameter.upper});
+      } else if (kind == DesignKind::kMonteCarlo) {
+        hdf5::WriteAttribute(d, "distribution", DescribeDistribution(parameter));
+        hdf5::WriteAttribute(d, "bounds", std::vector<double>{parameter.lower, parameter.upper});
+      } else if (kind == DesignKind::kGrid) {
+        hdf5::WriteAttribute(d, "axis_values", parameter.values);
+      }
+      break;
+    }
+    case archive::ValueSource::kResult: {
+      const OutputColumn& column = columns[static_cast<std::size_t>(stored.column)];
+      Describe(d, column.units, column.description);
+      if (!column.levels.empty()) hdf5::WriteAttribute(d, "levels", column.levels);
+      if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
+        hdf5::WriteAttribute(d, "fill", static_cast<std::int64_t>(column.integer_fill));
+      }
+      if (!column.time_axis.empty()) hdf5::WriteAttribute(d, "time_axis", column.time_axis);
+      if (!column.component_names.empty()) hdf5::WriteAttribute(d, "component_names", column.component_names);
+      break;
+    }
+    case archive::ValueSource::kIndex:
+      Describe(d, "1", "Index of the run in the design (0-based); -1 where not written yet");
+      break;
+    case archive::ValueSource::kId:
+      Describe(d, "1",
+               "Stable id of the run: FNV-1a hash of its design parameters' names and values "
+               "(with runs/index, identifies the run across shards and resumes)");
+      break;
+    case archive::ValueSource::kStatus:
+      Describe(d, "1",
+               "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
+               "results, so a nonzero status marks a complete run");
+      hdf5::WriteAttribute(d, "levels", std::vector<std::string>{"pending", "ok", "failed"});
+      break;
+    case archive::ValueSource::kMessage:
+      Describe(d, "1",
+               "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
+                   std::to_string(kMessageLength) +
+                   " bytes (a longer message ends in '...'); empty for most runs, whose chunks are "
+                   "never written");
+      hdf5::WriteAttribute(d, "max_bytes", static_cast<std::int64_t>(kMessageLength));
+      break;
+  }
+}
+
+}  // namespace
+
+ArchiveWriter::ArchiveWriter(std::filesystem::path path, const SweepPlan& plan)
+    : path_(std::move(path)), plan_(plan), layout_(plan) {}
+
+ArchiveWriter::~ArchiveWriter() {
+  // A sweep that stopped on an error still closes the file cleanly: the statuses tell which runs
+  // are complete, so --resume continues it.
+  if (!finished_) file_.Reset();
+  if (lock_held_) {
+    std::error_code ec;
+    std::filesystem::remove(path_.string() + ".lock", ec);
+  }
+  if (lock_fd_ >= 0) close(lock_fd_);
+}
+
+void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) {
+  const std::int64_t n = plan_.run_count();
+  const auto rows = static_cast<hsize_t>(n);
+
+  WriteRootAttributes(file, plan_, provenance);
 
   for (const char* group :
        {archive::kRunsGroup, archive::kDesignGroup, archive::kResultsGroup, archive::kAnalysisGroup}) {
@@ -237,33 +314,8 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
   }
   Handle complex_type = hdf5::ComplexType();
   Handle message_type = hdf5::FixedStringType(kMessageLength);
-  const auto& parameters = plan_.design().spec().parameters;
-  const auto& columns = plan_.schema().columns;
   for (const archive::StoredDataset& stored : layout_.datasets()) {
-    hid_t type = H5T_IEEE_F64LE;
-    switch (stored.kind) {
-      case archive::ElementKind::kFloat64:
-        type = H5T_IEEE_F64LE;
-        break;
-      case archive::ElementKind::kInt64:
-        type = H5T_STD_I64LE;
-        break;
-      case archive::ElementKind::kUInt64:
-        type = H5T_STD_U64LE;
-        break;
-      case archive::ElementKind::kInt32:
-        type = H5T_STD_I32LE;
-        break;
-      case archive::ElementKind::kInt8:
-        type = H5T_STD_I8LE;
-        break;
-      case archive::ElementKind::kComplex:
-        type = complex_type.get();
-        break;
-      case archive::ElementKind::kString:
-        type = message_type.get();
-        break;
-    }
+    const hid_t type = FileType(stored.kind, complex_type.get(), message_type.get());
     // The fill value is given in the stored type (little-endian, as the layout holds it).
     Handle dcpl = Creation(stored, type);
     std::vector<hsize_t> dims{rows};
@@ -271,59 +323,7 @@ void ArchiveWriter::CreateSkeleton(hid_t file, const RunProvenance& provenance) 
     hdf5::CreateGroups(file, stored.path.substr(0, stored.path.rfind('/')));
     Handle d =
         CreateDataset(file, stored.path, type, dims, dcpl.get(), static_cast<hsize_t>(stored.chunk_rows));
-    switch (stored.source) {
-      case archive::ValueSource::kDesign: {
-        const DesignParameter& parameter = parameters[static_cast<std::size_t>(stored.column)];
-        const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
-        Describe(d.get(), info.units, info.description);
-        if (!info.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", info.levels);
-        const DesignKind kind = plan_.design().spec().kind;
-        if (kind == DesignKind::kLhs || kind == DesignKind::kSobol || kind == DesignKind::kMorris) {
-          hdf5::WriteAttribute(d.get(), "distribution", std::string(ToString(parameter.distribution)));
-          hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
-        } else if (kind == DesignKind::kMonteCarlo) {
-          hdf5::WriteAttribute(d.get(), "distribution", DescribeDistribution(parameter));
-          hdf5::WriteAttribute(d.get(), "bounds", std::vector<double>{parameter.lower, parameter.upper});
-        } else if (kind == DesignKind::kGrid) {
-          hdf5::WriteAttribute(d.get(), "axis_values", parameter.values);
-        }
-        break;
-      }
-      case archive::ValueSource::kResult: {
-        const OutputColumn& column = columns[static_cast<std::size_t>(stored.column)];
-        Describe(d.get(), column.units, column.description);
-        if (!column.levels.empty()) hdf5::WriteAttribute(d.get(), "levels", column.levels);
-        if (column.type == ColumnType::kInt8 || column.type == ColumnType::kInt32) {
-          hdf5::WriteAttribute(d.get(), "fill", static_cast<std::int64_t>(column.integer_fill));
-        }
-        if (!column.time_axis.empty()) hdf5::WriteAttribute(d.get(), "time_axis", column.time_axis);
-        if (!column.component_names.empty())
-          hdf5::WriteAttribute(d.get(), "component_names", column.component_names);
-        break;
-      }
-      case archive::ValueSource::kIndex:
-        Describe(d.get(), "1", "Index of the run in the design (0-based); -1 where not written yet");
-        break;
-      case archive::ValueSource::kId:
-        Describe(d.get(), "1",
-                 "Stable id of the run: FNV-1a hash of its design parameters' names and values "
-                 "(with runs/index, identifies the run across shards and resumes)");
-        break;
-      case archive::ValueSource::kStatus:
-        Describe(d.get(), "1",
-                 "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
-                 "results, so a nonzero status marks a complete run");
-        hdf5::WriteAttribute(d.get(), "levels", std::vector<std::string>{"pending", "ok", "failed"});
-        break;
-      case archive::ValueSource::kMessage:
-        Describe(d.get(), "1",
-                 "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
-                     std::to_string(kMessageLength) +
-                     " bytes (a longer message ends in '...'); empty for most runs, whose chunks are "
-                     "never written");
-        hdf5::WriteAttribute(d.get(), "max_bytes", static_cast<std::int64_t>(kMessageLength));
-        break;
-    }
+    DescribeStored(d.get(), stored, plan_);
   }
   Handle design(H5Gopen2(file, archive::kDesignGroup, H5P_DEFAULT), "open design group");
   WriteDesignAttributes(design.get(), plan_);
@@ -428,13 +428,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
                                                    ArchiveOpenReport* report) {
   hdf5::Quiet();
   const std::string shown = path.string();
-  std::filesystem::path directory = path.parent_path();
-  if (directory.empty()) directory = ".";
+  const std::filesystem::path directory = RequireOutputDirectory(path, "output");
   std::error_code ec;
-  if (!std::filesystem::is_directory(directory, ec)) {
-    throw InputError("command line", "output", shown,
-                     "the directory " + directory.string() + " does not exist");
-  }
   const auto status = std::filesystem::symlink_status(path, ec);
   const bool exists = !ec && std::filesystem::exists(status);
   if (exists && std::filesystem::is_directory(std::filesystem::status(path, ec))) {

@@ -253,21 +253,25 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
   Check(H5Awrite(attribute.get(), type.get(), pointers.data()), "write attribute " + name);
 }
 
+Handle OpenAttribute(hid_t object, const std::string& name) {
+  return Handle(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+}
+
 void UpdateAttribute(hid_t object, const std::string& name, const std::string& value) {
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   Handle type = VariableString();
   const char* pointer = value.c_str();
   Check(H5Awrite(attribute.get(), type.get(), &pointer), "write attribute " + name);
 }
 
 void UpdateAttribute(hid_t object, const std::string& name, std::int64_t value) {
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   Check(H5Awrite(attribute.get(), H5T_NATIVE_INT64, &value), "write attribute " + name);
 }
 
 std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name) {
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   Handle file_type(H5Aget_type(attribute.get()), "attribute type");
   if (H5Tget_class(file_type.get()) != H5T_STRING)
     throw ArchiveError("attribute " + name + " is not a string");
@@ -290,7 +294,7 @@ std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& 
 
 std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name) {
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   Handle file_type(H5Aget_type(attribute.get()), "attribute type");
   if (H5Tget_class(file_type.get()) != H5T_INTEGER)
     throw ArchiveError("attribute " + name + " is not an integer");
@@ -301,7 +305,7 @@ std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string
 
 std::optional<double> ReadDoubleAttribute(hid_t object, const std::string& name) {
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   double value = 0;
   Check(H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value), "read attribute " + name);
   return value;
@@ -309,7 +313,7 @@ std::optional<double> ReadDoubleAttribute(hid_t object, const std::string& name)
 
 std::vector<std::string> ReadStringListAttribute(hid_t object, const std::string& name) {
   if (H5Aexists(object, name.c_str()) <= 0) return {};
-  Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), "open attribute " + name);
+  Handle attribute = OpenAttribute(object, name);
   Handle space(H5Aget_space(attribute.get()), "attribute space");
   const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
   if (count == 0) return {};

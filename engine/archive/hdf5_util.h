@@ -91,6 +91,9 @@ void WriteAttribute(hid_t object, const std::string& name, const std::vector<std
 void UpdateAttribute(hid_t object, const std::string& name, const std::string& value);
 void UpdateAttribute(hid_t object, const std::string& name, std::int64_t value);
 
+/// The attribute `name` of `object`, opened (ArchiveError "open attribute NAME" when it cannot be).
+Handle OpenAttribute(hid_t object, const std::string& name);
+
 /// Attribute readers; nullopt when absent, ArchiveError when of another kind.
 std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name);
 std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name);

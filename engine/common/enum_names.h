@@ -2,15 +2,13 @@
 /// One table of names per enum, from which come its printing, its parsing and the list of choices an
 /// error message offers (docs/architecture.md, "Describe once").
 ///
-/// An enum opts in by specializing `EnumNames` next to its declaration:
+/// An enum opts in by declaring its table next to its declaration, in one statement:
 ///
 ///     enum class IntegratorKind { kRk4, kDopri5 };
-///     template <> struct EnumNames<IntegratorKind> {
-///       static constexpr EnumName<IntegratorKind> kTable[] = {{IntegratorKind::kRk4, "rk4"},
-///                                                            {IntegratorKind::kDopri5, "dopri5"}};
-///     };
+///     GESWEEP_ENUM_NAMES(IntegratorKind, {kRk4, "rk4"}, {kDopri5, "dopri5"});
 ///
-/// and then `ToString(kind)`, `ParseEnum<IntegratorKind>("rk4")` and `EnumChoices<IntegratorKind>()`
+/// (the specialization `EnumNames<IntegratorKind>` with `kTable`; the enumerators are in scope), and
+/// then `ToString(kind)`, `ParseEnum<IntegratorKind>("rk4")` and `EnumChoices<IntegratorKind>()`
 /// ("rk4 or dopri5") all read that one table.
 
 #include <concepts>
@@ -32,6 +30,16 @@ struct EnumName {
 /// Specialize with `static constexpr EnumName<E> kTable[] = {...}` listing every value once.
 template <class E>
 struct EnumNames;
+
+/// Declares the names table of enum `E` (at namespace scope, in E's namespace): the specialization
+/// `EnumNames<E>` whose `kTable` lists the `{value, "name"}` pairs given, with E's enumerators in scope
+/// (`{kRk4, "rk4"}` for `{IntegratorKind::kRk4, "rk4"}`).
+#define GESWEEP_ENUM_NAMES(E, ...)                         \
+  template <>                                              \
+  struct EnumNames<E> {                                    \
+    using enum E;                                          \
+    static constexpr EnumName<E> kTable[] = {__VA_ARGS__}; \
+  }
 
 /// An enum with a names table.
 template <class E>

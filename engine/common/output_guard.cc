@@ -86,6 +86,17 @@ void CheckOutputPath(const std::filesystem::path& output, OutputKind kind,
   }
 }
 
+std::filesystem::path RequireOutputDirectory(const std::filesystem::path& output, const std::string& flag) {
+  std::filesystem::path directory = output.parent_path();
+  if (directory.empty()) directory = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(directory, ec)) {
+    throw InputError("command line", flag, output.string(),
+                     "the directory " + directory.string() + " does not exist");
+  }
+  return directory;
+}
+
 void RequireRegularFile(const std::filesystem::path& path, const std::string& what) {
   const std::string shown = path.string();
   struct stat info {};

@@ -43,6 +43,10 @@ void CheckOutputPath(const std::filesystem::path& output, OutputKind kind,
                      const std::vector<NamedInput>& inputs, const std::string& flag,
                      const std::vector<std::filesystem::path>& sidecars = {});
 
+/// D, the directory `output` is to be created in (its parent; "." for a bare name). Throws
+/// InputError("command line", flag, output, "the directory D does not exist") unless it is a directory.
+std::filesystem::path RequireOutputDirectory(const std::filesystem::path& output, const std::string& flag);
+
 /// Throws InputError(path, "", "", ...) unless `path` exists and is a regular file (symlinks followed):
 /// "no such file", "is a directory", "is a FIFO, not a regular file" (a FIFO or a device could block
 /// a reader for ever or never end), "cannot read the archive: Too many levels of symbolic links".

@@ -27,14 +27,9 @@ enum class RiccatiStatus {
 };
 
 /// The name of each status (in messages and the landing's design_failed reason).
-template <>
-struct EnumNames<RiccatiStatus> {
-  static constexpr EnumName<RiccatiStatus> kTable[] = {{RiccatiStatus::kOk, "ok"},
-                                                       {RiccatiStatus::kInvalidWeights, "invalid_weights"},
-                                                       {RiccatiStatus::kNotStabilizable, "not_stabilizable"},
-                                                       {RiccatiStatus::kNotDetectable, "not_detectable"},
-                                                       {RiccatiStatus::kSolverFailed, "solver_failed"}};
-};
+GESWEEP_ENUM_NAMES(RiccatiStatus, {kOk, "ok"}, {kInvalidWeights, "invalid_weights"},
+                   {kNotStabilizable, "not_stabilizable"}, {kNotDetectable, "not_detectable"},
+                   {kSolverFailed, "solver_failed"});
 
 /// The result of Lqr / Lqry / SolveContinuousRiccati.
 struct LqrResult {

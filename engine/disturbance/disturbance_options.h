@@ -16,21 +16,14 @@ enum class TurbulenceModel {
   kNone,    ///< no continuous turbulence
   kDryden,  ///< the Dryden form, low altitude (dryden.h)
 };
-template <>
-struct EnumNames<TurbulenceModel> {
-  static constexpr EnumName<TurbulenceModel> kTable[] = {{TurbulenceModel::kNone, "none"},
-                                                         {TurbulenceModel::kDryden, "dryden"}};
-};
+GESWEEP_ENUM_NAMES(TurbulenceModel, {kNone, "none"}, {kDryden, "dryden"});
 
 /// Body axis of the discrete gust.
 enum class GustAxis {
   kU,  ///< along x, adds to u_g (positive forward: a tail gust)
   kW,  ///< along z, adds to w_g (positive down: a down gust)
 };
-template <>
-struct EnumNames<GustAxis> {
-  static constexpr EnumName<GustAxis> kTable[] = {{GustAxis::kU, "u"}, {GustAxis::kW, "w"}};
-};
+GESWEEP_ENUM_NAMES(GustAxis, {kU, "u"}, {kW, "w"});
 
 // Their names (the study keys' values): ToString, ParseEnum, EnumChoices of engine/common/enum_names.h.
 

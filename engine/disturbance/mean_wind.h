@@ -20,11 +20,7 @@ enum class WindShear {
   kLogarithmic,  ///< W(h) = W20·ln(h/z0)/ln(20 ft/z0), 0 below z0, held above 1000 ft
   kNone,         ///< W(h) = W20 at every height
 };
-template <>
-struct EnumNames<WindShear> {
-  static constexpr EnumName<WindShear> kTable[] = {{WindShear::kLogarithmic, "logarithmic"},
-                                                   {WindShear::kNone, "none"}};
-};
+GESWEEP_ENUM_NAMES(WindShear, {kLogarithmic, "logarithmic"}, {kNone, "none"});
 
 /// The mean wind at height h above the ground, m/s, with the sign of W20 (W20 is the u_g of the
 /// mean wind at 20 ft: a headwind is negative). Any finite height; NaN propagates.

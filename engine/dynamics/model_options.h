@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "engine/aircraft/coefficient.h"
+#include "engine/common/enum_names.h"
 
 namespace gesweep {
 
@@ -15,12 +16,14 @@ enum class CdhMode {
   kPolar,  ///< d(k·CLo²)/dh by finite differences on the table rows (default)
   kZero,   ///< CDh = 0
 };
+GESWEEP_ENUM_NAMES(CdhMode, {kPolar, "polar"}, {kZero, "zero"});
 
 /// How the table is interpolated between finite rows (docs/model.md §2).
 enum class Interpolation {
   kLinear,  ///< piecewise linear in H (default)
   kPchip,   ///< monotone piecewise-cubic Hermite (Fritsch–Carlson, Boost.Math pchip)
 };
+GESWEEP_ENUM_NAMES(Interpolation, {kLinear, "linear"}, {kPchip, "pchip"});
 
 /// Options of the model; a default-constructed value is docs/model.md's model.
 struct ModelOptions {
@@ -48,8 +51,7 @@ struct ModelOptions {
   }
 };
 
-std::string_view ToString(CdhMode mode);
-std::string_view ToString(Interpolation interpolation);
+// Their names: ToString, ParseEnum, EnumChoices of engine/common/enum_names.h.
 /// Parses "polar" / "zero"; nullopt otherwise.
 std::optional<CdhMode> ParseCdhMode(std::string_view text);
 /// Parses "linear" / "pchip"; nullopt otherwise.

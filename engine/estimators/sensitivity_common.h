@@ -41,11 +41,7 @@ enum class FailedRunPolicy {
   kDropBlocks,  ///< drop every Saltelli block (Morris trajectory) that holds a failed row; report how many
   kError,       ///< stop: no indices, status kStoppedOnFailedRuns and a message naming the first failure
 };
-template <>
-struct EnumNames<FailedRunPolicy> {
-  static constexpr EnumName<FailedRunPolicy> kTable[] = {{FailedRunPolicy::kDropBlocks, "drop_blocks"},
-                                                         {FailedRunPolicy::kError, "error"}};
-};
+GESWEEP_ENUM_NAMES(FailedRunPolicy, {kDropBlocks, "drop_blocks"}, {kError, "error"});
 /// Parses "drop_blocks" / "error"; nullopt otherwise.
 std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text);
 
@@ -57,14 +53,8 @@ enum class SensitivityStatus {
   kTooFewBlocks,         ///< fewer than two usable blocks (trajectories) remain
   kZeroVariance,         ///< the output does not vary over the usable rows
 };
-template <>
-struct EnumNames<SensitivityStatus> {
-  static constexpr EnumName<SensitivityStatus> kTable[] = {
-      {SensitivityStatus::kOk, "ok"},
-      {SensitivityStatus::kStoppedOnFailedRuns, "stopped_on_failed_runs"},
-      {SensitivityStatus::kTooFewBlocks, "too_few_blocks"},
-      {SensitivityStatus::kZeroVariance, "zero_variance"}};
-};
+GESWEEP_ENUM_NAMES(SensitivityStatus, {kOk, "ok"}, {kStoppedOnFailedRuns, "stopped_on_failed_runs"},
+                   {kTooFewBlocks, "too_few_blocks"}, {kZeroVariance, "zero_variance"});
 
 /// A two-sided interval [lower, upper]; NaN when not computed.
 struct ConfidenceInterval {

@@ -56,13 +56,8 @@ enum class CrossingKind {
   kDiscontinuity,  ///< stability changes across the jump of the table at its last row (no root)
   kSigma,          ///< a sign change of σ found by BoundaryMethod::kSampled (not classified)
 };
-template <>
-struct EnumNames<CrossingKind> {
-  static constexpr EnumName<CrossingKind> kTable[] = {{CrossingKind::kHopf, "hopf"},
-                                                      {CrossingKind::kReal, "real"},
-                                                      {CrossingKind::kDiscontinuity, "table_row"},
-                                                      {CrossingKind::kSigma, "sigma"}};
-};
+GESWEEP_ENUM_NAMES(CrossingKind, {kHopf, "hopf"}, {kReal, "real"}, {kDiscontinuity, "table_row"},
+                   {kSigma, "sigma"});
 
 /// One crossing of the imaginary axis along height.
 struct BoundaryCrossing {

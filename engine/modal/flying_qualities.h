@@ -36,14 +36,8 @@ enum class FlyingQualitiesLevel {
   kWorseThanLevel3 = 4,  ///< meets no level's limit
 };
 /// "level 1", "level 2", "level 3", "worse than level 3" (ToString: enum_names.h).
-template <>
-struct EnumNames<FlyingQualitiesLevel> {
-  static constexpr EnumName<FlyingQualitiesLevel> kTable[] = {
-      {FlyingQualitiesLevel::kLevel1, "level 1"},
-      {FlyingQualitiesLevel::kLevel2, "level 2"},
-      {FlyingQualitiesLevel::kLevel3, "level 3"},
-      {FlyingQualitiesLevel::kWorseThanLevel3, "worse than level 3"}};
-};
+GESWEEP_ENUM_NAMES(FlyingQualitiesLevel, {kLevel1, "level 1"}, {kLevel2, "level 2"}, {kLevel3, "level 3"},
+                   {kWorseThanLevel3, "worse than level 3"});
 /// The worse of two levels.
 FlyingQualitiesLevel Worst(FlyingQualitiesLevel a, FlyingQualitiesLevel b);
 

@@ -35,14 +35,8 @@ enum class ModeClassification {
   kShortPeriodSplit,  ///< the short-period pair split into two real roots
   kAllReal,           ///< both pairs split; assigned by magnitude
 };
-template <>
-struct EnumNames<ModeClassification> {
-  static constexpr EnumName<ModeClassification> kTable[] = {
-      {ModeClassification::kStandard, "standard"},
-      {ModeClassification::kPhugoidSplit, "phugoid_split"},
-      {ModeClassification::kShortPeriodSplit, "short_period_split"},
-      {ModeClassification::kAllReal, "all_real"}};
-};
+GESWEEP_ENUM_NAMES(ModeClassification, {kStandard, "standard"}, {kPhugoidSplit, "phugoid_split"},
+                   {kShortPeriodSplit, "short_period_split"}, {kAllReal, "all_real"});
 
 /// The result of one eigen-analysis.
 struct ModalAnalysis {

@@ -25,11 +25,7 @@ enum class SensitivityMethod {
   kMorris,  ///< Morris elementary effects from a `morris` design
 };
 /// "sobol" / "morris" (ToString, ParseEnum: enum_names.h).
-template <>
-struct EnumNames<SensitivityMethod> {
-  static constexpr EnumName<SensitivityMethod> kTable[] = {{SensitivityMethod::kSobol, "sobol"},
-                                                           {SensitivityMethod::kMorris, "morris"}};
-};
+GESWEEP_ENUM_NAMES(SensitivityMethod, {kSobol, "sobol"}, {kMorris, "morris"});
 /// Parses "sobol" / "morris"; nullopt otherwise.
 std::optional<SensitivityMethod> ParseSensitivityMethod(std::string_view text);
 

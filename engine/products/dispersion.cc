@@ -119,11 +119,12 @@ LocationScale FitNormal(const std::vector<double>& values) {
 }
 
 LocationScale FitGumbelMax(const std::vector<double>& values) {
-  if (values.size() < 2) return {kNaN, kNaN};
-  // Standardised values y = (x − x̄)/s keep the exponentials in range; the fit is equivariant.
-  const double mean = Mean(values);
-  const double s = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
-  if (!(s > 0)) return {kNaN, kNaN};
+  // Standardised values y = (x − x̄)/s, with the normal fit's x̄ and s, keep the exponentials in
+  // range; the fit is equivariant. The normal fit is NaN for fewer than two values or all equal.
+  const LocationScale normal = FitNormal(values);
+  if (!(normal.scale > 0)) return {kNaN, kNaN};
+  const double mean = normal.location;
+  const double s = normal.scale;
   std::vector<double> y(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / s;
   const double y_min = *std::min_element(y.begin(), y.end());
@@ -199,9 +200,11 @@ double GevNegativeLogLikelihood(const std::vector<double>& values, double locati
 GevFit FitGevMax(const std::vector<double>& values) {
   GevFit fit{kNaN, kNaN, kNaN, kNaN};
   if (values.size() < 3) return fit;
-  const double mean = Mean(values);
-  const double sd = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
-  if (!(sd > 0)) return fit;
+  // Standardised as FitGumbelMax's.
+  const LocationScale normal = FitNormal(values);
+  if (!(normal.scale > 0)) return fit;
+  const double mean = normal.location;
+  const double sd = normal.scale;
   std::vector<double> y(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / sd;
   using Point = std::array<double, 3>;  // (μ, log σ, ξ) of the standardised values
@@ -441,11 +444,8 @@ DispersionLimit ParseLimit(const std::string& text, const ColumnCatalog& catalog
   return limit;
 }
 
-}  // namespace
-
-Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& catalog,
-                             const DispersionOptions& options) {
-  const std::string source = archive.path().string();
+// Refuses options out of their ranges (the percentiles, the tail probabilities, the confidence level).
+void CheckDispersionOptions(const DispersionOptions& options) {
   for (double p : options.percentiles) {
     if (!(p >= 0 && p <= 100))
       throw InputError("command line", "percentiles", ShortNumber(p), "expected 0 to 100");
@@ -458,14 +458,19 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
     throw InputError("command line", "confidence_level", ShortNumber(options.confidence_level),
                      "expected a level between 0 and 1, e.g. 0.95");
   }
-  Dispersion d;
-  d.archive = source;
-  d.options = options;
-  d.run_count = archive.run_count();
-  d.study_name = archive.StringAttributeOf("/", "study_name").value_or("");
-  d.design_kind = archive.StringAttributeOf("design", "kind").value_or("");
+}
 
-  // The columns.
+void AddColumn(Dispersion& d, const RunColumn& column) {
+  d.columns.push_back(column.name);
+  d.column_paths.push_back(column.path);
+  d.column_units.push_back(column.units);
+}
+
+// The catalogue indices of the columns described (the options' columns, or the landing's touchdown
+// and flare-elevator columns; then each column a limit names), added to d.columns with their
+// paths and units; the limits parsed into d.limits.
+std::vector<int> ChooseColumns(const ColumnCatalog& catalog, const DispersionOptions& options,
+                               const std::string& source, Dispersion& d) {
   std::vector<int> indices;
   if (options.columns.empty()) {
     for (const auto& path : DefaultDispersionColumns()) {
@@ -497,9 +502,7 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
     if (column.kind != ColumnKind::kNumber || column.path.rfind("results/", 0) != 0) {
       throw InputError(source, "columns", column.name, "expected a numeric result column (results/...)");
     }
-    d.columns.push_back(column.name);
-    d.column_paths.push_back(column.path);
-    d.column_units.push_back(column.units);
+    AddColumn(d, column);
   }
   for (const auto& text : options.limits) {
     DispersionLimit limit = ParseLimit(text, catalog, source);
@@ -509,15 +512,18 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
       if (column.kind != ColumnKind::kNumber || column.path.rfind("results/", 0) != 0) {
         throw InputError(source, "limits", text, "expected a limit on a numeric result column (results/...)");
       }
-      d.columns.push_back(column.name);
-      d.column_paths.push_back(column.path);
-      d.column_units.push_back(column.units);
+      AddColumn(d, column);
       indices.push_back(catalog.Require(limit.column, source, "limits"));
     }
     d.limits.push_back(limit);
   }
+  return indices;
+}
 
-  // The groups.
+// Each run's group: the index in d.groups (made here: the distinct values of the group_by column,
+// NaN last; one group "all" without group_by).
+std::vector<int> GroupRuns(const ArchiveReader& archive, const ColumnCatalog& catalog,
+                           const DispersionOptions& options, const std::string& source, Dispersion& d) {
   const std::int64_t n = archive.run_count();
   std::vector<double> group_values(static_cast<std::size_t>(n), kNaN);
   const RunColumn* group_column = nullptr;
@@ -570,6 +576,25 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
     d.groups[g].value = keys[g];
     d.groups[g].label = group_column == nullptr ? "all" : FormatCell(*group_column, keys[g]);
   }
+  return group_of;
+}
+
+}  // namespace
+
+Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& catalog,
+                             const DispersionOptions& options) {
+  const std::string source = archive.path().string();
+  CheckDispersionOptions(options);
+  Dispersion d;
+  d.archive = source;
+  d.options = options;
+  d.run_count = archive.run_count();
+  d.study_name = archive.StringAttributeOf("/", "study_name").value_or("");
+  d.design_kind = archive.StringAttributeOf("design", "kind").value_or("");
+  const std::vector<int> indices = ChooseColumns(catalog, options, source, d);
+  const std::vector<int> group_of = GroupRuns(archive, catalog, options, source, d);
+  const std::size_t group_count = d.groups.size();
+  const std::int64_t n = archive.run_count();
 
   // Statuses, then each column: its samples per group.
   std::vector<std::int8_t> status;
@@ -581,8 +606,8 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
   for (auto& group : d.groups) group.limits.resize(d.limits.size());
   for (std::size_t c = 0; c < indices.size(); ++c) {
     const RunColumn& column = catalog.column(indices[c]);
-    std::vector<std::vector<double>> samples(keys.size());
-    std::vector<ColumnDispersion> counts(keys.size());
+    std::vector<std::vector<double>> samples(group_count);
+    std::vector<ColumnDispersion> counts(group_count);
     ColumnValues values;
     for (std::int64_t first = 0; first < n; first += kPieceRows) {
       const std::int64_t count = std::min(kPieceRows, n - first);
@@ -603,7 +628,7 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
         }
       }
     }
-    for (std::size_t g = 0; g < keys.size(); ++g) {
+    for (std::size_t g = 0; g < group_count; ++g) {
       // The limits on this column first, on the unsorted sample (order does not matter).
       for (std::size_t l = 0; l < d.limits.size(); ++l) {
         if (d.limits[l].column != column.name) continue;

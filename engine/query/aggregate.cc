@@ -476,22 +476,14 @@ class Aggregator {
         entries_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(budget_entries, 1 << 20)));
       }
     }
-    std::vector<char> keep, condition;
+    std::vector<char> keep;
     const std::vector<int> no_skip;
     for (std::int64_t first = 0; first < summary_.runs; first += request_.chunk_rows) {
       const std::int64_t count = std::min(request_.chunk_rows, summary_.runs - first);
       const auto n = static_cast<std::size_t>(count);
-      const std::size_t complete = MarkCompleteRuns(archive_, first, count, keep);
-      summary_.complete += static_cast<std::int64_t>(complete);
-      if (complete == 0) continue;
-      if (filter_) {
-        Read(filter_->columns(), first, count, no_skip);
-        filter_->Evaluate(values_, count, condition);
-        for (std::size_t i = 0; i < n; ++i) keep[i] = keep[i] && condition[i];
-      }
-      const auto matched = static_cast<std::int64_t>(std::count(keep.begin(), keep.end(), 1));
-      summary_.matched += matched;
-      if (matched == 0) continue;
+      if (!SelectRuns(archive_, catalog_, filter_ ? &*filter_ : nullptr, first, count, values_, keep,
+                      summary_))
+        continue;
       Read(value_columns_, first, count, filter_ ? filter_->columns() : no_skip);
       for (std::size_t i = 0; i < n; ++i) {
         if (!keep[i]) continue;

@@ -41,13 +41,8 @@ class ArchiveReader;
 /// What one --aggregate item computes.
 enum class AggregateKind { kCount, kSum, kMin, kMax, kMean, kStd, kMedian, kQuantile };
 /// The statistics' names in --aggregate items and output columns (ToString, ParseEnum: enum_names.h).
-template <>
-struct EnumNames<AggregateKind> {
-  static constexpr EnumName<AggregateKind> kTable[] = {
-      {AggregateKind::kCount, "count"},   {AggregateKind::kSum, "sum"},          {AggregateKind::kMin, "min"},
-      {AggregateKind::kMax, "max"},       {AggregateKind::kMean, "mean"},        {AggregateKind::kStd, "std"},
-      {AggregateKind::kMedian, "median"}, {AggregateKind::kQuantile, "quantile"}};
-};
+GESWEEP_ENUM_NAMES(AggregateKind, {kCount, "count"}, {kSum, "sum"}, {kMin, "min"}, {kMax, "max"},
+                   {kMean, "mean"}, {kStd, "std"}, {kMedian, "median"}, {kQuantile, "quantile"});
 
 /// One statistic of the output.
 struct AggregateSpec {

@@ -6,7 +6,9 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <initializer_list>
 #include <limits>
+#include <string_view>
 
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
@@ -282,29 +284,22 @@ class Parser {
                              Describe(*node));
   }
 
-  std::unique_ptr<Node> ParseOr() {
-    auto left = ParseAnd();
-    while (Peek().kind == TokenKind::kName && Peek().text == "or") {
+  // operand (word operand)*, grouped from the left: `or` over `and` terms, `and` over `not` terms.
+  std::unique_ptr<Node> ParseConnective(const char* word, Kind kind,
+                                        std::unique_ptr<Node> (Parser::*operand)()) {
+    auto left = (this->*operand)();
+    while (Peek().kind == TokenKind::kName && Peek().text == word) {
       const int position = Take().position;
-      auto node = Make(Kind::kOr, Type::kBool, position);
+      auto node = Make(kind, Type::kBool, position);
       node->left = AsCondition(std::move(left));
-      node->right = AsCondition(ParseAnd());
+      node->right = AsCondition((this->*operand)());
       left = Grown(std::move(node));
     }
     return left;
   }
 
-  std::unique_ptr<Node> ParseAnd() {
-    auto left = ParseNot();
-    while (Peek().kind == TokenKind::kName && Peek().text == "and") {
-      const int position = Take().position;
-      auto node = Make(Kind::kAnd, Type::kBool, position);
-      node->left = AsCondition(std::move(left));
-      node->right = AsCondition(ParseNot());
-      left = Grown(std::move(node));
-    }
-    return left;
-  }
+  std::unique_ptr<Node> ParseOr() { return ParseConnective("or", Kind::kOr, &Parser::ParseAnd); }
+  std::unique_ptr<Node> ParseAnd() { return ParseConnective("and", Kind::kAnd, &Parser::ParseNot); }
 
   std::unique_ptr<Node> ParseNot() {
     if (Peek().kind == TokenKind::kName && Peek().text == "not") {
@@ -509,36 +504,27 @@ class Parser {
     Fail(node.position, Describe(node) + " is text, not a number");
   }
 
-  std::unique_ptr<Node> ParseSum() {
-    auto left = ParseProduct();
-    while (Peek().kind == TokenKind::kOperator && (Peek().text == "+" || Peek().text == "-")) {
+  // operand (op operand)*, grouped from the left, for the operators `ops`: sums of products,
+  // products of unary terms.
+  std::unique_ptr<Node> ParseArithmetic(std::initializer_list<std::string_view> ops,
+                                        std::unique_ptr<Node> (Parser::*operand)()) {
+    auto left = (this->*operand)();
+    while (Peek().kind == TokenKind::kOperator &&
+           std::find(ops.begin(), ops.end(), Peek().text) != ops.end()) {
       const Token op = Take();
       auto node = Make(Kind::kArithmetic, Type::kNumber, op.position);
       node->text = op.text;
       RequireNumber(*left);
       node->left = std::move(left);
-      node->right = ParseProduct();
+      node->right = (this->*operand)();
       RequireNumber(*node->right);
       left = Grown(std::move(node));
     }
     return left;
   }
 
-  std::unique_ptr<Node> ParseProduct() {
-    auto left = ParseUnary();
-    while (Peek().kind == TokenKind::kOperator &&
-           (Peek().text == "*" || Peek().text == "/" || Peek().text == "%")) {
-      const Token op = Take();
-      auto node = Make(Kind::kArithmetic, Type::kNumber, op.position);
-      node->text = op.text;
-      RequireNumber(*left);
-      node->left = std::move(left);
-      node->right = ParseUnary();
-      RequireNumber(*node->right);
-      left = Grown(std::move(node));
-    }
-    return left;
-  }
+  std::unique_ptr<Node> ParseSum() { return ParseArithmetic({"+", "-"}, &Parser::ParseProduct); }
+  std::unique_ptr<Node> ParseProduct() { return ParseArithmetic({"*", "/", "%"}, &Parser::ParseUnary); }
 
   std::unique_ptr<Node> ParseUnary() {
     if (Peek().kind == TokenKind::kOperator && Peek().text == "-") {

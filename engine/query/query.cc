@@ -89,6 +89,24 @@ std::vector<int> DefaultColumns(const ColumnCatalog& catalog) {
   return columns;
 }
 
+bool SelectRuns(const ArchiveReader& archive, const ColumnCatalog& catalog, const RowFilter* filter,
+                std::int64_t first, std::int64_t count, std::vector<ColumnValues>& values,
+                std::vector<char>& keep, QuerySummary& summary) {
+  const std::size_t complete = MarkCompleteRuns(archive, first, count, keep);
+  summary.complete += static_cast<std::int64_t>(complete);
+  if (complete == 0) return false;
+  if (filter != nullptr) {
+    for (int c : filter->columns())
+      ReadColumn(archive, catalog.column(c), first, count, values[static_cast<std::size_t>(c)]);
+    std::vector<char> condition;
+    filter->Evaluate(values, count, condition);
+    for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && condition[i];
+  }
+  const auto matched = static_cast<std::int64_t>(std::count(keep.begin(), keep.end(), 1));
+  summary.matched += matched;
+  return matched > 0;
+}
+
 QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog, const QueryRequest& request,
                       QueryRowSink& sink) {
   // Everything a person typed is checked before the first row is read.
@@ -140,19 +158,8 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   for (std::int64_t first = 0; first < summary.runs; first += request.chunk_rows) {
     const std::int64_t count = std::min(request.chunk_rows, summary.runs - first);
     const auto n = static_cast<std::size_t>(count);
-    const std::size_t complete = MarkCompleteRuns(archive, first, count, keep);
-    summary.complete += static_cast<std::int64_t>(complete);
-    if (complete == 0) continue;
-    if (filter) {
-      for (int c : filter->columns())
-        ReadColumn(archive, catalog.column(c), first, count, values[static_cast<std::size_t>(c)]);
-      std::vector<char> condition;
-      filter->Evaluate(values, count, condition);
-      for (std::size_t i = 0; i < n; ++i) keep[i] = keep[i] && condition[i];
-    }
-    const auto matched = static_cast<std::int64_t>(std::count(keep.begin(), keep.end(), 1));
-    summary.matched += matched;
-    if (matched == 0) continue;
+    if (!SelectRuns(archive, catalog, filter ? &*filter : nullptr, first, count, values, keep, summary))
+      continue;
     // Output values are read only for blocks that contribute a row.
     const bool want_rows = sorting || !bounded || summary.shown < request.limit;
     if (!want_rows) continue;

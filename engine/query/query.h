@@ -22,6 +22,7 @@
 namespace gesweep {
 
 class ArchiveReader;
+class RowFilter;
 
 /// What to select.
 struct QueryRequest {
@@ -50,6 +51,14 @@ struct QuerySummary {
   std::int64_t groups = -1;   ///< aggregates (aggregate.h): the groups of matching runs; -1: rows
   int passes = 1;             ///< passes over the archive (aggregates' exact order statistics)
 };
+
+/// The runs of rows [first, first + count) a query keeps: keep[i] = 1 for a complete run
+/// (MarkCompleteRuns) that satisfies `filter` when there is one (null: every complete run); they are
+/// counted into summary.complete and summary.matched. The filter's columns are read into `values`
+/// (ReadColumn) only when some run of the block is complete. Returns whether any run is kept.
+bool SelectRuns(const ArchiveReader& archive, const ColumnCatalog& catalog, const RowFilter* filter,
+                std::int64_t first, std::int64_t count, std::vector<ColumnValues>& values,
+                std::vector<char>& keep, QuerySummary& summary);
 
 /// Receives a query's result, row by row (formats: query_output.h).
 class QueryRowSink {

@@ -99,11 +99,7 @@ enum class IntegratorKind {
 };
 
 /// Names in study files, flags and output: "rk4", "dopri5" (ToString, ParseEnum, EnumChoices).
-template <>
-struct EnumNames<IntegratorKind> {
-  static constexpr EnumName<IntegratorKind> kTable[] = {{IntegratorKind::kRk4, "rk4"},
-                                                        {IntegratorKind::kDopri5, "dopri5"}};
-};
+GESWEEP_ENUM_NAMES(IntegratorKind, {kRk4, "rk4"}, {kDopri5, "dopri5"});
 
 /// The limits-table entries (input_limits.h) of the integrator's steps for one analysis.
 struct IntegratorLimitNames {
@@ -173,15 +169,9 @@ enum class IntegrationStatus {
 };
 
 /// "reached_end" / "stopped_by_event" / "non_finite" / "step_size_underflow" / "cancelled".
-template <>
-struct EnumNames<IntegrationStatus> {
-  static constexpr EnumName<IntegrationStatus> kTable[] = {
-      {IntegrationStatus::kReachedEnd, "reached_end"},
-      {IntegrationStatus::kStoppedByEvent, "stopped_by_event"},
-      {IntegrationStatus::kNonFinite, "non_finite"},
-      {IntegrationStatus::kStepSizeUnderflow, "step_size_underflow"},
-      {IntegrationStatus::kCancelled, "cancelled"}};
-};
+GESWEEP_ENUM_NAMES(IntegrationStatus, {kReachedEnd, "reached_end"}, {kStoppedByEvent, "stopped_by_event"},
+                   {kNonFinite, "non_finite"}, {kStepSizeUnderflow, "step_size_underflow"},
+                   {kCancelled, "cancelled"});
 
 /// What Integrate returns. Counts include everything: `rhs_calls` counts every Derivative call
 /// (RK4: 1 at the start, 4 per step, 1 per breakpoint or restart; dopri5: 1 at the start, 6 per

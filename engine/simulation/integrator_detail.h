@@ -94,17 +94,10 @@ class Rk4Method {
     return StepOutcome::kAccepted;
   }
 
-  /// Cubic Hermite through (t0, x0, f0) and (t1, x1, f1): 4th-order accurate locally, exact at ends.
+  /// Cubic Hermite through (t0, x0, f0) and (t1, x1, f1) at t0 < tau < t1: 4th-order accurate
+  /// locally (the step's ends are IntegrateWith's).
   void Interpolate(double tau, double t0, const State& x0, const State& f0, double t1, const State& x1,
                    const State& f1, State& out) const {
-    if (tau == t1) {
-      out = x1;
-      return;
-    }
-    if (tau == t0) {
-      out = x0;
-      return;
-    }
     const double h = t1 - t0;
     const double s = (tau - t0) / h;
     const double s2 = s * s;
@@ -175,17 +168,10 @@ class Dopri5Method {
     return StepOutcome::kUnderflow;
   }
 
-  /// The 4th-order continuous extension of the last accepted step (exact at its ends).
+  /// The 4th-order continuous extension of the last accepted step at t0 < tau < t1 (the step's ends
+  /// are IntegrateWith's).
   void Interpolate(double tau, double t0, const State& x0, const State& f0, double t1, const State& x1,
                    const State& f1, State& out) const {
-    if (tau == t1) {
-      out = x1;
-      return;
-    }
-    if (tau == t0) {
-      out = x0;
-      return;
-    }
     controlled_.stepper().calc_state(tau, out, x0, f0, t0, x1, f1, t1);
   }
 
@@ -299,8 +285,16 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
     if (outcome == StepOutcome::kUnderflow) return finish(IntegrationStatus::kStepSizeUnderflow);
     ++result.accepted_steps;
 
+    // The state at tau in [t, t_new]: exactly the step's end states at its ends, the method's
+    // interpolant between them.
     auto interpolate = [&](double tau, State& out) {
-      method.Interpolate(tau, t, *x, *f, t_new, *x_new, *f_new, out);
+      if (tau == t_new) {
+        out = *x_new;
+      } else if (tau == t) {
+        out = *x;
+      } else {
+        method.Interpolate(tau, t, *x, *f, t_new, *x_new, *f_new, out);
+      }
     };
     EventAction cut_action = EventAction::kContinue;
     double t_cut = t_new;

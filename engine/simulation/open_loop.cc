@@ -70,36 +70,14 @@ struct ModelSource {
 
 enum OpenLoopEvent : int { kTouchdownEvent = 0, kStallEvent = 1, kHeightMinimumEvent = 2 };
 
-// Eq. (1) as an OdeProblem (integrator.h).
-template <class Source>
-class OpenLoopProblem {
+// What the two problems below share: the start condition, the event functions, the series they
+// fill, and what they keep along the run (OnEvent, OnStep): the lowest height and its time, the
+// largest |q|, and the event that stopped the run. The airplane's states are x[0 .. 5).
+class OpenLoopRecorder {
  public:
-  static constexpr int kDimension = 5;
   static constexpr int kEventCount = 3;
-  using State = OdeState<kDimension>;
 
-  OpenLoopProblem(Source source, double start_height_m, double reference_speed_mps,
-                  const std::vector<double>& elevator_by_segment, double touchdown_height_m,
-                  double stall_speed_mps, OpenLoopSeries* series)
-      : source_(source),
-        start_height_m_(start_height_m),
-        u0_(reference_speed_mps),
-        elevator_by_segment_(elevator_by_segment.data()),
-        touchdown_height_m_(touchdown_height_m),
-        stall_speed_mps_(stall_speed_mps),
-        series_(series) {}
-
-  GESWEEP_ALWAYS_INLINE void Derivative(double /*t*/, const State& x, int segment, State& dxdt) {
-    source_.Derivative(start_height_m_, u0_, x.data(), elevator_by_segment_[segment], dxdt.data());
-  }
-
-  void EventValues(double /*t*/, const State& x, int /*segment*/, std::array<double, kEventCount>& g) const {
-    g[kTouchdownEvent] = start_height_m_ + x[kDeltaH] - touchdown_height_m_;
-    g[kStallEvent] = u0_ + x[kDeltaU] - stall_speed_mps_;
-    // Ḣ = −Δw + u0·Δθ (row ΔH of Eq. 1); −Ḣ falls through zero at a local minimum of H.
-    g[kHeightMinimumEvent] = x[kDeltaW] - u0_ * x[kDeltaTheta];
-  }
-
+  template <class State>
   EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
     if (event == kHeightMinimumEvent) {
       NoteHeight(t, x);
@@ -109,13 +87,38 @@ class OpenLoopProblem {
     return EventAction::kStop;
   }
 
+  template <class State>
   void OnStep(double t, const State& x, int /*segment*/) {
     NoteHeight(t, x);
     max_abs_pitch_rate_radps_ = std::max(max_abs_pitch_rate_radps_, std::abs(x[kPitchRate]));
   }
 
-  void OnOutput(double t, const State& x, int segment) {
-    if (series_ == nullptr) return;
+  double min_height_m() const { return min_height_m_; }
+  double min_height_time_s() const { return min_height_time_s_; }
+  double max_abs_pitch_rate_radps() const { return max_abs_pitch_rate_radps_; }
+  int stopping_event() const { return stopping_event_; }
+
+ protected:
+  OpenLoopRecorder(double start_height_m, double reference_speed_mps, double touchdown_height_m,
+                   double stall_speed_mps, OpenLoopSeries* series)
+      : start_height_m_(start_height_m),
+        u0_(reference_speed_mps),
+        touchdown_height_m_(touchdown_height_m),
+        stall_speed_mps_(stall_speed_mps),
+        series_(series) {}
+
+  // The event functions, given the speed that stalls (u0 + Δu in still air, the airspeed in wind).
+  template <class State>
+  void EventValuesAt(const State& x, double stalling_speed_mps, std::array<double, kEventCount>& g) const {
+    g[kTouchdownEvent] = start_height_m_ + x[kDeltaH] - touchdown_height_m_;
+    g[kStallEvent] = stalling_speed_mps - stall_speed_mps_;
+    // Ḣ = −Δw + u0·Δθ (row ΔH of Eq. 1); −Ḣ falls through zero at a local minimum of H.
+    g[kHeightMinimumEvent] = x[kDeltaW] - u0_ * x[kDeltaTheta];
+  }
+
+  // Appends the airplane's part of a sample to the series (series_ not null).
+  template <class State>
+  void AppendSample(double t, const State& x, double elevator_rad) {
     series_->time_s.push_back(t);
     series_->delta_speed_mps.push_back(x[kDeltaU]);
     series_->delta_normal_velocity_mps.push_back(x[kDeltaW]);
@@ -124,15 +127,17 @@ class OpenLoopProblem {
     series_->delta_height_m.push_back(x[kDeltaH]);
     series_->height_m.push_back(start_height_m_ + x[kDeltaH]);
     series_->speed_mps.push_back(u0_ + x[kDeltaU]);
-    series_->elevator_rad.push_back(elevator_by_segment_[segment]);
+    series_->elevator_rad.push_back(elevator_rad);
   }
 
-  double min_height_m() const { return min_height_m_; }
-  double min_height_time_s() const { return min_height_time_s_; }
-  double max_abs_pitch_rate_radps() const { return max_abs_pitch_rate_radps_; }
-  int stopping_event() const { return stopping_event_; }
+  double start_height_m_;
+  double u0_;
+  double touchdown_height_m_;
+  double stall_speed_mps_;
+  OpenLoopSeries* series_;
 
  private:
+  template <class State>
   void NoteHeight(double t, const State& x) {
     const double height_m = start_height_m_ + x[kDeltaH];
     if (height_m < min_height_m_) {
@@ -141,17 +146,41 @@ class OpenLoopProblem {
     }
   }
 
-  Source source_;
-  double start_height_m_;
-  double u0_;
-  const double* elevator_by_segment_;
-  double touchdown_height_m_;
-  double stall_speed_mps_;
-  OpenLoopSeries* series_;
   double min_height_m_ = std::numeric_limits<double>::infinity();
   double min_height_time_s_ = 0;
   double max_abs_pitch_rate_radps_ = 0;
   int stopping_event_ = -1;
+};
+
+// Eq. (1) as an OdeProblem (integrator.h).
+template <class Source>
+class OpenLoopProblem : public OpenLoopRecorder {
+ public:
+  static constexpr int kDimension = 5;
+  using State = OdeState<kDimension>;
+
+  OpenLoopProblem(Source source, double start_height_m, double reference_speed_mps,
+                  const std::vector<double>& elevator_by_segment, double touchdown_height_m,
+                  double stall_speed_mps, OpenLoopSeries* series)
+      : OpenLoopRecorder(start_height_m, reference_speed_mps, touchdown_height_m, stall_speed_mps, series),
+        source_(source),
+        elevator_by_segment_(elevator_by_segment.data()) {}
+
+  GESWEEP_ALWAYS_INLINE void Derivative(double /*t*/, const State& x, int segment, State& dxdt) {
+    source_.Derivative(start_height_m_, u0_, x.data(), elevator_by_segment_[segment], dxdt.data());
+  }
+
+  void EventValues(double /*t*/, const State& x, int /*segment*/, std::array<double, kEventCount>& g) const {
+    EventValuesAt(x, u0_ + x[kDeltaU], g);
+  }
+
+  void OnOutput(double t, const State& x, int segment) {
+    if (series_ != nullptr) AppendSample(t, x, elevator_by_segment_[segment]);
+  }
+
+ private:
+  Source source_;
+  const double* elevator_by_segment_;
 };
 
 void Reserve(OpenLoopSeries& series, std::size_t count) {
@@ -163,8 +192,8 @@ void Reserve(OpenLoopSeries& series, std::size_t count) {
 }
 
 // The summary of a run from the integrator's result and the problem's records.
-template <int N, class Problem>
-void FillSummary(OpenLoopSummary& summary, const IntegrationResult<N>& run, const Problem& problem,
+template <int N>
+void FillSummary(OpenLoopSummary& summary, const IntegrationResult<N>& run, const OpenLoopRecorder& problem,
                  const OpenLoopConfig& config) {
   summary.end_time_s = run.end_time_s;
   for (int i = 0; i < 5; ++i) summary.final_state[i] = run.final_state[static_cast<std::size_t>(i)];
@@ -249,10 +278,9 @@ struct ModelDerivatives {
 
 // The open-loop airplane and the field's states: x = [Δu, Δw, q, Δθ, ΔH, field states].
 template <class Derivatives>
-class DisturbedOpenLoopProblem {
+class DisturbedOpenLoopProblem : public OpenLoopRecorder {
  public:
   static constexpr int kDimension = 5 + DisturbanceField::kStateCount;
-  static constexpr int kEventCount = 3;
   using State = OdeState<kDimension>;
 
   DisturbedOpenLoopProblem(Derivatives derivatives, const DisturbanceField* field,
@@ -260,15 +288,11 @@ class DisturbedOpenLoopProblem {
                            const std::vector<double>* elevator_by_segment, double start_height_m,
                            double reference_speed_mps, double touchdown_height_m, double stall_speed_mps,
                            OpenLoopSeries* series)
-      : derivatives_(derivatives),
+      : OpenLoopRecorder(start_height_m, reference_speed_mps, touchdown_height_m, stall_speed_mps, series),
+        derivatives_(derivatives),
         field_(field),
         field_segments_(field_segments),
-        elevator_by_segment_(elevator_by_segment),
-        start_height_m_(start_height_m),
-        u0_(reference_speed_mps),
-        touchdown_height_m_(touchdown_height_m),
-        stall_speed_mps_(stall_speed_mps),
-        series_(series) {}
+        elevator_by_segment_(elevator_by_segment) {}
 
   void Derivative(double /*t*/, const State& x, int segment, State& dxdt) {
     DisturbanceField::State field_dxdt;
@@ -285,47 +309,18 @@ class DisturbedOpenLoopProblem {
 
   void EventValues(double /*t*/, const State& x, int segment, std::array<double, kEventCount>& g) const {
     DisturbanceField::State unused;
-    g[kTouchdownEvent] = start_height_m_ + x[kDeltaH] - touchdown_height_m_;
-    g[kStallEvent] = Air(x, segment, unused).airspeed_mps - stall_speed_mps_;  // the airspeed stalls
-    g[kHeightMinimumEvent] = x[kDeltaW] - u0_ * x[kDeltaTheta];
-  }
-
-  EventAction OnEvent(int event, double t, const State& x, int /*segment*/) {
-    if (event == kHeightMinimumEvent) {
-      NoteHeight(t, x);
-      return EventAction::kContinue;
-    }
-    stopping_event_ = event;
-    return EventAction::kStop;
-  }
-
-  void OnStep(double t, const State& x, int /*segment*/) {
-    NoteHeight(t, x);
-    max_abs_pitch_rate_radps_ = std::max(max_abs_pitch_rate_radps_, std::abs(x[kPitchRate]));
+    EventValuesAt(x, Air(x, segment, unused).airspeed_mps, g);  // the airspeed stalls
   }
 
   void OnOutput(double t, const State& x, int segment) {
     if (series_ == nullptr) return;
     DisturbanceField::State unused;
     const AirMotion air = Air(x, segment, unused);
-    series_->time_s.push_back(t);
-    series_->delta_speed_mps.push_back(x[kDeltaU]);
-    series_->delta_normal_velocity_mps.push_back(x[kDeltaW]);
-    series_->pitch_rate_radps.push_back(x[kPitchRate]);
-    series_->delta_pitch_rad.push_back(x[kDeltaTheta]);
-    series_->delta_height_m.push_back(x[kDeltaH]);
-    series_->height_m.push_back(start_height_m_ + x[kDeltaH]);
-    series_->speed_mps.push_back(u0_ + x[kDeltaU]);
-    series_->elevator_rad.push_back((*elevator_by_segment_)[static_cast<std::size_t>(segment)]);
+    AppendSample(t, x, (*elevator_by_segment_)[static_cast<std::size_t>(segment)]);
     series_->u_g_mps.push_back(air.u_g_mps);
     series_->w_g_mps.push_back(air.w_g_mps);
     if (field_->options().pitch_rate_gust) series_->q_g_radps.push_back(air.q_g_radps);
   }
-
-  double min_height_m() const { return min_height_m_; }
-  double min_height_time_s() const { return min_height_time_s_; }
-  double max_abs_pitch_rate_radps() const { return max_abs_pitch_rate_radps_; }
-  int stopping_event() const { return stopping_event_; }
 
  private:
   AirMotion Air(const State& x, int segment, DisturbanceField::State& field_dxdt) const {
@@ -334,27 +329,11 @@ class DisturbedOpenLoopProblem {
     return field_->Evaluate((*field_segments_)[static_cast<std::size_t>(segment)],
                             start_height_m_ + x[kDeltaH], u0_ + x[kDeltaU], xf, field_dxdt);
   }
-  void NoteHeight(double t, const State& x) {
-    const double height_m = start_height_m_ + x[kDeltaH];
-    if (height_m < min_height_m_) {
-      min_height_m_ = height_m;
-      min_height_time_s_ = t;
-    }
-  }
 
   Derivatives derivatives_;
   const DisturbanceField* field_;
   const std::vector<DisturbanceField::Segment>* field_segments_;
   const std::vector<double>* elevator_by_segment_;
-  double start_height_m_;
-  double u0_;
-  double touchdown_height_m_;
-  double stall_speed_mps_;
-  OpenLoopSeries* series_;
-  double min_height_m_ = std::numeric_limits<double>::infinity();
-  double min_height_time_s_ = 0;
-  double max_abs_pitch_rate_radps_ = 0;
-  int stopping_event_ = -1;
 };
 
 // The options the field is built from: the span of the pitch-rate gust is the aircraft's.

@@ -29,13 +29,8 @@ enum class ElevatorInputKind {
 };
 
 /// Names in study files, flags and output: "pulse", "step", "doublet", "none".
-template <>
-struct EnumNames<ElevatorInputKind> {
-  static constexpr EnumName<ElevatorInputKind> kTable[] = {{ElevatorInputKind::kPulse, "pulse"},
-                                                           {ElevatorInputKind::kStep, "step"},
-                                                           {ElevatorInputKind::kDoublet, "doublet"},
-                                                           {ElevatorInputKind::kNone, "none"}};
-};
+GESWEEP_ENUM_NAMES(ElevatorInputKind, {kPulse, "pulse"}, {kStep, "step"}, {kDoublet, "doublet"},
+                   {kNone, "none"});
 
 /// A piecewise-constant elevator input. Its jumps are the integrator's breakpoints.
 struct ElevatorInput {
@@ -184,13 +179,8 @@ enum class OpenLoopEndEvent {
 // With a disturbance, kStall is the airspeed u0 + Δu − u_g falling to the stall speed.
 
 /// "touchdown" / "stall" / "time_limit" / "diverged", in code order (the archive's levels).
-template <>
-struct EnumNames<OpenLoopEndEvent> {
-  static constexpr EnumName<OpenLoopEndEvent> kTable[] = {{OpenLoopEndEvent::kTouchdown, "touchdown"},
-                                                          {OpenLoopEndEvent::kStall, "stall"},
-                                                          {OpenLoopEndEvent::kTimeLimit, "time_limit"},
-                                                          {OpenLoopEndEvent::kDiverged, "diverged"}};
-};
+GESWEEP_ENUM_NAMES(OpenLoopEndEvent, {kTouchdown, "touchdown"}, {kStall, "stall"}, {kTimeLimit, "time_limit"},
+                   {kDiverged, "diverged"});
 
 /// The components of Eq. (1)'s state x = [Δu, Δw, q, Δθ, ΔH] as result columns.
 inline constexpr FieldComponent kStateComponents[] = {{"delta_u_mps", "m/s", "Delta u"},

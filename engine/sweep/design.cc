@@ -180,44 +180,6 @@ std::uint64_t Feistel(std::uint64_t x, int bits, std::uint64_t key) {
 
 }  // namespace
 
-std::string_view ToString(DesignKind kind) {
-  switch (kind) {
-    case DesignKind::kSingle:
-      return "single";
-    case DesignKind::kGrid:
-      return "grid";
-    case DesignKind::kList:
-      return "list";
-    case DesignKind::kLhs:
-      return "lhs";
-    case DesignKind::kSobol:
-      return "sobol";
-    case DesignKind::kMorris:
-      return "morris";
-    case DesignKind::kMonteCarlo:
-      return "monte_carlo";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
-std::string_view ToString(Distribution distribution) {
-  switch (distribution) {
-    case Distribution::kUniform:
-      return "uniform";
-    case Distribution::kLogUniform:
-      return "loguniform";
-    case Distribution::kNormal:
-      return "normal";
-    case Distribution::kTruncatedNormal:
-      return "truncated_normal";
-    case Distribution::kLogNormal:
-      return "lognormal";
-    case Distribution::kDiscrete:
-      return "discrete";
-  }
-  GESWEEP_UNREACHABLE();
-}
-
 std::int64_t CountRuns(const DesignSpec& spec) {
   auto multiply = [](std::int64_t a, std::int64_t b) -> std::int64_t {
     if (a < 0 || b < 0) return -1;

@@ -23,12 +23,15 @@
 #include <vector>
 
 #include "engine/analyses/parameter_catalog.h"
+#include "engine/common/enum_names.h"
 #include "engine/estimators/saltelli_layout.h"
 
 namespace gesweep {
 
 enum class DesignKind { kSingle, kGrid, kList, kLhs, kSobol, kMorris, kMonteCarlo };
-std::string_view ToString(DesignKind kind);
+/// The study's `kind` and the archive's design attribute (ToString: enum_names.h).
+GESWEEP_ENUM_NAMES(DesignKind, {kSingle, "single"}, {kGrid, "grid"}, {kList, "list"}, {kLhs, "lhs"},
+                   {kSobol, "sobol"}, {kMorris, "morris"}, {kMonteCarlo, "monte_carlo"});
 
 /// How a sampled parameter's unit-interval coordinate maps to its value (by the inverse of its
 /// cumulative distribution function). lhs, sobol and morris take the first two only.
@@ -40,7 +43,10 @@ enum class Distribution {
   kLogNormal,        ///< exp(mean + sigma·Φ⁻¹(u)): mean and sigma are those of the log of the value
   kDiscrete,         ///< values[k] with probability weights[k] / Σ weights
 };
-std::string_view ToString(Distribution distribution);
+/// The study's and the archive's names of the distributions (ToString: enum_names.h).
+GESWEEP_ENUM_NAMES(Distribution, {kUniform, "uniform"}, {kLogUniform, "loguniform"}, {kNormal, "normal"},
+                   {kTruncatedNormal, "truncated_normal"}, {kLogNormal, "lognormal"},
+                   {kDiscrete, "discrete"});
 
 /// One column of a design.
 struct DesignParameter {

@@ -179,6 +179,41 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
   block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
 }
 
+namespace {
+
+// Computes the runs of a batch in parallel (each thread in its own workspace), counting them into
+// `counters` and the batch's runs_failed; a cancellation leaves the rest of the batch pending.
+void ComputeBatch(const SweepPlan& plan, ResultBlock& block,
+                  tbb::enumerable_thread_specific<RunWorkspace>& workspaces, const RunnerOptions& options,
+                  SweepProgress& counters) {
+  std::atomic<int> failed{0};
+  tbb::parallel_for(tbb::blocked_range<int>(0, block.rows, 1), [&](const tbb::blocked_range<int>& range) {
+    RunWorkspace& workspace = workspaces.local();
+    int range_failed = 0;
+    for (int row = range.begin(); row != range.end(); ++row) {
+      if (options.cancel != nullptr && options.cancel->load()) break;
+      ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row,
+                 options.cancel);
+      const auto status = block.status[static_cast<std::size_t>(row)];
+      if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
+      range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
+      counters.runs_done.fetch_add(1, std::memory_order_relaxed);
+    }
+    failed.fetch_add(range_failed, std::memory_order_relaxed);
+    counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
+  });
+  block.runs_failed = failed.load();
+}
+
+// Whether a run of the batch is still pending (a cancellation stopped it).
+bool Unfinished(const ResultBlock& block) {
+  const auto begin = block.status.begin();
+  return std::find(begin, begin + block.rows, static_cast<std::int8_t>(RunStatus::kPending)) !=
+         begin + block.rows;
+}
+
+}  // namespace
+
 SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink,
                       const RunnerOptions& options, SweepProgress* progress) {
   SweepProgress local_progress;
@@ -245,50 +280,29 @@ SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& si
                                                  block->Reset(plan, index);
                                                  return block;
                                                }) &
-              tbb::make_filter<ResultBlock*, ResultBlock*>(
-                  tbb::filter_mode::parallel,
-                  [&](ResultBlock* block) {
-                    std::atomic<int> failed{0};
-                    tbb::parallel_for(
-                        tbb::blocked_range<int>(0, block->rows, 1),
-                        [&](const tbb::blocked_range<int>& range) {
-                          RunWorkspace& workspace = workspaces.local();
-                          int range_failed = 0;
-                          for (int row = range.begin(); row != range.end(); ++row) {
-                            if (options.cancel != nullptr && options.cancel->load()) break;
-                            ExecuteRun(plan, block->design_index[static_cast<std::size_t>(row)], workspace,
-                                       *block, row, options.cancel);
-                            const auto status = block->status[static_cast<std::size_t>(row)];
-                            if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
-                            range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
-                            counters.runs_done.fetch_add(1, std::memory_order_relaxed);
-                          }
-                          failed.fetch_add(range_failed, std::memory_order_relaxed);
-                          counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
-                        });
-                    block->runs_failed = failed.load();
-                    // A batch a cancellation left unfinished is not encoded (nor written, below).
-                    const auto begin = block->status.begin();
-                    if (std::find(begin, begin + block->rows,
-                                  static_cast<std::int8_t>(RunStatus::kPending)) != begin + block->rows) {
-                      return block;
-                    }
-                    // The worker that computed the batch encodes it (filters its chunks).
-                    sink.Encode(*block);
-                    return block;
-                  }) &
-              tbb::make_filter<ResultBlock*, void>(
-                  tbb::filter_mode::serial_out_of_order, [&](ResultBlock* block) {
-                    // A batch a cancellation left unfinished is not written: its runs stay pending.
-                    const auto begin = block->status.begin();
-                    if (std::find(begin, begin + block->rows,
-                                  static_cast<std::int8_t>(RunStatus::kPending)) != begin + block->rows) {
-                      dropped.fetch_add(1);
-                      free_blocks.push(block);
-                      return;
-                    }
-                    write_queue.push(block);
-                  }));
+              tbb::make_filter<ResultBlock*, ResultBlock*>(tbb::filter_mode::parallel,
+                                                           [&](ResultBlock* block) {
+                                                             ComputeBatch(plan, *block, workspaces, options,
+                                                                          counters);
+                                                             // A batch a cancellation left unfinished is not
+                                                             // encoded (nor written, below).
+                                                             if (Unfinished(*block)) return block;
+                                                             // The worker that computed the batch encodes it
+                                                             // (filters its chunks).
+                                                             sink.Encode(*block);
+                                                             return block;
+                                                           }) &
+              tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
+                                                   [&](ResultBlock* block) {
+                                                     // A batch a cancellation left unfinished is not written:
+                                                     // its runs stay pending.
+                                                     if (Unfinished(*block)) {
+                                                       dropped.fetch_add(1);
+                                                       free_blocks.push(block);
+                                                       return;
+                                                     }
+                                                     write_queue.push(block);
+                                                   }));
     });
   } catch (...) {
     worker_error = std::current_exception();

@@ -3,6 +3,7 @@
 // process's archive; refused when a shard is missing, overlaps, is incomplete or foreign).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -78,6 +79,15 @@ class ArchiveTest : public ::testing::Test {
 
   std::filesystem::path directory_;
 };
+
+TEST(ArchiveFormat, FingerprintTextIsSixteenLowercaseHexDigits) {
+  // Oracle: C's printf conversion %016llx, which the attribute has been written as.
+  for (const unsigned long long value : {0ULL, 0x1234abcdULL, 0x00ff00ff00ff00ffULL, ~0ULL}) {
+    char expected[17];
+    std::snprintf(expected, sizeof(expected), "%016llx", value);
+    EXPECT_EQ(archive::FingerprintText(value), expected) << value;
+  }
+}
 
 TEST_F(ArchiveTest, StoresEveryRunWithUnitsDescriptionsAndProvenance) {
   SweepPlan plan(LoadStudy(StudyFile("s.toml", 16)), ShardSpec{});

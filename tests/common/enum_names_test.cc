@@ -5,19 +5,14 @@
 
 namespace gesweep {
 
+// Declared with the one-statement macro, as the engine's enums are.
 enum class Colour { kRed, kGreen, kBlue };
-template <>
-struct EnumNames<Colour> {
-  static constexpr EnumName<Colour> kTable[] = {
-      {Colour::kRed, "red"}, {Colour::kGreen, "green"}, {Colour::kBlue, "blue"}};
-};
+GESWEEP_ENUM_NAMES(Colour, {kRed, "red"}, {kGreen, "green"}, {kBlue, "blue"});
 
 enum class Single { kOnly };
-template <>
-struct EnumNames<Single> {
-  static constexpr EnumName<Single> kTable[] = {{Single::kOnly, "only"}};
-};
+GESWEEP_ENUM_NAMES(Single, {kOnly, "only"});
 
+// Written out: the specialization the macro declares.
 enum class Pair { kA, kB };
 template <>
 struct EnumNames<Pair> {
@@ -33,6 +28,13 @@ TEST(EnumNames, PrintsAndParsesEveryValueBothWays) {
   EXPECT_EQ(ToString(Colour::kGreen), "green");
   static_assert(ToString(Colour::kBlue) == "blue");
   static_assert(ParseEnum<Colour>("red") == Colour::kRed);
+}
+
+TEST(EnumNames, TheMacroKeepsTheTableInTheOrderGiven) {
+  static_assert(std::size(EnumNames<Colour>::kTable) == 3);
+  static_assert(EnumNames<Colour>::kTable[0].value == Colour::kRed);
+  static_assert(EnumNames<Colour>::kTable[2].name == "blue");
+  static_assert(std::size(EnumNames<Single>::kTable) == 1);
 }
 
 TEST(EnumNames, ParsingIsExactAndRefusesAnythingElse) {
