@@ -75,14 +75,15 @@ int RunLimits(const std::string& format) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddLimitsFlags(CLI::App& app, std::string& format) {
+  format = "text";
+  app.add_option("--format", format, "text (default), markdown or json");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<std::string>(
     "limits",
     "Print the allowed range of every number a flag or a study file takes, with its reason (docs/limits.md)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto format = std::make_shared<std::string>("text");
-      app.add_option("--format", *format, "text (default), markdown or json");
-      return [format] { return RunLimits(*format); };
-    }}};
+    AddLimitsFlags, RunLimits)};
 
 }  // namespace
 }  // namespace gesweep::cli
