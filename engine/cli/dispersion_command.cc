@@ -15,9 +15,22 @@
 #include <sstream>
 
 #include "engine/cli/command.h"
+#include "engine/cli/json_util.h"
+#include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
 #include "engine/products/dispersion.h"
 #include "engine/query/run_columns.h"
+
+namespace gesweep {
+// The header of a dispersion and the statistics of a column and of a limit in a group, under their
+// own names; ToJson adds the settings and groups, the column's name and fits, the limit's text and
+// intervals. Non-finite numbers are null.
+GESWEEP_JSON_MEMBERS(ColumnDispersion, runs, values, failed, without_value, pending, mean, standard_deviation,
+                     minimum, maximum, percentiles)
+GESWEEP_JSON_MEMBERS(Dispersion, archive, study_name, design_kind, run_count, columns, column_units, group_by)
+GESWEEP_JSON_MEMBERS(LimitExceedance, exceed, values, failed, probability, normal_probability,
+                     gumbel_probability, gev_probability)
+}  // namespace gesweep
 
 namespace gesweep::cli {
 namespace {
@@ -53,12 +66,7 @@ std::string CommandLine(const DispersionFlags& flags) {
   return line.str();
 }
 
-std::string General(double value) {
-  if (!std::isfinite(value)) return FormatValue(value);
-  std::ostringstream out;
-  out << std::setprecision(6) << value;
-  return out.str();
-}
+std::string General(double value) { return FormatNumber(value, 6); }
 
 // JSON has no NaN: null.
 nlohmann::json Number(double value) {
@@ -91,49 +99,28 @@ nlohmann::json ToJson(const Dispersion& d, bool written) {
     nlohmann::json columns = nlohmann::json::array();
     for (std::size_t c = 0; c < d.columns.size(); ++c) {
       const ColumnDispersion& s = g.columns[c];
-      columns.push_back(
-          {{"column", d.columns[c]},
-           {"runs", s.runs},
-           {"values", s.values},
-           {"failed", s.failed},
-           {"without_value", s.without_value},
-           {"pending", s.pending},
-           {"mean", Number(s.mean)},
-           {"standard_deviation", Number(s.standard_deviation)},
-           {"minimum", Number(s.minimum)},
-           {"maximum", Number(s.maximum)},
-           {"percentiles", Numbers(s.percentiles)},
-           {"fits", {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)}}});
+      nlohmann::json column = s;
+      column["column"] = d.columns[c];
+      column["fits"] = {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)};
+      columns.push_back(std::move(column));
     }
     nlohmann::json limits = nlohmann::json::array();
     for (std::size_t l = 0; l < d.limits.size(); ++l) {
       const LimitExceedance& e = g.limits[l];
-      limits.push_back(
-          {{"limit", d.limits[l].text},
-           {"exceed", e.exceed},
-           {"values", e.values},
-           {"failed", e.failed},
-           {"probability", Number(e.probability)},
-           {"wilson", {Number(e.wilson.lower), Number(e.wilson.upper)}},
-           {"clopper_pearson", {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)}},
-           {"normal_probability", Number(e.normal_probability)},
-           {"gumbel_probability", Number(e.gumbel_probability)},
-           {"gev_probability", Number(e.gev_probability)}});
+      nlohmann::json limit = e;
+      limit["limit"] = d.limits[l].text;
+      limit["wilson"] = {Number(e.wilson.lower), Number(e.wilson.upper)};
+      limit["clopper_pearson"] = {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)};
+      limits.push_back(std::move(limit));
     }
     groups.push_back(
         {{"label", g.label}, {"value", Number(g.value)}, {"columns", columns}, {"limits", limits}});
   }
-  nlohmann::json j = {{"archive", d.archive},
-                      {"study_name", d.study_name},
-                      {"design_kind", d.design_kind},
-                      {"run_count", d.run_count},
-                      {"columns", d.columns},
-                      {"column_units", d.column_units},
-                      {"group_by", d.group_by},
-                      {"percentiles", Numbers(d.options.percentiles)},
-                      {"tail_probabilities", Numbers(d.options.tail_probabilities)},
-                      {"confidence_level", d.options.confidence_level},
-                      {"groups", groups}};
+  nlohmann::json j = d;
+  j["percentiles"] = Numbers(d.options.percentiles);
+  j["tail_probabilities"] = Numbers(d.options.tail_probabilities);
+  j["confidence_level"] = d.options.confidence_level;
+  j["groups"] = groups;
   if (written) j["written"] = "/" + DispersionGroupPath();
   return j;
 }

@@ -4,8 +4,15 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/cli/command.h"
+#include "engine/cli/json_util.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+
+namespace gesweep {
+// `gesweep limits --format json`: one object per entry, its members under their own names.
+GESWEEP_JSON_MEMBERS(InputLimit, name, units, minimum, maximum, minimum_exclusive, maximum_exclusive,
+                     allows_infinity, reason)
+}  // namespace gesweep
 
 namespace gesweep::cli {
 namespace {
@@ -23,19 +30,9 @@ std::string Interval(const InputLimit& limit) {
 
 int RunLimits(const std::string& format) {
   if (format == "json") {
-    nlohmann::json rows = nlohmann::json::array();
-    for (const InputLimit& limit : InputLimits()) {
-      rows.push_back({{"name", limit.name},
-                      {"units", limit.units},
-                      {"minimum", limit.minimum},
-                      {"maximum", limit.maximum},
-                      {"minimum_exclusive", limit.minimum_exclusive},
-                      {"maximum_exclusive", limit.maximum_exclusive},
-                      {"allows_infinity", limit.allows_infinity},
-                      {"reason", limit.reason}});
-    }
-    std::cout << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", rows}}.dump(2)
-              << "\n";
+    std::cout
+        << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", InputLimits()}}.dump(2)
+        << "\n";
     return 0;
   }
   if (format == "markdown") {

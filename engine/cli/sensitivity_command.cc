@@ -55,12 +55,7 @@ std::string Fixed(double value, int decimals = 4) {
   return out.str();
 }
 
-std::string General(double value) {
-  if (!std::isfinite(value)) return FormatNumber(value);
-  std::ostringstream out;
-  out << std::setprecision(5) << value;
-  return out.str();
-}
+std::string General(double value) { return FormatNumber(value, 5); }
 
 std::string Interval(const ConfidenceInterval& ci, std::string (*format)(double, int), int decimals) {
   return "[" + format(ci.lower, decimals) + ", " + format(ci.upper, decimals) + "]";
