@@ -26,6 +26,11 @@
 #include "engine/products/run_model.h"
 #include "engine/query/run_columns.h"
 
+namespace gesweep {
+// The header of --archive's JSON, under the members' own names (PrintArchiveBoundary adds the rest).
+GESWEEP_JSON_MEMBERS(ArchiveBoundary, archive, wingspan_m, tolerance_m, runs_used, runs_skipped, snapshot)
+}  // namespace gesweep
+
 namespace gesweep::cli {
 namespace {
 
@@ -191,17 +196,12 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
       if (sensitivities[i]) AddSensitivitiesJson(*sensitivities[i], row);
       points.push_back(row);
     }
-    nlohmann::json out = {{"archive", boundary.archive},
-                          {"study", boundary.study_name},
-                          {"aircraft", boundary.aircraft_name},
-                          {"wingspan_m", boundary.wingspan_m},
-                          {"keys", boundary.key_names},
-                          {"tolerance_m", boundary.tolerance_m},
-                          {"runs_used", boundary.runs_used},
-                          {"runs_skipped", boundary.runs_skipped},
-                          {"snapshot", boundary.snapshot},
-                          {"written", written},
-                          {"boundaries", points}};
+    nlohmann::json out = boundary;
+    out["study"] = boundary.study_name;
+    out["aircraft"] = boundary.aircraft_name;
+    out["keys"] = boundary.key_names;
+    out["written"] = written;
+    out["boundaries"] = points;
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -375,6 +375,64 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
   });
 }
 
+// One speed's boundary object of --format json; `others` are the crossings other than H*.
+nlohmann::json BoundaryJson(double speed, const BoundaryResult& result, double span,
+                            const std::vector<double>& others) {
+  nlohmann::json crossings = nlohmann::json::array();
+  for (const auto& crossing : result.crossings) crossings.push_back(CrossingJson(crossing));
+  nlohmann::json row = {
+      {"speed_mps", speed},
+      {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
+      {"height_over_span",
+       result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
+      {"other_crossings_m", others},
+      {"crossings", crossings},
+      {"method", std::string(ToString(result.method))},
+      {"certified", result.certified},
+      {"certificate", result.certificate},
+      {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
+  if (!result.height_m) row["reason"] = result.reason;
+  return row;
+}
+
+// The speeds to print and, for a:b and a:b:n, the curve H*(u0) traced over them.
+struct SpeedPlan {
+  std::vector<double> speeds;
+  std::optional<BoundaryCurve> curve;
+};
+
+SpeedPlan PlanSpeeds(const BoundaryFlags& flags, const LongitudinalModel& model,
+                     const BoundaryOptions& search) {
+  SpeedPlan plan;
+  const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
+  if (!flags.speeds.empty() && colons == 1) {
+    // a:b: the traced curve, printed at its own points.
+    const std::string a = flags.speeds.substr(0, flags.speeds.find(':'));
+    const std::string b = flags.speeds.substr(flags.speeds.find(':') + 1);
+    const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
+    const double lower = ends[0], upper = ends[1];
+    RequireWithinLimit(ends, "speed_mps", "--speeds-mps");
+    if (!(upper > lower))
+      throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
+    BoundaryCurveOptions options;
+    options.search = search;
+    plan.curve = TraceBoundary(model, lower, upper, options);
+    for (const auto& p : plan.curve->points) plan.speeds.push_back(p.speed_mps);
+  } else if (!flags.speeds.empty()) {
+    plan.speeds = ParseRange(flags.speeds, "--speeds-mps");
+    RequireWithinLimit(plan.speeds, "speed_mps", "--speeds-mps");
+    if (colons == 2 && plan.speeds.size() > 1 && plan.speeds.back() > plan.speeds.front()) {
+      // a:b:n: the curve traced over [a, b], printed at the n speeds.
+      BoundaryCurveOptions options;
+      options.search = search;
+      plan.curve = TraceBoundary(model, plan.speeds.front(), plan.speeds.back(), options);
+    }
+  } else {
+    plan.speeds.push_back(flags.speed_mps);
+  }
+  return plan;
+}
+
 int RunBoundary(const BoundaryFlags& flags) {
   flags.described.Apply();
   if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
@@ -388,34 +446,7 @@ int RunBoundary(const BoundaryFlags& flags) {
   if (!flags.archive.empty()) return RunArchiveBoundary(flags);
   const LongitudinalModel model = flags.model.BuildModel();
   const BoundaryOptions search = SearchOptions(flags, model.aircraft());  // before anything is printed
-  std::vector<double> speeds;
-  std::optional<BoundaryCurve> curve;
-  const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
-  if (!flags.speeds.empty() && colons == 1) {
-    // a:b: the traced curve, printed at its own points.
-    const std::string a = flags.speeds.substr(0, flags.speeds.find(':'));
-    const std::string b = flags.speeds.substr(flags.speeds.find(':') + 1);
-    const std::vector<double> ends = ParseNumberList(a + "," + b, "--speeds-mps", false);
-    const double lower = ends[0], upper = ends[1];
-    RequireWithinLimit(ends, "speed_mps", "--speeds-mps");
-    if (!(upper > lower))
-      throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
-    BoundaryCurveOptions options;
-    options.search = search;
-    curve = TraceBoundary(model, lower, upper, options);
-    for (const auto& p : curve->points) speeds.push_back(p.speed_mps);
-  } else if (!flags.speeds.empty()) {
-    speeds = ParseRange(flags.speeds, "--speeds-mps");
-    RequireWithinLimit(speeds, "speed_mps", "--speeds-mps");
-    if (colons == 2 && speeds.size() > 1 && speeds.back() > speeds.front()) {
-      // a:b:n: the curve traced over [a, b], printed at the n speeds.
-      BoundaryCurveOptions options;
-      options.search = search;
-      curve = TraceBoundary(model, speeds.front(), speeds.back(), options);
-    }
-  } else {
-    speeds.push_back(flags.speed_mps);
-  }
+  const auto [speeds, curve] = PlanSpeeds(flags, model, search);
   const double span = model.aircraft().wingspan_m;
 
   nlohmann::json boundaries = nlohmann::json::array();
@@ -442,27 +473,14 @@ int RunBoundary(const BoundaryFlags& flags) {
     if (flags.sensitivities) sensitivities.push_back(ComputeBoundarySensitivities(model, result));
     std::vector<double> others;
     std::string other_text;
-    nlohmann::json crossings = nlohmann::json::array();
     for (const auto& crossing : result.crossings) {
-      crossings.push_back(CrossingJson(crossing));
       if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9) {
         others.push_back(crossing.height_m);
         other_text += (other_text.empty() ? "" : " ") + CrossingText(crossing);
       }
     }
     if (flags.format == "json") {
-      nlohmann::json row = {
-          {"speed_mps", speed},
-          {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
-          {"height_over_span",
-           result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
-          {"other_crossings_m", others},
-          {"crossings", crossings},
-          {"method", std::string(ToString(search.method))},
-          {"certified", result.certified},
-          {"certificate", result.certificate},
-          {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
-      if (!result.height_m) row["reason"] = result.reason;
+      nlohmann::json row = BoundaryJson(speed, result, span, others);
       if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
       boundaries.push_back(row);
     } else {

@@ -41,14 +41,9 @@ std::string ModeCell(const ModeProperties& mode) {
   return out.str();
 }
 
-int RunModes(const ModesFlags& flags) {
-  flags.described.Apply();
-  const double speed_mps = flags.options.speed_mps;
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
-  const LongitudinalModel model = flags.model.BuildModel();
-  const Aircraft& aircraft = model.aircraft();
+// The heights of --heights-m (each within the limits table and above the wheel contact) or
+// --table-heights (the aircraft's rows and free flight).
+std::vector<double> Heights(const ModesFlags& flags, const Aircraft& aircraft) {
   std::vector<double> heights;
   if (flags.table_heights) {
     heights = aircraft.table_heights_m;
@@ -64,7 +59,18 @@ int RunModes(const ModesFlags& flags) {
                            FormatNumber(aircraft.wheel_contact_height_m) + " m of " + aircraft.source_path);
     }
   }
+  return heights;
+}
 
+int RunModes(const ModesFlags& flags) {
+  flags.described.Apply();
+  const double speed_mps = flags.options.speed_mps;
+  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
+    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
+  }
+  const LongitudinalModel model = flags.model.BuildModel();
+  const Aircraft& aircraft = model.aircraft();
+  const std::vector<double> heights = Heights(flags, aircraft);
   nlohmann::json rows = nlohmann::json::array();
   if (flags.format == "table") {
     std::cout << "# " << aircraft.name << " at u0 = " << speed_mps << " m/s, h-derivatives "
