@@ -435,9 +435,7 @@ SpeedPlan PlanSpeeds(const BoundaryFlags& flags, const LongitudinalModel& model,
 
 int RunBoundary(const BoundaryFlags& flags) {
   flags.described.Apply();
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
+  RequireFormat(flags.format, {"table", "csv", "json"});
   if (flags.sensitivities && flags.format == "csv") {
     throw InputError(
         "command line", "--format", "csv",

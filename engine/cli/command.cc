@@ -7,6 +7,17 @@
 
 namespace gesweep::cli {
 
+void RequireFormat(const std::string& format, std::initializer_list<std::string_view> choices) {
+  std::string expected;
+  std::size_t i = 0;
+  for (std::string_view choice : choices) {
+    if (format == choice) return;
+    expected += (i == 0 ? "" : (i + 1 == choices.size() ? " or " : ", ")) + std::string(choice);
+    ++i;
+  }
+  throw InputError("command line", "--format", "'" + format + "'", "expected " + expected);
+}
+
 ProductArchive OpenProductArchive(const std::string& path, bool no_write, std::string_view command) {
   std::error_code ec;
   std::optional<ArchiveLock> lock;

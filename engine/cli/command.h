@@ -1,11 +1,14 @@
 #pragma once
 /// The subcommand registry of the `gesweep` CLI. Each subcommand lives in its own file in engine/cli/
-/// and registers itself with a static GESWEEP_REGISTER_COMMAND; main.cc builds the CLI11 app from the
-/// registry. Subcommands parse, call the engine and print; they hold no physics.
+/// and registers itself with a static CommandRegistrar (usually of CommandWith<Flags>); main.cc
+/// builds the CLI11 app from the registry. Subcommands parse, call the engine and print; they hold no
+/// physics. Below: the shapes every command shares (registration, the --format check, the ARCHIVE
+/// positional, the end on an archive it cannot use, the lock-and-open of a product command).
 
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <functional>
+#include <initializer_list>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -52,6 +55,10 @@ Command CommandWith(std::string name, std::string description, void (*add)(CLI::
                    return [flags, run] { return run(*flags); };
                  }};
 }
+
+/// Refuses a --format value that is not one of `choices` (exit 2):
+/// "command line: --format = 'xml': expected table, csv or json".
+void RequireFormat(const std::string& format, std::initializer_list<std::string_view> choices);
 
 /// The positional ARCHIVE of a command that reads one (required).
 inline CLI::Option* AddArchiveArgument(CLI::App& app, std::string& archive, const std::string& description) {

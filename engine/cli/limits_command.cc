@@ -29,6 +29,7 @@ std::string Interval(const InputLimit& limit) {
 }
 
 int RunLimits(const std::string& format) {
+  RequireFormat(format, {"text", "markdown", "json"});
   if (format == "json") {
     std::cout
         << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", InputLimits()}}.dump(2)
@@ -53,9 +54,6 @@ int RunLimits(const std::string& format) {
               << " integration steps per run: duration_s / step_s (RK4), duration_s / max_step_s (dopri5 "
                  "with a largest step), a landing's time limit / max_step_s.\n";
     return 0;
-  }
-  if (format != "text") {
-    throw InputError("command line", "--format", "'" + format + "'", "expected text, markdown or json");
   }
   std::size_t name_width = 5, range_width = 5;
   for (const InputLimit& limit : InputLimits()) {

@@ -65,9 +65,7 @@ std::vector<double> Heights(const ModesFlags& flags, const Aircraft& aircraft) {
 int RunModes(const ModesFlags& flags) {
   flags.described.Apply();
   const double speed_mps = flags.options.speed_mps;
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
+  RequireFormat(flags.format, {"table", "csv", "json"});
   const LongitudinalModel model = flags.model.BuildModel();
   const Aircraft& aircraft = model.aircraft();
   const std::vector<double> heights = Heights(flags, aircraft);

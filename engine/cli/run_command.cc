@@ -432,9 +432,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
 }
 
 int Run(const RunFlags& flags) {
-  if (flags.format != "text" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected text or json");
-  }
+  RequireFormat(flags.format, {"text", "json"});
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }

@@ -98,9 +98,7 @@ std::vector<std::pair<const char*, const std::vector<double>*>> SeriesColumns(co
 
 int RunSimulate(const SimulateFlags& flags) {
   flags.described.Apply();
-  if (flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected csv or json");
-  }
+  RequireFormat(flags.format, {"csv", "json"});
   const LongitudinalModel model = flags.model.BuildModel();
   const OpenLoopConfig config = BuildConfig(flags, model);
   const SignalCancellation signals;
