@@ -15,6 +15,7 @@
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
@@ -25,6 +26,11 @@
 #include "engine/products/run_model.h"
 #include "engine/query/run_columns.h"
 
+namespace gesweep {
+// The header of --archive's JSON, under the members' own names (PrintArchiveBoundary adds the rest).
+GESWEEP_JSON_MEMBERS(ArchiveBoundary, archive, wingspan_m, tolerance_m, runs_used, runs_skipped, snapshot)
+}  // namespace gesweep
+
 namespace gesweep::cli {
 namespace {
 
@@ -34,20 +40,22 @@ struct BoundaryFlags {
   std::string speeds;
   std::string format = "table";
   bool sensitivities = false;
-  std::string archive;             // --archive: the boundary of a sweep's results
-  std::vector<std::string> by;     // --by: order of the curve's axes
-  bool no_write = false;           // --no-write: print only
-  std::string method = "hurwitz";  // --method: hurwitz (certified) or sampled (the former search)
+  std::string archive;          // --archive: the boundary of a sweep's results
+  std::vector<std::string> by;  // --by: order of the curve's axes
+  bool no_write = false;        // --no-write: print only
+  BoundaryOptions search;  // its fields are flags (BoundaryOptions::Describe): method, heights, tolerance
+  DescribedFlags described;
 };
 
-BoundaryOptions SearchOptions(const BoundaryFlags& flags) {
-  BoundaryOptions options;
-  if (flags.method == "sampled") {
-    options.method = BoundaryMethod::kSampled;
-  } else if (flags.method != "hurwitz") {
-    throw InputError("command line", "--method", "'" + flags.method + "'", "expected hurwitz or sampled");
+// The search settings, checked against the aircraft in the flags' names (each flag's own range was
+// checked as it was parsed).
+BoundaryOptions SearchOptions(const BoundaryFlags& flags, const Aircraft& aircraft) {
+  try {
+    ValidateBoundaryOptions(flags.search, aircraft, "command line");
+  } catch (const InputError& e) {
+    flags.described.Rethrow(e);
   }
-  return options;
+  return flags.search;
 }
 
 nlohmann::json CrossingJson(const BoundaryCrossing& c) {
@@ -188,17 +196,12 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
       if (sensitivities[i]) AddSensitivitiesJson(*sensitivities[i], row);
       points.push_back(row);
     }
-    nlohmann::json out = {{"archive", boundary.archive},
-                          {"study", boundary.study_name},
-                          {"aircraft", boundary.aircraft_name},
-                          {"wingspan_m", boundary.wingspan_m},
-                          {"keys", boundary.key_names},
-                          {"tolerance_m", boundary.tolerance_m},
-                          {"runs_used", boundary.runs_used},
-                          {"runs_skipped", boundary.runs_skipped},
-                          {"snapshot", boundary.snapshot},
-                          {"written", written},
-                          {"boundaries", points}};
+    nlohmann::json out = boundary;
+    out["study"] = boundary.study_name;
+    out["aircraft"] = boundary.aircraft_name;
+    out["keys"] = boundary.key_names;
+    out["written"] = written;
+    out["boundaries"] = points;
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -302,7 +305,7 @@ void PrintCurveSummary(const BoundaryCurve& curve) {
 
 // The flags are checked (RunBoundary).
 int RunArchiveBoundary(const BoundaryFlags& flags) {
-  try {
+  return GuardArchive([&] {
     // Claim the archive before reading it, so no sweep starts writing it meanwhile; refused while
     // one writes it.
     std::optional<ArchiveLock> lock;
@@ -368,27 +371,40 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
       if (!flags.no_write)
         std::cout << "# curve written to " << flags.archive << ":/" << kBoundaryCurveGroup << "\n";
     }
-  } catch (const ArchiveError& e) {
-    return ArchiveFailure(e);
-  }
-  return 0;
+    return 0;
+  });
 }
 
-int RunBoundary(const BoundaryFlags& flags) {
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
-  if (flags.sensitivities && flags.format == "csv") {
-    throw InputError(
-        "command line", "--format", "csv",
-        "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
-  }
-  if (!flags.archive.empty()) return RunArchiveBoundary(flags);
-  const BoundaryOptions search = SearchOptions(flags);  // validated before anything is printed
+// One speed's boundary object of --format json; `others` are the crossings other than H*.
+nlohmann::json BoundaryJson(double speed, const BoundaryResult& result, double span,
+                            const std::vector<double>& others) {
+  nlohmann::json crossings = nlohmann::json::array();
+  for (const auto& crossing : result.crossings) crossings.push_back(CrossingJson(crossing));
+  nlohmann::json row = {
+      {"speed_mps", speed},
+      {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
+      {"height_over_span",
+       result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
+      {"other_crossings_m", others},
+      {"crossings", crossings},
+      {"method", std::string(ToString(result.method))},
+      {"certified", result.certified},
+      {"certificate", result.certificate},
+      {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
+  if (!result.height_m) row["reason"] = result.reason;
+  return row;
+}
+
+// The speeds to print and, for a:b and a:b:n, the curve H*(u0) traced over them.
+struct SpeedPlan {
   std::vector<double> speeds;
   std::optional<BoundaryCurve> curve;
+};
+
+SpeedPlan PlanSpeeds(const BoundaryFlags& flags, const LongitudinalModel& model,
+                     const BoundaryOptions& search) {
+  SpeedPlan plan;
   const auto colons = std::count(flags.speeds.begin(), flags.speeds.end(), ':');
-  const LongitudinalModel model = flags.model.BuildModel();
   if (!flags.speeds.empty() && colons == 1) {
     // a:b: the traced curve, printed at its own points.
     const std::string a = flags.speeds.substr(0, flags.speeds.find(':'));
@@ -399,21 +415,36 @@ int RunBoundary(const BoundaryFlags& flags) {
     if (!(upper > lower))
       throw InputError("command line", "--speeds-mps", "'" + flags.speeds + "'", "expected a:b with a < b");
     BoundaryCurveOptions options;
-    options.search = SearchOptions(flags);
-    curve = TraceBoundary(model, lower, upper, options);
-    for (const auto& p : curve->points) speeds.push_back(p.speed_mps);
+    options.search = search;
+    plan.curve = TraceBoundary(model, lower, upper, options);
+    for (const auto& p : plan.curve->points) plan.speeds.push_back(p.speed_mps);
   } else if (!flags.speeds.empty()) {
-    speeds = ParseRange(flags.speeds, "--speeds-mps");
-    RequireWithinLimit(speeds, "speed_mps", "--speeds-mps");
-    if (colons == 2 && speeds.size() > 1 && speeds.back() > speeds.front()) {
+    plan.speeds = ParseRange(flags.speeds, "--speeds-mps");
+    RequireWithinLimit(plan.speeds, "speed_mps", "--speeds-mps");
+    if (colons == 2 && plan.speeds.size() > 1 && plan.speeds.back() > plan.speeds.front()) {
       // a:b:n: the curve traced over [a, b], printed at the n speeds.
       BoundaryCurveOptions options;
-      options.search = SearchOptions(flags);
-      curve = TraceBoundary(model, speeds.front(), speeds.back(), options);
+      options.search = search;
+      plan.curve = TraceBoundary(model, plan.speeds.front(), plan.speeds.back(), options);
     }
   } else {
-    speeds.push_back(flags.speed_mps);
+    plan.speeds.push_back(flags.speed_mps);
   }
+  return plan;
+}
+
+int RunBoundary(const BoundaryFlags& flags) {
+  flags.described.Apply();
+  RequireFormat(flags.format, {"table", "csv", "json"});
+  if (flags.sensitivities && flags.format == "csv") {
+    throw InputError(
+        "command line", "--format", "csv",
+        "expected table or json with --sensitivities (a second table does not fit one CSV stream)");
+  }
+  if (!flags.archive.empty()) return RunArchiveBoundary(flags);
+  const LongitudinalModel model = flags.model.BuildModel();
+  const BoundaryOptions search = SearchOptions(flags, model.aircraft());  // before anything is printed
+  const auto [speeds, curve] = PlanSpeeds(flags, model, search);
   const double span = model.aircraft().wingspan_m;
 
   nlohmann::json boundaries = nlohmann::json::array();
@@ -440,27 +471,14 @@ int RunBoundary(const BoundaryFlags& flags) {
     if (flags.sensitivities) sensitivities.push_back(ComputeBoundarySensitivities(model, result));
     std::vector<double> others;
     std::string other_text;
-    nlohmann::json crossings = nlohmann::json::array();
     for (const auto& crossing : result.crossings) {
-      crossings.push_back(CrossingJson(crossing));
       if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9) {
         others.push_back(crossing.height_m);
         other_text += (other_text.empty() ? "" : " ") + CrossingText(crossing);
       }
     }
     if (flags.format == "json") {
-      nlohmann::json row = {
-          {"speed_mps", speed},
-          {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
-          {"height_over_span",
-           result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
-          {"other_crossings_m", others},
-          {"crossings", crossings},
-          {"method", flags.method},
-          {"certified", result.certified},
-          {"certificate", result.certificate},
-          {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
-      if (!result.height_m) row["reason"] = result.reason;
+      nlohmann::json row = BoundaryJson(speed, result, span, others);
       if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
       boundaries.push_back(row);
     } else {
@@ -491,59 +509,62 @@ int RunBoundary(const BoundaryFlags& flags) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddBoundaryFlags(CLI::App& app, BoundaryFlags& flags) {
+  flags.model.AddTo(app, /*aircraft_required=*/false);
+  auto* speed = AddLimitedOption(app, "--speed-mps", flags.speed_mps, "speed_mps", "Reference speed u0, m/s");
+  auto* speeds =
+      app.add_option("--speeds-mps", flags.speeds,
+                     "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
+                     "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
+  speed->excludes(speeds);
+  auto* archive =
+      app.add_option("--archive", flags.archive,
+                     "Instead of --aircraft: the boundary of a sweep's archive (results/modes over a "
+                     "height_m axis), refined on each run's model, written to /analysis/boundary");
+  archive->excludes(app.get_option("--aircraft"))->excludes(speed)->excludes(speeds);
+  auto* by = app.add_option("--by", flags.by,
+                            "With --archive: the swept parameters to order the curve by, e.g. speed_mps "
+                            "(default: the design's order)")
+                 ->delimiter(',');
+  auto* no_write = app.add_flag("--no-write", flags.no_write, "With --archive: print only, write nothing");
+  app.add_option("--format", flags.format, "table (default), csv or json");
+  flags.described.Add(app, flags.search);
+  app.add_flag("--sensitivities", flags.sensitivities,
+               "Also print dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by "
+               "|p dH*/dp| (docs/sensitivity.md)");
+  app.callback([&app, speed, speeds, archive, by, no_write] {
+    if (archive->count() > 0) {
+      for (const char* model_flag : {"--cdh", "--no-h-derivatives", "--interpolation"}) {
+        if (app.get_option(model_flag)->count() > 0) {
+          throw CLI::ValidationError(model_flag,
+                                     "the model of --archive comes from the archive's runs; "
+                                     "sweep the model options in the study instead");
+        }
+      }
+      for (const char* search_flag : {"--lower-height-m", "--upper-height-m", "--tolerance-m"}) {
+        if (app.get_option(search_flag)->count() > 0) {
+          throw CLI::ValidationError(search_flag,
+                                     "sets the search on --aircraft's model; --archive refines each "
+                                     "run's boundary within the archive's own height grid");
+        }
+      }
+      return;
+    }
+    if (by->count() > 0 || no_write->count() > 0) {
+      throw CLI::ValidationError(by->count() > 0 ? "--by" : "--no-write", "only with --archive");
+    }
+    if (app.get_option("--aircraft")->count() == 0) {
+      throw CLI::ValidationError("--aircraft or --archive", "one of them is required");
+    }
+    if (speed->count() == 0 && speeds->count() == 0) {
+      throw CLI::ValidationError("--speed-mps or --speeds-mps", "one of them is required");
+    }
+  });
+}
+
+const CommandRegistrar kRegistrar{CommandWith<BoundaryFlags>(
     "boundary", "Stability boundary H*(u0): where the largest real part of the eigenvalues changes sign",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<BoundaryFlags>();
-      flags->model.AddTo(app, /*aircraft_required=*/false);
-      auto* speed =
-          AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s");
-      auto* speeds =
-          app.add_option("--speeds-mps", flags->speeds,
-                         "Speeds a:b (the curve H*(u0) traced by continuation, printed at its points), "
-                         "a:b:n (traced, printed at n evenly spaced speeds) or a,b,c (each on its own)");
-      speed->excludes(speeds);
-      auto* archive =
-          app.add_option("--archive", flags->archive,
-                         "Instead of --aircraft: the boundary of a sweep's archive (results/modes over a "
-                         "height_m axis), refined on each run's model, written to /analysis/boundary");
-      archive->excludes(app.get_option("--aircraft"))->excludes(speed)->excludes(speeds);
-      auto* by = app.add_option("--by", flags->by,
-                                "With --archive: the swept parameters to order the curve by, e.g. speed_mps "
-                                "(default: the design's order)")
-                     ->delimiter(',');
-      auto* no_write =
-          app.add_flag("--no-write", flags->no_write, "With --archive: print only, write nothing");
-      app.add_option("--format", flags->format, "table (default), csv or json");
-      app.add_option("--method", flags->method,
-                     "hurwitz (default: every crossing of the imaginary axis, certified) or sampled (the "
-                     "former search, sigma sampled per table segment; for comparison)");
-      app.add_flag("--sensitivities", flags->sensitivities,
-                   "Also print dH*/dp for every coefficient scale factor, CDo, mass, Iy and speed, ranked by "
-                   "|p dH*/dp| (docs/sensitivity.md)");
-      app.callback([&app, speed, speeds, archive, by, no_write] {
-        if (archive->count() > 0) {
-          for (const char* model_flag : {"--cdh", "--no-h-derivatives", "--interpolation"}) {
-            if (app.get_option(model_flag)->count() > 0) {
-              throw CLI::ValidationError(model_flag,
-                                         "the model of --archive comes from the archive's runs; "
-                                         "sweep the model options in the study instead");
-            }
-          }
-          return;
-        }
-        if (by->count() > 0 || no_write->count() > 0) {
-          throw CLI::ValidationError(by->count() > 0 ? "--by" : "--no-write", "only with --archive");
-        }
-        if (app.get_option("--aircraft")->count() == 0) {
-          throw CLI::ValidationError("--aircraft or --archive", "one of them is required");
-        }
-        if (speed->count() == 0 && speeds->count() == 0) {
-          throw CLI::ValidationError("--speed-mps or --speeds-mps", "one of them is required");
-        }
-      });
-      return [flags] { return RunBoundary(*flags); };
-    }}};
+    AddBoundaryFlags, RunBoundary)};
 
 }  // namespace
 }  // namespace gesweep::cli

@@ -327,25 +327,31 @@ void PrintText(const Json& manifest) {
   }
 }
 
-const CommandRegistrar kRegistrar{Command{
-    "columns", "The column manifest: every dataset an archive can hold (schemas/archive.md)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto json = std::make_shared<bool>(false);
-      auto aircraft = std::make_shared<std::string>(GESWEEP_COLUMNS_AIRCRAFT_DEFAULT);
-      app.add_flag("--json", *json, "JSON (what scripts read, schemas/archive.md) instead of a text table");
-      app.add_option("--aircraft", *aircraft,
-                     "Aircraft file the analyses that need one are built with (the columns do not depend on "
-                     "it); default: the repository's studies/aircraft/ance.toml");
-      return [json, aircraft] {
-        const Json manifest = Manifest(LoadAircraftFile(*aircraft));
-        if (*json) {
-          std::cout << manifest.dump(2) << "\n";
-        } else {
-          PrintText(manifest);
-        }
-        return 0;
-      };
-    }}};
+struct ColumnsFlags {
+  bool json = false;
+  std::string aircraft = GESWEEP_COLUMNS_AIRCRAFT_DEFAULT;
+};
+
+void AddColumnsFlags(CLI::App& app, ColumnsFlags& flags) {
+  app.add_flag("--json", flags.json, "JSON (what scripts read, schemas/archive.md) instead of a text table");
+  app.add_option("--aircraft", flags.aircraft,
+                 "Aircraft file the analyses that need one are built with (the columns do not depend on "
+                 "it); default: the repository's studies/aircraft/ance.toml");
+}
+
+int RunColumns(const ColumnsFlags& flags) {
+  const Json manifest = Manifest(LoadAircraftFile(flags.aircraft));
+  if (flags.json) {
+    std::cout << manifest.dump(2) << "\n";
+  } else {
+    PrintText(manifest);
+  }
+  return 0;
+}
+
+const CommandRegistrar kRegistrar{CommandWith<ColumnsFlags>(
+    "columns", "The column manifest: every dataset an archive can hold (schemas/archive.md)", AddColumnsFlags,
+    RunColumns)};
 
 }  // namespace
 }  // namespace gesweep::cli

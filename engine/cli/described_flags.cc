@@ -28,7 +28,8 @@ std::vector<std::string> DescribedFlags::AliasesOf(std::string_view key) const {
 std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::string& default_text,
                                  bool required) {
   std::string help(attributes.doc);
-  if (!required) help += "; default " + default_text;
+  // A NaN default means "unset": the description says what applies then.
+  if (!required && default_text != "nan") help += "; default " + default_text;
   return help;
 }
 

@@ -14,27 +14,30 @@
 #include <optional>
 #include <sstream>
 
-#include "engine/archive/archive_error.h"
-#include "engine/archive/archive_lock.h"
-#include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
-#include "engine/cli/request_names.h"
+#include "engine/cli/json_util.h"
+#include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
 #include "engine/products/dispersion.h"
 #include "engine/query/run_columns.h"
+
+namespace gesweep {
+// The header of a dispersion and the statistics of a column and of a limit in a group, under their
+// own names; ToJson adds the settings and groups, the column's name and fits, the limit's text and
+// intervals. Non-finite numbers are null.
+GESWEEP_JSON_MEMBERS(ColumnDispersion, runs, values, failed, without_value, pending, mean, standard_deviation,
+                     minimum, maximum, percentiles)
+GESWEEP_JSON_MEMBERS(Dispersion, archive, study_name, design_kind, run_count, columns, column_units, group_by)
+GESWEEP_JSON_MEMBERS(LimitExceedance, exceed, values, failed, probability, normal_probability,
+                     gumbel_probability, gev_probability)
+}  // namespace gesweep
 
 namespace gesweep::cli {
 namespace {
 
 struct DispersionFlags {
   std::string archive;
-  std::vector<std::string> columns;
-  std::vector<std::string> limits;
-  std::string group_by;
-  std::vector<double> percentiles = DispersionOptions{}.percentiles;
-  std::vector<double> tail_probabilities = DispersionOptions{}.tail_probabilities;
-  double confidence_level = DispersionOptions{}.confidence_level;
-  int max_groups = DispersionOptions{}.max_groups;
+  DispersionOptions options;  // its fields are the flags below (defaults as the struct's)
   std::string format = "table";
   bool no_write = false;
 };
@@ -54,21 +57,16 @@ std::string JoinNumbers(const std::vector<double>& values) {
 std::string CommandLine(const DispersionFlags& flags) {
   std::ostringstream line;
   line << "gesweep dispersion " << flags.archive;
-  if (!flags.columns.empty()) line << " --columns " << Join(flags.columns);
-  for (const auto& limit : flags.limits) line << " --limit '" << limit << "'";
-  if (!flags.group_by.empty()) line << " --group-by " << flags.group_by;
-  line << " --percentiles " << JoinNumbers(flags.percentiles) << " --tail-probabilities "
-       << JoinNumbers(flags.tail_probabilities) << " --confidence-level "
-       << ShortNumber(flags.confidence_level);
+  if (!flags.options.columns.empty()) line << " --columns " << Join(flags.options.columns);
+  for (const auto& limit : flags.options.limits) line << " --limit '" << limit << "'";
+  if (!flags.options.group_by.empty()) line << " --group-by " << flags.options.group_by;
+  line << " --percentiles " << JoinNumbers(flags.options.percentiles) << " --tail-probabilities "
+       << JoinNumbers(flags.options.tail_probabilities) << " --confidence-level "
+       << ShortNumber(flags.options.confidence_level);
   return line.str();
 }
 
-std::string General(double value) {
-  if (!std::isfinite(value)) return FormatValue(value);
-  std::ostringstream out;
-  out << std::setprecision(6) << value;
-  return out.str();
-}
+std::string General(double value) { return FormatNumber(value, 6); }
 
 // JSON has no NaN: null.
 nlohmann::json Number(double value) {
@@ -101,49 +99,28 @@ nlohmann::json ToJson(const Dispersion& d, bool written) {
     nlohmann::json columns = nlohmann::json::array();
     for (std::size_t c = 0; c < d.columns.size(); ++c) {
       const ColumnDispersion& s = g.columns[c];
-      columns.push_back(
-          {{"column", d.columns[c]},
-           {"runs", s.runs},
-           {"values", s.values},
-           {"failed", s.failed},
-           {"without_value", s.without_value},
-           {"pending", s.pending},
-           {"mean", Number(s.mean)},
-           {"standard_deviation", Number(s.standard_deviation)},
-           {"minimum", Number(s.minimum)},
-           {"maximum", Number(s.maximum)},
-           {"percentiles", Numbers(s.percentiles)},
-           {"fits", {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)}}});
+      nlohmann::json column = s;
+      column["column"] = d.columns[c];
+      column["fits"] = {FitJson(s.normal), FitJson(s.gumbel_max), FitJson(s.gumbel_min), FitJson(s.gev_max)};
+      columns.push_back(std::move(column));
     }
     nlohmann::json limits = nlohmann::json::array();
     for (std::size_t l = 0; l < d.limits.size(); ++l) {
       const LimitExceedance& e = g.limits[l];
-      limits.push_back(
-          {{"limit", d.limits[l].text},
-           {"exceed", e.exceed},
-           {"values", e.values},
-           {"failed", e.failed},
-           {"probability", Number(e.probability)},
-           {"wilson", {Number(e.wilson.lower), Number(e.wilson.upper)}},
-           {"clopper_pearson", {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)}},
-           {"normal_probability", Number(e.normal_probability)},
-           {"gumbel_probability", Number(e.gumbel_probability)},
-           {"gev_probability", Number(e.gev_probability)}});
+      nlohmann::json limit = e;
+      limit["limit"] = d.limits[l].text;
+      limit["wilson"] = {Number(e.wilson.lower), Number(e.wilson.upper)};
+      limit["clopper_pearson"] = {Number(e.clopper_pearson.lower), Number(e.clopper_pearson.upper)};
+      limits.push_back(std::move(limit));
     }
     groups.push_back(
         {{"label", g.label}, {"value", Number(g.value)}, {"columns", columns}, {"limits", limits}});
   }
-  nlohmann::json j = {{"archive", d.archive},
-                      {"study_name", d.study_name},
-                      {"design_kind", d.design_kind},
-                      {"run_count", d.run_count},
-                      {"columns", d.columns},
-                      {"column_units", d.column_units},
-                      {"group_by", d.group_by},
-                      {"percentiles", Numbers(d.options.percentiles)},
-                      {"tail_probabilities", Numbers(d.options.tail_probabilities)},
-                      {"confidence_level", d.options.confidence_level},
-                      {"groups", groups}};
+  nlohmann::json j = d;
+  j["percentiles"] = Numbers(d.options.percentiles);
+  j["tail_probabilities"] = Numbers(d.options.tail_probabilities);
+  j["confidence_level"] = d.options.confidence_level;
+  j["groups"] = groups;
   if (written) j["written"] = "/" + DispersionGroupPath();
   return j;
 }
@@ -228,86 +205,64 @@ int RunDispersion(const DispersionFlags& flags) {
   if (flags.format != "table" && flags.format != "json") {
     throw InputError("command line", "--format", flags.format, "expected table or json");
   }
-  if (flags.max_groups < 1) {
-    throw InputError("command line", "--max-groups", std::to_string(flags.max_groups), "expected >= 1");
+  if (flags.options.max_groups < 1) {
+    throw InputError("command line", "--max-groups", std::to_string(flags.options.max_groups),
+                     "expected >= 1");
   }
-  DispersionOptions options;
-  options.columns = flags.columns;
-  options.limits = flags.limits;
-  options.group_by = flags.group_by;
-  options.percentiles = flags.percentiles;
-  options.tail_probabilities = flags.tail_probabilities;
-  options.confidence_level = flags.confidence_level;
-  options.max_groups = flags.max_groups;
   const FlagNames names = {{"columns", "--columns"},
                            {"limits", "--limit"},
                            {"group_by", "--group-by"},
                            {"percentiles", "--percentiles"},
                            {"tail_probabilities", "--tail-probabilities"},
                            {"confidence_level", "--confidence-level"}};
-  try {
-    const std::filesystem::path path = flags.archive;
-    std::error_code ec;
-    std::optional<ArchiveLock> lock;
-    if (!flags.no_write && std::filesystem::is_regular_file(path, ec))
-      lock.emplace(ArchiveLock::Acquire(
-          path, "run gesweep dispersion once it has finished, or pass --no-write to only print it"));
-    ArchiveReader reader = ArchiveReader::Open(path);
-    if (reader.snapshot() && !flags.no_write) {
-      throw InputError(flags.archive, "", "",
-                       "archive in use: a sweep is writing it, or the sweep that wrote it stopped without "
-                       "closing it (finish it with `gesweep run STUDY -o " +
-                           flags.archive + " --resume`); or pass --no-write");
-    }
-    const ColumnCatalog catalog = ColumnCatalog::Of(reader);
-    const Dispersion result = ComputeDispersion(reader, catalog, options);
-    reader.Close();
-    if (lock) WriteDispersionGroup(path, result, CommandLine(flags));
+  return GuardArchive(names, [&] {
+    ProductArchive archive = OpenProductArchive(flags.archive, flags.no_write, "dispersion");
+    const ColumnCatalog catalog = ColumnCatalog::Of(archive.reader);
+    const Dispersion result = ComputeDispersion(archive.reader, catalog, flags.options);
+    archive.reader.Close();
+    const bool written = archive.lock.has_value();
+    if (written) WriteDispersionGroup(flags.archive, result, CommandLine(flags));
     if (flags.format == "json") {
-      std::cout << ToJson(result, lock.has_value()).dump(2) << "\n";
+      std::cout << ToJson(result, written).dump(2) << "\n";
     } else {
       PrintTable(result);
-      if (lock) std::cout << "# written to " << flags.archive << ": /" << DispersionGroupPath() << "\n";
+      if (written) std::cout << "# written to " << flags.archive << ": /" << DispersionGroupPath() << "\n";
     }
-  } catch (const InputError& e) {
-    throw ForCommandLine(e, names);
-  } catch (const ArchiveError& e) {
-    return ArchiveFailure(e);
-  }
-  return 0;
+    return 0;
+  });
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddDispersionFlags(CLI::App& app, DispersionFlags& flags) {
+  DispersionOptions& options = flags.options;
+  AddArchiveArgument(app, flags.archive, "Archive of a sweep (typically a monte_carlo design)");
+  app.add_option("--columns", options.columns,
+                 "Result columns (names, paths or wildcards, comma-separated; default: the landing's "
+                 "touchdown distance past the transmitter, sink rate, speed and pitch, and the flare's "
+                 "peak elevator when present)")
+      ->delimiter(',');
+  app.add_option("--limit", options.limits,
+                 "A limit COLUMN>VALUE or COLUMN<VALUE (repeatable), e.g. 'touchdown_sink_rate_mps>3': "
+                 "the probability of exceeding it");
+  app.add_option("--group-by", options.group_by,
+                 "A column (e.g. a design parameter) whose values split the runs into groups");
+  app.add_option("--percentiles", options.percentiles,
+                 "Percentiles, 0 to 100 (default 0.1,1,5,50,95,99,99.9)")
+      ->delimiter(',');
+  app.add_option("--tail-probabilities", options.tail_probabilities,
+                 "Tail probabilities of the fitted quantiles (default 1e-3,1e-4,1e-5,1e-6)")
+      ->delimiter(',');
+  app.add_option("--confidence-level", options.confidence_level, "Level of the intervals (default 0.95)");
+  app.add_option("--max-groups", options.max_groups, "Most groups accepted (default 1000)");
+  app.add_option("--format", flags.format, "table (default) or json");
+  app.add_flag("--no-write", flags.no_write, "Print only; leave the archive untouched");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<DispersionFlags>(
     "dispersion",
     "Dispersion of a Monte Carlo sweep's results (by default the landing's touchdown columns): moments, "
     "percentiles, normal and Gumbel tail fits, limit exceedance probabilities with Wilson and "
     "Clopper-Pearson intervals, per group; writes /analysis/dispersion",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<DispersionFlags>();
-      app.add_option("archive", flags->archive, "Archive of a sweep (typically a monte_carlo design)")
-          ->required();
-      app.add_option("--columns", flags->columns,
-                     "Result columns (names, paths or wildcards, comma-separated; default: the landing's "
-                     "touchdown distance past the transmitter, sink rate, speed and pitch, and the flare's "
-                     "peak elevator when present)")
-          ->delimiter(',');
-      app.add_option("--limit", flags->limits,
-                     "A limit COLUMN>VALUE or COLUMN<VALUE (repeatable), e.g. 'touchdown_sink_rate_mps>3': "
-                     "the probability of exceeding it");
-      app.add_option("--group-by", flags->group_by,
-                     "A column (e.g. a design parameter) whose values split the runs into groups");
-      app.add_option("--percentiles", flags->percentiles,
-                     "Percentiles, 0 to 100 (default 0.1,1,5,50,95,99,99.9)")
-          ->delimiter(',');
-      app.add_option("--tail-probabilities", flags->tail_probabilities,
-                     "Tail probabilities of the fitted quantiles (default 1e-3,1e-4,1e-5,1e-6)")
-          ->delimiter(',');
-      app.add_option("--confidence-level", flags->confidence_level, "Level of the intervals (default 0.95)");
-      app.add_option("--max-groups", flags->max_groups, "Most groups accepted (default 1000)");
-      app.add_option("--format", flags->format, "table (default) or json");
-      app.add_flag("--no-write", flags->no_write, "Print only; leave the archive untouched");
-      return [flags] { return RunDispersion(*flags); };
-    }}};
+    AddDispersionFlags, RunDispersion)};
 
 }  // namespace
 }  // namespace gesweep::cli

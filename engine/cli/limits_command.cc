@@ -4,8 +4,15 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/cli/command.h"
+#include "engine/cli/json_util.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+
+namespace gesweep {
+// `gesweep limits --format json`: one object per entry, its members under their own names.
+GESWEEP_JSON_MEMBERS(InputLimit, name, units, minimum, maximum, minimum_exclusive, maximum_exclusive,
+                     allows_infinity, reason)
+}  // namespace gesweep
 
 namespace gesweep::cli {
 namespace {
@@ -22,20 +29,11 @@ std::string Interval(const InputLimit& limit) {
 }
 
 int RunLimits(const std::string& format) {
+  RequireFormat(format, {"text", "markdown", "json"});
   if (format == "json") {
-    nlohmann::json rows = nlohmann::json::array();
-    for (const InputLimit& limit : InputLimits()) {
-      rows.push_back({{"name", limit.name},
-                      {"units", limit.units},
-                      {"minimum", limit.minimum},
-                      {"maximum", limit.maximum},
-                      {"minimum_exclusive", limit.minimum_exclusive},
-                      {"maximum_exclusive", limit.maximum_exclusive},
-                      {"allows_infinity", limit.allows_infinity},
-                      {"reason", limit.reason}});
-    }
-    std::cout << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", rows}}.dump(2)
-              << "\n";
+    std::cout
+        << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", InputLimits()}}.dump(2)
+        << "\n";
     return 0;
   }
   if (format == "markdown") {
@@ -57,9 +55,6 @@ int RunLimits(const std::string& format) {
                  "with a largest step), a landing's time limit / max_step_s.\n";
     return 0;
   }
-  if (format != "text") {
-    throw InputError("command line", "--format", "'" + format + "'", "expected text, markdown or json");
-  }
   std::size_t name_width = 5, range_width = 5;
   for (const InputLimit& limit : InputLimits()) {
     name_width = std::max(name_width, limit.name.size());
@@ -75,14 +70,15 @@ int RunLimits(const std::string& format) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddLimitsFlags(CLI::App& app, std::string& format) {
+  format = "text";
+  app.add_option("--format", format, "text (default), markdown or json");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<std::string>(
     "limits",
     "Print the allowed range of every number a flag or a study file takes, with its reason (docs/limits.md)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto format = std::make_shared<std::string>("text");
-      app.add_option("--format", *format, "text (default), markdown or json");
-      return [format] { return RunLimits(*format); };
-    }}};
+    AddLimitsFlags, RunLimits)};
 
 }  // namespace
 }  // namespace gesweep::cli

@@ -5,7 +5,6 @@
 #include <iomanip>
 #include <iostream>
 
-#include "engine/archive/archive_error.h"
 #include "engine/archive/archive_merge.h"
 #include "engine/cli/command.h"
 #include "engine/common/errors.h"
@@ -26,7 +25,7 @@ int Merge(const MergeFlags& flags) {
   std::string command_line = "gesweep merge";
   for (const auto& input : flags.inputs) command_line += " " + input;
   command_line += " -o " + flags.output + (flags.copy ? " --copy" : "") + (flags.force ? " --force" : "");
-  try {
+  return GuardArchive([&] {
     const MergeReport report = MergeArchives(inputs, flags.output, flags.force, command_line,
                                              flags.copy ? MergeKind::kCopy : MergeKind::kVirtual);
     if (!flags.quiet) {
@@ -45,28 +44,25 @@ int Merge(const MergeFlags& flags) {
         std::cerr << ")\n";
       }
     }
-  } catch (const ArchiveError& e) {
-    return ArchiveFailure(e);
-  }
-  return 0;
+    return 0;
+  });
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddMergeFlags(CLI::App& app, MergeFlags& flags) {
+  app.add_option("archives", flags.inputs, "Shard archives (from gesweep run --shard i/N)")->required();
+  app.add_option("-o,--output", flags.output, "Merged archive to write")->required();
+  app.add_flag("--force", flags.force, "Replace an existing output archive");
+  app.add_flag("--copy", flags.copy,
+               "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
+               "files, which must then stay where they are)");
+  app.add_flag("-q,--quiet", flags.quiet, "No summary line");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<MergeFlags>(
     "merge",
     "Merge shard archives of one study into one archive (virtual by default; --copy: self-contained), "
     "checking they cover the design exactly once",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<MergeFlags>();
-      app.add_option("archives", flags->inputs, "Shard archives (from gesweep run --shard i/N)")->required();
-      app.add_option("-o,--output", flags->output, "Merged archive to write")->required();
-      app.add_flag("--force", flags->force, "Replace an existing output archive");
-      app.add_flag(
-          "--copy", flags->copy,
-          "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
-          "files, which must then stay where they are)");
-      app.add_flag("-q,--quiet", flags->quiet, "No summary line");
-      return [flags] { return Merge(*flags); };
-    }}};
+    AddMergeFlags, Merge)};
 
 }  // namespace
 }  // namespace gesweep::cli

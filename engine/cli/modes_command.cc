@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
@@ -14,7 +15,8 @@ namespace {
 
 struct ModesFlags {
   ModelFlags model;
-  double speed_mps = 0;
+  ModesOptions options;  // its fields are flags (ModesOptions::Describe)
+  DescribedFlags described;
   std::string heights;
   bool table_heights = false;
   std::string format = "table";
@@ -39,12 +41,9 @@ std::string ModeCell(const ModeProperties& mode) {
   return out.str();
 }
 
-int RunModes(const ModesFlags& flags) {
-  if (flags.format != "table" && flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected table, csv or json");
-  }
-  const LongitudinalModel model = flags.model.BuildModel();
-  const Aircraft& aircraft = model.aircraft();
+// The heights of --heights-m (each within the limits table and above the wheel contact) or
+// --table-heights (the aircraft's rows and free flight).
+std::vector<double> Heights(const ModesFlags& flags, const Aircraft& aircraft) {
   std::vector<double> heights;
   if (flags.table_heights) {
     heights = aircraft.table_heights_m;
@@ -60,10 +59,19 @@ int RunModes(const ModesFlags& flags) {
                            FormatNumber(aircraft.wheel_contact_height_m) + " m of " + aircraft.source_path);
     }
   }
+  return heights;
+}
 
+int RunModes(const ModesFlags& flags) {
+  flags.described.Apply();
+  const double speed_mps = flags.options.speed_mps;
+  RequireFormat(flags.format, {"table", "csv", "json"});
+  const LongitudinalModel model = flags.model.BuildModel();
+  const Aircraft& aircraft = model.aircraft();
+  const std::vector<double> heights = Heights(flags, aircraft);
   nlohmann::json rows = nlohmann::json::array();
   if (flags.format == "table") {
-    std::cout << "# " << aircraft.name << " at u0 = " << flags.speed_mps << " m/s, h-derivatives "
+    std::cout << "# " << aircraft.name << " at u0 = " << speed_mps << " m/s, h-derivatives "
               << (model.options().h_derivatives ? "on" : "off") << ", cdh " << ToString(model.options().cdh)
               << ", " << ToString(model.options().interpolation) << " interpolation\n";
     std::cout << std::setw(9) << "H_m" << std::setw(8) << "H/b" << std::setw(24) << "short period λ"
@@ -77,7 +85,7 @@ int RunModes(const ModesFlags& flags) {
            "phugoid_damping_ratio,height_re,height_im,stability_margin_per_s,stable,classification\n";
   }
   for (double h : heights) {
-    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(h, flags.speed_mps));
+    const ModalAnalysis modal = AnalyzeModes(model.StateMatrix(h, speed_mps));
     const double h_over_b = h / aircraft.wingspan_m;
     if (flags.format == "json") {
       nlohmann::json eigenvalues = nlohmann::json::array();
@@ -121,30 +129,29 @@ int RunModes(const ModesFlags& flags) {
     }
   }
   if (flags.format == "json")
-    std::cout << nlohmann::json{{"speed_mps", flags.speed_mps}, {"rows", rows}}.dump(2) << "\n";
+    std::cout << nlohmann::json{{"speed_mps", speed_mps}, {"rows", rows}}.dump(2) << "\n";
   return 0;
 }
 
-const CommandRegistrar kRegistrar{Command{
-    "modes", "Eigenvalues, modes and stability margin of Eq. (1) at a list of heights",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<ModesFlags>();
-      flags->model.AddTo(app);
-      AddLimitedOption(app, "--speed-mps", flags->speed_mps, "speed_mps", "Reference speed u0, m/s")
-          ->required();
-      auto* heights =
-          app.add_option("--heights-m", flags->heights, "Comma-separated heights H, m (inf: free flight)");
-      auto* table = app.add_flag("--table-heights", flags->table_heights,
-                                 "The aircraft's table heights and free flight");
-      heights->excludes(table);
-      app.add_option("--format", flags->format, "table (default), csv or json");
-      app.callback([heights, table] {
-        if (heights->count() == 0 && table->count() == 0) {
-          throw CLI::ValidationError("--heights-m or --table-heights", "one of them is required");
-        }
-      });
-      return [flags] { return RunModes(*flags); };
-    }}};
+void AddModesFlags(CLI::App& app, ModesFlags& flags) {
+  flags.model.AddTo(app);
+  flags.described.Add(app, flags.options, {"speed_mps"});
+  auto* heights =
+      app.add_option("--heights-m", flags.heights, "Comma-separated heights H, m (inf: free flight)");
+  auto* table =
+      app.add_flag("--table-heights", flags.table_heights, "The aircraft's table heights and free flight");
+  heights->excludes(table);
+  app.add_option("--format", flags.format, "table (default), csv or json");
+  app.callback([heights, table] {
+    if (heights->count() == 0 && table->count() == 0) {
+      throw CLI::ValidationError("--heights-m or --table-heights", "one of them is required");
+    }
+  });
+}
+
+const CommandRegistrar kRegistrar{CommandWith<ModesFlags>(
+    "modes", "Eigenvalues, modes and stability margin of Eq. (1) at a list of heights", AddModesFlags,
+    RunModes)};
 
 }  // namespace
 }  // namespace gesweep::cli

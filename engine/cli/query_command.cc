@@ -152,7 +152,7 @@ int RunQueryCommand(const QueryFlags& flags) {
   if (flags.limit < -1) {
     throw InputError("command line", "--limit", std::to_string(flags.limit), "expected a count >= 0");
   }
-  try {
+  return GuardArchive([&] {
     const ArchiveReader archive = ArchiveReader::Open(flags.archive);
     const ColumnCatalog catalog = ColumnCatalog::Of(archive);
     const bool aggregating = !flags.group_by.empty() || !flags.aggregates.empty();
@@ -199,47 +199,43 @@ int RunQueryCommand(const QueryFlags& flags) {
     request.columns = flags.columns;
     const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
     RunQuery(archive, catalog, request, *writer);
-  } catch (const ArchiveError& e) {
-    return ArchiveFailure(e);
-  }
-  return 0;
+    return 0;
+  });
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
+  AddArchiveArgument(app, flags.archive, "Archive (HDF5) written by gesweep run");
+  app.add_option("--where", flags.where,
+                 "Condition, e.g. 'height_m < 3 and stability_margin_per_s > 0', 'status == \"failed\"' "
+                 "(docs/report.md)");
+  app.add_option("--columns", flags.columns,
+                 "Columns to show, comma-separated; wildcards such as 'phugoid/*' or '*' "
+                 "(default: index, design, status)")
+      ->delimiter(',');
+  app.add_option("--group-by", flags.group_by,
+                 "Columns whose equal values form a group, comma-separated (wildcards allowed); "
+                 "with --aggregate")
+      ->delimiter(',');
+  app.add_option("--aggregate", flags.aggregates,
+                 "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
+                 "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
+  app.add_option("--memory-mb", flags.memory_mb,
+                 "Memory for exact medians and quantiles (default 256); past it, more passes")
+      ->each([&flags](const std::string&) { flags.memory_given = true; });
+  app.add_option("--max-groups", flags.max_groups, "Refuse more groups than this (default 1000000)")
+      ->each([&flags](const std::string&) { flags.max_groups_given = true; });
+  app.add_option("--sort", flags.sort,
+                 "Column to sort by (missing values last); with --aggregate an output column");
+  app.add_flag("--descending", flags.descending, "Sort largest first");
+  app.add_option("--limit", flags.limit,
+                 "Show at most this many rows (with --sort: the best n); with --aggregate, groups");
+  app.add_option("--format", flags.format, "table (default), csv or json");
+  app.add_flag("--describe", flags.describe, "List the columns with units, run counts by status, provenance");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<QueryFlags>(
     "query", "Select runs of an archive by a condition, with chosen columns, sorted; or --describe it",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<QueryFlags>();
-      app.add_option("archive", flags->archive, "Archive (HDF5) written by gesweep run")->required();
-      app.add_option("--where", flags->where,
-                     "Condition, e.g. 'height_m < 3 and stability_margin_per_s > 0', 'status == \"failed\"' "
-                     "(docs/report.md)");
-      app.add_option("--columns", flags->columns,
-                     "Columns to show, comma-separated; wildcards such as 'phugoid/*' or '*' "
-                     "(default: index, design, status)")
-          ->delimiter(',');
-      app.add_option("--group-by", flags->group_by,
-                     "Columns whose equal values form a group, comma-separated (wildcards allowed); "
-                     "with --aggregate")
-          ->delimiter(',');
-      app.add_option(
-          "--aggregate", flags->aggregates,
-          "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
-          "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
-      app.add_option("--memory-mb", flags->memory_mb,
-                     "Memory for exact medians and quantiles (default 256); past it, more passes")
-          ->each([flags](const std::string&) { flags->memory_given = true; });
-      app.add_option("--max-groups", flags->max_groups, "Refuse more groups than this (default 1000000)")
-          ->each([flags](const std::string&) { flags->max_groups_given = true; });
-      app.add_option("--sort", flags->sort,
-                     "Column to sort by (missing values last); with --aggregate an output column");
-      app.add_flag("--descending", flags->descending, "Sort largest first");
-      app.add_option("--limit", flags->limit,
-                     "Show at most this many rows (with --sort: the best n); with --aggregate, groups");
-      app.add_option("--format", flags->format, "table (default), csv or json");
-      app.add_flag("--describe", flags->describe,
-                   "List the columns with units, run counts by status, provenance");
-      return [flags] { return RunQueryCommand(*flags); };
-    }}};
+    AddQueryFlags, RunQueryCommand)};
 
 }  // namespace
 }  // namespace gesweep::cli

@@ -141,18 +141,17 @@ int RunReport(const ReportFlags& flags) {
   return 1;
 }
 
-const CommandRegistrar kRegistrar{Command{
-    "report", "Write an HTML report (figures and tables) of one or more archives",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<ReportFlags>();
-      app.add_option("archives", flags->inputs, "Archives (HDF5), or directories of archives (*.h5)")
-          ->required();
-      app.add_option("-o,--output", flags->output, "Directory for index.html and its figures (created)")
-          ->required();
-      app.add_option("--title", flags->title, "Title of the page (default: from the studies)");
-      app.add_flag("-q,--quiet", flags->quiet, "No progress lines");
-      return [flags] { return RunReport(*flags); };
-    }}};
+void AddReportFlags(CLI::App& app, ReportFlags& flags) {
+  app.add_option("archives", flags.inputs, "Archives (HDF5), or directories of archives (*.h5)")->required();
+  app.add_option("-o,--output", flags.output, "Directory for index.html and its figures (created)")
+      ->required();
+  app.add_option("--title", flags.title, "Title of the page (default: from the studies)");
+  app.add_flag("-q,--quiet", flags.quiet, "No progress lines");
+}
+
+const CommandRegistrar kRegistrar{
+    CommandWith<ReportFlags>("report", "Write an HTML report (figures and tables) of one or more archives",
+                             AddReportFlags, RunReport)};
 
 }  // namespace
 }  // namespace gesweep::cli

@@ -4,49 +4,45 @@ namespace gesweep::cli {
 
 namespace {
 
-// Each remedy as the command line words it: `before` what was expected, then `after`, in which "{}"
-// stands for the remedy's argument.
+// Each remedy as the command line and the Python module (the keyword arguments of gesweep.run) word
+// it: `before` what was expected, then `after`, in which "{}" stands for the remedy's argument. A
+// remedy without Python words (python_after null) is worded there as on the command line.
 struct Wording {
   const char* remedy;
   const char* before;
   const char* after;
+  const char* python_after;
 };
 constexpr Wording kWordings[] = {
-    {"describe_columns", "", "; gesweep query ARCHIVE --describe lists the columns"},
-    {"fewer_groups", "", "; group by fewer columns, narrow --where, or raise --max-groups"},
-    {"aggregate_sort", "with --group-by/--aggregate, ", ""},
-    {"by_other_parameters", "", "; --by names the other swept parameters"},
-    {"force", "", "; pass --force to replace it"},
-    {"force_use", "", "; use --force to replace it"},
-    {"force_or_other_output", "", "; use --force to replace it, or another -o"},
-    {"resume_or_force", "", "; pass --resume to continue it or --force to replace it"},
-    {"force_or_resume_nodes", "", "; pass --force to replace them or --resume with as many nodes"},
-    {"resume_shard_first", "", "; finish it with `gesweep run ... --shard {} --resume` first"},
-    {"resume_shard", "", "; finish it with `gesweep run ... --shard {} --resume`"},
-    {"resume_repairs", "", ": gesweep run STUDY -o {} --resume repairs it and goes on"},
-    {"finish_sweep", "", "; finish the sweep with `gesweep run STUDY -o {} --resume`"},
-    {"merge_copy", "", " (gesweep merge --copy makes a self-contained archive)"},
-    {"use_method", "", " (use --method {})"},
-    {"no_write", "", " pass --no-write to only print {}"},
+    {"describe_columns", "", "; gesweep query ARCHIVE --describe lists the columns", nullptr},
+    {"fewer_groups", "", "; group by fewer columns, narrow --where, or raise --max-groups", nullptr},
+    {"aggregate_sort", "with --group-by/--aggregate, ", "", nullptr},
+    {"by_other_parameters", "", "; --by names the other swept parameters", nullptr},
+    {"force", "", "; pass --force to replace it", "; pass force=True to replace it"},
+    {"force_use", "", "; use --force to replace it", "; pass force=True to replace it"},
+    {"force_or_other_output", "", "; use --force to replace it, or another -o",
+     "; pass force=True to replace it, or another archive_path"},
+    {"resume_or_force", "", "; pass --resume to continue it or --force to replace it",
+     "; pass resume=True to continue it or force=True to replace it"},
+    {"force_or_resume_nodes", "", "; pass --force to replace them or --resume with as many nodes", nullptr},
+    {"resume_shard_first", "", "; finish it with `gesweep run ... --shard {} --resume` first",
+     "; finish it with gesweep.run(..., shard=\"{}\", resume=True) first"},
+    {"resume_shard", "", "; finish it with `gesweep run ... --shard {} --resume`",
+     "; finish it with gesweep.run(..., shard=\"{}\", resume=True)"},
+    {"resume_repairs", "", ": gesweep run STUDY -o {} --resume repairs it and goes on",
+     ": gesweep.run(study, \"{}\", resume=True) repairs it and goes on"},
+    {"finish_sweep", "", "; finish the sweep with `gesweep run STUDY -o {} --resume`",
+     "; finish the sweep with gesweep.run(study, \"{}\", resume=True)"},
+    {"merge_copy", "", " (gesweep merge --copy makes a self-contained archive)", nullptr},
+    {"use_method", "", " (use --method {})", nullptr},
+    {"no_write", "", " pass --no-write to only print {}", nullptr},
 };
 
-// The same remedies as the Python module words them: the keyword arguments of gesweep.run.
-constexpr Wording kPythonWordings[] = {
-    {"force", "", "; pass force=True to replace it"},
-    {"force_use", "", "; pass force=True to replace it"},
-    {"force_or_other_output", "", "; pass force=True to replace it, or another archive_path"},
-    {"resume_or_force", "", "; pass resume=True to continue it or force=True to replace it"},
-    {"resume_shard_first", "", "; finish it with gesweep.run(..., shard=\"{}\", resume=True) first"},
-    {"resume_shard", "", "; finish it with gesweep.run(..., shard=\"{}\", resume=True)"},
-    {"resume_repairs", "", ": gesweep.run(study, \"{}\", resume=True) repairs it and goes on"},
-    {"finish_sweep", "", "; finish the sweep with gesweep.run(study, \"{}\", resume=True)"},
-};
-
-template <std::size_t N>
-std::optional<std::string> Word(const RequestError& error, const Wording (&wordings)[N]) {
-  for (const Wording& w : wordings) {
+// The expectation of `error` worded for the command line (`python` false) or the Python module.
+std::optional<std::string> Word(const RequestError& error, bool python) {
+  for (const Wording& w : kWordings) {
     if (error.remedy() != w.remedy) continue;
-    std::string after = w.after;
+    std::string after = python && w.python_after != nullptr ? w.python_after : w.after;
     if (const auto at = after.find("{}"); at != std::string::npos)
       after.replace(at, 2, error.remedy_argument());
     return w.before + error.expected() + after;
@@ -56,13 +52,12 @@ std::optional<std::string> Word(const RequestError& error, const Wording (&wordi
 
 }  // namespace
 
-std::optional<std::string> WordRemedy(const RequestError& error) { return Word(error, kWordings); }
+std::optional<std::string> WordRemedy(const RequestError& error) { return Word(error, false); }
 
 InputError ForPython(const InputError& error) {
   const auto* request = dynamic_cast<const RequestError*>(&error);
   if (request == nullptr) return error;
-  std::optional<std::string> worded = Word(*request, kPythonWordings);
-  if (!worded) worded = WordRemedy(*request);
+  const std::optional<std::string> worded = Word(*request, true);
   if (!worded) return error;
   return InputError(error.source(), error.key(), error.value(), *worded, error.line());
 }

@@ -432,9 +432,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
 }
 
 int Run(const RunFlags& flags) {
-  if (flags.format != "text" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected text or json");
-  }
+  RequireFormat(flags.format, {"text", "json"});
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }
@@ -561,38 +559,34 @@ int Run(const RunFlags& flags) {
   return exit_code;
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddRunFlags(CLI::App& app, RunFlags& flags) {
+  app.add_option("study", flags.study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
+  app.add_option("-o,--output", flags.output, "Archive to write (HDF5), e.g. results/stability_map.h5");
+  app.add_option("--threads", flags.threads, "Worker threads, 1 to 4096 (default, when left out: all cores)")
+      ->each([&flags](const std::string&) { flags.threads_given = true; });
+  app.add_option("--shard", flags.shard,
+                 "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
+  app.add_flag("--resume", flags.resume, "Continue an existing archive: skip complete runs, run the rest");
+  app.add_flag("--force", flags.force, "Replace an existing archive");
+  app.add_flag("--dry-run", flags.dry_run,
+               "Print the run count, storage and time estimates (measured on sample runs within "
+               "--dry-run-budget-s); run nothing");
+  app.add_option("--dry-run-budget-s", flags.dry_run_budget_s,
+                 "Wall time the dry run's measurement may take, s (default 2, at most 600)");
+  app.add_option("--format", flags.format, "Dry-run output: text (default) or json");
+  app.add_flag("-q,--quiet", flags.quiet, "No progress output");
+  app.add_flag("--mpi", flags.mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
+  app.add_option("--ranks-per-node", flags.ranks_per_node,
+                 "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
+                 "the ranks sharing a machine)");
+  app.add_option("--merge", flags.merge,
+                 "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
+                 "or copy (self-contained)");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<RunFlags>(
     "run", "Run a study file's sweep into an HDF5 archive (exit 0 all ok, 3 some runs failed, 2 bad input)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<RunFlags>();
-      app.add_option("study", flags->study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
-      app.add_option("-o,--output", flags->output, "Archive to write (HDF5), e.g. results/stability_map.h5");
-      app.add_option("--threads", flags->threads,
-                     "Worker threads, 1 to 4096 (default, when left out: all cores)")
-          ->each([flags](const std::string&) { flags->threads_given = true; });
-      app.add_option("--shard", flags->shard,
-                     "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
-      app.add_flag("--resume", flags->resume,
-                   "Continue an existing archive: skip complete runs, run the rest");
-      app.add_flag("--force", flags->force, "Replace an existing archive");
-      app.add_flag("--dry-run", flags->dry_run,
-                   "Print the run count, storage and time estimates (measured on sample runs within "
-                   "--dry-run-budget-s); run nothing");
-      app.add_option("--dry-run-budget-s", flags->dry_run_budget_s,
-                     "Wall time the dry run's measurement may take, s (default 2, at most 600)");
-      app.add_option("--format", flags->format, "Dry-run output: text (default) or json");
-      app.add_flag("-q,--quiet", flags->quiet, "No progress output");
-      app.add_flag("--mpi", flags->mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
-      app.add_option(
-          "--ranks-per-node", flags->ranks_per_node,
-          "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
-          "the ranks sharing a machine)");
-      app.add_option(
-          "--merge", flags->merge,
-          "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
-          "or copy (self-contained)");
-      return [flags] { return Run(*flags); };
-    }}};
+    AddRunFlags, Run)};
 
 }  // namespace
 }  // namespace gesweep::cli

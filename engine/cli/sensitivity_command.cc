@@ -18,12 +18,8 @@
 #include <optional>
 #include <sstream>
 
-#include "engine/archive/archive_error.h"
-#include "engine/archive/archive_lock.h"
-#include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
 #include "engine/cli/model_flags.h"
-#include "engine/cli/request_names.h"
 #include "engine/common/errors.h"
 #include "engine/products/archive_sensitivity.h"
 #include "engine/products/sensitivity_group.h"
@@ -59,12 +55,7 @@ std::string Fixed(double value, int decimals = 4) {
   return out.str();
 }
 
-std::string General(double value) {
-  if (!std::isfinite(value)) return FormatNumber(value);
-  std::ostringstream out;
-  out << std::setprecision(5) << value;
-  return out.str();
-}
+std::string General(double value) { return FormatNumber(value, 5); }
 
 std::string Interval(const ConfidenceInterval& ci, std::string (*format)(double, int), int decimals) {
   return "[" + format(ci.lower, decimals) + ", " + format(ci.upper, decimals) + "]";
@@ -254,25 +245,11 @@ int Sensitivity(const SensitivityFlags& flags) {
   options.bootstrap.confidence_level = flags.confidence_level;
   ValidateBootstrapOptions(options.bootstrap, "command line");
 
-  try {
-    const std::filesystem::path path = flags.archive;
-    std::error_code ec;
-    // The lock comes first, so that no sweep starts writing between the read and the write; a
-    // missing archive is reported as such, not as an unwritable lock file.
-    std::optional<ArchiveLock> lock;
-    if (!flags.no_write && std::filesystem::is_regular_file(path, ec))
-      lock.emplace(ArchiveLock::Acquire(
-          path, "run gesweep sensitivity once it has finished, or pass --no-write to only print it"));
-    ArchiveReader reader = ArchiveReader::Open(path);
-    if (reader.snapshot() && !flags.no_write) {
-      throw InputError(
-          flags.archive, "", "",
-          "archive in use: a sweep is writing it, or the sweep that wrote it stopped without closing "
-          "it (finish it with `gesweep run STUDY -o " +
-              flags.archive + " --resume`); or pass --no-write");
-    }
-    const ArchiveSensitivity result = AnalyzeArchiveOutput(reader, flags.output, options);
-    reader.Close();
+  // The engine names the request's fields (the source is the archive): this command's flags.
+  return GuardArchive({{"output", "--output"}, {"method", "--method"}}, [&] {
+    ProductArchive archive = OpenProductArchive(flags.archive, flags.no_write, "sensitivity");
+    const ArchiveSensitivity result = AnalyzeArchiveOutput(archive.reader, flags.output, options);
+    archive.reader.Close();
     if (result.status != SensitivityStatus::kOk) {
       std::cerr << "gesweep: error: " << flags.archive << ": " << result.message
                 << (result.failed_runs_remedy.empty()
@@ -281,54 +258,47 @@ int Sensitivity(const SensitivityFlags& flags) {
                 << "\n";
       return result.status == SensitivityStatus::kStoppedOnFailedRuns ? 3 : 1;
     }
-    if (lock) WriteSensitivityGroup(path, result, CommandLine(flags));
+    const bool written = archive.lock.has_value();
+    if (written) WriteSensitivityGroup(flags.archive, result, CommandLine(flags));
     if (flags.format == "json") {
-      std::cout << ToJson(result, lock.has_value()).dump(2) << "\n";
+      std::cout << ToJson(result, written).dump(2) << "\n";
     } else {
       if (result.method == SensitivityMethod::kSobol) {
         PrintSobol(result);
       } else {
         PrintMorris(result);
       }
-      if (lock)
+      if (written)
         std::cout << "# written to " << flags.archive << ": /" << SensitivityGroupPath(result.output) << "\n";
     }
-  } catch (const InputError& e) {
-    // The engine names the request's fields (the source is the archive): this command's flags.
-    throw ForCommandLine(e, {{"output", "--output"}, {"method", "--method"}});
-  } catch (const ArchiveError& e) {
-    return ArchiveFailure(e);
-  }
-  return 0;
+    return 0;
+  });
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddSensitivityFlags(CLI::App& app, SensitivityFlags& flags) {
+  AddArchiveArgument(app, flags.archive, "Archive of a sweep with a sobol or morris design");
+  app.add_option(
+         "--output", flags.output,
+         "Output column: a name (height_m, ishigami), a path below results/ (boundary/height_m) or the "
+         "full path (results/boundary/height_m)")
+      ->required();
+  app.add_option("--method", flags.method, "sobol or morris (default: the one the design was made for)");
+  app.add_option("--bootstrap", flags.bootstrap,
+                 "Bootstrap resamples for the intervals (default 1000; 0: none)");
+  app.add_option("--seed", flags.seed, "Seed of the bootstrap (default 20240607): same seed, same intervals");
+  app.add_option("--confidence-level", flags.confidence_level, "Level of the intervals (default 0.95)");
+  app.add_option("--failed-runs", flags.failed_runs,
+                 "Runs without a value (failed, or NaN such as no boundary): drop_blocks (default; leave out "
+                 "every Saltelli block / Morris trajectory that holds one) or error (stop, exit 3)");
+  app.add_option("--format", flags.format, "table (default) or json");
+  app.add_flag("--no-write", flags.no_write, "Print only; leave the archive untouched");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<SensitivityFlags>(
     "sensitivity",
     "Sobol' indices or Morris effects of one output of a sobol/morris sweep's archive; writes them into "
     "/analysis/sensitivity/<output>/ (exit 3: runs without a value and --failed-runs error)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<SensitivityFlags>();
-      app.add_option("archive", flags->archive, "Archive of a sweep with a sobol or morris design")
-          ->required();
-      app.add_option(
-             "--output", flags->output,
-             "Output column: a name (height_m, ishigami), a path below results/ (boundary/height_m) or the "
-             "full path (results/boundary/height_m)")
-          ->required();
-      app.add_option("--method", flags->method, "sobol or morris (default: the one the design was made for)");
-      app.add_option("--bootstrap", flags->bootstrap,
-                     "Bootstrap resamples for the intervals (default 1000; 0: none)");
-      app.add_option("--seed", flags->seed,
-                     "Seed of the bootstrap (default 20240607): same seed, same intervals");
-      app.add_option("--confidence-level", flags->confidence_level, "Level of the intervals (default 0.95)");
-      app.add_option(
-          "--failed-runs", flags->failed_runs,
-          "Runs without a value (failed, or NaN such as no boundary): drop_blocks (default; leave out "
-          "every Saltelli block / Morris trajectory that holds one) or error (stop, exit 3)");
-      app.add_option("--format", flags->format, "table (default) or json");
-      app.add_flag("--no-write", flags->no_write, "Print only; leave the archive untouched");
-      return [flags] { return Sensitivity(*flags); };
-    }}};
+    AddSensitivityFlags, Sensitivity)};
 
 }  // namespace
 }  // namespace gesweep::cli

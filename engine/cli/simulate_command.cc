@@ -97,9 +97,8 @@ std::vector<std::pair<const char*, const std::vector<double>*>> SeriesColumns(co
 }
 
 int RunSimulate(const SimulateFlags& flags) {
-  if (flags.format != "csv" && flags.format != "json") {
-    throw InputError("command line", "--format", "'" + flags.format + "'", "expected csv or json");
-  }
+  flags.described.Apply();
+  RequireFormat(flags.format, {"csv", "json"});
   const LongitudinalModel model = flags.model.BuildModel();
   const OpenLoopConfig config = BuildConfig(flags, model);
   const SignalCancellation signals;
@@ -152,32 +151,28 @@ int RunSimulate(const SimulateFlags& flags) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar{Command{
+void AddSimulateFlags(CLI::App& app, SimulateFlags& flags) {
+  flags.model.AddTo(app);
+  flags.described.Add(app, flags.config, {"height_m", "speed_mps"});
+  auto* output_dt =
+      AddLimitedOption(app, "--output-dt-s", flags.output_dt_s, "output_dt_s",
+                       "Series sampling interval, s (interpolated inside steps); default --step-s");
+  auto* summary = app.add_flag("--summary-only", flags.summary_only, "Write the summary only, no series");
+  output_dt->excludes(summary);
+  app.add_option("--seed", flags.seed,
+                 "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
+  app.add_option("--run-index", flags.run_index,
+                 "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
+  app.add_option("--format", flags.format,
+                 "csv (default: the time series; with --summary-only one summary row) or json "
+                 "({\"run\", \"summary\", \"series\"})");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<SimulateFlags>(
     "simulate",
     "Open-loop time response of Eq. (1) after an elevator input, derivatives re-evaluated at the current "
     "height and speed (docs/model.md section 7; the paper's Fig. 4)",
-    [](CLI::App& app) -> std::function<int()> {
-      auto flags = std::make_shared<SimulateFlags>();
-      flags->model.AddTo(app);
-      flags->described.Add(app, flags->config, {"height_m", "speed_mps"});
-      auto* output_dt =
-          AddLimitedOption(app, "--output-dt-s", flags->output_dt_s, "output_dt_s",
-                           "Series sampling interval, s (interpolated inside steps); default --step-s");
-      auto* summary =
-          app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
-      output_dt->excludes(summary);
-      app.add_option("--seed", flags->seed,
-                     "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
-      app.add_option("--run-index", flags->run_index,
-                     "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
-      app.add_option("--format", flags->format,
-                     "csv (default: the time series; with --summary-only one summary row) or json "
-                     "({\"run\", \"summary\", \"series\"})");
-      return [flags] {
-        flags->described.Apply();
-        return RunSimulate(*flags);
-      };
-    }}};
+    AddSimulateFlags, RunSimulate)};
 
 }  // namespace
 }  // namespace gesweep::cli

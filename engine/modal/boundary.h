@@ -11,6 +11,7 @@
 /// isolates with certainty. The former sampled search (BoundaryMethod::kSampled: σ at a few hundred
 /// heights, TOMS 748 at each sign change) stays for comparison.
 
+#include <cmath>
 #include <complex>
 #include <functional>
 #include <limits>
@@ -18,7 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/describe.h"
 #include "engine/common/enum_names.h"
+#include "engine/common/errors.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/modal/modal_analysis.h"
 
@@ -28,6 +31,11 @@ namespace gesweep {
 enum class BoundaryMethod {
   kHurwitz,  ///< certified enumeration of the roots of Δ₄ and a₅ per segment (default)
   kSampled,  ///< the former search: σ sampled per segment, TOMS 748 at each sign change
+};
+template <>
+struct EnumNames<BoundaryMethod> {
+  static constexpr EnumName<BoundaryMethod> kTable[] = {{BoundaryMethod::kHurwitz, "hurwitz"},
+                                                        {BoundaryMethod::kSampled, "sampled"}};
 };
 
 /// Where and how finely to look.
@@ -47,7 +55,60 @@ struct BoundaryOptions {
   /// names the crossing mode). kEigen reproduces the searches as they were before the fixed-size
   /// kernel, for comparison (docs/performance.md).
   EigenvalueSolver eigenvalue_solver = EigenvalueSolver::kFixedSize;
+
+  /// The settings a person gives (engine/common/describe.h): the flags of `gesweep boundary`
+  /// (samples_per_segment, a study key of [analyses.boundary], is not a flag). The eigen-solver is a
+  /// comparison switch for benchmarks, not a setting.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("method", &method)
+          .Doc("hurwitz (every crossing of the imaginary axis, certified) or sampled (the former search, "
+               "sigma sampled per table segment; for comparison)"));
+    v(Field("lower_height_m", &lower_height_m)
+          .Unit("m")
+          .Limit("height_m")
+          .Doc("Lowest height scanned, m (default: the aircraft's wheel-contact height)"));
+    v(Field("upper_height_m", &upper_height_m)
+          .Unit("m")
+          .Limit("height_m")
+          .Doc("Highest height scanned, m (default: the aircraft's last finite table height)"));
+    v(Field("tolerance_m", &tolerance_m)
+          .Unit("m")
+          .Limit("boundary.tolerance_m")
+          .Doc("Width of the final bracket of each crossing, m (hurwitz refines to rounding within it)"));
+    v(Field("samples_per_segment", &samples_per_segment)
+          .StudyOnly()
+          .Doc("Method sampled: sample heights inside each table segment"));
+  }
 };
+
+/// The checks of BoundaryOptions that depend on the aircraft or on two fields (each field's own
+/// range is its limits-table entry, CheckFieldRanges): the scanned range starts at or above the
+/// wheel-contact height and is not empty. Messages name the fields by their keys; `source` is the
+/// file or "command line".
+inline void ValidateBoundaryOptions(const BoundaryOptions& options, const Aircraft& aircraft,
+                                    const std::string& source) {
+  const double lower =
+      std::isnan(options.lower_height_m) ? aircraft.wheel_contact_height_m : options.lower_height_m;
+  const double upper =
+      std::isnan(options.upper_height_m) ? aircraft.table_heights_m.back() : options.upper_height_m;
+  const std::string lower_key(KeyOf(options, &options.lower_height_m));
+  const std::string upper_key(KeyOf(options, &options.upper_height_m));
+  if (lower < aircraft.wheel_contact_height_m) {
+    throw InputError(source, lower_key, ShortNumber(lower),
+                     "expected a height >= the wheel-contact height " +
+                         ShortNumber(aircraft.wheel_contact_height_m) + " m of " + aircraft.source_path);
+  }
+  if (!(upper > lower)) {
+    if (std::isnan(options.upper_height_m)) {
+      throw InputError(source, lower_key, ShortNumber(lower),
+                       "expected less than " + upper_key + " = " + ShortNumber(upper) +
+                           " m (by default the last finite table height of " + aircraft.source_path + ")");
+    }
+    throw InputError(source, upper_key, ShortNumber(upper),
+                     "expected more than " + lower_key + " = " + ShortNumber(lower) + " m");
+  }
+}
 
 /// What crosses the imaginary axis.
 enum class CrossingKind {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "engine/common/describe.h"
 #include "engine/common/enum_names.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/modal/eigenvalues5.h"
@@ -37,6 +38,21 @@ enum class ModeClassification {
 };
 GESWEEP_ENUM_NAMES(ModeClassification, {kStandard, "standard"}, {kPhugoidSplit, "phugoid_split"},
                    {kShortPeriodSplit, "short_period_split"}, {kAllReal, "all_real"});
+
+/// The settings of an eigen-analysis a person asks for (`gesweep modes`, at a list of heights given
+/// apart); in a sweep the run's speed_mps is a parameter instead.
+struct ModesOptions {
+  double speed_mps = 0;  ///< reference speed u0, m/s
+
+  template <class V>
+  void Describe(V& v) {
+    v(Field("speed_mps", &speed_mps)
+          .Unit("m/s")
+          .Limit("speed_mps")
+          .CommandLineOnly()
+          .Doc("Reference speed u0, m/s"));
+  }
+};
 
 /// The result of one eigen-analysis.
 struct ModalAnalysis {

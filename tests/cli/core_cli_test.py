@@ -39,6 +39,28 @@ class Boundary(unittest.TestCase):
         speeds = [b["speed_mps"] for b in json.loads(out.stdout)["boundaries"]]
         self.assertEqual(speeds, [30.0, 40.0, 50.0])
 
+    # The scanned range (BoundaryOptions::Describe: --lower-height-m, --upper-height-m). Oracle: the
+    # paper's bracket above, 2.0748 m < H* < 2.9987 m at this speed.
+    def test_scanned_range_flags(self):
+        def boundary(*flags):
+            out = run("boundary", "--aircraft", ANCE, "--speed-mps", "32.0208", "--format", "json", *flags)
+            self.assertEqual(out.returncode, 0, out.stderr)
+            return json.loads(out.stdout)["boundaries"][0]
+
+        full = boundary()
+        around = boundary("--lower-height-m", "2.0", "--upper-height-m", "3.0", "--tolerance-m", "1e-6")
+        self.assertEqual(around["scanned_range_m"], [2.0, 3.0])
+        self.assertGreater(around["height_m"], 2.0748)
+        self.assertLess(around["height_m"], 2.9987)
+        # The same root, whatever the range around it: both are refined to rounding (hurwitz).
+        self.assertAlmostEqual(around["height_m"], full["height_m"], delta=1e-6)
+        above = boundary("--lower-height-m", "3.0")
+        self.assertEqual(above["scanned_range_m"][0], 3.0)
+        self.assertIsNone(above["height_m"])
+        below = boundary("--upper-height-m", "2.0")
+        self.assertEqual(below["scanned_range_m"][1], 2.0)
+        self.assertIsNone(below["height_m"])
+
 
 class Modes(unittest.TestCase):
     def test_table_heights_json_shape(self):
@@ -85,6 +107,15 @@ class BadInput(unittest.TestCase):
         (("boundary", "--aircraft", ANCE, "--speeds-mps", "40:30"), "a < b"),
         (("boundary", "--aircraft", ANCE, "--speed-mps", "30", "--method", "dense"), "--method"),
         (("boundary", "--aircraft", ANCE, "--speed-mps", "nan"), "--speed-mps"),
+        (("boundary", "--aircraft", ANCE, "--speed-mps", "30", "--lower-height-m", "0.1"),
+         "--lower-height-m = 0.1: expected a height >= the wheel-contact height 0.788 m"),
+        (("boundary", "--aircraft", ANCE, "--speed-mps", "30", "--lower-height-m", "5", "--upper-height-m", "3"),
+         "--upper-height-m = 3: expected more than --lower-height-m = 5 m"),
+        (("boundary", "--aircraft", ANCE, "--speed-mps", "30", "--lower-height-m", "50"),
+         "--lower-height-m = 50: expected less than --upper-height-m = 13.373 m"),
+        (("boundary", "--aircraft", ANCE, "--speed-mps", "30", "--tolerance-m", "1"),
+         "--tolerance-m = 1: expected a number in [1e-09, 0.001] m"),
+        (("boundary", "--archive", "no/such.h5", "--tolerance-m", "1e-5"), "--tolerance-m"),
         (("modes", "--aircraft", "README.md", "--speed-mps", "30", "--table-heights"), "README.md"),
         (("nosuchcommand",), "nosuchcommand"),
     ]
