@@ -20,6 +20,7 @@
 #include "engine/archive/archive_error.h"
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/request_names.h"
 
 namespace gesweep::cli {
@@ -40,9 +41,26 @@ struct CommandRegistrar {
   explicit CommandRegistrar(Command command) { CommandRegistry().push_back(std::move(command)); }
 };
 
+namespace command_detail {
+struct NoVisitor {
+  template <class U>
+  void operator()(const Field<U>&) {}
+};
+}  // namespace command_detail
+
+/// A `Flags` struct that describes its own settings (engine/common/describe.h): a member template
+/// `Describe` and a `DescribedFlags described` that makes their flags.
+template <class Flags>
+concept DescribedSettings = requires(Flags& flags, command_detail::NoVisitor& visitor) {
+  flags.Describe(visitor);
+  { flags.described } -> std::same_as<DescribedFlags&>;
+};
+
 /// The registration of a subcommand whose settings are one `Flags` struct (a fresh one per parse):
 /// `add(app, flags)` adds its flags and positionals bound to the struct's members, `run(flags)` is
-/// the action once parsed and returns the exit code. A command file ends with
+/// the action once parsed and returns the exit code. When `Flags` is DescribedSettings, the flags of
+/// its described fields come after `add`'s, and are written into the struct before `run`. A command
+/// file ends with
 ///
 ///     const CommandRegistrar kRegistrar{CommandWith<MergeFlags>("merge", "Merge shard archives ...",
 ///                                                               AddMergeFlags, Merge)};
@@ -52,7 +70,11 @@ Command CommandWith(std::string name, std::string description, void (*add)(CLI::
   return Command{std::move(name), std::move(description), [add, run](CLI::App& app) -> std::function<int()> {
                    auto flags = std::make_shared<Flags>();
                    add(app, *flags);
-                   return [flags, run] { return run(*flags); };
+                   if constexpr (DescribedSettings<Flags>) flags->described.Add(app, *flags);
+                   return [flags, run] {
+                     if constexpr (DescribedSettings<Flags>) flags->described.Apply();
+                     return run(*flags);
+                   };
                  }};
 }
 

@@ -17,12 +17,25 @@ DescribedFlags::Entry& DescribedFlags::NewEntry(std::string_view key) {
   return entries_.emplace_back(Entry{std::string(key), {}, {}});
 }
 
+namespace {
+
+bool IsShortName(std::string_view flag) { return flag.size() == 2 && flag[0] == '-' && flag[1] != '-'; }
+
+}  // namespace
+
 std::vector<std::string> DescribedFlags::AliasesOf(std::string_view key) const {
   std::vector<std::string> names;
   for (const FlagAlias& alias : aliases_) {
-    if (alias.key == key) names.emplace_back(alias.flag);
+    if (alias.key == key && !IsShortName(alias.flag)) names.emplace_back(alias.flag);
   }
   return names;
+}
+
+std::string DescribedFlags::WithShortName(std::string_view key, const std::string& flag) const {
+  for (const FlagAlias& alias : aliases_) {
+    if (alias.key == key && IsShortName(alias.flag)) return std::string(alias.flag) + "," + flag;
+  }
+  return flag;
 }
 
 std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::string& default_text,

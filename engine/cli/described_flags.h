@@ -7,7 +7,8 @@
 /// a result struct are never Add()ed: only settings structs are. A number flag is checked against the field's
 /// limits-table range as it is parsed (AddLimitedOption), in the key's unit. The help text is the field's
 /// description and its default. A command may keep older names of a flag as hidden aliases
-/// (FlagAlias); messages name the flag the person typed.
+/// (FlagAlias), and give a switch or a count a short name (`-q`), shown with it; messages name the flag
+/// the person typed.
 
 #include <CLI/CLI.hpp>
 #include <deque>
@@ -27,7 +28,9 @@ namespace gesweep::cli {
 std::string FlagName(std::string_view key);
 
 /// An older flag name a command keeps for a field: `--dt-s` for step_s. For a boolean field the
-/// alias is a switch with the same effect as the field's own (e.g. `--no-breakpoints`).
+/// alias is a switch with the same effect as the field's own (e.g. `--no-breakpoints`). A short name
+/// of a switch or a count (a dash and one letter, `-q` for quiet) is not hidden: the help shows it with
+/// the flag (`-q,--quiet`); a number or a choice has none (their messages name the long flag).
 struct FlagAlias {
   std::string_view key;
   std::string_view flag;
@@ -69,6 +72,7 @@ class DescribedFlags {
   };
   Entry& NewEntry(std::string_view key);
   std::vector<std::string> AliasesOf(std::string_view key) const;
+  std::string WithShortName(std::string_view key, const std::string& flag) const;
   CLI::Option* AddNumber(CLI::App& app, const std::string& flag, double& slot,
                          const FieldAttributes& attributes, const std::string& help);
   CLI::Option* AddChoice(CLI::App& app, const std::string& flag, std::string& slot, const std::string& help,
@@ -105,7 +109,7 @@ class DescribedFlags {
         const std::string help = default_value
                                      ? "Sets " + std::string(a.key) + " false; " + std::string(a.doc)
                                      : std::string(a.doc);
-        entry.options.push_back(app->add_flag(flag, given, help));
+        entry.options.push_back(app->add_flag(self->WithShortName(a.key, flag), given, help));
         entry.names.push_back(flag);
         for (const std::string& alias : self->AliasesOf(a.key)) {
           entry.options.push_back(app->add_flag(alias, given, "same as " + flag)->group(""));
@@ -146,7 +150,7 @@ class DescribedFlags {
       } else if constexpr (IntegerValue<U>) {
         // A count or a seed: CLI11 parses it into the field itself (a whole number in U's range).
         const std::string help = Help(a, std::to_string(*value), is_required);
-        entry.options.push_back(app->add_option(FlagName(a.key), *value, help));
+        entry.options.push_back(app->add_option(self->WithShortName(a.key, FlagName(a.key)), *value, help));
         entry.names.push_back(FlagName(a.key));
       } else {
         static_assert(!sizeof(U*), "a command-line field is a number, an integer, a bool or a named enum");

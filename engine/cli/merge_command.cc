@@ -7,6 +7,7 @@
 
 #include "engine/archive/archive_merge.h"
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/common/errors.h"
 
 namespace gesweep::cli {
@@ -18,6 +19,18 @@ struct MergeFlags {
   bool force = false;
   bool copy = false;
   bool quiet = false;
+  DescribedFlags described{{{"quiet", "-q"}}};
+
+  /// The switches, whose flag is their key's name (DescribedFlags, added by CommandWith); the
+  /// archives and -o are added by hand.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("force", &force).Doc("Replace an existing output archive"));
+    v(Field("copy", &copy)
+          .Doc("Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
+               "files, which must then stay where they are)"));
+    v(Field("quiet", &quiet).Doc("No summary line"));
+  }
 };
 
 int Merge(const MergeFlags& flags) {
@@ -51,11 +64,6 @@ int Merge(const MergeFlags& flags) {
 void AddMergeFlags(CLI::App& app, MergeFlags& flags) {
   app.add_option("archives", flags.inputs, "Shard archives (from gesweep run --shard i/N)")->required();
   app.add_option("-o,--output", flags.output, "Merged archive to write")->required();
-  app.add_flag("--force", flags.force, "Replace an existing output archive");
-  app.add_flag("--copy", flags.copy,
-               "Copy every chunk into a self-contained archive (default: a virtual archive over the shard "
-               "files, which must then stay where they are)");
-  app.add_flag("-q,--quiet", flags.quiet, "No summary line");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<MergeFlags>(

@@ -8,6 +8,8 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 
 #include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
@@ -20,6 +22,10 @@
 namespace gesweep::cli {
 namespace {
 
+// An aggregate query's memory for exact medians and quantiles, and its most groups, unless given.
+constexpr long long kDefaultMemoryMb = 256;
+constexpr long long kDefaultMaxGroups = 1'000'000;
+
 struct QueryFlags {
   std::string archive;
   std::string where;
@@ -31,9 +37,8 @@ struct QueryFlags {
   bool describe = false;
   std::vector<std::string> group_by;
   std::vector<std::string> aggregates;
-  long long memory_mb = 256;
-  long long max_groups = 1'000'000;
-  bool memory_given = false, max_groups_given = false;
+  std::optional<long long> memory_mb;   // none: kDefaultMemoryMb
+  std::optional<long long> max_groups;  // none: kDefaultMaxGroups
 };
 
 // The fields a row query and an aggregate query share, from the flags.
@@ -168,8 +173,8 @@ int RunQueryCommand(const QueryFlags& flags) {
     if (flags.descending && flags.sort.empty()) {
       throw InputError("command line", "--descending", "", "sorts by --sort; give --sort COLUMN");
     }
-    if (!aggregating && (flags.memory_given || flags.max_groups_given)) {
-      throw InputError("command line", flags.memory_given ? "--memory-mb" : "--max-groups", "",
+    if (!aggregating && (flags.memory_mb || flags.max_groups)) {
+      throw InputError("command line", flags.memory_mb ? "--memory-mb" : "--max-groups", "",
                        "applies to --group-by/--aggregate only");
     }
     if (aggregating) {
@@ -178,19 +183,20 @@ int RunQueryCommand(const QueryFlags& flags) {
                          "lists runs; with --group-by/--aggregate the output columns are the groups and "
                          "the statistics");
       }
-      if (flags.memory_mb < 1 || flags.memory_mb > (std::int64_t{1} << 20)) {
-        throw InputError("command line", "--memory-mb", std::to_string(flags.memory_mb),
+      const long long memory_mb = flags.memory_mb.value_or(kDefaultMemoryMb);
+      const long long max_groups = flags.max_groups.value_or(kDefaultMaxGroups);
+      if (memory_mb < 1 || memory_mb > (std::int64_t{1} << 20)) {
+        throw InputError("command line", "--memory-mb", std::to_string(memory_mb),
                          "expected megabytes, 1 to 1048576");
       }
-      if (flags.max_groups < 1) {
-        throw InputError("command line", "--max-groups", std::to_string(flags.max_groups),
-                         "expected a count >= 1");
+      if (max_groups < 1) {
+        throw InputError("command line", "--max-groups", std::to_string(max_groups), "expected a count >= 1");
       }
       auto request = RequestOf<AggregateRequest>(flags);
       request.group_by = flags.group_by;
       request.aggregates = flags.aggregates;
-      request.memory_bytes = static_cast<std::int64_t>(flags.memory_mb) << 20;
-      request.max_groups = flags.max_groups;
+      request.memory_bytes = static_cast<std::int64_t>(memory_mb) << 20;
+      request.max_groups = max_groups;
       const auto writer = MakeQueryWriter(format, std::cout, flags.archive);
       RunAggregateQuery(archive, catalog, request, *writer);
       return 0;
@@ -220,10 +226,10 @@ void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
                  "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
                  "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
   app.add_option("--memory-mb", flags.memory_mb,
-                 "Memory for exact medians and quantiles (default 256); past it, more passes")
-      ->each([&flags](const std::string&) { flags.memory_given = true; });
-  app.add_option("--max-groups", flags.max_groups, "Refuse more groups than this (default 1000000)")
-      ->each([&flags](const std::string&) { flags.max_groups_given = true; });
+                 "Memory for exact medians and quantiles (default " + std::to_string(kDefaultMemoryMb) +
+                     "); past it, more passes");
+  app.add_option("--max-groups", flags.max_groups,
+                 "Refuse more groups than this (default " + std::to_string(kDefaultMaxGroups) + ")");
   app.add_option("--sort", flags.sort,
                  "Column to sort by (missing values last); with --aggregate an output column");
   app.add_flag("--descending", flags.descending, "Sort largest first");

@@ -14,12 +14,14 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
 #include "engine/archive/archive_writer.h"
 #include "engine/archive/write_cost.h"
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/request_names.h"
 #include "engine/cli/signals.h"
@@ -45,18 +47,38 @@ constexpr double kLogInterval_s = 5.0;
 struct RunFlags {
   std::string study;
   std::string output;
-  int threads = 0;
+  std::optional<int> threads;  // none: every core
   std::string shard;
   bool resume = false;
   bool force = false;
   bool dry_run = false;
   double dry_run_budget_s = kDefaultDryRunBudget_s;
-  bool threads_given = false;
   bool quiet = false;
   bool mpi = false;
   int ranks_per_node = 0;
   std::string merge = "virtual";
   std::string format = "text";
+  DescribedFlags described{{{"quiet", "-q"}}};
+
+  /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the study,
+  /// the output, the threads (absent: every core), the shard, the format and the merge (MergeKind has
+  /// no names table) are added by hand.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("resume", &resume).Doc("Continue an existing archive: skip complete runs, run the rest"));
+    v(Field("force", &force).Doc("Replace an existing archive"));
+    v(Field("dry_run", &dry_run)
+          .Doc("Print the run count, storage and time estimates (measured on sample runs within "
+               "--dry-run-budget-s); run nothing"));
+    v(Field("dry_run_budget_s", &dry_run_budget_s)
+          .Unit("s")
+          .Doc("Wall time the dry run's measurement may take, s (at most 600)"));
+    v(Field("quiet", &quiet).Doc("No progress output"));
+    v(Field("mpi", &mpi).Doc("Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi"));
+    v(Field("ranks_per_node", &ranks_per_node)
+          .Doc("With --mpi: ranks per node, one shard writer each (0: $GESWEEP_RANKS_PER_NODE, else the "
+               "ranks sharing a machine)"));
+  }
 };
 
 std::string FormatDuration(double seconds) {
@@ -93,7 +115,7 @@ std::string Milliseconds(double seconds) {
 
 std::string CommandLine(const RunFlags& flags) {
   std::string line = "gesweep run " + flags.study + " -o " + flags.output;
-  if (flags.threads) line += " --threads " + std::to_string(flags.threads);
+  if (flags.threads) line += " --threads " + std::to_string(*flags.threads);
   if (!flags.shard.empty()) line += " --shard " + flags.shard;
   if (flags.resume) line += " --resume";
   if (flags.force) line += " --force";
@@ -349,7 +371,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   options.output = flags.output;
   options.mode = flags.resume ? ArchiveOpenMode::kResume
                               : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate);
-  options.threads = flags.threads;
+  options.threads = flags.threads.value_or(0);
   options.command_line = CommandLine(flags) + " --mpi";
   options.cancel = signals.flag();
   options.ranks_per_node = flags.ranks_per_node;
@@ -358,7 +380,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   MpiFinalizer finalize_after_printing;
   SweepProgress progress;
   std::unique_ptr<ProgressPrinter> printer;
-  const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
+  const int threads = flags.threads.value_or(tbb::info::default_concurrency());
   MpiSweepReport report;
   try {
     report = RunStudyMpi(plan, options, &progress, [&](const MpiSweepReport& started) {
@@ -436,8 +458,8 @@ int Run(const RunFlags& flags) {
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }
-  if (flags.threads_given && (flags.threads < 1 || flags.threads > 4096)) {
-    throw InputError("command line", "--threads", std::to_string(flags.threads),
+  if (flags.threads && (*flags.threads < 1 || *flags.threads > 4096)) {
+    throw InputError("command line", "--threads", std::to_string(*flags.threads),
                      "expected 1 to 4096 worker threads; leave --threads out to use every core");
   }
   if (!(flags.dry_run_budget_s > 0.0) || flags.dry_run_budget_s > kMaximumDryRunBudget_s) {
@@ -449,7 +471,7 @@ int Run(const RunFlags& flags) {
   Study study = LoadStudy(flags.study);
   if (!flags.output.empty()) CheckArchivePath(flags, study);
   SweepPlan plan(std::move(study), shard);
-  const int threads = flags.threads > 0 ? flags.threads : tbb::info::default_concurrency();
+  const int threads = flags.threads.value_or(tbb::info::default_concurrency());
   if (flags.dry_run) return DryRun(plan, threads, flags);
   if (flags.output.empty())
     throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/out.h5");
@@ -562,23 +584,10 @@ int Run(const RunFlags& flags) {
 void AddRunFlags(CLI::App& app, RunFlags& flags) {
   app.add_option("study", flags.study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
   app.add_option("-o,--output", flags.output, "Archive to write (HDF5), e.g. results/stability_map.h5");
-  app.add_option("--threads", flags.threads, "Worker threads, 1 to 4096 (default, when left out: all cores)")
-      ->each([&flags](const std::string&) { flags.threads_given = true; });
+  app.add_option("--threads", flags.threads, "Worker threads, 1 to 4096 (default, when left out: all cores)");
   app.add_option("--shard", flags.shard,
                  "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
-  app.add_flag("--resume", flags.resume, "Continue an existing archive: skip complete runs, run the rest");
-  app.add_flag("--force", flags.force, "Replace an existing archive");
-  app.add_flag("--dry-run", flags.dry_run,
-               "Print the run count, storage and time estimates (measured on sample runs within "
-               "--dry-run-budget-s); run nothing");
-  app.add_option("--dry-run-budget-s", flags.dry_run_budget_s,
-                 "Wall time the dry run's measurement may take, s (default 2, at most 600)");
   app.add_option("--format", flags.format, "Dry-run output: text (default) or json");
-  app.add_flag("-q,--quiet", flags.quiet, "No progress output");
-  app.add_flag("--mpi", flags.mpi, "Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi");
-  app.add_option("--ranks-per-node", flags.ranks_per_node,
-                 "With --mpi: ranks per node, one shard writer each (default: $GESWEEP_RANKS_PER_NODE, else "
-                 "the ranks sharing a machine)");
   app.add_option("--merge", flags.merge,
                  "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
                  "or copy (self-contained)");

@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
 #include "engine/products/archive_sensitivity.h"
@@ -37,6 +38,18 @@ struct SensitivityFlags {
   std::string failed_runs = "drop_blocks";
   std::string format = "table";
   bool no_write = false;
+  DescribedFlags described;
+
+  /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the archive,
+  /// the output, the method, the failed-runs policy and the format are added by hand (a described
+  /// choice's message would quote the value, these never did).
+  template <class V>
+  void Describe(V& v) {
+    v(Field("bootstrap", &bootstrap).Doc("Bootstrap resamples for the intervals (0: none)"));
+    v(Field("seed", &seed).Doc("Seed of the bootstrap: same seed, same intervals"));
+    v(Field("confidence_level", &confidence_level).Doc("Level of the intervals"));
+    v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
+  }
 };
 
 std::string CommandLine(const SensitivityFlags& flags) {
@@ -283,15 +296,10 @@ void AddSensitivityFlags(CLI::App& app, SensitivityFlags& flags) {
          "full path (results/boundary/height_m)")
       ->required();
   app.add_option("--method", flags.method, "sobol or morris (default: the one the design was made for)");
-  app.add_option("--bootstrap", flags.bootstrap,
-                 "Bootstrap resamples for the intervals (default 1000; 0: none)");
-  app.add_option("--seed", flags.seed, "Seed of the bootstrap (default 20240607): same seed, same intervals");
-  app.add_option("--confidence-level", flags.confidence_level, "Level of the intervals (default 0.95)");
   app.add_option("--failed-runs", flags.failed_runs,
                  "Runs without a value (failed, or NaN such as no boundary): drop_blocks (default; leave out "
                  "every Saltelli block / Morris trajectory that holds one) or error (stop, exit 3)");
   app.add_option("--format", flags.format, "table (default) or json");
-  app.add_flag("--no-write", flags.no_write, "Print only; leave the archive untouched");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<SensitivityFlags>(

@@ -35,11 +35,7 @@ enum class PlantHeightReference {
   kFixedHeight,
 };
 /// "path" / "fixed": the study values, flag values and JSON strings.
-template <>
-struct EnumNames<PlantHeightReference> {
-  static constexpr EnumName<PlantHeightReference> kTable[] = {{PlantHeightReference::kReferencePath, "path"},
-                                                              {PlantHeightReference::kFixedHeight, "fixed"}};
-};
+GESWEEP_ENUM_NAMES(PlantHeightReference, {kReferencePath, "path"}, {kFixedHeight, "fixed"});
 
 /// A setting whose NaN means "automatic" (as DisturbanceOptions::turbulence_sigma_w_mps): `value`
 /// when set, else `automatic`.

@@ -30,23 +30,13 @@ enum class LandingOutcome {
 
 /// "landed" / "no_touchdown" / "stall" / "diverged" / "design_failed", in code order (the archive's
 /// levels).
-template <>
-struct EnumNames<LandingOutcome> {
-  static constexpr EnumName<LandingOutcome> kTable[] = {{LandingOutcome::kLanded, "landed"},
-                                                        {LandingOutcome::kNoTouchdown, "no_touchdown"},
-                                                        {LandingOutcome::kStall, "stall"},
-                                                        {LandingOutcome::kDiverged, "diverged"},
-                                                        {LandingOutcome::kDesignFailed, "design_failed"}};
-};
+GESWEEP_ENUM_NAMES(LandingOutcome, {kLanded, "landed"}, {kNoTouchdown, "no_touchdown"}, {kStall, "stall"},
+                   {kDiverged, "diverged"}, {kDesignFailed, "design_failed"});
 
 /// Phase of the landing.
 enum class LandingPhase { kGlideSlope = 0, kFlare = 1 };
 /// "glide_slope" / "flare".
-template <>
-struct EnumNames<LandingPhase> {
-  static constexpr EnumName<LandingPhase> kTable[] = {{LandingPhase::kGlideSlope, "glide_slope"},
-                                                      {LandingPhase::kFlare, "flare"}};
-};
+GESWEEP_ENUM_NAMES(LandingPhase, {kGlideSlope, "glide_slope"}, {kFlare, "flare"});
 
 /// One sample of the time series (SI units; angles in rad).
 struct LandingSample {

@@ -32,11 +32,7 @@ enum class BoundaryMethod {
   kHurwitz,  ///< certified enumeration of the roots of Δ₄ and a₅ per segment (default)
   kSampled,  ///< the former search: σ sampled per segment, TOMS 748 at each sign change
 };
-template <>
-struct EnumNames<BoundaryMethod> {
-  static constexpr EnumName<BoundaryMethod> kTable[] = {{BoundaryMethod::kHurwitz, "hurwitz"},
-                                                        {BoundaryMethod::kSampled, "sampled"}};
-};
+GESWEEP_ENUM_NAMES(BoundaryMethod, {kHurwitz, "hurwitz"}, {kSampled, "sampled"});
 
 /// Where and how finely to look.
 struct BoundaryOptions {

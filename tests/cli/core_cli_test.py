@@ -1,11 +1,14 @@
 #!/usr/bin/python3
-"""End-to-end checks of `gesweep modes` and `gesweep boundary` (issue 2's "done when").
+"""End-to-end checks of `gesweep modes` and `gesweep boundary` (issue 2's "done when"), and of the
+request flags of `run`, `merge` and `query`.
 
 The oracles: the paper's boundary bracket (between its rows H/b = 0.4 and 0.578), the JSON shape
 the issue specifies, and the error contract (one line on stderr, exit code 2)."""
 import json
+import os
 import subprocess
 import sys
+import tempfile
 import unittest
 
 GESWEEP = sys.argv.pop(1)
@@ -129,6 +132,66 @@ class BadInput(unittest.TestCase):
                 self.assertEqual(len(lines), 1, out.stderr)
                 self.assertIn(fragment, lines[0])
                 self.assertEqual(out.stdout, "")
+
+
+class RequestFlags(unittest.TestCase):
+    """The request flags of run, merge and query (engine/cli): the described switches and numbers
+    reach the request, a short name is shown with its flag, and a flag left out is told apart from
+    one given with the default's value."""
+
+    STUDY = "tests/report/flying_qualities_small.toml"  # 240 quick runs
+
+    @classmethod
+    def setUpClass(cls):
+        cls.directory = tempfile.TemporaryDirectory()
+        cls.archive = os.path.join(cls.directory.name, "small.h5")
+        out = run("run", cls.STUDY, "-o", cls.archive, "-q")
+        assert out.returncode == 0, out.stderr
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.directory.cleanup()
+
+    def test_quiet_has_its_short_name_in_the_help(self):
+        for command in ("run", "merge"):
+            with self.subTest(command=command):
+                self.assertIn("-q,--quiet", run(command, "--help").stdout)
+
+    def test_the_dry_run_budget_given_is_the_one_used(self):
+        out = run("run", self.STUDY, "--dry-run", "--format", "json", "--dry-run-budget-s", "0.25")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertEqual(json.loads(out.stdout)["budget_seconds"], 0.25)
+
+    def test_an_aggregate_query_takes_memory_and_group_limits(self):
+        out = run("query", self.archive, "--group-by", "status", "--aggregate", "count", "--memory-mb", "1",
+                  "--max-groups", "1", "--format", "json")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        # The study's 4 x 60 grid, every run ok: one group, within --max-groups 1.
+        self.assertEqual(json.loads(out.stdout)["rows"], [{"count": 4 * 60, "status": "ok"}])
+
+    def test_each_bad_request_flag_gives_one_line_and_exit_2(self):
+        output = os.path.join(self.directory.name, "never.h5")
+        existing = os.path.join(self.directory.name, "existing.h5")
+        open(existing, "w").close()
+        cases = [
+            (("run", self.STUDY, "-o", output, "--threads", "0"), "--threads = 0"),
+            (("run", self.STUDY, "-o", output, "--threads", "4097"), "--threads = 4097"),
+            (("run", self.STUDY, "-o", output, "--dry-run-budget-s", "0"), "--dry-run-budget-s = 0"),
+            (("run", self.STUDY, "-o", output, "--ranks-per-node", "2"), "only with --mpi"),
+            (("merge", self.archive, "-o", existing), "already exists; pass --force"),
+            (("query", self.archive, "--memory-mb", "256"), "--memory-mb"),
+            (("query", self.archive, "--max-groups", "1000000"), "--max-groups"),
+            (("query", self.archive, "--group-by", "status", "--memory-mb", "0"), "--memory-mb = 0"),
+            (("query", self.archive, "--group-by", "status", "--max-groups", "0"), "--max-groups = 0"),
+        ]
+        for args, fragment in cases:
+            with self.subTest(args=args):
+                out = run(*args)
+                self.assertEqual(out.returncode, 2, out.stderr)
+                lines = out.stderr.strip().splitlines()
+                self.assertEqual(len(lines), 1, out.stderr)
+                self.assertIn(fragment, lines[0])
+        self.assertFalse(os.path.exists(output))
 
 
 if __name__ == "__main__":
