@@ -6,6 +6,7 @@
 /// positional, the end on an archive it cannot use, the lock-and-open of a product command).
 
 #include <CLI/CLI.hpp>
+#include <concepts>
 #include <exception>
 #include <functional>
 #include <initializer_list>
