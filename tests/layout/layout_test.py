@@ -7,7 +7,7 @@
 2. Every `#include "engine/<folder>/..."` of an engine file names its own folder or one its folder
    reaches through the table's "depends on" column (direct dependencies, followed transitively):
    nothing includes a folder above it.
-3. No tracked file of the product cites or reads ../shared, or cites MODEL.md / STYLE.md (the
+3. No tracked file of the product cites or reads the shared folder beside the clone, or cites MODEL.md / STYLE.md (the
    project's model is docs/model.md).
 4. Only engine/archive includes HDF5 (hdf5.h or an H5*.h header).
 5. No string literal of an engine file outside engine/cli names a CLI flag (`--word`): below the CLI
