@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -238,11 +239,103 @@ void RunInterruptible(const std::function<void(const std::atomic<bool>*)>& work,
 
 // ---------------------------------------------------------------- modes
 
+/// The per-mode outputs of gesweep.modes, named <mode>/<property> as the archive's results/modes
+/// columns (schemas/archive.md).
+constexpr std::array<const char*, 3> kModeNames = {"short_period", "phugoid", "height"};
+constexpr std::array<const char*, 6> kModeProperties = {
+    "eigenvalue_re_per_s",     "eigenvalue_im_per_s", "natural_frequency_radps", "damping_ratio", "period_s",
+    "time_to_half_or_double_s"};
+constexpr std::array<const char*, 2> kModeFlags = {"oscillatory", "neutral"};
+
+/// Where gesweep.modes writes: the caller's arrays (`out=`, the dict of an earlier call: no new
+/// memory, docs/python.md) or new ones. New ones are carved out of one NumPy allocation, as pandas
+/// keeps the columns of one dtype in one block: one large block gets transparent huge pages from
+/// NumPy's allocator, where 30 arrays of 8 MB each fault in 4 KiB pages, which at 10^6 pairs cost
+/// 10-20 % of the call (docs/performance.md, "From Python"). Each new array is a view with the
+/// block as its base, so one array kept keeps the block alive (`.copy()` frees it).
+class ModesOutput {
+ public:
+  /// `out`: None, or a dict of flat arrays (n or n x 5) that Data checks and RefuseUnknown completes.
+  ModesOutput(py::ssize_t n, const py::object& out) : n_(n) {
+    if (out.is_none()) {
+      block_ = py::array_t<std::uint8_t>(static_cast<py::ssize_t>(BlockBytes(n)));
+      return;
+    }
+    if (!py::isinstance<py::dict>(out)) {
+      throw InputError(kArguments, "out", Repr(out),
+                       "expected the dict of an earlier gesweep.modes call, or None");
+    }
+    given_ = out.cast<py::dict>();
+  }
+
+  /// The `width` values per pair (1, or 5 for the eigenvalues) of output `name`.
+  template <class T>
+  T* Data(const std::string& name, py::ssize_t width = 1) {
+    std::vector<py::ssize_t> shape = {n_};
+    if (width > 1) shape.push_back(width);
+    if (!given_) {
+      const std::size_t bytes = static_cast<std::size_t>(n_ * width) * sizeof(T);
+      auto* data = reinterpret_cast<T*>(block_.mutable_data() + used_);
+      used_ += Aligned(bytes);
+      arrays_[py::str(name)] = py::array_t<T>(shape, data, block_);
+      return data;
+    }
+    const std::string key = "out['" + name + "']";
+    if (!given_->contains(name)) throw InputError(kArguments, "out", "", "expected an array '" + name + "'");
+    py::object value = (*given_)[py::str(name)];
+    const std::string expected = std::string("expected a writeable C-contiguous ") +
+                                 py::str(py::dtype::of<T>()).cast<std::string>() + " array of shape (" +
+                                 std::to_string(n_) + (width > 1 ? ", " + std::to_string(width) : "") + ")";
+    if (!py::isinstance<py::array>(value)) throw InputError(kArguments, key, Repr(value), expected);
+    auto array = value.cast<py::array>();
+    const bool right = array.dtype().is(py::dtype::of<T>()) &&
+                       array.ndim() == static_cast<py::ssize_t>(shape.size()) &&
+                       std::equal(shape.begin(), shape.end(), array.shape()) && array.writeable() &&
+                       (array.flags() & py::array::c_style) != 0;
+    if (!right) {
+      throw InputError(kArguments, key, "an array of dtype " + py::str(array.dtype()).cast<std::string>(),
+                       expected);
+    }
+    ++used_;
+    return static_cast<T*>(array.mutable_data());
+  }
+
+  /// With `out=`: refuses names that are not outputs (a misspelt key would be left unwritten).
+  void RefuseUnknown() const {
+    if (given_ && static_cast<std::size_t>(py::len(*given_)) != used_) {
+      throw InputError(kArguments, "out", "", "expected exactly the keys of an earlier gesweep.modes result");
+    }
+  }
+
+  /// The arrays written: the new ones, or the caller's dict.
+  py::dict Arrays() const { return given_ ? *given_ : arrays_; }
+
+ private:
+  static constexpr std::size_t kAlignment = 64;  // a cache line
+  static std::size_t Aligned(std::size_t bytes) { return (bytes + kAlignment - 1) / kAlignment * kAlignment; }
+  /// Bytes of every output of n pairs, each aligned: the eigenvalues, 2 doubles and 2 one-byte arrays,
+  /// then per mode its properties (doubles) and flags (bools).
+  static std::size_t BlockBytes(py::ssize_t n) {
+    const auto count = static_cast<std::size_t>(n);
+    std::size_t bytes = Aligned(count * 5 * sizeof(std::complex<double>)) +
+                        2 * Aligned(count * sizeof(double)) + 2 * Aligned(count);
+    bytes += kModeNames.size() * (kModeProperties.size() * Aligned(count * sizeof(double)) +
+                                  kModeFlags.size() * Aligned(count * sizeof(bool)));
+    return std::max<std::size_t>(bytes, 1);
+  }
+
+  py::ssize_t n_;
+  std::optional<py::dict> given_;
+  py::array_t<std::uint8_t> block_;
+  std::size_t used_ = 0;  // bytes of the block handed out, or arrays of `out` checked
+  py::dict arrays_;
+};
+
 /// gesweep.modes: the eigen-analysis at every (H, u) pair, in parallel, the GIL released.
 py::dict Modes(const PyAircraft& aircraft,
-               py::array_t<double, py::array::c_style | py::array::forcecast> heights,
-               py::array_t<double, py::array::c_style | py::array::forcecast> speeds, int threads,
-               py::kwargs kwargs) {
+               const py::array_t<double, py::array::c_style | py::array::forcecast>& heights,
+               const py::array_t<double, py::array::c_style | py::array::forcecast>& speeds, int threads,
+               const py::object& out, const py::kwargs& kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
   RefuseLeftovers(options, ModelOptionKeys());
@@ -251,38 +344,37 @@ py::dict Modes(const PyAircraft& aircraft,
   const double* h = heights.data();
   const double* u = speeds.data();
   const double wheel = aircraft.aircraft().wheel_contact_height_m;
+  const InputLimit& height_limit = RequireInputLimit("height_m");
+  const InputLimit& speed_limit = RequireInputLimit("speed_mps");
   for (py::ssize_t i = 0; i < n; ++i) {
-    if (!std::isinf(h[i])) CheckInputLimit("height_m", h[i], kArguments, "height_m");
+    if (!std::isinf(h[i]) && !WithinLimit(height_limit, h[i])) {
+      CheckInputLimit("height_m", h[i], kArguments, "height_m");
+    }
     if (h[i] < wheel) {
       throw InputError(kArguments, "height_m", ShortNumber(h[i]),
                        "expected heights >= the wheel-contact height " + ShortNumber(wheel) + " m of " +
                            aircraft.aircraft().source_path);
     }
-    CheckInputLimit("speed_mps", u[i], kArguments, "speed_mps");
+    if (!WithinLimit(speed_limit, u[i])) CheckInputLimit("speed_mps", u[i], kArguments, "speed_mps");
   }
 
-  const char* kModes[] = {"short_period", "phugoid", "height"};
-  const char* kProperties[] = {"natural_frequency_radps", "damping_ratio", "period_s",
-                               "time_to_half_or_double_s"};
-  py::array_t<std::complex<double>> eigenvalues({n, py::ssize_t{5}});
-  py::array_t<double> sigma(n), h_over_b(n);
-  py::array_t<bool> stable(n);
-  py::array_t<std::int8_t> classification(n);
-  std::vector<py::array_t<double>> properties;  // [mode][property], then re, im
-  std::vector<py::array_t<bool>> flags;         // [mode][oscillatory, neutral]
-  for (int m = 0; m < 3; ++m) {
-    for (int p = 0; p < 6; ++p) properties.emplace_back(n);
-    for (int f = 0; f < 2; ++f) flags.emplace_back(n);
+  ModesOutput output(n, out);
+  auto* eig = output.Data<std::complex<double>>("eigenvalues", 5);
+  double* sig = output.Data<double>("stability_margin_per_s");
+  bool* st = output.Data<bool>("stable");
+  auto* cl = output.Data<std::int8_t>("classification");
+  double* hb = output.Data<double>("height_over_span");
+  std::array<std::array<double*, kModeProperties.size()>, kModeNames.size()> prop{};
+  std::array<std::array<bool*, kModeFlags.size()>, kModeNames.size()> flag{};
+  for (std::size_t m = 0; m < kModeNames.size(); ++m) {
+    const std::string prefix = std::string(kModeNames[m]) + "/";
+    for (std::size_t p = 0; p < kModeProperties.size(); ++p) {
+      prop[m][p] = output.Data<double>(prefix + kModeProperties[p]);
+    }
+    for (std::size_t f = 0; f < kModeFlags.size(); ++f)
+      flag[m][f] = output.Data<bool>(prefix + kModeFlags[f]);
   }
-  auto* eig = eigenvalues.mutable_data();
-  double* sig = sigma.mutable_data();
-  double* hb = h_over_b.mutable_data();
-  bool* st = stable.mutable_data();
-  std::int8_t* cl = classification.mutable_data();
-  std::vector<double*> prop;
-  std::vector<bool*> flag;
-  for (auto& a : properties) prop.push_back(a.mutable_data());
-  for (auto& a : flags) flag.push_back(a.mutable_data());
+  output.RefuseUnknown();
   const double span = aircraft.aircraft().wingspan_m;
   {
     py::gil_scoped_release release;
@@ -295,16 +387,15 @@ py::dict Modes(const PyAircraft& aircraft,
         cl[i] = static_cast<std::int8_t>(modal.classification);
         hb[i] = h[i] / span;
         const ModeProperties* modes[] = {&modal.short_period, &modal.phugoid, &modal.height};
-        for (int m = 0; m < 3; ++m) {
+        for (std::size_t m = 0; m < kModeNames.size(); ++m) {
           const ModeProperties& mode = *modes[m];
-          prop[m * 6 + 0][i] = mode.natural_frequency_radps;
-          prop[m * 6 + 1][i] = mode.damping_ratio;
-          prop[m * 6 + 2][i] = mode.period_s;
-          prop[m * 6 + 3][i] = mode.time_to_half_or_double_s;
-          prop[m * 6 + 4][i] = mode.eigenvalue.real();
-          prop[m * 6 + 5][i] = mode.eigenvalue.imag();
-          flag[m * 2 + 0][i] = mode.oscillatory;
-          flag[m * 2 + 1][i] = mode.neutral;
+          const double values[] = {
+              mode.eigenvalue.real(), mode.eigenvalue.imag(), mode.natural_frequency_radps,
+              mode.damping_ratio,     mode.period_s,          mode.time_to_half_or_double_s};
+          static_assert(std::size(values) == kModeProperties.size());
+          for (std::size_t p = 0; p < kModeProperties.size(); ++p) prop[m][p][i] = values[p];
+          flag[m][0][i] = mode.oscillatory;
+          flag[m][1][i] = mode.neutral;
         }
       }
     };
@@ -316,21 +407,7 @@ py::dict Modes(const PyAircraft& aircraft,
       arena.execute([&] { tbb::parallel_for(tbb::blocked_range<py::ssize_t>(0, n, 4096), body); });
     }
   }
-  py::dict out;
-  out["eigenvalues"] = eigenvalues;
-  out["stability_margin_per_s"] = sigma;
-  out["stable"] = stable;
-  out["classification"] = classification;
-  out["height_over_span"] = h_over_b;
-  for (int m = 0; m < 3; ++m) {
-    const std::string prefix = std::string(kModes[m]) + "/";
-    out[py::str(prefix + "eigenvalue_re_per_s")] = properties[m * 6 + 4];
-    out[py::str(prefix + "eigenvalue_im_per_s")] = properties[m * 6 + 5];
-    for (int p = 0; p < 4; ++p) out[py::str(prefix + kProperties[p])] = properties[m * 6 + p];
-    out[py::str(prefix + "oscillatory")] = flags[m * 2 + 0];
-    out[py::str(prefix + "neutral")] = flags[m * 2 + 1];
-  }
-  return out;
+  return output.Arrays();
 }
 
 // ---------------------------------------------------------------- boundary
@@ -352,8 +429,8 @@ py::dict CrossingDict(const BoundaryCrossing& c) {
   return row;
 }
 
-py::dict Boundary(const PyAircraft& aircraft, py::object speed_arg, py::object method_arg,
-                  py::object sensitivities_arg, py::kwargs kwargs) {
+py::dict Boundary(const PyAircraft& aircraft, const py::object& speed_arg, const py::object& method_arg,
+                  const py::object& sensitivities_arg, const py::kwargs& kwargs) {
   const double speed_mps = ToNumber(speed_arg, "speed_mps");
   const std::string method = ToText(method_arg, "method");
   const bool sensitivities = ToBool(sensitivities_arg, "sensitivities");
@@ -521,8 +598,9 @@ py::array_t<double> Array(const std::vector<double>& values) {
   return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
 }
 
-py::tuple Simulate(const PyAircraft& aircraft, py::object height_m, py::object speed_mps,
-                   py::object summary_only_arg, py::object output_dt_arg, py::kwargs kwargs) {
+py::tuple Simulate(const PyAircraft& aircraft, const py::object& height_m, const py::object& speed_mps,
+                   const py::object& summary_only_arg, const py::object& output_dt_arg,
+                   const py::kwargs& kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
   const bool summary_only = ToBool(summary_only_arg, "summary_only");
@@ -680,7 +758,7 @@ py::dict LandingSeriesDict(const LandingConfig& config, const std::vector<Landin
   return out;
 }
 
-py::tuple Land(const PyAircraft& aircraft, py::object summary_only_arg, py::kwargs kwargs) {
+py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, const py::kwargs& kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
   const bool summary_only = ToBool(summary_only_arg, "summary_only");
@@ -885,7 +963,8 @@ PYBIND11_MODULE(_gesweep, m) {
       "gesweep.ArchiveError", "An archive could not be written or read (I/O, disk full, damage).",
       PyExc_OSError, nullptr));
   m.attr("ArchiveError") = ArchiveErrorType();
-  py::register_exception_translator([](std::exception_ptr p) {
+  // pybind11's ExceptionTranslator is a function pointer taking the exception_ptr by value.
+  py::register_exception_translator([](std::exception_ptr p) {  // NOLINT(performance-unnecessary-value-param)
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InputError& e) {
@@ -908,7 +987,7 @@ PYBIND11_MODULE(_gesweep, m) {
       .def("facts", &AircraftFacts)
       .def("table", &AircraftTable);
   m.def("modes", &Modes, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),
-        py::arg("threads") = 0);
+        py::arg("threads") = 0, py::arg("out") = py::none());
   m.def("boundary", &Boundary, py::arg("aircraft"), py::arg("speed_mps"), py::arg("method") = "hurwitz",
         py::arg("sensitivities") = false);
   m.def("simulate", &Simulate, py::arg("aircraft"), py::arg("height_m"), py::arg("speed_mps"),

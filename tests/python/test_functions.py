@@ -81,6 +81,52 @@ def test_modes_broadcasts_and_keeps_shape(gesweep, ance):
     assert single["stability_margin_per_s"] == m["stability_margin_per_s"][1, 1]
 
 
+def test_modes_out_writes_in_place_the_same_values(gesweep, ance):
+    """out= (an earlier result) is written in place: the same arrays come back, holding what a fresh
+    call returns, bit for bit, including at a new shape-compatible input."""
+    h = np.geomspace(0.79, 14.0, 12).reshape(3, 4)
+    first = gesweep.modes(ance, h, 30.0, threads=2)
+    ids = {k: id(v) for k, v in first.items()}
+    fresh = gesweep.modes(ance, h, 45.0, threads=2)
+    again = gesweep.modes(ance, h, 45.0, threads=2, out=first)
+    assert again is first and {k: id(v) for k, v in again.items()} == ids
+    assert list(again) == list(fresh)
+    for key in fresh:
+        np.testing.assert_array_equal(again[key], fresh[key], err_msg=key)
+
+
+def test_modes_new_arrays_are_independent(gesweep, ance):
+    """The arrays of one call share one allocation, but none overlaps another: writing one leaves
+    the others as they were."""
+    m = gesweep.modes(ance, np.geomspace(0.79, 14.0, 7), 30.0)
+    before = {k: v.copy() for k, v in m.items()}
+    m["short_period/damping_ratio"][:] = -1.0
+    for key, value in m.items():
+        if key != "short_period/damping_ratio":
+            np.testing.assert_array_equal(value, before[key], err_msg=key)
+    keys = list(m)
+    for i, a in enumerate(keys):
+        for b in keys[i + 1:]:
+            assert not np.shares_memory(m[a], m[b]), (a, b)
+
+
+@pytest.mark.parametrize("change,message", [
+    (lambda out: out.pop("stable"), "argument: out: expected an array 'stable'"),
+    (lambda out: out.update(extra=np.zeros(3)), "expected exactly the keys of an earlier gesweep.modes result"),
+    (lambda out: out.update(stable=np.zeros(3)), "out['stable']"),
+    (lambda out: out.update(stable=np.zeros(4, dtype=bool)), "expected a C-contiguous array of shape (3,)"),
+    (lambda out: out.update(eigenvalues=np.zeros((3, 5, 2))[:, :, 0]), "expected a C-contiguous array"),
+    (lambda out: out["stable"].setflags(write=False), "writeable"),
+])
+def test_modes_out_refuses_what_it_cannot_write(gesweep, ance, change, message):
+    out = gesweep.modes(ance, [1.0, 2.0, 3.0], 30.0)
+    change(out)
+    with pytest.raises(gesweep.InputError) as error:
+        gesweep.modes(ance, [1.0, 2.0, 3.0], 30.0, out=out)
+    assert message in str(error.value)
+    assert "\n" not in str(error.value)
+
+
 def test_modes_model_options_equal_cli(gesweep, ance):
     cli = cli_json("modes", "--aircraft", ANCE, "--speed-mps", 40, "--heights-m", "1.2,3",
                    "--no-h-derivatives", "--cdh", "zero", "--interpolation", "pchip")

@@ -105,7 +105,7 @@ class Aircraft:
         return f"gesweep.Aircraft({self.name!r} from {self.source_path!r})"
 
 
-def modes(aircraft, height_m, speed_mps, *, threads=None, **model_options):
+def modes(aircraft, height_m, speed_mps, *, threads=None, out=None, **model_options):
     """The eigen-analysis of Eq. (1) at every (height_m, speed_mps) pair (docs/model.md section 6).
 
     height_m, speed_mps: numbers or arrays (broadcast together; inf is free flight), m and m/s.
@@ -118,19 +118,41 @@ def modes(aircraft, height_m, speed_mps, *, threads=None, **model_options):
       <mode>/eigenvalue_re_per_s, <mode>/eigenvalue_im_per_s (1/s), <mode>/natural_frequency_radps,
       <mode>/damping_ratio (1), <mode>/period_s (s), <mode>/time_to_half_or_double_s (s),
       <mode>/oscillatory, <mode>/neutral (bool), for <mode> in short_period, phugoid, height.
+    The new arrays of one call share one allocation: an array kept keeps all of them (.copy() it alone).
+    out: the dict of an earlier call with the same shape S, written in place and returned (no new
+    memory: for repeated calls over large arrays, as NumPy's out=).
     Model options (keywords):
 """
     h, u = _np.broadcast_arrays(_numbers(height_m, "height_m"), _numbers(speed_mps, "speed_mps"))
     shape = h.shape
-    out = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
-                         int(threads or 0), **_given(model_options))
-    return {k: v.reshape(shape + v.shape[1:]) for k, v in out.items()}
+    flat = None if out is None else _flat_outputs(out, shape)
+    result = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
+                            int(threads or 0), flat, **_given(model_options))
+    if out is not None:
+        return out
+    return {k: v.reshape(shape + v.shape[1:]) for k, v in result.items()}
+
+
+def _flat_outputs(out, shape):
+    """modes' `out` as flat views (the engine checks the names, dtypes and sizes); InputError when an
+    array is not of shape S + (...) or not C-contiguous, since its flat form would be a copy."""
+    if not isinstance(out, dict):
+        raise _input_error("out", out, "expected the dict of an earlier gesweep.modes call, or None")
+    flat = {}
+    for key, value in out.items():
+        if not (isinstance(value, _np.ndarray) and value.shape[:len(shape)] == shape and value.flags.c_contiguous):
+            raise _input_error(f"out[{key!r}]", value if not isinstance(value, _np.ndarray) else
+                               f"an array of shape {value.shape}",
+                               f"expected a C-contiguous array of shape {shape} + (...)")
+        flat[key] = value.reshape((int(_np.prod(shape, dtype=_np.int64)),) + value.shape[len(shape):])
+    return flat
 
 
 modes.__doc__ += _MODEL_DOC
 modes.__signature__ = _inspect.Signature(
     [_inspect.Parameter(n, _inspect.Parameter.POSITIONAL_OR_KEYWORD) for n in ("aircraft", "height_m", "speed_mps")]
-    + [_inspect.Parameter("threads", _inspect.Parameter.KEYWORD_ONLY, default=None)] + _model_parameters())
+    + [_inspect.Parameter("threads", _inspect.Parameter.KEYWORD_ONLY, default=None),
+       _inspect.Parameter("out", _inspect.Parameter.KEYWORD_ONLY, default=None)] + _model_parameters())
 
 
 def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **model_options):
