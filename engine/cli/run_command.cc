@@ -187,85 +187,142 @@ class ProgressPrinter {
   bool stopping_ = false;
 };
 
-int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
+// What the dry run measured, and the sweep time it gives (docs/sweep.md, "Dry run").
+struct DryRunEstimate {
   RunCostEstimate cost;
   WriteCostEstimate write;
-  double pipeline_s = 0;
-  bool fixed_measured = false;
+  double pipeline_s = 0;        // the pipeline's start and end
+  bool fixed_measured = false;  // the per-sweep parts (archive set-up, pipeline, close) were timed
+  double fixed_s = 0;           // their sum, 0 when not measured
+  double estimate_s = 0;        // the sweep's time, and its 95 % interval
+  double low_s = 0;
+  double high_s = 0;
+};
+
+// Times sample runs and one real batch written to a scratch archive. Empty when a signal stopped it;
+// `exit_code` is then the signal's.
+std::optional<DryRunEstimate> EstimateSweep(SweepPlan& plan, int threads, const RunFlags& flags,
+                                            int& exit_code) {
+  DryRunEstimate e;
   {
     const SignalCancellation signals;
     // Most of the budget to the runs, the rest to one real batch written to a scratch archive.
     RunCostOptions options;
     options.threads = threads;
     options.budget_s = 0.75 * flags.dry_run_budget_s;
-    cost = EstimateRunCost(plan, options, signals.flag());
-    if (!cost.stopped && !cost.lower_bound) {
+    e.cost = EstimateRunCost(plan, options, signals.flag());
+    if (!e.cost.stopped && !e.cost.lower_bound) {
       // What the sweep costs whatever its size: the pipeline's start and end (the process's first
       // use of TBB, as in the sweep), then the archive's set-up and close, timed on the scratch archive.
-      pipeline_s = MeasurePipelineStart(plan, threads);
+      e.pipeline_s = MeasurePipelineStart(plan, threads);
       try {
-        write = MeasureWriteCost(plan, cost.seconds_per_run, 0.15 * flags.dry_run_budget_s,
-                                 0.1 * flags.dry_run_budget_s);
+        e.write = MeasureWriteCost(plan, e.cost.seconds_per_run, 0.15 * flags.dry_run_budget_s,
+                                   0.1 * flags.dry_run_budget_s);
       } catch (const ArchiveError&) {
-        write = WriteCostEstimate{};  // no scratch space: the estimate leaves the writer out, and says so
+        e.write = WriteCostEstimate{};  // no scratch space: the estimate leaves the writer out, and says so
       }
-      fixed_measured = write.archive_measured;
+      e.fixed_measured = e.write.archive_measured;
     }
-    if (cost.stopped || signals.cancelled()) {
+    if (e.cost.stopped || signals.cancelled()) {
       std::cerr << "gesweep: dry run stopped by signal " << signals.signal() << "\n";
-      return signals.exit_code();
+      exit_code = signals.exit_code();
+      return std::nullopt;
     }
   }
-  const double fixed_s = fixed_measured ? write.open_seconds + pipeline_s + write.close_seconds : 0.0;
+  e.fixed_s = e.fixed_measured ? e.write.open_seconds + e.pipeline_s + e.write.close_seconds : 0.0;
   const int cores = std::max(1, tbb::info::default_concurrency());
   // The workers run and encode; the writer thread stores.
   auto sweep_seconds = [&](double compute_s, double store_s) {
-    const SweepTimeParts parts{compute_s, write.encode_seconds_per_run, store_s, fixed_s};
+    const SweepTimeParts parts{compute_s, e.write.encode_seconds_per_run, store_s, e.fixed_s};
     return SweepSeconds(parts, plan.run_count(), plan.chunk_runs(), threads, cores);
   };
-  const double estimate_s = sweep_seconds(cost.seconds_per_run, write.seconds_per_run);
-  const double low_s = sweep_seconds(cost.seconds_per_run_low, write.seconds_per_run_low);
-  const double high_s =
-      cost.lower_bound ? INFINITY : sweep_seconds(cost.seconds_per_run_high, write.seconds_per_run_high);
+  e.estimate_s = sweep_seconds(e.cost.seconds_per_run, e.write.seconds_per_run);
+  e.low_s = sweep_seconds(e.cost.seconds_per_run_low, e.write.seconds_per_run_low);
+  e.high_s = e.cost.lower_bound ? INFINITY
+                                : sweep_seconds(e.cost.seconds_per_run_high, e.write.seconds_per_run_high);
+  return e;
+}
+
+void PrintDryRunJson(const SweepPlan& plan, int threads, const RunFlags& flags, const DryRunEstimate& e) {
   const auto& storage = plan.storage();
-  const std::int64_t shard_bytes = storage.bytes_per_run * plan.run_count();
   const Study& study = plan.study();
-  if (flags.format == "json") {
-    nlohmann::json out = {
-        {"study", study.path},
-        {"name", study.name},
-        {"design_kind", std::string(ToString(study.design.kind))},
-        {"design_runs", plan.design_runs()},
-        {"shard", std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count)},
-        {"first_run", plan.first_run()},
-        {"run_count", plan.run_count()},
-        {"chunk_runs", plan.chunk_runs()},
-        {"bytes_per_run", storage.bytes_per_run},
-        {"series_bytes_per_run", storage.series_bytes_per_run},
-        {"storage_bytes", shard_bytes},
-        {"design_storage_bytes", storage.design_bytes},
-        {"seconds_per_run", cost.seconds_per_run},
-        {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
-        {"write_seconds_per_run",
-         write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
-        {"encode_seconds_per_run",
-         write.measured ? nlohmann::json(write.encode_seconds_per_run) : nlohmann::json(nullptr)},
-        {"fixed_seconds", fixed_measured ? nlohmann::json(fixed_s) : nlohmann::json(nullptr)},
-        {"fixed_parts_seconds", fixed_measured ? nlohmann::json{{"archive_open", write.open_seconds},
-                                                                {"pipeline", pipeline_s},
+  const RunCostEstimate& cost = e.cost;
+  const WriteCostEstimate& write = e.write;
+  nlohmann::json out = {
+      {"study", study.path},
+      {"name", study.name},
+      {"design_kind", std::string(ToString(study.design.kind))},
+      {"design_runs", plan.design_runs()},
+      {"shard", std::to_string(plan.shard().index) + "/" + std::to_string(plan.shard().count)},
+      {"first_run", plan.first_run()},
+      {"run_count", plan.run_count()},
+      {"chunk_runs", plan.chunk_runs()},
+      {"bytes_per_run", storage.bytes_per_run},
+      {"series_bytes_per_run", storage.series_bytes_per_run},
+      {"storage_bytes", storage.bytes_per_run * plan.run_count()},
+      {"design_storage_bytes", storage.design_bytes},
+      {"seconds_per_run", cost.seconds_per_run},
+      {"seconds_per_run_interval", {cost.seconds_per_run_low, JsonNumber(cost.seconds_per_run_high)}},
+      {"write_seconds_per_run",
+       write.measured ? nlohmann::json(write.seconds_per_run) : nlohmann::json(nullptr)},
+      {"encode_seconds_per_run",
+       write.measured ? nlohmann::json(write.encode_seconds_per_run) : nlohmann::json(nullptr)},
+      {"fixed_seconds", e.fixed_measured ? nlohmann::json(e.fixed_s) : nlohmann::json(nullptr)},
+      {"fixed_parts_seconds", e.fixed_measured ? nlohmann::json{{"archive_open", write.open_seconds},
+                                                                {"pipeline", e.pipeline_s},
                                                                 {"archive_close", write.close_seconds}}
                                                : nlohmann::json(nullptr)},
-        {"calibration_runs", cost.timed_runs},
-        {"warmup_runs", cost.warmup_runs},
-        {"measured_seconds", cost.measured_s},
-        {"budget_seconds", flags.dry_run_budget_s},
-        {"lower_bound", cost.lower_bound},
-        {"threads", threads},
-        {"estimated_seconds", estimate_s},
-        {"estimated_seconds_interval", {low_s, JsonNumber(high_s)}}};
-    std::cout << out.dump(2) << "\n";
-    return 0;
+      {"calibration_runs", cost.timed_runs},
+      {"warmup_runs", cost.warmup_runs},
+      {"measured_seconds", cost.measured_s},
+      {"budget_seconds", flags.dry_run_budget_s},
+      {"lower_bound", cost.lower_bound},
+      {"threads", threads},
+      {"estimated_seconds", e.estimate_s},
+      {"estimated_seconds_interval", {e.low_s, JsonNumber(e.high_s)}}};
+  std::cout << out.dump(2) << "\n";
+}
+
+// "about 2 min (1 min to 3 min, 95 %) on 2 threads (3.1 us per run on a thread, ...)".
+void PrintDryRunTime(int threads, const RunFlags& flags, const DryRunEstimate& e) {
+  const RunCostEstimate& cost = e.cost;
+  const WriteCostEstimate& write = e.write;
+  const double us = cost.seconds_per_run * 1e6;
+  const std::string per_run = us < 1e3   ? ShortNumber(std::round(us * 100) / 100) + " us"
+                              : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
+                                         : ShortNumber(std::round(us / 1e4) / 100) + " s";
+  if (cost.lower_bound) {
+    std::cout << "time         more than " << FormatDuration(e.estimate_s) << " on " << threads << " thread"
+              << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
+              << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
+              << " per run); --dry-run-budget-s measures longer\n";
+    return;
   }
+  std::cout << "time         about " << FormatDuration(e.estimate_s) << " (" << FormatDuration(e.low_s)
+            << " to " << FormatDuration(e.high_s) << ", 95 %) on " << threads << " thread"
+            << (threads > 1 ? "s" : "") << " (" << per_run << " per run on a thread, from " << cost.timed_runs
+            << " sample run" << (cost.timed_runs == 1 ? "" : "s") << " after " << cost.warmup_runs
+            << " warm-up";
+  if (write.measured) {
+    std::cout << "; encoding " << ShortNumber(std::round(write.encode_seconds_per_run * 1e8) / 100)
+              << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100)
+              << " us per run";
+  } else {
+    std::cout << "; writing not measured";
+  }
+  if (e.fixed_measured) {
+    std::cout << "; per sweep " << Milliseconds(e.fixed_s) << ": archive set-up "
+              << Milliseconds(write.open_seconds) << ", pipeline " << Milliseconds(e.pipeline_s) << ", close "
+              << Milliseconds(write.close_seconds);
+  } else {
+    std::cout << "; fixed per-sweep part not measured";
+  }
+  std::cout << ")\n";
+}
+
+void PrintDryRunText(const SweepPlan& plan, int threads, const RunFlags& flags, const DryRunEstimate& e) {
+  const auto& storage = plan.storage();
+  const Study& study = plan.study();
   std::cout << "study        " << study.name << " (" << study.path << ")\n";
   std::cout << "analyses    ";
   for (const auto& analysis : study.analyses) std::cout << " " << analysis->name();
@@ -276,41 +333,23 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
               << ".." << plan.first_run() + plan.run_count() - 1 << " (" << plan.run_count() << " runs)";
   }
   std::cout << "\n";
-  std::cout << "storage      about " << FormatBytes(static_cast<double>(shard_bytes))
+  std::cout << "storage      about "
+            << FormatBytes(static_cast<double>(storage.bytes_per_run * plan.run_count()))
             << " before compression (" << FormatBytes(static_cast<double>(storage.bytes_per_run))
             << " per run" << (storage.series_bytes_per_run ? ", time series included" : "") << ")\n";
-  const double us = cost.seconds_per_run * 1e6;
-  const std::string per_run = us < 1e3   ? ShortNumber(std::round(us * 100) / 100) + " us"
-                              : us < 1e6 ? ShortNumber(std::round(us / 10) / 100) + " ms"
-                                         : ShortNumber(std::round(us / 1e4) / 100) + " s";
-  if (cost.lower_bound) {
-    std::cout << "time         more than " << FormatDuration(estimate_s) << " on " << threads << " thread"
-              << (threads > 1 ? "s" : "") << ": a sample run did not finish within the "
-              << ShortNumber(flags.dry_run_budget_s) << " s budget (more than " << per_run
-              << " per run); --dry-run-budget-s measures longer\n";
-  } else {
-    std::cout << "time         about " << FormatDuration(estimate_s) << " (" << FormatDuration(low_s)
-              << " to " << FormatDuration(high_s) << ", 95 %) on " << threads << " thread"
-              << (threads > 1 ? "s" : "") << " (" << per_run << " per run on a thread, from "
-              << cost.timed_runs << " sample run" << (cost.timed_runs == 1 ? "" : "s") << " after "
-              << cost.warmup_runs << " warm-up";
-    if (write.measured) {
-      std::cout << "; encoding " << ShortNumber(std::round(write.encode_seconds_per_run * 1e8) / 100)
-                << " us and storing " << ShortNumber(std::round(write.seconds_per_run * 1e8) / 100)
-                << " us per run";
-    } else {
-      std::cout << "; writing not measured";
-    }
-    if (fixed_measured) {
-      std::cout << "; per sweep " << Milliseconds(fixed_s) << ": archive set-up "
-                << Milliseconds(write.open_seconds) << ", pipeline " << Milliseconds(pipeline_s) << ", close "
-                << Milliseconds(write.close_seconds);
-    } else {
-      std::cout << "; fixed per-sweep part not measured";
-    }
-    std::cout << ")\n";
-  }
+  PrintDryRunTime(threads, flags, e);
   std::cout << "batches      " << plan.block_count() << " of " << plan.chunk_runs() << " runs\n";
+}
+
+int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
+  int exit_code = 0;
+  const std::optional<DryRunEstimate> estimate = EstimateSweep(plan, threads, flags, exit_code);
+  if (!estimate) return exit_code;
+  if (flags.format == "json") {
+    PrintDryRunJson(plan, threads, flags, *estimate);
+  } else {
+    PrintDryRunText(plan, threads, flags, *estimate);
+  }
   return 0;
 }
 
@@ -357,6 +396,47 @@ std::string WriteFailure(const RunFlags& flags, const std::string& cause, std::i
 // mpirun -n R gesweep run ... --mpi (docs/cluster.md, "MPI"): the same pipeline with MPI as its
 // transport; one writer per node writes the node's shard, rank 0 merges them into -o. RunStudyMpi
 // initialises and finalises MPI itself and prints nothing; rank 0 prints here.
+#ifdef GESWEEP_HAVE_MPI
+// The MPI sweep's last lines on rank 0's stderr, and every rank's exit code: 0, 3 when runs failed,
+// the signal's when stopped.
+int ReportMpiSweepEnd(const RunFlags& flags, const MpiSweepReport& report,
+                      const SignalCancellation& signals) {
+  const bool speaks = report.rank == 0;
+  if (speaks && (!flags.quiet || report.runs_failed > 0 || report.cancelled)) {
+    std::int64_t ran = 0;
+    for (const std::int64_t r : report.runs_per_rank) ran += r;
+    std::ostringstream line;
+    line << "gesweep: " << ran << " runs in " << FormatDuration(report.seconds) << " (" << std::fixed
+         << std::setprecision(1) << (report.seconds > 0 ? ran / report.seconds : 0.0) << " runs/s) on "
+         << report.ranks << " ranks (runs per rank:";
+    for (const std::int64_t r : report.runs_per_rank) line << " " << r;
+    line << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
+         << " pending in " << report.node_archives.size() << " node shard"
+         << (report.node_archives.size() > 1 ? "s" : "");
+    if (report.merged) {
+      line << " -> " << flags.output << " ("
+           << (report.merge.kind == MergeKind::kVirtual ? "virtual: keep the node shards beside it"
+                                                        : "copied: self-contained")
+           << ")";
+    }
+    std::cerr << line.str() << "\n";
+  }
+  if (report.cancelled) {
+    if (speaks)
+      std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
+    return signals.exit_code();
+  }
+  if (report.runs_failed > 0) {
+    if (speaks) {
+      std::cerr << "gesweep: " << report.runs_failed
+                << " runs failed; their status is 'failed' and runs/message says why\n";
+    }
+    return 3;
+  }
+  return 0;
+}
+#endif
+
 int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
 #ifdef GESWEEP_HAVE_MPI
   if (flags.merge != "virtual" && flags.merge != "copy") {
@@ -415,45 +495,15 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
     }
     return report.error_code;
   }
-  if (speaks && (!flags.quiet || report.runs_failed > 0 || report.cancelled)) {
-    std::int64_t ran = 0;
-    for (const std::int64_t r : report.runs_per_rank) ran += r;
-    std::ostringstream line;
-    line << "gesweep: " << ran << " runs in " << FormatDuration(report.seconds) << " (" << std::fixed
-         << std::setprecision(1) << (report.seconds > 0 ? ran / report.seconds : 0.0) << " runs/s) on "
-         << report.ranks << " ranks (runs per rank:";
-    for (const std::int64_t r : report.runs_per_rank) line << " " << r;
-    line << "); " << report.runs_ok << " ok, " << report.runs_failed << " failed, " << report.runs_pending
-         << " pending in " << report.node_archives.size() << " node shard"
-         << (report.node_archives.size() > 1 ? "s" : "");
-    if (report.merged) {
-      line << " -> " << flags.output << " ("
-           << (report.merge.kind == MergeKind::kVirtual ? "virtual: keep the node shards beside it"
-                                                        : "copied: self-contained")
-           << ")";
-    }
-    std::cerr << line.str() << "\n";
-  }
-  if (report.cancelled) {
-    if (speaks)
-      std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
-    return signals.exit_code();
-  }
-  if (report.runs_failed > 0) {
-    if (speaks) {
-      std::cerr << "gesweep: " << report.runs_failed
-                << " runs failed; their status is 'failed' and runs/message says why\n";
-    }
-    return 3;
-  }
-  return 0;
+  return ReportMpiSweepEnd(flags, report, signals);
 #else
   (void)plan;
   throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
 #endif
 }
 
-int Run(const RunFlags& flags) {
+// The checks of the flags among themselves, before the study is read.
+void CheckRunFlags(const RunFlags& flags) {
   RequireFormat(flags.format, {"text", "json"});
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
@@ -466,6 +516,50 @@ int Run(const RunFlags& flags) {
     throw InputError("command line", "--dry-run-budget-s", ShortNumber(flags.dry_run_budget_s),
                      "expected a time in (0, " + ShortNumber(kMaximumDryRunBudget_s) + "] s");
   }
+}
+
+// The sweep's first lines on stderr: what runs where, and what a resume found.
+void AnnounceSweep(const RunFlags& flags, const SweepPlan& plan, int threads, const ArchiveOpenReport& opened,
+                   std::int64_t runs_to_do) {
+  std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
+  if (plan.shard().count > 1) {
+    std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count << " = runs "
+              << plan.first_run() << ".." << plan.first_run() + plan.run_count() - 1;
+  }
+  std::cerr << ", " << threads << " thread" << (threads > 1 ? "s" : "") << " -> " << flags.output << "\n";
+  if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
+    std::cerr << "gesweep: resuming"
+              << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
+                      ? " from a fresh copy of its complete batches (" + opened.note + ")"
+                      : std::string())
+              << ": " << opened.runs_complete << " runs already complete, " << runs_to_do << " to run\n";
+  }
+}
+
+// The sweep's last lines on stderr, and the command's exit code: 0, 3 when runs failed, the signal's
+// when stopped (docs/sweep.md).
+int ReportSweepEnd(const RunFlags& flags, const ArchiveWriter& writer, bool cancelled,
+                   const SignalCancellation& signals, std::int64_t ran, double elapsed) {
+  if (!flags.quiet || writer.runs_failed() > 0 || cancelled) {
+    std::cerr << "gesweep: " << ran << " runs in " << FormatDuration(elapsed) << " (" << std::fixed
+              << std::setprecision(1) << (elapsed > 0 ? ran / elapsed : 0.0)
+              << " runs/s); archive: " << writer.runs_ok() << " ok, " << writer.runs_failed() << " failed, "
+              << writer.runs_pending() << " pending -> " << flags.output << "\n";
+  }
+  if (cancelled) {
+    std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
+    return signals.cancelled() ? signals.exit_code() : 1;
+  }
+  if (writer.runs_failed() > 0) {
+    std::cerr << "gesweep: " << writer.runs_failed()
+              << " runs failed; their status is 'failed' and runs/message says why\n";
+    return 3;
+  }
+  return 0;
+}
+
+int Run(const RunFlags& flags) {
+  CheckRunFlags(flags);
   ShardSpec shard;
   if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
   Study study = LoadStudy(flags.study);
@@ -510,25 +604,17 @@ int Run(const RunFlags& flags) {
   SweepProgress progress;
   progress.runs_skipped = opened.runs_complete;
   progress.runs_to_do = plan.run_count() - opened.runs_complete;
-  if (!flags.quiet) {
-    std::cerr << "gesweep: " << plan.study().name << ": " << plan.design_runs() << " runs";
-    if (plan.shard().count > 1) {
-      std::cerr << ", shard " << plan.shard().index << "/" << plan.shard().count << " = runs "
-                << plan.first_run() << ".." << plan.first_run() + plan.run_count() - 1;
-    }
-    std::cerr << ", " << threads << " thread" << (threads > 1 ? "s" : "") << " -> " << flags.output << "\n";
-    if (opened.kind != ArchiveOpenReport::Kind::kCreated) {
-      std::cerr << "gesweep: resuming"
-                << (opened.kind == ArchiveOpenReport::Kind::kResumedAfterCrash
-                        ? " from a fresh copy of its complete batches (" + opened.note + ")"
-                        : std::string())
-                << ": " << opened.runs_complete << " runs already complete, " << progress.runs_to_do
-                << " to run\n";
-    }
-  }
+  if (!flags.quiet) AnnounceSweep(flags, plan, threads, opened, progress.runs_to_do);
 
+  // A write or run failure: one line saying what is kept (exit 1).
+  auto failed = [&](const std::string& cause) {
+    std::cerr << "gesweep: error: "
+              << EscapeForMessage(
+                     WriteFailure(flags, cause, opened.runs_complete + progress.runs_written.load()))
+              << "\n";
+    return 1;
+  };
   SweepOutcome outcome;
-  int exit_code = 0;
   {
     ProgressPrinter printer(progress, !flags.quiet && progress.runs_to_do > 0);
     RunnerOptions options;
@@ -538,47 +624,19 @@ int Run(const RunFlags& flags) {
       outcome = RunSweep(plan, opened.pending_blocks, *writer, options, &progress);
     } catch (const ArchiveError& e) {
       printer.Stop();  // ends its line on a terminal, so the error is one line of its own
-      std::cerr << "gesweep: error: "
-                << EscapeForMessage(
-                       WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
-                << "\n";
-      return 1;
+      return failed(e.cause());
     } catch (const std::exception& e) {
       printer.Stop();
-      std::cerr << "gesweep: error: "
-                << EscapeForMessage(
-                       WriteFailure(flags, e.what(), opened.runs_complete + progress.runs_written.load()))
-                << "\n";
-      return 1;
+      return failed(e.what());
     }
   }
   try {
     writer->Finish();
   } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: "
-              << EscapeForMessage(
-                     WriteFailure(flags, e.cause(), opened.runs_complete + progress.runs_written.load()))
-              << "\n";
-    return 1;
+    return failed(e.cause());
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const std::int64_t ran = progress.runs_done.load();
-  if (!flags.quiet || writer->runs_failed() > 0 || outcome.cancelled) {
-    std::cerr << "gesweep: " << ran << " runs in " << FormatDuration(elapsed) << " (" << std::fixed
-              << std::setprecision(1) << (elapsed > 0 ? ran / elapsed : 0.0)
-              << " runs/s); archive: " << writer->runs_ok() << " ok, " << writer->runs_failed() << " failed, "
-              << writer->runs_pending() << " pending -> " << flags.output << "\n";
-  }
-  if (outcome.cancelled) {
-    std::cerr << "gesweep: stopped by signal " << signals.signal() << "; continue with --resume\n";
-    return signals.cancelled() ? signals.exit_code() : 1;
-  }
-  if (writer->runs_failed() > 0) {
-    std::cerr << "gesweep: " << writer->runs_failed()
-              << " runs failed; their status is 'failed' and runs/message says why\n";
-    exit_code = 3;
-  }
-  return exit_code;
+  return ReportSweepEnd(flags, *writer, outcome.cancelled, signals, progress.runs_done.load(), elapsed);
 }
 
 void AddRunFlags(CLI::App& app, RunFlags& flags) {
