@@ -252,9 +252,8 @@ class LandingProblem {
         UpdateSaturation(t, false);  // the command is back at the limit it crossed
         return EventAction::kContinue;
       default:
-        GESWEEP_DEMAND(false);
+        GESWEEP_UNREACHABLE();  // the problem declares no other event
     }
-    return EventAction::kContinue;
   }
 
   void OnStep(double t, const State& x, int segment) { Monitor(t, x, segment); }

@@ -767,8 +767,7 @@ class Aggregator {
         return OrderStatistic(spec, m.n, [&](std::int64_t rank) { return TargetValue(unit, rank); });
       }
     }
-    GESWEEP_DEMAND(false);
-    return kNaN;
+    GESWEEP_UNREACHABLE();
   }
 
   // The output column --sort names: a group column (any name of it) or an aggregate (its item).

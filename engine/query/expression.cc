@@ -637,6 +637,63 @@ bool CompareText(const std::string& op, const std::string& a, const std::string&
   return c >= 0;
 }
 
+std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& values, std::size_t n);
+
+// A comparison, of two numbers or of a text column with a text (quoted or another column).
+std::vector<double> EvaluateCompare(const Node& node, const std::vector<ColumnValues>& values,
+                                    std::size_t n) {
+  std::vector<double> out(n);
+  if (node.left->type == Type::kText || node.right->type == Type::kText) {
+    const bool left_text = node.left->type == Type::kText;
+    const Node& column = left_text ? *node.left : *node.right;
+    const Node& other = left_text ? *node.right : *node.left;
+    const std::vector<std::string>& texts = values[static_cast<std::size_t>(column.column)].texts;
+    const std::vector<std::string>* other_texts =
+        other.kind == Kind::kColumn ? &values[static_cast<std::size_t>(other.column)].texts : nullptr;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::string& b = other_texts ? (*other_texts)[i] : other.text;
+      out[i] = left_text ? CompareText(node.text, texts[i], b) : CompareText(node.text, b, texts[i]);
+    }
+    return out;
+  }
+  const std::vector<double> a = Evaluate(*node.left, values, n);
+  const std::vector<double> b = Evaluate(*node.right, values, n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = Compare(node.text, a[i], b[i]) ? 1.0 : 0.0;
+  return out;
+}
+
+// `in` / `not in` a list of numbers or texts.
+std::vector<double> EvaluateIn(const Node& node, const std::vector<ColumnValues>& values, std::size_t n) {
+  std::vector<double> out(n);
+  if (node.left->type == Type::kText) {
+    const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool hit = std::binary_search(node.strings.begin(), node.strings.end(), texts[i]);
+      out[i] = hit != node.negated ? 1.0 : 0.0;
+    }
+    return out;
+  }
+  const std::vector<double> a = Evaluate(*node.left, values, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    // A missing value (NaN) is in no list, and so "not in" every one, as != holds for it.
+    const bool hit = !std::isnan(a[i]) && std::binary_search(node.numbers.begin(), node.numbers.end(), a[i]);
+    out[i] = hit != node.negated ? 1.0 : 0.0;
+  }
+  return out;
+}
+
+// `contains` / `matches` (and their `not`): a text column against a substring or a regular expression.
+std::vector<double> EvaluateMatch(const Node& node, const std::vector<ColumnValues>& values, std::size_t n) {
+  std::vector<double> out(n);
+  const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool hit = node.regex ? re2::RE2::PartialMatch(texts[i], *node.regex)
+                                : texts[i].find(node.text) != std::string::npos;
+    out[i] = hit != node.negated ? 1.0 : 0.0;
+  }
+  return out;
+}
+
 std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& values, std::size_t n) {
   switch (node.kind) {
     case Kind::kColumn:
@@ -644,8 +701,7 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
     case Kind::kNumber:
       return std::vector<double>(n, node.number);
     case Kind::kString:
-      GESWEEP_DEMAND(false);  // strings are consumed by their comparison
-      return {};
+      GESWEEP_UNREACHABLE();  // strings are consumed by their comparison
     case Kind::kNot: {
       std::vector<double> a = Evaluate(*node.left, values, n);
       for (double& v : a) v = v != 0.0 ? 0.0 : 1.0;
@@ -665,26 +721,8 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
       for (double& v : a) v = v == 1.0 ? 1.0 : 0.0;
       return a;
     }
-    case Kind::kCompare: {
-      std::vector<double> out(n);
-      if (node.left->type == Type::kText || node.right->type == Type::kText) {
-        const bool left_text = node.left->type == Type::kText;
-        const Node& column = left_text ? *node.left : *node.right;
-        const Node& other = left_text ? *node.right : *node.left;
-        const std::vector<std::string>& texts = values[static_cast<std::size_t>(column.column)].texts;
-        const std::vector<std::string>* other_texts =
-            other.kind == Kind::kColumn ? &values[static_cast<std::size_t>(other.column)].texts : nullptr;
-        for (std::size_t i = 0; i < n; ++i) {
-          const std::string& b = other_texts ? (*other_texts)[i] : other.text;
-          out[i] = left_text ? CompareText(node.text, texts[i], b) : CompareText(node.text, b, texts[i]);
-        }
-        return out;
-      }
-      const std::vector<double> a = Evaluate(*node.left, values, n);
-      const std::vector<double> b = Evaluate(*node.right, values, n);
-      for (std::size_t i = 0; i < n; ++i) out[i] = Compare(node.text, a[i], b[i]) ? 1.0 : 0.0;
-      return out;
-    }
+    case Kind::kCompare:
+      return EvaluateCompare(node, values, n);
     case Kind::kArithmetic: {
       std::vector<double> a = Evaluate(*node.left, values, n);
       const std::vector<double> b = Evaluate(*node.right, values, n);
@@ -698,35 +736,10 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
       }
       return a;
     }
-    case Kind::kIn: {
-      std::vector<double> out(n);
-      if (node.left->type == Type::kText) {
-        const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
-        for (std::size_t i = 0; i < n; ++i) {
-          const bool hit = std::binary_search(node.strings.begin(), node.strings.end(), texts[i]);
-          out[i] = hit != node.negated ? 1.0 : 0.0;
-        }
-        return out;
-      }
-      const std::vector<double> a = Evaluate(*node.left, values, n);
-      for (std::size_t i = 0; i < n; ++i) {
-        // A missing value (NaN) is in no list, and so "not in" every one, as != holds for it.
-        const bool hit =
-            !std::isnan(a[i]) && std::binary_search(node.numbers.begin(), node.numbers.end(), a[i]);
-        out[i] = hit != node.negated ? 1.0 : 0.0;
-      }
-      return out;
-    }
-    case Kind::kMatch: {
-      std::vector<double> out(n);
-      const std::vector<std::string>& texts = values[static_cast<std::size_t>(node.left->column)].texts;
-      for (std::size_t i = 0; i < n; ++i) {
-        const bool hit = node.regex ? re2::RE2::PartialMatch(texts[i], *node.regex)
-                                    : texts[i].find(node.text) != std::string::npos;
-        out[i] = hit != node.negated ? 1.0 : 0.0;
-      }
-      return out;
-    }
+    case Kind::kIn:
+      return EvaluateIn(node, values, n);
+    case Kind::kMatch:
+      return EvaluateMatch(node, values, n);
     case Kind::kNegate: {
       std::vector<double> a = Evaluate(*node.left, values, n);
       for (double& v : a) v = -v;
@@ -742,8 +755,7 @@ std::vector<double> Evaluate(const Node& node, const std::vector<ColumnValues>& 
       return a;
     }
   }
-  GESWEEP_DEMAND(false);
-  return {};
+  GESWEEP_UNREACHABLE();
 }
 
 }  // namespace
