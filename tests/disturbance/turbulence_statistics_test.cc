@@ -185,7 +185,11 @@ void CheckRecord(double height_m, double dt, double duration, double output_dt, 
   // Expected variances: σ² reduced by the hold (the w filter's Φ ~ ω⁻² tail reaches past 1/Δt).
   const double var_u = VarianceWithHold(phi_u, dt);
   const double var_w = VarianceWithHold(phi_w, dt);
-  EXPECT_NEAR(var_u / (s.sigma_u * s.sigma_u), 1.0, 0.01);
+  // The hold keeps tanh(aΔt/2)/(aΔt/2) of σ_u² (docs/disturbance.md), above 0.999999 at these steps; the
+  // quadrature of the ω⁻² tail to infinity adds its own error (measured 2e-4 at 100 ft, 7e-4 at the
+  // floor). 1 % bounds both; a lost factor 2 or π in the spectrum or the hold is far outside.
+  constexpr double kHeldUVarianceTolerance = 0.01;
+  EXPECT_NEAR(var_u / (s.sigma_u * s.sigma_u), 1.0, kHeldUVarianceTolerance);
   const double sd_u = VarianceSd(s.length_u / kV, duration);
   const double sd_w = VarianceSd(0.625 * s.length_w / kV, duration);
   // 4 sd: the records are fixed by the seed; a lost factor π or a wrong gain is many sd away.
@@ -215,9 +219,12 @@ TEST(TurbulenceStatistics, HoldLossOfTheWVarianceAsDocumented) {
   // docs/disturbance.md quotes the w variance kept at the 10 ft floor and 52.21 m/s for Δt_n:
   // 0.958 at 5 ms, 0.882 at 15 ms (the quadrature of Φ_w·sinc², independent of the field).
   const HandScales s = Hand(2.0, 1.0);
+  // The table prints 3 decimals: rounding is half a unit of the last one, and one unit leaves the other
+  // half for this quadrature's error (SciPy's quad gives 0.95837 and 0.88186).
+  constexpr double kPrintedDigit = 0.001;
   const auto phi_w = [&](double omega) { return TimeSpectrumW(omega, s, 52.21); };
-  EXPECT_NEAR(VarianceWithHold(phi_w, 0.005), 0.958, 0.001);
-  EXPECT_NEAR(VarianceWithHold(phi_w, 0.015), 0.882, 0.001);
+  EXPECT_NEAR(VarianceWithHold(phi_w, 0.005), 0.958, kPrintedDigit);
+  EXPECT_NEAR(VarianceWithHold(phi_w, 0.015), 0.882, kPrintedDigit);
 }
 
 }  // namespace

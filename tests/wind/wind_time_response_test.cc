@@ -28,6 +28,9 @@ constexpr double kSettledSpeedTolerance_mps = 1e-3;
 /// accuracy; 1e-3 m/s against σ_w = 1.5 m/s is far below the sampling spread and far above both errors
 /// (docs/disturbance.md: the field alone agrees to 1e-4 m/s).
 constexpr double kSameTurbulenceTolerance_mps = 1e-3;
+/// The series' first Δu is the −4 m/s wind plus the 4 m/s airspeed offset: exact in binary, and 1e-15
+/// allows no more than one rounding of a 4 m/s value (ulp 8.9e-16).
+constexpr double kOffsetSumTolerance_mps = 1e-15;
 /// Series interval of the geometric tests, s.
 constexpr double kSeriesInterval_s = 0.01;
 /// Rounding of a difference of speeds of ~60 m/s, or of distances of ~1 km (×1e3).
@@ -83,7 +86,7 @@ TEST(OpenLoopInWind, EnteringASteadyHeadwindAtGroundSpeedU0ItSettlesAtAirspeedU0
   config.series_interval_s = 1.0;
   const OpenLoopResult r = SimulateOpenLoop(Model(), config);
   ASSERT_EQ(r.summary.end_event, OpenLoopEndEvent::kTimeLimit) << r.summary.message;
-  EXPECT_NEAR(r.series.delta_speed_mps.front(), 0.0, 1e-15) << "starts at ground speed u0";
+  EXPECT_NEAR(r.series.delta_speed_mps.front(), 0.0, kOffsetSumTolerance_mps) << "starts at ground speed u0";
   EXPECT_NEAR(r.summary.final_state[kDeltaU], -4.0, kSettledSpeedTolerance_mps);
   EXPECT_NEAR(r.summary.final_state[kPitchRate], 0.0, kSettledSpeedTolerance_mps);
   // The series carries the wind the airplane met: −4 m/s throughout, no vertical air motion.
