@@ -240,6 +240,11 @@ class Search {
     return hopf ? HopfCriterion(a, deflated) : RealCriterion(a, deflated);
   }
 
+  // aₖ(H), k = 1..5, at the Chebyshev nodes of a segment: [k][node].
+  using CoefficientSamples = std::array<std::array<double, BernsteinPolynomial::kMaxDegree + 2>, 6>;
+
+  // The Bernstein forms of segment s's characteristic coefficients and of its stability criteria,
+  // each checked (degree bound, faithfulness to the exact model); false when the matrix is not finite.
   bool BuildPolynomials(std::size_t s) {
     const MatrixSegment& segment = segments_[s];
     int degree = 0;
@@ -247,9 +252,19 @@ class Search {
       degree = std::max(degree, segment.coefficient_degrees[static_cast<std::size_t>(k)]);
     // One node more than the degree needs: the tail of every coefficient checks its degree bound.
     const int m = degree + 2;
-    const std::vector<double>& nodes = Nodes(m);
-    std::array<std::array<double, BernsteinPolynomial::kMaxDegree + 2>, 6> values;
+    CoefficientSamples values;
     double entry_scale = 0;
+    if (!SampleCoefficients(s, m, values, entry_scale)) return false;
+    FitCoefficients(s, m, values, entry_scale);
+    SetCriteria(s);
+    return true;
+  }
+
+  // aₖ(H), k = 1..5, at the m Chebyshev nodes of segment s (values[k][i]), and the largest |entry| of
+  // A there; false (and the reason) when A is not finite at a node.
+  bool SampleCoefficients(std::size_t s, int m, CoefficientSamples& values, double& entry_scale) {
+    const MatrixSegment& segment = segments_[s];
+    const std::vector<double>& nodes = Nodes(m);
     for (int i = 0; i < m; ++i) {
       const double h = HeightAt(s, nodes[static_cast<std::size_t>(i)]);
       const Matrix5d A = segment.polynomial_matrix(h);
@@ -266,6 +281,13 @@ class Search {
       for (int k = 1; k <= 5; ++k)
         values[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)] = a[static_cast<std::size_t>(k)];
     }
+    return true;
+  }
+
+  // The Bernstein form of each aₖ from its samples, its degree bound checked by the Chebyshev tail and
+  // the fit checked against the exact model at a point that is no node; either failing uncertifies.
+  void FitCoefficients(std::size_t s, int m, const CoefficientSamples& values, double entry_scale) {
+    const MatrixSegment& segment = segments_[s];
     SegmentPolynomials& p = polynomials_[s];
     std::array<double, 6> scale{};
     double entry_power = 1.0;
@@ -304,6 +326,15 @@ class Search {
                 ": the fitted coefficients do not reproduce the exact model (relative error " +
                 std::to_string(worst) + ")");
     }
+  }
+
+  // The Hopf (Δ₄, or Δ₃ when deflated) and real-root (a₅, or a₄) criteria's scales and the real one's
+  // polynomial; then Δ's sign, excluded over the segment by interval arithmetic where it can be.
+  void SetCriteria(std::size_t s) {
+    const MatrixSegment& segment = segments_[s];
+    SegmentPolynomials& p = polynomials_[s];
+    const auto& a = p.a;
+    const auto& S = p.scale;
     if (!segment.deflated) {
       p.hopf_scale =
           (S[1] * S[2] + S[3]) * (S[3] * S[4] + S[2] * S[5]) + (S[1] * S[4] + S[5]) * (S[1] * S[4] + S[5]);
@@ -334,7 +365,7 @@ class Search {
         (hopf_lower > margin && hopf_upper < -margin) || (hopf_lower < -margin && hopf_upper > margin);
     if (root_certain) {
       BuildHopf(s, -1.0);
-      return true;
+      return;
     }
     // Interval bounds of each aₖ over the segment (the range of its Bernstein coefficients, which the
     // basis, a partition of unity, keeps the polynomial in) and Δ's formula in them.
@@ -349,7 +380,6 @@ class Search {
     }
     // Then, where that does not exclude a root, the tighter ranges of Δ's factors (BuildHopf).
     p.hopf_excluded = bound.ExcludesZero(margin) || !BuildHopf(s, margin);
-    return true;
   }
 
   // Builds the Bernstein form of Δ₄ (Δ₃ when deflated) of segment s, unless `exclusion_margin` ≥ 0
