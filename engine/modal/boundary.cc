@@ -415,43 +415,45 @@ class Search {
   }
 
   // Refines a candidate on the exact model, checks it is a crossing, classifies it.
-  void Confirm(const Candidate& c) {
+  // The segment of a height in candidate c's bracket (the bracket may straddle a table row).
+  std::size_t SegmentOf(const Candidate& c, double h) const {
+    if (h > segments_[c.segment].upper_height_m && c.segment + 1 < segments_.size()) return c.segment + 1;
+    return c.segment;
+  }
+
+  // Candidate c's root of the exact criterion (TOMS 748 across the bracket) and the final bracket's
+  // width; the polynomial's root, uncertified, when the exact model does not change sign there.
+  std::pair<double, double> RefineRoot(const Candidate& c) {
     const MatrixSegment& segment = segments_[c.segment];
-    // The exact criterion across the bracket (it may straddle a table row: then each side's segment).
-    auto segment_of = [&](double h) {
-      if (h > segment.upper_height_m && c.segment + 1 < segments_.size()) return c.segment + 1;
-      return c.segment;
-    };
-    auto f = [&](double h) { return ExactCriterion(segment_of(h), h, c.hopf, c.undeflated); };
+    auto f = [&](double h) { return ExactCriterion(SegmentOf(c, h), h, c.hopf, c.undeflated); };
     double lower = c.lower_m, upper = c.upper_m;
     double f_lower = f(lower), f_upper = f(upper);
-    double root = 0.5 * (lower + upper);
-    double width = upper - lower;
     if (f_lower != 0.0 && f_upper != 0.0 && (f_lower < 0) != (f_upper < 0)) {
       std::uintmax_t iterations = 100;
       auto [low, high] = boost::math::tools::toms748_solve(
           f, lower, upper, f_lower, f_upper, boost::math::tools::eps_tolerance<double>(50), iterations);
-      root = 0.5 * (low + high);
-      width = high - low;
-    } else if (f_lower == 0.0 || f_upper == 0.0) {
-      root = f_lower == 0.0 ? lower : upper;
-      width = 0.0;
-    } else {
-      // The exact model does not change sign where the polynomial does: ρ̂ moved a root out of a
-      // bracket narrower than the interpolation error. Keep the polynomial's root and say so.
-      const BernsteinPolynomial& poly = c.hopf ? Hopf(c.segment) : polynomials_[c.segment].real;
-      double tl = (lower - segment.lower_height_m) / Length(c.segment);
-      double tu = (upper - segment.lower_height_m) / Length(c.segment);
-      const bool rising = poly(tu) > poly(tl);
-      for (int i = 0; i < 60; ++i) {
-        const double tm = 0.5 * (tl + tu);
-        ((poly(tm) > 0) == rising ? tu : tl) = tm;
-      }
-      root = HeightAt(c.segment, 0.5 * (tl + tu));
-      Uncertify("the exact model does not change sign across the polynomial's root near H = " +
-                FormatMetres(root));
+      return {0.5 * (low + high), high - low};
     }
-    const std::size_t s = segment_of(root);
+    if (f_lower == 0.0 || f_upper == 0.0) return {f_lower == 0.0 ? lower : upper, 0.0};
+    // The exact model does not change sign where the polynomial does: ρ̂ moved a root out of a
+    // bracket narrower than the interpolation error. Keep the polynomial's root and say so.
+    const BernsteinPolynomial& poly = c.hopf ? Hopf(c.segment) : polynomials_[c.segment].real;
+    double tl = (lower - segment.lower_height_m) / Length(c.segment);
+    double tu = (upper - segment.lower_height_m) / Length(c.segment);
+    const bool rising = poly(tu) > poly(tl);
+    for (int i = 0; i < 60; ++i) {
+      const double tm = 0.5 * (tl + tu);
+      ((poly(tm) > 0) == rising ? tu : tl) = tm;
+    }
+    const double root = HeightAt(c.segment, 0.5 * (tl + tu));
+    Uncertify("the exact model does not change sign across the polynomial's root near H = " +
+              FormatMetres(root));
+    return {root, upper - lower};
+  }
+
+  void Confirm(const Candidate& c) {
+    const auto [root, width] = RefineRoot(c);
+    const std::size_t s = SegmentOf(c, root);
     const bool deflated = segments_[s].deflated && !c.undeflated;
     const CharacteristicCoefficients a = Exact(s, root);
     const double t = (root - segments_[s].lower_height_m) / Length(s);
