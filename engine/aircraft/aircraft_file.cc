@@ -8,9 +8,7 @@ namespace gesweep {
 namespace {
 
 std::vector<std::string> TabulatedNames() {
-  std::vector<std::string> names;
-  for (int i = 0; i < kTabulatedCount; ++i) names.emplace_back(kCoefficientNames[i]);
-  return names;
+  return std::vector<std::string>(kCoefficientNames.begin(), kCoefficientNames.begin() + kTabulatedCount);
 }
 
 void ReadTable(const TomlSection& table, Aircraft& aircraft) {

@@ -175,10 +175,12 @@ void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t fi
       std::memcpy(at, block.status.data() + from, n);
       break;
     case ValueSource::kMessage:
+      // Fixed-size NULLPAD strings (hdf5::FixedStringType): a row holds the message's first row_bytes
+      // bytes and zeros after them; a message that fills the row has no terminator.
       std::memset(at, 0, n * row_bytes);
       for (std::size_t r = 0; r < n; ++r) {
         const std::string& message = block.message[from + r];
-        std::memcpy(at + r * row_bytes, message.data(), std::min(message.size(), row_bytes));
+        std::copy_n(message.data(), std::min(message.size(), row_bytes), at + r * row_bytes);
       }
       break;
     case ValueSource::kResult: {

@@ -47,6 +47,12 @@ bool Below(const std::string& path, const char* group) {
   return path.compare(0, prefix.size(), prefix) == 0;
 }
 
+// A second name `link` of the object at `target` (a hard link: the same object, no copy).
+void HardLink(hid_t file, const std::string& target, const std::string& link) {
+  Check(H5Lcreate_hard(file, target.c_str(), file, link.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+        "link " + target + " as " + link);
+}
+
 // The design columns as coordinates of `run` in every results/<analysis> and series/<analysis>
 // group: netCDF groups do not share variables, so each group gets hard links to the design
 // datasets (the same objects: no copy) and CF's `coordinates` attribute on its data variables.
@@ -65,8 +71,7 @@ void LinkDesignCoordinates(hid_t file, const std::vector<std::string>& paths) {
     for (const std::string& column : design) {
       const std::string link = group + "/" + Leaf(column);
       if (hdf5::Exists(file, link)) continue;
-      Check(H5Lcreate_hard(file, column.c_str(), file, link.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-            "link " + column + " as " + link);
+      HardLink(file, column, link);
       names += (names.empty() ? "" : " ") + Leaf(column);
     }
     if (names.empty()) continue;
@@ -96,10 +101,14 @@ void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std:
                       "The netCDF dimension of the runs: axis 0 of every per-run dataset; no stored values");
   std::map<std::string, Handle> scales;
   scales.emplace(kRunDimension, Handle(H5Dopen2(file, kRunDimension, H5P_DEFAULT), "open dimension run"));
-  auto scale = [&](const std::string& path) -> hid_t { return scales.at(path).get(); };
+  // The scale `dimension` (one of `scales`) as axis `index` of the dataset `d` at `path`.
+  auto attach = [&](const Handle& d, const std::string& path, const std::string& dimension, unsigned index) {
+    Check(H5DSattach_scale(d.get(), scales.at(dimension).get(), index),
+          "attach " + dimension + " to " + path);
+  };
   for (const std::string& path : paths) {
     Handle d(H5Dopen2(file, path.c_str(), H5P_DEFAULT), "open " + path);
-    Check(H5DSattach_scale(d.get(), scale(kRunDimension), 0), "attach run to " + path);
+    attach(d, path, kRunDimension, 0);
     if (!IsVectorOrSeries(d.get())) continue;
     const auto axis = hdf5::ReadStringAttribute(d.get(), "time_axis");
     std::string dimension;
@@ -122,7 +131,7 @@ void AttachDimensionScales(hid_t file, std::int64_t runs, const std::vector<std:
                        Handle(H5Dopen2(file, dimension.c_str(), H5P_DEFAULT), "open " + dimension));
       }
     }
-    Check(H5DSattach_scale(d.get(), scale(dimension), 1), "attach " + dimension + " to " + path);
+    attach(d, path, dimension, 1);
   }
   LinkDesignCoordinates(file, paths);
 }

@@ -19,7 +19,12 @@ std::vector<Command>& CommandRegistry() {
 }
 }  // namespace gesweep::cli
 
-int main(int argc, char** argv) {
+namespace {
+
+// Builds the CLI11 app, parses the command line and runs the chosen subcommand: its exit code, or 2
+// for a bad command line (one line on stderr). What it throws (a command's InputError, a failure
+// nothing caught) main turns into one line.
+int Run(int argc, char** argv) {
   using gesweep::cli::CommandRegistry;
   CLI::App app{
       "gesweep: batch parametric and sensitivity studies of airplane longitudinal dynamics "
@@ -65,10 +70,18 @@ int main(int argc, char** argv) {
     std::cerr << "gesweep: error: " << EscapeForMessage(text) << "\n";
     return 2;
   }
+  for (auto& [sub, action] : actions) {
+    if (sub->parsed()) return action();
+  }
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using gesweep::EscapeForMessage;
   try {
-    for (auto& [sub, action] : actions) {
-      if (sub->parsed()) return action();
-    }
+    return Run(argc, argv);
   } catch (const gesweep::InputError& e) {
     // The engine names remedies ("force", "no_write"); the command line words them (request_names.h).
     std::cerr << "gesweep: error: " << EscapeForMessage(gesweep::cli::ForCommandLine(e).what()) << "\n";
@@ -78,6 +91,10 @@ int main(int argc, char** argv) {
     // line, the I/O exit code.
     std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
     return 1;
+  } catch (...) {
+    // Not a std::exception (gesweep throws none; a library might): still one line and exit code 1,
+    // never std::terminate.
+    std::cerr << "gesweep: error: an unexpected exception (not a std::exception)\n";
+    return 1;
   }
-  return 2;
 }

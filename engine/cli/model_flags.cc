@@ -104,6 +104,7 @@ std::vector<double> ParseRange(const std::string& text, const std::string& flag)
   }
   const int count = static_cast<int>(n);
   std::vector<double> values;
+  values.reserve(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) values.push_back(count == 1 ? a : a + (b - a) * i / (count - 1));
   return values;
 }

@@ -77,6 +77,7 @@ int RunReport(const ReportFlags& flags) {
   const std::vector<std::string> archives = ExpandInputs(flags.inputs);
   const std::filesystem::path output(flags.output);
   std::vector<NamedInput> inputs;
+  inputs.reserve(archives.size());
   for (const auto& path : archives) inputs.push_back({path, "input archive"});
   // Before any archive is read or anything written: the directory is a directory (or new), and
   // none of the files the report writes or deletes in it is an input.
@@ -119,6 +120,7 @@ int RunReport(const ReportFlags& flags) {
   arguments.push_back("--");
   arguments.insert(arguments.end(), archives.begin(), archives.end());
   std::vector<char*> argv;
+  argv.reserve(arguments.size() + 1);  // and the terminating nullptr
   for (auto& a : arguments) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;

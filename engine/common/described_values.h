@@ -36,9 +36,12 @@ struct OutputVisitor {
       sink->Number(key, v / a.scale);
     } else {
       static_assert(DoubleArray<U>);
+      const int size = static_cast<int>(v.size());
       std::vector<double> values;
+      values.reserve(static_cast<std::size_t>(size));
+      for (int c = 0; c < size; ++c) values.push_back(v[c]);
       std::vector<std::string> names;
-      for (int c = 0; c < static_cast<int>(v.size()); ++c) values.push_back(v[c]);
+      names.reserve(a.components.size());
       for (const FieldComponent& component : a.components) names.emplace_back(component.name);
       sink->Array(key, values, names);
     }

@@ -267,6 +267,7 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
   if (matches.size() == 1) return *matches.front();
   if (matches.size() > 1) {
     std::vector<std::string> paths;
+    paths.reserve(matches.size());
     for (const auto* m : matches) paths.push_back(m->path);
     throw InputError(source, "output", name,
                      "ambiguous: matches " + Join(paths) + "; give one of these paths");
@@ -289,12 +290,14 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
                      "with scalar results)");
   }
   std::vector<std::string> names;
+  names.reserve(2 * outputs.size());
   for (const auto& output : outputs) {
     names.push_back(output.name);
     names.push_back(LastName(output.path));
   }
   const std::string nearest = NearestName(wanted, names);
   std::vector<std::string> listed;
+  listed.reserve(outputs.size());
   for (const auto& output : outputs) listed.push_back(output.name);
   throw InputError(source, "output", name,
                    (nearest.empty() ? std::string() : "did you mean " + nearest + "? ") +

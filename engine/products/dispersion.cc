@@ -428,7 +428,7 @@ DispersionLimit ParseLimit(const std::string& text, const ColumnCatalog& catalog
   limit.text = text;
   limit.above = text[at] == '>';
   std::string name = text.substr(0, at), number = text.substr(at + 1);
-  auto trim = [](std::string s) {
+  auto trim = [](const std::string& s) {
     const auto b = s.find_first_not_of(' '), e = s.find_last_not_of(' ');
     return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
   };

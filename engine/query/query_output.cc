@@ -65,6 +65,7 @@ class TableWriter final : public QueryRowSink {
       widths_.push_back(width);
     }
     std::vector<std::string> names;
+    names.reserve(columns.size());
     for (const RunColumn* column : columns) names.push_back(column->name);
     Write(names);
   }
