@@ -677,7 +677,10 @@ py::list LandingSettingsList() {
   q["key"] = "q_weights";
   q["unit"] = "SI";
   std::string names;
-  for (auto name : LandingStateNames()) names += (names.empty() ? "" : ", ") + std::string(name);
+  for (auto name : LandingStateNames()) {
+    if (!names.empty()) names += ", ";
+    names += name;
+  }
   q["doc"] = "9 LQR output weights >= 0 on " + names;
   q["default"] = py::cast(std::vector<double>(defaults.q_weights.begin(), defaults.q_weights.end()));
   out.append(q);
