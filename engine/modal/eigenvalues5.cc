@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <utility>
 
 #include "engine/common/errors.h"
@@ -25,7 +26,7 @@ constexpr double kPlainSquaresHigh = 0x1p+1000;
 // The 2-norm of x[0..n): the plain sum of squares, in order, as BLAS dnrm2 computes it for entries
 // in its middle range; scaled by the largest entry when that sum would over- or underflow.
 template <int n>
-double Norm2(const double* x, int stride) {
+double Norm2(const double* x, std::ptrdiff_t stride) {
   double sum = 0;
   for (int i = 0; i < n; ++i) sum += x[i * stride] * x[i * stride];
   if (sum >= kPlainSquaresLow && sum <= kPlainSquaresHigh) return std::sqrt(sum);
@@ -152,7 +153,7 @@ void BalanceInPlace(Square a, double scale[kN]) {
 // alpha = β and x = v. n − 1 = the length of x (1 or 2 here, 1 to 3 in the reduction).
 
 template <int m>  // m = length of x
-[[gnu::always_inline]] inline double Reflector(double& alpha, double* x, int stride) {
+[[gnu::always_inline]] inline double Reflector(double& alpha, double* x, std::ptrdiff_t stride) {
   double squares = alpha * alpha;
   bool x_zero = true;
   for (int i = 0; i < m; ++i) {
@@ -242,9 +243,8 @@ void StandardisedPair(double a, double b, double c, double d, std::complex<doubl
     std::swap(a, d);
     b = -c;
     c = 0.0;
-  } else if (a - d == 0.0 && std::signbit(b) != std::signbit(c)) {
-    // already standard: a complex pair
-  } else {
+  } else if (a - d != 0.0 || std::signbit(b) == std::signbit(c)) {
+    // not yet standard (a = d with b·c < 0 is a standard complex pair already: nothing to do)
     double temp = a - d;
     double p = 0.5 * temp;
     const double bcmax = std::max(std::abs(b), std::abs(c));
