@@ -78,9 +78,9 @@ class ModesAnalysis final : public Analysis {
       return AnalysisOutcome::Failed(message.str());
     }
     double* lambda = row.Slot(eigenvalues_);
-    for (int i = 0; i < 5; ++i) {
-      lambda[2 * i] = modal.eigenvalues[static_cast<std::size_t>(i)].real();
-      lambda[2 * i + 1] = modal.eigenvalues[static_cast<std::size_t>(i)].imag();
+    for (std::size_t i = 0; i < modal.eigenvalues.size(); ++i) {
+      lambda[2 * i] = modal.eigenvalues[i].real();
+      lambda[2 * i + 1] = modal.eigenvalues[i].imag();
     }
     row.Set(margin_, modal.stability_margin_per_s);
     row.Set(stable_, modal.stable ? 1.0 : 0.0);

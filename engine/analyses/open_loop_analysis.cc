@@ -23,7 +23,7 @@ constexpr double kGridTolerance_s = 1e-9;
 
 class OpenLoopAnalysis final : public Analysis {
  public:
-  explicit OpenLoopAnalysis(OpenLoopConfig config) : config_(std::move(config)) {}
+  explicit OpenLoopAnalysis(const OpenLoopConfig& config) : config_(config) {}
 
   std::string_view name() const override { return "open_loop"; }
   std::vector<ParameterId> parameters_used() const override {
@@ -167,7 +167,7 @@ std::unique_ptr<Analysis> MakeOpenLoopAnalysis(const TomlSection& settings, cons
   } catch (const InputError& e) {
     settings.Fail(e.key(), e.value(), e.expected());
   }
-  return std::make_unique<OpenLoopAnalysis>(std::move(config));
+  return std::make_unique<OpenLoopAnalysis>(config);
 }
 
 const AnalysisRegistrar kRegistrar{{"open_loop",

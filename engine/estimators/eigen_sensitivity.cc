@@ -30,7 +30,7 @@ EigenSystem ComputeEigenSystem(const Eigen::MatrixXd& A) {
   const Eigen::EigenSolver<Eigen::MatrixXd> left_solver(At);
   system.eigenvalues = right_solver.eigenvalues();
   system.right = right_solver.eigenvectors();
-  const Eigen::VectorXcd mirrored = left_solver.eigenvalues();
+  const Eigen::VectorXcd& mirrored = left_solver.eigenvalues();
   const Eigen::MatrixXcd transposed_vectors = left_solver.eigenvectors();
 
   // Aᵀ z = μ z with μ = conj(λ) is zᴴ A = λ zᴴ: z is the left eigenvector of λ.

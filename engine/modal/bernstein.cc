@@ -46,7 +46,7 @@ struct ChebyshevToBernstein {
                   T[static_cast<std::size_t>(m - 1)]);
     }
     for (int D = 0; D <= kMaxConversionDegree; ++D) {
-      conversion[static_cast<std::size_t>(D)].resize(static_cast<std::size_t>(D + 1));
+      conversion[static_cast<std::size_t>(D)].resize(static_cast<std::size_t>(D) + 1);
       for (int m = 0; m <= D; ++m) {
         const BernsteinPolynomial e = T[static_cast<std::size_t>(m)].Elevated(D);
         auto& row = conversion[static_cast<std::size_t>(D)][static_cast<std::size_t>(m)];
@@ -61,12 +61,11 @@ struct CosineTables {
   std::vector<std::vector<double>> table;  // table[m][k·m + i]
   CosineTables() {
     table.resize(kMaxConversionDegree + 3);
-    for (int m = 1; m <= kMaxConversionDegree + 2; ++m) {
-      auto& t = table[static_cast<std::size_t>(m)];
-      t.resize(static_cast<std::size_t>(m * m));
-      for (int k = 0; k < m; ++k)
-        for (int i = 0; i < m; ++i)
-          t[static_cast<std::size_t>(k * m + i)] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
+    for (std::size_t m = 1; m < table.size(); ++m) {
+      auto& t = table[m];
+      t.resize(m * m);
+      for (std::size_t k = 0; k < m; ++k)
+        for (std::size_t i = 0; i < m; ++i) t[k * m + i] = std::cos(k * std::numbers::pi * (i + 0.5) / m);
     }
   }
 };
@@ -95,23 +94,25 @@ const FitMatrix& Fit(int m, int d) {
   Slot& slot = slots[m][d];
   std::call_once(slot.built, [&] {
     static const ChebyshevToBernstein table;
-    const double* cosines = Cosines().table[static_cast<std::size_t>(m)].data();
+    const auto nodes = static_cast<std::size_t>(m);
+    const auto terms = static_cast<std::size_t>(d) + 1;  // the coefficients 0…d
+    const double* cosines = Cosines().table[nodes].data();
     // Node i is x_i = −cos θ_i, θ_i = π(i + ½)/m, so T_k(x_i) = (−1)^k cos(k θ_i), and the
     // interpolant's Chebyshev coefficient is c_k = w_k Σ_i v_i (−1)^k cos(k θ_i), w_k = 2/m (1/m for k = 0).
-    auto weight = [m](int k) { return (k % 2 == 0 ? 2.0 : -2.0) / m * (k == 0 ? 0.5 : 1.0); };
-    const auto& conversion = table.conversion[static_cast<std::size_t>(d)];
-    slot.matrix.bernstein.assign(static_cast<std::size_t>((d + 1) * m), 0.0);
-    for (int k = 0; k <= d; ++k) {
-      const auto& row = conversion[static_cast<std::size_t>(k)];
-      for (int j = 0; j <= d; ++j) {
-        for (int i = 0; i < m; ++i) {
-          slot.matrix.bernstein[static_cast<std::size_t>(j * m + i)] +=
-              row[static_cast<std::size_t>(j)] * weight(k) * cosines[k * m + i];
-        }
+    auto weight = [m](std::size_t k) { return (k % 2 == 0 ? 2.0 : -2.0) / m * (k == 0 ? 0.5 : 1.0); };
+    const auto& conversion = table.conversion[terms - 1];
+    slot.matrix.bernstein.assign(terms * nodes, 0.0);
+    for (std::size_t k = 0; k < terms; ++k) {
+      const auto& row = conversion[k];
+      for (std::size_t j = 0; j < terms; ++j) {
+        for (std::size_t i = 0; i < nodes; ++i)
+          slot.matrix.bernstein[j * nodes + i] += row[j] * weight(k) * cosines[k * nodes + i];
       }
     }
-    if (d + 1 < m) {
-      for (int i = 0; i < m; ++i) slot.matrix.tail.push_back(weight(d + 1) * cosines[(d + 1) * m + i]);
+    if (terms < nodes) {
+      slot.matrix.tail.reserve(nodes);
+      for (std::size_t i = 0; i < nodes; ++i)
+        slot.matrix.tail.push_back(weight(terms) * cosines[terms * nodes + i]);
     }
   });
   return slot.matrix;
@@ -184,11 +185,12 @@ BernsteinPolynomial BernsteinPolynomial::FromChebyshevSamples(const double* valu
   const FitMatrix& fit = Fit(m, degree);
   BernsteinPolynomial p;
   p.degree_ = degree;
-  for (int j = 0; j <= degree; ++j) {
-    const double* row = fit.bernstein.data() + j * m;
+  const auto nodes = static_cast<std::size_t>(m);
+  for (std::size_t j = 0; j <= static_cast<std::size_t>(degree); ++j) {
+    const double* row = fit.bernstein.data() + j * nodes;
     double sum = 0;
-    for (int i = 0; i < m; ++i) sum += row[i] * values[i];
-    p.b_[static_cast<std::size_t>(j)] = sum;
+    for (std::size_t i = 0; i < nodes; ++i) sum += row[i] * values[i];
+    p.b_[j] = sum;
   }
   if (tail) {
     double dropped = 0;
@@ -230,10 +232,7 @@ BernsteinPolynomial BernsteinPolynomial::Derivative() const {
   BernsteinPolynomial d;
   if (degree_ == 0) return Constant(0.0);
   d.degree_ = degree_ - 1;
-  for (int k = 0; k < degree_; ++k) {
-    d.b_[static_cast<std::size_t>(k)] =
-        degree_ * (b_[static_cast<std::size_t>(k + 1)] - b_[static_cast<std::size_t>(k)]);
-  }
+  for (std::size_t k = 0; k < static_cast<std::size_t>(degree_); ++k) d.b_[k] = degree_ * (b_[k + 1] - b_[k]);
   return d;
 }
 
@@ -270,16 +269,13 @@ void BernsteinPolynomial::Split(BernsteinPolynomial& left, BernsteinPolynomial& 
   std::array<double, kMax + 1> work;
   std::copy(b_.begin(), b_.begin() + degree_ + 1, work.begin());
   left.degree_ = right.degree_ = degree_;
-  const int n = degree_;
+  const auto n = static_cast<std::size_t>(degree_);
   left.b_[0] = work[0];
-  right.b_[static_cast<std::size_t>(n)] = work[static_cast<std::size_t>(n)];
-  for (int r = 1; r <= n; ++r) {
-    for (int k = 0; k <= n - r; ++k) {
-      work[static_cast<std::size_t>(k)] =
-          0.5 * (work[static_cast<std::size_t>(k)] + work[static_cast<std::size_t>(k + 1)]);
-    }
-    left.b_[static_cast<std::size_t>(r)] = work[0];
-    right.b_[static_cast<std::size_t>(n - r)] = work[static_cast<std::size_t>(n - r)];
+  right.b_[n] = work[n];
+  for (std::size_t r = 1; r <= n; ++r) {
+    for (std::size_t k = 0; k <= n - r; ++k) work[k] = 0.5 * (work[k] + work[k + 1]);
+    left.b_[r] = work[0];
+    right.b_[n - r] = work[n - r];
   }
 }
 
@@ -288,18 +284,18 @@ BernsteinPolynomial operator*(const BernsteinPolynomial& p, const BernsteinPolyn
   GESWEEP_DEMAND(m + n <= BernsteinPolynomial::kMaxDegree);
   const auto& C = Binomial().c;
   std::array<double, kMax + 1> ps, qs;
-  for (int i = 0; i <= m; ++i) ps[static_cast<std::size_t>(i)] = p.b_[static_cast<std::size_t>(i)] * C[m][i];
-  for (int j = 0; j <= n; ++j) qs[static_cast<std::size_t>(j)] = q.b_[static_cast<std::size_t>(j)] * C[n][j];
+  const auto p_count = static_cast<std::size_t>(m) + 1, q_count = static_cast<std::size_t>(n) + 1;
+  for (std::size_t i = 0; i < p_count; ++i) ps[i] = p.b_[i] * C[m][i];
+  for (std::size_t j = 0; j < q_count; ++j) qs[j] = q.b_[j] * C[n][j];
   BernsteinPolynomial r;
   r.degree_ = m + n;
-  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] = 0.0;
-  for (int i = 0; i <= m; ++i) {
-    for (int j = 0; j <= n; ++j)
-      r.b_[static_cast<std::size_t>(i + j)] +=
-          ps[static_cast<std::size_t>(i)] * qs[static_cast<std::size_t>(j)];
+  const std::size_t r_count = p_count + q_count - 1;
+  for (std::size_t k = 0; k < r_count; ++k) r.b_[k] = 0.0;
+  for (std::size_t i = 0; i < p_count; ++i) {
+    for (std::size_t j = 0; j < q_count; ++j) r.b_[i + j] += ps[i] * qs[j];
   }
   const auto& inverse = Binomial().inverse[m + n];
-  for (int k = 0; k <= m + n; ++k) r.b_[static_cast<std::size_t>(k)] *= inverse[k];
+  for (std::size_t k = 0; k < r_count; ++k) r.b_[k] *= inverse[k];
   return r;
 }
 

@@ -1,7 +1,9 @@
 #include "engine/modal/eigenvalues5.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <utility>
 
 #include "engine/common/errors.h"
@@ -25,7 +27,7 @@ constexpr double kPlainSquaresHigh = 0x1p+1000;
 // The 2-norm of x[0..n): the plain sum of squares, in order, as BLAS dnrm2 computes it for entries
 // in its middle range; scaled by the largest entry when that sum would over- or underflow.
 template <int n>
-double Norm2(const double* x, int stride) {
+double Norm2(const double* x, std::ptrdiff_t stride) {
   double sum = 0;
   for (int i = 0; i < n; ++i) sum += x[i * stride] * x[i * stride];
   if (sum >= kPlainSquaresLow && sum <= kPlainSquaresHigh) return std::sqrt(sum);
@@ -152,7 +154,7 @@ void BalanceInPlace(Square a, double scale[kN]) {
 // alpha = β and x = v. n − 1 = the length of x (1 or 2 here, 1 to 3 in the reduction).
 
 template <int m>  // m = length of x
-[[gnu::always_inline]] inline double Reflector(double& alpha, double* x, int stride) {
+[[gnu::always_inline]] inline double Reflector(double& alpha, double* x, std::ptrdiff_t stride) {
   double squares = alpha * alpha;
   bool x_zero = true;
   for (int i = 0; i < m; ++i) {
@@ -242,9 +244,8 @@ void StandardisedPair(double a, double b, double c, double d, std::complex<doubl
     std::swap(a, d);
     b = -c;
     c = 0.0;
-  } else if (a - d == 0.0 && std::signbit(b) != std::signbit(c)) {
-    // already standard: a complex pair
-  } else {
+  } else if (a - d != 0.0 || std::signbit(b) == std::signbit(c)) {
+    // not yet standard (a = d with b·c < 0 is a standard complex pair already: nothing to do)
     double temp = a - d;
     double p = 0.5 * temp;
     const double bcmax = std::max(std::abs(b), std::abs(c));
@@ -319,7 +320,7 @@ void StandardisedPair(double a, double b, double c, double d, std::complex<doubl
 // One double-shift sweep of dlahqr on the active block l…i, the bulge started at row m with the
 // first column v of the shift polynomial: reflector k (m ≤ k < i) acts on rows and columns k…k+2
 // (k…k+1 for the last). With l, i and m template parameters every loop has constant bounds and
-// unrolls; the ten blocks and starting rows of a 5×5 are dispatched by a switch.
+// unrolls; the ten blocks and starting rows of a 5×5 are dispatched by a table.
 
 // The reflector of dlarfg in unnormalised form, I − factor·w·wᵀ, mapping (alpha, x) to (β, 0):
 // w = (alpha − β, x), factor = 1/(β(β − alpha)). The dot products with w can start before the one
@@ -403,30 +404,34 @@ void SweepFrom(Square h, double v[3]) {
   (std::make_integer_sequence<int, I - M>{});
 }
 
-void Sweep(Square h, int l, int i, int m, double v[3]) {
-  switch (100 * i + 10 * l + m) {
-    case 400:
-      return SweepFrom<0, 4, 0>(h, v);
-    case 401:
-      return SweepFrom<0, 4, 1>(h, v);
-    case 402:
-      return SweepFrom<0, 4, 2>(h, v);
-    case 411:
-      return SweepFrom<1, 4, 1>(h, v);
-    case 412:
-      return SweepFrom<1, 4, 2>(h, v);
-    case 422:
-      return SweepFrom<2, 4, 2>(h, v);
-    case 300:
-      return SweepFrom<0, 3, 0>(h, v);
-    case 301:
-      return SweepFrom<0, 3, 1>(h, v);
-    case 311:
-      return SweepFrom<1, 3, 1>(h, v);
-    case 200:
-      return SweepFrom<0, 2, 0>(h, v);
+// kSweeps[i][l][m] = SweepFrom<l, i, m> for every l ≤ m ≤ i − 2 < kN, enumerated at compile time.
+using SweepKernel = void (*)(Square, double[3]);
+using SweepTable = std::array<std::array<std::array<SweepKernel, kN>, kN>, kN>;
+
+template <int I = 2, int L = 0, int M = 0>
+constexpr void AddSweeps(SweepTable& table) {
+  if constexpr (I < kN) {
+    if constexpr (L > I - 2) {
+      AddSweeps<I + 1, 0, 0>(table);
+    } else if constexpr (M > I - 2) {
+      AddSweeps<I, L + 1, L + 1>(table);
+    } else {
+      table[I][L][M] = &SweepFrom<L, I, M>;
+      AddSweeps<I, L, M + 1>(table);
+    }
   }
-  GESWEEP_DEMAND(false && "a double-shift sweep needs a block of at least 3 rows");
+}
+
+constexpr SweepTable kSweeps = [] {
+  SweepTable table{};
+  AddSweeps(table);
+  return table;
+}();
+
+void Sweep(Square h, int l, int i, int m, double v[3]) {
+  GESWEEP_DEMAND(0 <= l && l <= m && m <= i - 2 && i < kN &&
+                 "a double-shift sweep needs a block of at least 3 rows");
+  kSweeps[static_cast<std::size_t>(i)][static_cast<std::size_t>(l)][static_cast<std::size_t>(m)](h, v);
 }
 
 // ---------------------------------------------------------------------------------------------

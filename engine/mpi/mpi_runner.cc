@@ -212,9 +212,10 @@ int AgreeOnError(int code, const std::string& text, const Topology& t, std::stri
 // ---- A filtered batch on the wire ----
 
 void PackBlock(const ResultBlock& block, std::vector<char>& out) {
-  std::size_t bytes = 5 * 8;
+  constexpr std::size_t kField = sizeof(std::int64_t);  // every header field is one int64
+  std::size_t bytes = 5 * kField;
   for (int c = 0; c < block.chunk_count; ++c)
-    bytes += 4 * 8 + block.chunks[static_cast<std::size_t>(c)].bytes.size();
+    bytes += 4 * kField + block.chunks[static_cast<std::size_t>(c)].bytes.size();
   out.resize(bytes);
   char* at = out.data();
   auto put = [&](std::int64_t value) {
@@ -383,7 +384,7 @@ class Dispatcher {
 
  private:
   std::vector<std::deque<std::int64_t>> pending_;
-  int ranks_;
+  std::int64_t ranks_;
   std::int64_t remaining_ = 0;
   bool stopped_ = false;
 };
@@ -591,10 +592,9 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
     std::vector<std::deque<std::int64_t>> pending(static_cast<std::size_t>(t.nodes));
     if (t.rank == 0) {
       for (int r = 0; r < t.ranks; ++r) {
-        for (int i = 0; i < counts[static_cast<std::size_t>(r)]; ++i) {
-          const std::int64_t batch = all[static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)] + i)];
-          pending[static_cast<std::size_t>(t.node_of[static_cast<std::size_t>(r)])].push_back(batch);
-        }
+        const auto from = all.begin() + offsets[static_cast<std::size_t>(r)];
+        auto& node_pending = pending[static_cast<std::size_t>(t.node_of[static_cast<std::size_t>(r)])];
+        node_pending.insert(node_pending.end(), from, from + counts[static_cast<std::size_t>(r)]);
       }
     }
     report.runs_per_rank.assign(static_cast<std::size_t>(t.ranks), 0);

@@ -40,7 +40,8 @@ LinearDerivativeTable::LinearDerivativeTable(const LongitudinalModel& model)
   GESWEEP_DEMAND(n >= 2);
   const bool h_derivatives = model.options().h_derivatives;
   auto reduced_at = [&](const CoefficientRow& row) {
-    DimensionalDerivatives d = ComputeDerivatives(row, model.mass_geometry(), /*density=*/1.0, /*speed=*/1.0);
+    DimensionalDerivatives d =
+        ComputeDerivatives(row, model.mass_geometry(), /*density_kgpm3=*/1.0, /*speed_mps=*/1.0);
     if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
     return Reduce(d);
   };

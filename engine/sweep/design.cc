@@ -133,7 +133,7 @@ class MorrisDesign final : public Design {
     std::vector<int> order(static_cast<std::size_t>(D));
     std::iota(order.begin(), order.end(), 0);
     for (int i = D - 1; i > 0; --i) {
-      const auto j = static_cast<int>(stream.Below(static_cast<std::uint64_t>(i + 1)));
+      const auto j = static_cast<int>(stream.Below(static_cast<std::uint64_t>(i) + 1));
       std::swap(order[static_cast<std::size_t>(i)], order[static_cast<std::size_t>(j)]);
     }
     std::vector<double> x = start;

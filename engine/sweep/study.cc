@@ -428,13 +428,13 @@ class StudyParser {
             for (double value : {parameter.lower, parameter.upper}) {
               const std::string problem = CheckParameterValue(parameter.id, value, aircraft);
               if (!problem.empty()) {
-                entry.Fail(key, "[...]",
-                           "the distribution reaches " + FormatNumber(value) +
-                               " (its value at probability 2^-53 from an end, the furthest a draw can go), " +
-                               "and " + name + ": " + problem +
-                               (key == "normal" || key == "lognormal"
-                                    ? "; truncate it (truncated_normal) or narrow it"
-                                    : ""));
+                std::string expected =
+                    "the distribution reaches " + FormatNumber(value) +
+                    " (its value at probability 2^-53 from an end, the furthest a draw can go), and ";
+                expected.append(name).append(": ").append(problem);
+                if (key == "normal" || key == "lognormal")
+                  expected += "; truncate it (truncated_normal) or narrow it";
+                entry.Fail(key, "[...]", std::move(expected));
               }
             }
           }
@@ -637,19 +637,18 @@ class StudyParser {
                              line_number);
         }
         std::vector<std::string> names = header;
-        const std::string source = csv_source;
         std::set<ParameterId> seen;
         for (std::size_t i = 0; i < names.size(); ++i) {
           const auto id = FindParameter(names[i]);
           if (!id) {
             const std::string near = NearestName(names[i], ParameterNames());
             throw InputError(
-                source, "header", Quote(names[i]),
+                csv_source, "header", Quote(names[i]),
                 near.empty() ? "unknown parameter" : "unknown parameter (did you mean '" + near + "'?)",
                 line_number);
           }
           if (!seen.insert(*id).second)
-            throw InputError(source, "header", Quote(names[i]), "duplicate column", line_number);
+            throw InputError(csv_source, "header", Quote(names[i]), "duplicate column", line_number);
           DesignParameter parameter;
           parameter.id = *id;
           swept_lines_[*id] = design.LineOf("csv");

@@ -19,6 +19,7 @@ constexpr int kMaximumChunkRuns = 4096;  // 32 KB float64 chunks: a good unit fo
 constexpr int kMinimumChunkRuns = 16;
 // Memory of one batch buffer; a few of them are in flight per thread.
 constexpr std::int64_t kMaximumBatchBytes = 16 << 20;
+constexpr std::int64_t kDoubleBytes = sizeof(double);
 constexpr int kMaximumShards = 100000;
 
 int FloorPowerOfTwo(double x) {
@@ -98,8 +99,8 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
     batch_runs = FloorPowerOfTwo(
         std::clamp(kTargetBatchCost_us / per_run, double{kMinimumChunkRuns}, double{kMaximumChunkRuns}));
     std::int64_t memory_per_run =
-        8 * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
-    for (const auto& column : schema_.columns) memory_per_run += 8 * column.doubles_per_run();
+        kDoubleBytes * static_cast<std::int64_t>(design_->column_count()) + BookkeepingBytesPerRun();
+    for (const auto& column : schema_.columns) memory_per_run += kDoubleBytes * column.doubles_per_run();
     while (batch_runs > 1 && batch_runs * memory_per_run > kMaximumBatchBytes) batch_runs /= 2;
   }
   ShardRange(design_runs_, batch_runs, shard_, &first_run_, &run_count_);
@@ -143,7 +144,7 @@ SweepPlan::SweepPlan(Study study, ShardSpec shard) : study_(std::move(study)), s
 void SweepPlan::CheckStorage() {
   // Storage before compression.
   storage_.bytes_per_run = BookkeepingBytesPerRun() +
-                           8 * static_cast<std::int64_t>(study_.design.parameters.size()) +
+                           kDoubleBytes * static_cast<std::int64_t>(study_.design.parameters.size()) +
                            schema_.StoredBytesPerRun();
   for (const auto& column : schema_.columns) {
     if (!column.time_axis.empty()) storage_.series_bytes_per_run += column.stored_bytes_per_run();
