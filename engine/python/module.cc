@@ -14,12 +14,14 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <functional>
 #include <future>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <numbers>
 #include <optional>
 #include <set>
@@ -248,19 +250,15 @@ constexpr std::array<const char*, 6> kModeProperties = {
 constexpr std::array<const char*, 2> kModeFlags = {"oscillatory", "neutral"};
 
 /// Where gesweep.modes writes: the caller's arrays (`out=`, the dict of an earlier call: no new
-/// memory, docs/python.md) or new ones. New ones are carved out of one NumPy allocation, as pandas
-/// keeps the columns of one dtype in one block: one large block gets transparent huge pages from
-/// NumPy's allocator, where 30 arrays of 8 MB each fault in 4 KiB pages, which at 10^6 pairs cost
-/// 10-20 % of the call (docs/performance.md, "From Python"). Each new array is a view with the
-/// block as its base, so one array kept keeps the block alive (`.copy()` frees it).
+/// memory, docs/python.md) or new ones. New ones are allocated with malloc, as the engine's own
+/// buffers, each a NumPy array that frees its memory when it dies: not through NumPy's allocator,
+/// whose MADV_HUGEPAGE made a 10^6-pair call 5-30 % slower on the measuring machine (transparent
+/// huge pages there wait for compaction; docs/performance.md, "From Python").
 class ModesOutput {
  public:
   /// `out`: None, or a dict of flat arrays (n or n x 5) that Data checks and RefuseUnknown completes.
   ModesOutput(py::ssize_t n, const py::object& out) : n_(n) {
-    if (out.is_none()) {
-      block_ = py::array_t<std::uint8_t>(static_cast<py::ssize_t>(BlockBytes(n)));
-      return;
-    }
+    if (out.is_none()) return;
     if (!py::isinstance<py::dict>(out)) {
       throw InputError(kArguments, "out", Repr(out),
                        "expected the dict of an earlier gesweep.modes call, or None");
@@ -274,35 +272,36 @@ class ModesOutput {
     std::vector<py::ssize_t> shape = {n_};
     if (width > 1) shape.push_back(width);
     if (!given_) {
-      const std::size_t bytes = static_cast<std::size_t>(n_ * width) * sizeof(T);
-      auto* data = reinterpret_cast<T*>(block_.mutable_data() + used_);
-      used_ += Aligned(bytes);
-      arrays_[py::str(name)] = py::array_t<T>(shape, data, block_);
+      const std::size_t bytes = std::max<std::size_t>(static_cast<std::size_t>(n_ * width) * sizeof(T), 1);
+      auto* data = static_cast<T*>(std::malloc(bytes));
+      if (data == nullptr) throw std::bad_alloc();
+      py::capsule owner(data, [](void* memory) { std::free(memory); });
+      arrays_[py::str(name)] = py::array_t<T>(shape, data, owner);
       return data;
     }
     const std::string key = "out['" + name + "']";
     if (!given_->contains(name)) throw InputError(kArguments, "out", "", "expected an array '" + name + "'");
     py::object value = (*given_)[py::str(name)];
     const std::string expected = std::string("expected a writeable C-contiguous ") +
-                                 py::str(py::dtype::of<T>()).cast<std::string>() + " array of shape (" +
-                                 std::to_string(n_) + (width > 1 ? ", " + std::to_string(width) : "") + ")";
+                                 DtypeName(py::dtype::of<T>()) + " array of shape " + ShapeText(shape);
     if (!py::isinstance<py::array>(value)) throw InputError(kArguments, key, Repr(value), expected);
     auto array = value.cast<py::array>();
-    const bool right = array.dtype().is(py::dtype::of<T>()) &&
-                       array.ndim() == static_cast<py::ssize_t>(shape.size()) &&
-                       std::equal(shape.begin(), shape.end(), array.shape()) && array.writeable() &&
+    const std::vector<py::ssize_t> given_shape(array.shape(), array.shape() + array.ndim());
+    const bool right = array.dtype().is(py::dtype::of<T>()) && given_shape == shape && array.writeable() &&
                        (array.flags() & py::array::c_style) != 0;
     if (!right) {
-      throw InputError(kArguments, key, "an array of dtype " + py::str(array.dtype()).cast<std::string>(),
+      throw InputError(kArguments, key,
+                       std::string(array.writeable() ? "a " : "a read-only ") + DtypeName(array.dtype()) +
+                           " array of shape " + ShapeText(given_shape),
                        expected);
     }
-    ++used_;
+    ++checked_;
     return static_cast<T*>(array.mutable_data());
   }
 
   /// With `out=`: refuses names that are not outputs (a misspelt key would be left unwritten).
   void RefuseUnknown() const {
-    if (given_ && static_cast<std::size_t>(py::len(*given_)) != used_) {
+    if (given_ && static_cast<std::size_t>(py::len(*given_)) != checked_) {
       throw InputError(kArguments, "out", "", "expected exactly the keys of an earlier gesweep.modes result");
     }
   }
@@ -311,23 +310,23 @@ class ModesOutput {
   py::dict Arrays() const { return given_ ? *given_ : arrays_; }
 
  private:
-  static constexpr std::size_t kAlignment = 64;  // a cache line
-  static std::size_t Aligned(std::size_t bytes) { return (bytes + kAlignment - 1) / kAlignment * kAlignment; }
-  /// Bytes of every output of n pairs, each aligned: the eigenvalues, 2 doubles and 2 one-byte arrays,
-  /// then per mode its properties (doubles) and flags (bools).
-  static std::size_t BlockBytes(py::ssize_t n) {
-    const auto count = static_cast<std::size_t>(n);
-    std::size_t bytes = Aligned(count * 5 * sizeof(std::complex<double>)) +
-                        2 * Aligned(count * sizeof(double)) + 2 * Aligned(count);
-    bytes += kModeNames.size() * (kModeProperties.size() * Aligned(count * sizeof(double)) +
-                                  kModeFlags.size() * Aligned(count * sizeof(bool)));
-    return std::max<std::size_t>(bytes, 1);
+  static std::string DtypeName(const py::dtype& dtype) {
+    return py::str(py::handle(dtype)).cast<std::string>();
+  }
+  static std::string ShapeText(const std::vector<py::ssize_t>& shape) {
+    std::string text = "(";
+    for (const py::ssize_t extent : shape) {
+      text += std::to_string(extent);
+      text += ", ";
+    }
+    if (shape.size() > 1) text.resize(text.size() - 2);
+    if (shape.size() == 1) text.resize(text.size() - 1);
+    return text + ")";
   }
 
   py::ssize_t n_;
   std::optional<py::dict> given_;
-  py::array_t<std::uint8_t> block_;
-  std::size_t used_ = 0;  // bytes of the block handed out, or arrays of `out` checked
+  std::size_t checked_ = 0;  // arrays of `out` checked
   py::dict arrays_;
 };
 

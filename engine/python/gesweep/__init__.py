@@ -118,7 +118,6 @@ def modes(aircraft, height_m, speed_mps, *, threads=None, out=None, **model_opti
       <mode>/eigenvalue_re_per_s, <mode>/eigenvalue_im_per_s (1/s), <mode>/natural_frequency_radps,
       <mode>/damping_ratio (1), <mode>/period_s (s), <mode>/time_to_half_or_double_s (s),
       <mode>/oscillatory, <mode>/neutral (bool), for <mode> in short_period, phugoid, height.
-    The new arrays of one call share one allocation: an array kept keeps all of them (.copy() it alone).
     out: the dict of an earlier call with the same shape S, written in place and returned (no new
     memory: for repeated calls over large arrays, as NumPy's out=).
     Model options (keywords):
