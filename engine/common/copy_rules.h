@@ -2,6 +2,9 @@
 /// Declarations of how a class that owns a resource (a file handle, a lock, signal handlers, zlib's
 /// state) may be copied or moved, said once. Each macro stands in a class's public section.
 
+// The macro argument is a class name in declarations, where parentheses cannot stand.
+// NOLINTBEGIN(bugprone-macro-parentheses)
+
 /// The class is not copyable: its copy constructor and copy assignment are deleted (it has no move
 /// either, unless it declares one).
 #define GESWEEP_NO_COPY(Class)  \
@@ -14,3 +17,5 @@
   Class(Class&& other) noexcept;           \
   Class& operator=(Class&&) = delete;      \
   GESWEEP_NO_COPY(Class)
+
+// NOLINTEND(bugprone-macro-parentheses)

@@ -260,8 +260,9 @@ struct Recorder {
       r.kind = FieldKind::kText;
       r.default_text = v;
     } else if constexpr (ListValue<U>) {
-      static_assert(!sizeof(U*), "a list field is a command-line setting: ListFields and the study file "
-                                 "do not take one (see ListValue)");
+      static_assert(!sizeof(U*),
+                    "a list field is a command-line setting: ListFields and the study file "
+                    "do not take one (see ListValue)");
     } else {
       static_assert(DoubleArray<U>,
                     "a described field is a number, integer, bool, named enum, string or array");
