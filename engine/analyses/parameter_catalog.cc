@@ -149,8 +149,6 @@ std::vector<ParameterInfo> BuildCatalog() {
   return c;
 }
 
-std::string FormatNumber(double value) { return ShortNumber(value); }
-
 }  // namespace
 
 const std::vector<ParameterInfo>& ParameterCatalog() {
@@ -215,10 +213,10 @@ std::string CheckParameterValue(ParameterId id, double value, const Aircraft* ai
   if (aircraft != nullptr && info.name == "height_m") {
     if (value < aircraft->wheel_contact_height_m) {
       return "expected a height >= the wheel-contact height " +
-             FormatNumber(aircraft->wheel_contact_height_m) + " m of " + aircraft->source_path;
+             ShortNumber(aircraft->wheel_contact_height_m) + " m of " + aircraft->source_path;
     }
     if (aircraft->field_elevation_m + value > limit.maximum) {
-      return "expected field elevation + height <= " + FormatNumber(limit.maximum) +
+      return "expected field elevation + height <= " + ShortNumber(limit.maximum) +
              " m (the ISA troposphere the density model uses)";
     }
   }
@@ -231,7 +229,7 @@ std::string FormatParameterValue(ParameterId id, double value) {
       value == std::floor(value)) {
     return info.levels[static_cast<std::size_t>(value)];
   }
-  return FormatNumber(value);
+  return ShortNumber(value);
 }
 
 std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text) {

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/copy_rules.h"
+
 namespace gesweep {
 
 /// An HDF5 object of a product being written (a dataset or a group): its attributes.
@@ -54,10 +56,7 @@ class ProductGroup : public ProductObject {
   /// A subgroup.
   ProductGroup Group(const std::string& name);
 
-  ProductGroup(ProductGroup&& other) noexcept;
-  ProductGroup& operator=(ProductGroup&&) = delete;
-  ProductGroup(const ProductGroup&) = delete;
-  ProductGroup& operator=(const ProductGroup&) = delete;
+  GESWEEP_MOVE_CONSTRUCT_ONLY(ProductGroup);
   ~ProductGroup();
 
  private:

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <string>
 
+#include "engine/common/copy_rules.h"
+
 namespace gesweep {
 
 /// The claim; released (and its lock file removed when this claim created it) on destruction.
@@ -18,10 +20,7 @@ class ArchiveLock {
   /// once it has finished, or pass --no-write"), or when the lock file cannot be created.
   static ArchiveLock Acquire(const std::filesystem::path& archive, const std::string& retry_hint);
 
-  ArchiveLock(ArchiveLock&& other) noexcept;
-  ArchiveLock& operator=(ArchiveLock&&) = delete;
-  ArchiveLock(const ArchiveLock&) = delete;
-  ArchiveLock& operator=(const ArchiveLock&) = delete;
+  GESWEEP_MOVE_CONSTRUCT_ONLY(ArchiveLock);
   ~ArchiveLock();
 
  private:

@@ -84,6 +84,7 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
       hdf5::WriteAttribute(group, "csv", spec.list_csv);
       break;
     case DesignKind::kLhs:
+    case DesignKind::kMonteCarlo:
       hdf5::WriteAttribute(group, "samples", spec.samples);
       hdf5::WriteAttribute(group, "seed", static_cast<std::int64_t>(spec.seed));
       break;
@@ -106,10 +107,6 @@ void WriteDesignAttributes(hid_t group, const SweepPlan& plan) {
       hdf5::WriteAttribute(group, "delta", spec.levels / (2.0 * (spec.levels - 1)));
       hdf5::WriteAttribute(group, "seed", static_cast<std::int64_t>(spec.seed));
       hdf5::WriteAttribute(group, "trajectory_rows", static_cast<std::int64_t>(spec.parameters.size()) + 1);
-      break;
-    case DesignKind::kMonteCarlo:
-      hdf5::WriteAttribute(group, "samples", spec.samples);
-      hdf5::WriteAttribute(group, "seed", static_cast<std::int64_t>(spec.seed));
       break;
     case DesignKind::kSingle:
       break;

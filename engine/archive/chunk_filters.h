@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/common/copy_rules.h"
+
 namespace gesweep::archive {
 
 /// The filter pipeline of a dataset, in HDF5's order: shuffle, deflate, Fletcher-32.
@@ -40,8 +42,7 @@ class ChunkFilter {
  public:
   ChunkFilter();
   ~ChunkFilter();
-  ChunkFilter(const ChunkFilter&) = delete;
-  ChunkFilter& operator=(const ChunkFilter&) = delete;
+  GESWEEP_NO_COPY(ChunkFilter);
 
   /// Filters `size` bytes into `out` (resized) and returns HDF5's filter mask: bit i set when filter
   /// i was skipped, which HDF5 does for an optional filter that fails (deflate when its output would

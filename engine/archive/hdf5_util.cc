@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
+#include <utility>
 
 #include "engine/archive/dimension_scales.h"
 
@@ -269,12 +270,33 @@ void UpdateAttribute(hid_t object, const std::string& name, std::int64_t value) 
   Check(H5Awrite(attribute.get(), H5T_NATIVE_INT64, &value), "write attribute " + name);
 }
 
-std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name) {
+namespace {
+
+// An attribute and its type in the file.
+struct TypedAttribute {
+  Handle attribute;
+  Handle file_type;
+};
+
+// The attribute `name` of `object` and its type in the file; none when it is absent, ArchiveError
+// ("attribute <name> is not <what>") when its type is not of class `type_class`.
+std::optional<TypedAttribute> OpenAttributeOfClass(hid_t object, const std::string& name,
+                                                   H5T_class_t type_class, const std::string& what) {
   if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
   Handle attribute = OpenAttribute(object, name);
   Handle file_type(H5Aget_type(attribute.get()), "attribute type");
-  if (H5Tget_class(file_type.get()) != H5T_STRING)
-    throw ArchiveError("attribute " + name + " is not a string");
+  if (H5Tget_class(file_type.get()) != type_class)
+    throw ArchiveError("attribute " + name + " is not " + what);
+  return TypedAttribute{std::move(attribute), std::move(file_type)};
+}
+
+}  // namespace
+
+std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& name) {
+  const auto found = OpenAttributeOfClass(object, name, H5T_STRING, "a string");
+  if (!found) return std::nullopt;
+  const Handle& attribute = found->attribute;
+  const Handle& file_type = found->file_type;
   Handle space(H5Aget_space(attribute.get()), "attribute space");
   if (H5Sget_simple_extent_npoints(space.get()) != 1)
     throw ArchiveError("attribute " + name + " is not one string");
@@ -293,13 +315,10 @@ std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& 
 }
 
 std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name) {
-  if (H5Aexists(object, name.c_str()) <= 0) return std::nullopt;
-  Handle attribute = OpenAttribute(object, name);
-  Handle file_type(H5Aget_type(attribute.get()), "attribute type");
-  if (H5Tget_class(file_type.get()) != H5T_INTEGER)
-    throw ArchiveError("attribute " + name + " is not an integer");
+  const auto found = OpenAttributeOfClass(object, name, H5T_INTEGER, "an integer");
+  if (!found) return std::nullopt;
   std::int64_t value = 0;
-  Check(H5Aread(attribute.get(), H5T_NATIVE_INT64, &value), "read attribute " + name);
+  Check(H5Aread(found->attribute.get(), H5T_NATIVE_INT64, &value), "read attribute " + name);
   return value;
 }
 

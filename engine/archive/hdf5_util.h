@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/archive/archive_error.h"
+#include "engine/common/copy_rules.h"
 
 namespace gesweep {
 
@@ -48,8 +49,7 @@ class Handle {
     }
     return *this;
   }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
+  GESWEEP_NO_COPY(Handle);
   hid_t get() const { return id_; }
   explicit operator bool() const { return id_ >= 0; }
   /// Closes now (errors reported, unlike the destructor's).

@@ -41,9 +41,22 @@ std::string DescribedFlags::WithShortName(std::string_view key, const std::strin
 std::string DescribedFlags::Help(const FieldAttributes& attributes, const std::string& default_text,
                                  bool required) {
   std::string help(attributes.doc);
-  // A NaN default means "unset": the description says what applies then.
-  if (!required && default_text != "nan") help += "; default " + default_text;
+  // A NaN default or an empty list means "unset": the description says what applies then.
+  if (!required && default_text != "nan" && !default_text.empty()) help += "; default " + default_text;
   return help;
+}
+
+std::string DescribedFlags::ListText(const std::vector<std::string>& values) {
+  std::string text;
+  for (std::size_t i = 0; i < values.size(); ++i) text += (i > 0 ? "," : "") + values[i];
+  return text;
+}
+
+std::string DescribedFlags::ListText(const std::vector<double>& values) {
+  std::vector<std::string> texts;
+  texts.reserve(values.size());
+  for (double value : values) texts.push_back(FieldNumberText(value));
+  return ListText(texts);
 }
 
 CLI::Option* DescribedFlags::AddNumber(CLI::App& app, const std::string& flag, double& slot,
@@ -54,7 +67,8 @@ CLI::Option* DescribedFlags::AddNumber(CLI::App& app, const std::string& flag, d
 }
 
 CLI::Option* DescribedFlags::AddChoice(CLI::App& app, const std::string& flag, std::string& slot,
-                                       const std::string& help, std::function<bool(const std::string&)> known,
+                                       const std::string& help,
+                                       const std::function<bool(const std::string&)>& known,
                                        const std::string& choices) {
   CLI::Option* option = app.add_option(flag, slot, help);
   // A whole InputError line, as AddLimitedOption's checks (main.cc prints it as such).

@@ -3,12 +3,13 @@
 ///
 /// The mapping is mechanical: key `step_s` is flag `--step-s` (underscores become hyphens); a
 /// boolean that defaults to false is a switch `--<key>`, one that defaults to true is `--no-<key>`;
-/// an enum field takes one of its names; an integer field (a seed) a whole number. Integer fields of
-/// a result struct are never Add()ed: only settings structs are. A number flag is checked against the field's
-/// limits-table range as it is parsed (AddLimitedOption), in the key's unit. The help text is the field's
-/// description and its default. A command may keep older names of a flag as hidden aliases
-/// (FlagAlias), and give a switch or a count a short name (`-q`), shown with it; messages name the flag
-/// the person typed.
+/// an enum field takes one of its names; an integer field (a seed) a whole number; a list field
+/// (ListValue) its values comma-separated, or the flag repeated, in place of the default list.
+/// Integer fields of a result struct are never Add()ed: only settings structs are. A number flag is
+/// checked against the field's limits-table range as it is parsed (AddLimitedOption), in the key's
+/// unit. The help text is the field's description and its default (none for an empty list). A
+/// command may keep older names of a flag as hidden aliases (FlagAlias), and give a switch or a count
+/// a short name (`-q`), shown with it; messages name the flag the person typed.
 
 #include <CLI/CLI.hpp>
 #include <deque>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "engine/cli/model_flags.h"
+#include "engine/common/copy_rules.h"
 #include "engine/common/describe.h"
 #include "engine/common/described_values.h"
 #include "engine/common/errors.h"
@@ -40,8 +42,7 @@ struct FlagAlias {
 class DescribedFlags {
  public:
   explicit DescribedFlags(std::vector<FlagAlias> aliases = {}) : aliases_(std::move(aliases)) {}
-  DescribedFlags(const DescribedFlags&) = delete;
-  DescribedFlags& operator=(const DescribedFlags&) = delete;
+  GESWEEP_NO_COPY(DescribedFlags);
 
   /// Adds a flag per command-line field of `object` (scope kEverywhere or kCommandLineOnly); the
   /// object's current values are the defaults. Keys in `required` are required flags. `object` must
@@ -76,8 +77,10 @@ class DescribedFlags {
   CLI::Option* AddNumber(CLI::App& app, const std::string& flag, double& slot,
                          const FieldAttributes& attributes, const std::string& help);
   CLI::Option* AddChoice(CLI::App& app, const std::string& flag, std::string& slot, const std::string& help,
-                         std::function<bool(const std::string&)> known, const std::string& choices);
+                         const std::function<bool(const std::string&)>& known, const std::string& choices);
   static std::string Help(const FieldAttributes& attributes, const std::string& default_text, bool required);
+  static std::string ListText(const std::vector<std::string>& values);
+  static std::string ListText(const std::vector<double>& values);
 
   std::vector<FlagAlias> aliases_;
   std::deque<Entry> entries_;
@@ -93,7 +96,8 @@ class DescribedFlags {
     const std::vector<std::string_view>* required;
     template <class U>
     void operator()(const Field<U>& field) {
-      if constexpr (SettingValue<U>) Visit(field, field.attributes());  // a result's array or text: none
+      // A result's array or text: none.
+      if constexpr (SettingValue<U> || ListValue<U>) Visit(field, field.attributes());
     }
     template <class U>
     void Visit(const Field<U>& field, const FieldAttributes& a) {
@@ -152,8 +156,15 @@ class DescribedFlags {
         const std::string help = Help(a, std::to_string(*value), is_required);
         entry.options.push_back(app->add_option(self->WithShortName(a.key, FlagName(a.key)), *value, help));
         entry.names.push_back(FlagName(a.key));
+      } else if constexpr (ListValue<U>) {
+        // CLI11 parses the values into the field itself, replacing the default list.
+        GESWEEP_DEMAND(a.limit.empty() && a.scale == 1.0);  // a list has neither (ListValue)
+        const std::string help = Help(a, ListText(*value), is_required);
+        entry.options.push_back(app->add_option(FlagName(a.key), *value, help)->delimiter(','));
+        entry.names.push_back(FlagName(a.key));
       } else {
-        static_assert(!sizeof(U*), "a command-line field is a number, an integer, a bool or a named enum");
+        static_assert(!sizeof(U*),
+                      "a command-line field is a number, an integer, a bool, a named enum or a list");
       }
       if (is_required) entry.options.front()->required();
     }

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/common/errors.h"
@@ -37,9 +38,26 @@ namespace {
 
 struct DispersionFlags {
   std::string archive;
-  DispersionOptions options;  // its fields are the flags below (defaults as the struct's)
+  DispersionOptions options;  // its fields are the flags (defaults as the struct's)
   std::string format = "table";
   bool no_write = false;
+  DescribedFlags described;
+
+  /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the archive,
+  /// the limits, the grouping column and the format are added by hand.
+  template <class V>
+  void Describe(V& v) {
+    v(Field("columns", &options.columns)
+          .Doc("Result columns (names, paths or wildcards, comma-separated; default: the landing's "
+               "touchdown distance past the transmitter, sink rate, speed and pitch, and the flare's "
+               "peak elevator when present)"));
+    v(Field("percentiles", &options.percentiles).Doc("Percentiles, 0 to 100"));
+    v(Field("tail_probabilities", &options.tail_probabilities)
+          .Doc("Tail probabilities of the fitted quantiles"));
+    v(Field("confidence_level", &options.confidence_level).Doc("Level of the intervals"));
+    v(Field("max_groups", &options.max_groups).Doc("Most groups accepted"));
+    v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
+  }
 };
 
 std::string Join(const std::vector<std::string>& items) {
@@ -235,26 +253,12 @@ int RunDispersion(const DispersionFlags& flags) {
 void AddDispersionFlags(CLI::App& app, DispersionFlags& flags) {
   DispersionOptions& options = flags.options;
   AddArchiveArgument(app, flags.archive, "Archive of a sweep (typically a monte_carlo design)");
-  app.add_option("--columns", options.columns,
-                 "Result columns (names, paths or wildcards, comma-separated; default: the landing's "
-                 "touchdown distance past the transmitter, sink rate, speed and pitch, and the flare's "
-                 "peak elevator when present)")
-      ->delimiter(',');
   app.add_option("--limit", options.limits,
                  "A limit COLUMN>VALUE or COLUMN<VALUE (repeatable), e.g. 'touchdown_sink_rate_mps>3': "
                  "the probability of exceeding it");
   app.add_option("--group-by", options.group_by,
                  "A column (e.g. a design parameter) whose values split the runs into groups");
-  app.add_option("--percentiles", options.percentiles,
-                 "Percentiles, 0 to 100 (default 0.1,1,5,50,95,99,99.9)")
-      ->delimiter(',');
-  app.add_option("--tail-probabilities", options.tail_probabilities,
-                 "Tail probabilities of the fitted quantiles (default 1e-3,1e-4,1e-5,1e-6)")
-      ->delimiter(',');
-  app.add_option("--confidence-level", options.confidence_level, "Level of the intervals (default 0.95)");
-  app.add_option("--max-groups", options.max_groups, "Most groups accepted (default 1000)");
   app.add_option("--format", flags.format, "table (default) or json");
-  app.add_flag("--no-write", flags.no_write, "Print only; leave the archive untouched");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<DispersionFlags>(

@@ -13,6 +13,7 @@
 
 #include "engine/archive/archive_reader.h"
 #include "engine/cli/command.h"
+#include "engine/cli/described_flags.h"
 #include "engine/common/errors.h"
 #include "engine/query/aggregate.h"
 #include "engine/query/query.h"
@@ -39,6 +40,21 @@ struct QueryFlags {
   std::vector<std::string> aggregates;
   std::optional<long long> memory_mb;   // none: kDefaultMemoryMb
   std::optional<long long> max_groups;  // none: kDefaultMaxGroups
+  DescribedFlags described;
+
+  /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the others
+  /// are added by hand (AddQueryFlags).
+  template <class V>
+  void Describe(V& v) {
+    v(Field("columns", &columns)
+          .Doc("Columns to show, comma-separated; wildcards such as 'phugoid/*' or '*' (default: index, "
+               "design, status)"));
+    v(Field("group_by", &group_by)
+          .Doc("Columns whose equal values form a group, comma-separated (wildcards allowed); with "
+               "--aggregate"));
+    v(Field("descending", &descending).Doc("Sort largest first"));
+    v(Field("describe", &describe).Doc("List the columns with units, run counts by status, provenance"));
+  }
 };
 
 // The fields a row query and an aggregate query share, from the flags.
@@ -214,14 +230,6 @@ void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
   app.add_option("--where", flags.where,
                  "Condition, e.g. 'height_m < 3 and stability_margin_per_s > 0', 'status == \"failed\"' "
                  "(docs/report.md)");
-  app.add_option("--columns", flags.columns,
-                 "Columns to show, comma-separated; wildcards such as 'phugoid/*' or '*' "
-                 "(default: index, design, status)")
-      ->delimiter(',');
-  app.add_option("--group-by", flags.group_by,
-                 "Columns whose equal values form a group, comma-separated (wildcards allowed); "
-                 "with --aggregate")
-      ->delimiter(',');
   app.add_option("--aggregate", flags.aggregates,
                  "Statistics per group: count, count(c), sum(c), min(c), max(c), mean(c), std(c[, 0]), "
                  "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
@@ -232,11 +240,9 @@ void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
                  "Refuse more groups than this (default " + std::to_string(kDefaultMaxGroups) + ")");
   app.add_option("--sort", flags.sort,
                  "Column to sort by (missing values last); with --aggregate an output column");
-  app.add_flag("--descending", flags.descending, "Sort largest first");
   app.add_option("--limit", flags.limit,
                  "Show at most this many rows (with --sort: the best n); with --aggregate, groups");
   app.add_option("--format", flags.format, "table (default), csv or json");
-  app.add_flag("--describe", flags.describe, "List the columns with units, run counts by status, provenance");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<QueryFlags>(

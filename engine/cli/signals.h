@@ -7,6 +7,8 @@
 
 #include <atomic>
 
+#include "engine/common/copy_rules.h"
+
 namespace gesweep::cli {
 
 /// Installs the handlers on construction (the flag starts cleared) and restores the previous ones
@@ -15,8 +17,7 @@ class SignalCancellation {
  public:
   SignalCancellation();
   ~SignalCancellation();
-  SignalCancellation(const SignalCancellation&) = delete;
-  SignalCancellation& operator=(const SignalCancellation&) = delete;
+  GESWEEP_NO_COPY(SignalCancellation);
 
   /// The flag to hand to the engine (RunnerOptions::cancel, SimulateOpenLoop, SimulateLanding).
   const std::atomic<bool>* flag() const;

@@ -146,9 +146,16 @@ class Field {
 
 // ---------------------------------------------------------------- kinds of field values
 
-/// A fixed-size array of doubles (Eigen vector or std::array): `size()` and `operator[]`.
+/// A list setting of any length: texts (column names) or numbers (percentiles). On the command line
+/// its values are comma-separated (engine/cli/described_flags.h). It has no limits-table range and no
+/// scale: the command that reads it checks its values. The study file, ListFields and the front ends'
+/// output visitors do not take one (yet): a list is a command-line setting.
 template <class T>
-concept DoubleArray = !std::is_arithmetic_v<T> && requires(T & t, int i) {
+concept ListValue = std::same_as<T, std::vector<std::string>> || std::same_as<T, std::vector<double>>;
+
+/// A fixed-size array of doubles (Eigen vector or std::array): `size()` and `operator[]`; a result.
+template <class T>
+concept DoubleArray = !std::is_arithmetic_v<T> && !ListValue<T> && requires(T & t, int i) {
   { t[i] } -> std::convertible_to<double&>;
   t.size();
 };
@@ -252,6 +259,10 @@ struct Recorder {
     } else if constexpr (std::same_as<U, std::string>) {
       r.kind = FieldKind::kText;
       r.default_text = v;
+    } else if constexpr (ListValue<U>) {
+      static_assert(!sizeof(U*),
+                    "a list field is a command-line setting: ListFields and the study file "
+                    "do not take one (see ListValue)");
     } else {
       static_assert(DoubleArray<U>,
                     "a described field is a number, integer, bool, named enum, string or array");

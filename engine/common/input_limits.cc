@@ -162,8 +162,6 @@ std::vector<InputLimit> BuildTable() {
   return t;
 }
 
-std::string Bound(double value) { return ShortNumber(value); }
-
 }  // namespace
 
 const std::vector<InputLimit>& InputLimits() {
@@ -194,7 +192,7 @@ bool WithinLimit(const InputLimit& limit, double value) {
 
 std::string DescribeLimit(const InputLimit& limit) {
   std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") +
-                     Bound(limit.minimum) + ", " + Bound(limit.maximum) +
+                     ShortNumber(limit.minimum) + ", " + ShortNumber(limit.maximum) +
                      (limit.maximum_exclusive ? ")" : "]");
   if (limit.units != "1") text += " " + std::string(limit.units);
   if (limit.allows_infinity) text += ", or inf";

@@ -186,6 +186,32 @@ class PeerDispersionTest(unittest.TestCase):
             for p, engine in zip(PERCENTILES, c["percentiles"]):
                 self.close(engine, np.percentile(values, p), kMomentRelative, f"percentile {p}")
 
+    def test_list_flags_replace_their_defaults_and_a_bad_element_is_one_line(self):
+        # --percentiles and --tail-probabilities take comma-separated lists (a described list field):
+        # the lists given replace the defaults, and the percentiles are NumPy's of each group.
+        percentiles, tails = [2.5, 50, 97.5], [1e-2]
+        result = json.loads(run("dispersion", self.archive, "--columns", "ishigami", "--group-by", "x3",
+                                "--percentiles", "2.5,50,97.5", "--tail-probabilities", "1e-2", "--format",
+                                "json", "--no-write"))
+        self.assertEqual(result["percentiles"], percentiles)
+        self.assertEqual(result["tail_probabilities"], tails)
+        for g, (_, _, values) in zip(result["groups"], self.groups()):
+            c = g["columns"][0]
+            self.assertEqual(len(c["percentiles"]), len(percentiles))
+            for p, engine in zip(percentiles, c["percentiles"]):
+                self.close(engine, np.percentile(values, p), kMomentRelative, f"percentile {p}")
+            normal = next(f for f in c["fits"] if f["law"] == "normal")
+            self.assertEqual(len(normal["upper_quantiles"]), len(tails))
+        for flag, value, words in (("--percentiles", "5,abc", "Could not convert"),
+                                   ("--percentiles", "5,150", "expected 0 to 100"),
+                                   ("--tail-probabilities", "1e-3,0.7", "expected 0 < p < 0.5")):
+            bad = subprocess.run([GESWEEP, "dispersion", self.archive, "--no-write", flag, value],
+                                 capture_output=True, text=True)
+            self.assertEqual(bad.returncode, 2, bad.stderr)
+            self.assertEqual(len(bad.stderr.splitlines()), 1, bad.stderr)
+            self.assertIn(flag, bad.stderr)
+            self.assertIn(words, bad.stderr)
+
     def test_fits_goodness_and_tails(self):
         for g, _, values in self.groups():
             normal, gmax, gmin, gev = g["columns"][0]["fits"]
