@@ -207,7 +207,7 @@ void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t fi
           }
           break;
         default:
-          GESWEEP_DEMAND(false);
+          GESWEEP_UNREACHABLE();
       }
       break;
     }

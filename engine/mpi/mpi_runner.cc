@@ -149,8 +149,7 @@ int OwnerOf(const std::vector<BatchRange>& ranges, std::int64_t batch) {
   for (std::size_t k = 0; k < ranges.size(); ++k) {
     if (batch >= ranges[k].first && batch < ranges[k].first + ranges[k].count) return static_cast<int>(k);
   }
-  GESWEEP_DEMAND(false);
-  return -1;
+  GESWEEP_UNREACHABLE();  // every batch is in some rank's range
 }
 
 // What every rank must agree on before anything is written: the same study (fingerprint), design,

@@ -353,8 +353,7 @@ std::unique_ptr<Design> MakeDesign(DesignSpec spec) {
     case DesignKind::kMonteCarlo:
       return std::make_unique<MonteCarloDesign>(std::move(spec));
   }
-  GESWEEP_DEMAND(false);
-  return nullptr;
+  GESWEEP_UNREACHABLE();
 }
 
 }  // namespace gesweep
