@@ -34,6 +34,26 @@ ArchiveLock ArchiveLock::Acquire(const std::filesystem::path& archive, const std
   return lock;
 }
 
+ArchiveLock ArchiveLock::AcquireOutput(const std::filesystem::path& archive, const std::string& field) {
+  ArchiveLock lock;
+  lock.lock_path_ = archive.string() + ".lock";
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(lock.lock_path_, ec);
+  lock.fd_ = ::open(lock.lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock.fd_ < 0) {
+    throw InputError(
+        "command line", field, archive.string(),
+        "cannot create its lock file " + lock.lock_path_.string() + " (" + std::strerror(errno) + ")");
+  }
+  if (flock(lock.fd_, LOCK_EX | LOCK_NB) != 0) {
+    throw InputError("command line", field, archive.string(),
+                     "archive in use: another gesweep process is writing it (" + lock.lock_path_.string() +
+                         " is locked); run this again once it has finished, or choose another output");
+  }
+  lock.created_ = !existed;  // removed with the claim, once it is ours
+  return lock;
+}
+
 ArchiveLock::ArchiveLock(ArchiveLock&& other) noexcept
     : lock_path_(std::move(other.lock_path_)), fd_(other.fd_), created_(other.created_) {
   other.fd_ = -1;

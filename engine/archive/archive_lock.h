@@ -2,8 +2,8 @@
 /// An exclusive claim on an archive for adding a derived product to it (/analysis/boundary by
 /// `gesweep boundary --archive`, /analysis/sensitivity by `gesweep sensitivity`): a flock on
 /// ARCHIVE.lock, the lock `gesweep run` holds while it writes the archive
-/// (engine/archive/archive_writer.h). While held, no sweep can start writing the archive; it is not
-/// granted while one writes.
+/// (engine/archive/archive_writer.h), and `gesweep merge` while it writes its output. While held, no
+/// sweep or merge can start writing the archive; it is not granted while one writes.
 
 #include <filesystem>
 #include <string>
@@ -19,6 +19,10 @@ class ArchiveLock {
   /// holds it ("archive in use: ..."; `retry_hint` says what to do, e.g. "run gesweep boundary again
   /// once it has finished, or pass --no-write"), or when the lock file cannot be created.
   static ArchiveLock Acquire(const std::filesystem::path& archive, const std::string& retry_hint);
+  /// The same claim on an archive about to be written whole, which need not exist yet (`gesweep merge`'s
+  /// output, as `gesweep run` claims its output): throws InputError("command line", `field`, archive, ...)
+  /// when a gesweep process holds it ("archive in use: ...") or the lock file cannot be created.
+  static ArchiveLock AcquireOutput(const std::filesystem::path& archive, const std::string& field);
 
   GESWEEP_MOVE_CONSTRUCT_ONLY(ArchiveLock);
   ~ArchiveLock();

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <optional>
 
 #include "engine/archive/archive_format.h"
+#include "engine/archive/archive_identity.h"
+#include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/dimension_scales.h"
 #include "engine/archive/provenance.h"
@@ -21,7 +24,7 @@ using hdf5::Handle;
 
 struct Shard {
   std::filesystem::path path;
-  std::optional<ArchiveReader> reader;
+  std::shared_ptr<ArchiveReader> reader;
   std::int64_t first = 0, count = 0;
   std::string shard;  // "i/N"
 };
@@ -107,9 +110,9 @@ void WriteVirtual(hid_t file, const std::string& path, const std::vector<Shard>&
     std::vector<hsize_t> shard_dims{static_cast<hsize_t>(shard.count)};
     if (rank == 2) shard_dims.push_back(out_dims[1]);
     Handle source_space(H5Screate_simple(rank, shard_dims.data(), nullptr), "source space");
-    Check(
-        H5Pset_virtual(dcpl.get(), virtual_space.get(), sources[i].c_str(), path.c_str(), source_space.get()),
-        "map " + path + " of " + shard.path.string());
+    Check(H5Pset_virtual(dcpl.get(), virtual_space.get(), archive::VirtualFilePattern(sources[i]).c_str(),
+                         path.c_str(), source_space.get()),
+          "map " + path + " of " + shard.path.string());
   }
   Handle space(H5Screate_simple(rank, out_dims.data(), nullptr), "dataspace");
   Handle target(H5Dcreate2(file, path.c_str(), type.get(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
@@ -208,11 +211,50 @@ void CheckMergeOutput(const std::vector<std::filesystem::path>& inputs, const st
   std::vector<NamedInput> named;
   named.reserve(inputs.size());
   for (const auto& input : inputs) named.push_back({input, "shard archive"});
-  CheckOutputPath(output, OutputKind::kFile, named, "output", {output.string() + ".partial"});
+  CheckOutputPath(output, OutputKind::kFile, named, "output",
+                  {output.string() + ".partial", output.string() + ".lock"});
   std::error_code ec;
   if (std::filesystem::exists(output, ec) && !force) {
     throw RequestError("command line", "output", shown, "already exists", "force");
   }
+}
+
+// The output check again, once the inputs are open, over every file they read: the shards behind
+// a virtual input too (a merge onto one of them would replace what its own input reads).
+void CheckMergeOutputAgainstSources(const std::vector<Shard>& shards, const std::filesystem::path& output) {
+  std::vector<NamedInput> named;
+  for (const Shard& shard : shards) {
+    for (const auto& file : shard.reader->files_read())
+      named.push_back({file, "shard file", shard.path.string()});
+  }
+  if (named.empty()) return;
+  CheckOutputPath(output, OutputKind::kFile, named, "output",
+                  {output.string() + ".partial", output.string() + ".lock"});
+}
+
+// The plain archives the merged file maps or copies: each input, or for a virtual one the files it
+// maps (checked when it was opened), so that a merged archive never reads through another.
+std::vector<Shard> Leaves(const std::vector<Shard>& shards) {
+  std::vector<Shard> leaves;
+  for (const Shard& shard : shards) {
+    if (!shard.reader->is_virtual()) {
+      leaves.push_back(shard);
+      continue;
+    }
+    std::vector<Shard> sources;
+    for (const archive::FoundSource& source : shard.reader->sources()) {
+      Shard leaf;
+      leaf.path = source.path;
+      leaf.reader = std::make_shared<ArchiveReader>(ArchiveReader::Open(source.path));
+      leaf.first = source.identity.first_run;
+      leaf.count = source.identity.run_count;
+      leaf.shard = source.identity.shard;
+      sources.push_back(std::move(leaf));
+    }
+    for (Shard& leaf : Leaves(sources)) leaves.push_back(std::move(leaf));
+  }
+  std::sort(leaves.begin(), leaves.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
+  return leaves;
 }
 
 // Opens every shard, refusing one whose sweep is still writing it or was killed.
@@ -221,7 +263,7 @@ std::vector<Shard> OpenShards(const std::vector<std::filesystem::path>& inputs) 
   for (const auto& input : inputs) {
     Shard shard;
     shard.path = input;
-    shard.reader.emplace(ArchiveReader::Open(input));
+    shard.reader = std::make_shared<ArchiveReader>(ArchiveReader::Open(input));
     ArchiveReader& reader = *shard.reader;
     if (reader.snapshot()) {
       throw RequestError(input.string(), "", "",
@@ -328,21 +370,26 @@ void CountCompleteRuns(const std::vector<Shard>& shards, MergeReport& report) {
   }
 }
 
-// The merged file's attributes: the first shard's, less the node's, with the merge's provenance,
-// the runs merged and how (virtual: where the shards are, relative to `output`, into report.sources).
-void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const std::filesystem::path& output,
-                           const std::string& command_line, MergeKind kind, const MergeScope& scope,
-                           std::int64_t origin, std::int64_t total, MergeReport& report) {
+// The merged file's attributes: the first input's, less those of a node, of another merge and of its
+// identity, with a new identity, the merge's provenance, the runs merged and how (virtual: the files
+// mapped, `leaves`, relative to `output`, into report.sources, each with its identity).
+void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const std::vector<Shard>& leaves,
+                           const std::filesystem::path& output, const std::string& command_line,
+                           MergeKind kind, const MergeScope& scope, std::int64_t origin, std::int64_t total,
+                           MergeReport& report) {
   const ArchiveReader& reference = *shards.front().reader;
   hdf5::CopyAttributes(reference.file(), file);
-  for (const char* node_attribute : {"node_index", "node_count"}) {
-    if (H5Aexists(file, node_attribute) > 0)
-      Check(H5Adelete(file, node_attribute), "drop the node attribute");
+  for (const char* stale : {"node_index", "node_count", "virtual_sources", "virtual_note",
+                            "virtual_source_ids", "virtual_source_fingerprints", "virtual_source_first_runs",
+                            "virtual_source_run_counts", "virtual_source_shards", "merged_from_ids"}) {
+    if (H5Aexists(file, stale) > 0) Check(H5Adelete(file, stale), "drop the attribute " + std::string(stale));
   }
-  std::vector<std::string> merged_from, shard_notes;
+  hdf5::WriteAttribute(file, "archive_id", archive::NewArchiveId());
+  std::vector<std::string> merged_from, merged_ids, shard_notes;
   std::string start = reference.StringAttribute("start_time"), end = reference.StringAttribute("end_time");
   for (const auto& shard : shards) {
     merged_from.push_back(shard.path.string());
+    merged_ids.push_back(shard.reader->StringAttribute("archive_id"));
     shard_notes.push_back(
         shard.shard + ": " + shard.path.string() + ", host " + shard.reader->StringAttribute("host") +
         ", threads " + std::to_string(shard.reader->IntegerAttribute("threads")) + ", " +
@@ -351,6 +398,7 @@ void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const s
     end = std::max(end, shard.reader->StringAttribute("end_time"));
   }
   hdf5::WriteAttribute(file, "merged_from", merged_from);
+  hdf5::WriteAttribute(file, "merged_from_ids", merged_ids);
   hdf5::WriteAttribute(file, "merged_shards", shard_notes);
   hdf5::WriteAttribute(file, "merge_time", UtcTimestamp());
   hdf5::WriteAttribute(file, "merge_command_line", command_line);
@@ -371,9 +419,13 @@ void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const s
     CopyGroupAttributes(reference.file(), file, group);
   }
   if (kind == MergeKind::kVirtual) {
-    for (const auto& shard : shards) report.sources.push_back(SourceName(shard.path, output));
+    std::vector<archive::RecordedSource> recorded;
+    for (const auto& leaf : leaves) {
+      report.sources.push_back(SourceName(leaf.path, output));
+      recorded.push_back({report.sources.back(), archive::ReadIdentity(leaf.reader->file())});
+    }
     hdf5::WriteAttribute(file, "merge_kind", "virtual");
-    hdf5::WriteAttribute(file, "virtual_sources", report.sources);
+    archive::WriteRecordedSources(file, recorded);
     hdf5::WriteAttribute(
         file, "virtual_note",
         "The per-run datasets of this archive are HDF5 virtual datasets over the shard files listed in "
@@ -384,12 +436,11 @@ void WriteMergedAttributes(hid_t file, const std::vector<Shard>& shards, const s
   }
 }
 
-// The merged file's datasets (shards' `first` are rows of the merged file): the per-run ones
-// merged (virtual or copied), the shared ones (time axes) copied from the first shard, /analysis
-// left out (derived: recomputed after a merge); then the dimension scales of the merged rows.
-void WriteMergedDatasets(hid_t file, const std::vector<Shard>& shards, MergeKind kind, std::int64_t total,
-                         MergeReport& report) {
-  const ArchiveReader& reference = *shards.front().reader;
+// The merged file's datasets (the leaves' `first` are rows of the merged file): the per-run ones
+// merged from the leaves (virtual or copied), the shared ones (time axes) copied from the first input,
+// /analysis left out (derived: recomputed after a merge); then the dimension scales of the merged rows.
+void WriteMergedDatasets(hid_t file, const ArchiveReader& reference, const std::vector<Shard>& leaves,
+                         MergeKind kind, std::int64_t total, MergeReport& report) {
   std::vector<std::string> per_run;
   for (const std::string& path : reference.Datasets()) {
     if (StartsWith(path, std::string(archive::kAnalysisGroup) + "/"))
@@ -406,47 +457,24 @@ void WriteMergedDatasets(hid_t file, const std::vector<Shard>& shards, MergeKind
     }
     per_run.push_back(path);
     if (kind == MergeKind::kVirtual) {
-      WriteVirtual(file, path, shards, report.sources, total);
+      WriteVirtual(file, path, leaves, report.sources, total);
     } else {
-      WriteCopy(file, path, shards, total, report);
+      WriteCopy(file, path, leaves, total, report);
     }
   }
   // The netCDF view of the merged rows (the shards' scales refer to the shards' own objects).
   archive::AttachDimensionScales(file, total, per_run);
 }
 
-}  // namespace
-
-MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
-                          const std::filesystem::path& output, bool force, const std::string& command_line,
-                          MergeKind kind, const MergeScope& scope) {
-  hdf5::Quiet();
-  CheckMergeOutput(inputs, output, force);
-  std::vector<Shard> shards = OpenShards(inputs);
-  CheckSameStudy(shards);
-  const ArchiveReader& reference = *shards.front().reader;
-  const std::int64_t design_runs = reference.IntegerAttribute("design_runs");
-  const std::string shown = output.string();
-  std::error_code ec;
-
-  // Coverage: exactly once.
-  std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
-  const std::int64_t origin = scope.first_run;
-  const std::int64_t total = scope.run_count >= 0 ? scope.run_count : design_runs - origin;
-  CheckCoverage(shards, origin, total);
-
-  // Complete: no pending run in any shard.
-  MergeReport report;
-  report.kind = kind;
-  report.shards = static_cast<int>(shards.size());
-  report.runs = total;
-  CountCompleteRuns(shards, report);
-
-  // Write the merged archive under a temporary name.
+// Writes the merged archive under OUTPUT.partial and renames it into place (nothing half-written
+// survives a failure).
+void WriteMerged(const std::vector<Shard>& shards, std::vector<Shard>& leaves,
+                 const std::filesystem::path& output, const std::string& command_line, MergeKind kind,
+                 const MergeScope& scope, std::int64_t origin, std::int64_t total, MergeReport& report) {
   const std::filesystem::path temporary = output.string() + ".partial";
+  std::error_code ec;
   std::filesystem::remove(temporary, ec);
   Handle fapl = hdf5::FileAccess();
-  // Nothing half-written survives a failure: the temporary file goes.
   struct RemoveOnFailure {
     const std::filesystem::path& path;
     bool armed = true;
@@ -458,15 +486,49 @@ MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
   {
     Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                 "create " + temporary.string());
-    WriteMergedAttributes(file.get(), shards, output, command_line, kind, scope, origin, total, report);
-    for (auto& shard : shards) shard.first -= origin;  // rows of the merged archive from here on
-    WriteMergedDatasets(file.get(), shards, kind, total, report);
+    WriteMergedAttributes(file.get(), shards, leaves, output, command_line, kind, scope, origin, total,
+                          report);
+    for (auto& leaf : leaves) leaf.first -= origin;  // rows of the merged archive from here on
+    WriteMergedDatasets(file.get(), *shards.front().reader, leaves, kind, total, report);
     file.Close("close " + temporary.string());
   }
+  for (auto& leaf : leaves) leaf.reader->Close();
   for (auto& shard : shards) shard.reader->Close();
   std::filesystem::rename(temporary, output, ec);
-  if (ec) throw ArchiveError("rename " + temporary.string() + " to " + shown + ": " + ec.message());
+  if (ec) throw ArchiveError("rename " + temporary.string() + " to " + output.string() + ": " + ec.message());
   cleanup.armed = false;
+}
+
+}  // namespace
+
+MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
+                          const std::filesystem::path& output, bool force, const std::string& command_line,
+                          MergeKind kind, const MergeScope& scope) {
+  hdf5::Quiet();
+  CheckMergeOutput(inputs, output, force);
+  // Each input opened checks its own sources (a virtual input's shards), before anything is read.
+  std::vector<Shard> shards = OpenShards(inputs);
+  CheckMergeOutputAgainstSources(shards, output);
+  // A writer like `gesweep run`: the output's lock, held until the merged file is in place.
+  const ArchiveLock lock = ArchiveLock::AcquireOutput(output, "output");
+  CheckSameStudy(shards);
+  const std::int64_t design_runs = shards.front().reader->IntegerAttribute("design_runs");
+
+  // Coverage: exactly once, by the inputs and by the files they read.
+  std::sort(shards.begin(), shards.end(), [](const Shard& a, const Shard& b) { return a.first < b.first; });
+  const std::int64_t origin = scope.first_run;
+  const std::int64_t total = scope.run_count >= 0 ? scope.run_count : design_runs - origin;
+  CheckCoverage(shards, origin, total);
+  std::vector<Shard> leaves = Leaves(shards);
+  CheckCoverage(leaves, origin, total);
+
+  // Complete: no pending run in any shard.
+  MergeReport report;
+  report.kind = kind;
+  report.shards = static_cast<int>(shards.size());
+  report.runs = total;
+  CountCompleteRuns(shards, report);
+  WriteMerged(shards, leaves, output, command_line, kind, scope, origin, total, report);
   return report;
 }
 

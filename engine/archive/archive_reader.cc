@@ -224,39 +224,21 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
                          " (this engine is older than the archive)");
   }
   ValidateLayout(id, shown, &reader.run_count_);
-  if (reader.StringAttribute("merge_kind") == "virtual") reader.CheckVirtualSources();
+  reader.is_virtual_ = reader.StringAttribute("merge_kind") == "virtual" || archive::HasVirtualDatasets(id);
+  if (reader.is_virtual_) reader.CheckVirtualSources();
   return reader;
 }
 
-void ArchiveReader::CheckVirtualSources() const {
-  // A virtual archive reads its shards in place, and HDF5 silently gives fill values for a shard
-  // it cannot find: refuse instead, naming it.
-  const std::string shown = path_.string();
-  const std::filesystem::path directory = path_.parent_path();
-  const std::string fingerprint = StringAttribute("study_fingerprint");
-  for (const std::string& source : StringListAttribute("virtual_sources")) {
-    const std::filesystem::path shard =
-        std::filesystem::path(source).is_absolute() ? std::filesystem::path(source) : directory / source;
-    std::error_code ec;
-    auto refuse = [&](const std::string& why) {
-      throw RequestError(
-          shown, "virtual_sources", source,
-          why +
-              ": a virtual archive (gesweep merge) reads its shard files in place, so they must "
-              "stay where they were merged (relative to this file); put it back, or merge again",
-          "merge_copy");
-    };
-    if (!std::filesystem::is_regular_file(shard, ec)) refuse("shard file " + shard.string() + " is missing");
-    Handle fapl = hdf5::FileAccess();
-    const hid_t id = H5Fopen(shard.c_str(), H5F_ACC_RDONLY, fapl.get());
-    H5Eclear2(H5E_DEFAULT);
-    if (id < 0) refuse("shard file " + shard.string() + " cannot be opened (in use by a writer, or damaged)");
-    Handle file(id);
-    if (hdf5::ReadStringAttribute(id, "study_fingerprint").value_or("") != fingerprint ||
-        hdf5::ReadIntegerAttribute(id, "complete").value_or(0) != 1) {
-      refuse("shard file " + shard.string() +
-             " has changed since the merge (another study, or not complete)");
-    }
+void ArchiveReader::CheckVirtualSources() {
+  // A virtual archive reads its shards in place, where HDF5 finds them, and HDF5 silently gives fill
+  // values for a shard it cannot find, another file's runs for a file put in its place, and recurses
+  // without end through virtual archives that read each other: each source is checked first.
+  archive::SourceCheck check = archive::CheckVirtualSources(file_.get(), path_);
+  sources_ = std::move(check.sources);
+  files_read_ = std::move(check.files);
+  for (std::string& note : check.notes) {
+    archive::SendArchiveNote(note);
+    notes_.push_back(std::move(note));
   }
 }
 

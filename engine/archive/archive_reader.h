@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/archive_identity.h"
 #include "engine/archive/hdf5_util.h"
 
 namespace gesweep {
@@ -25,12 +26,14 @@ class ArchiveReader {
   /// "archive in use"), or breaks the layout its readers rely on: a root attribute they use missing
   /// (run_count, design_runs, first_run, chunk_runs), runs/ or design/ missing, a per-run dataset
   /// (runs/, design/, results/, the series) without one row per run or of a type its readers cannot
-  /// convert; and when it is a virtual merged archive one of whose shard files is
-  /// missing, unreadable or changed. Every reader (query, boundary, report, sensitivity, merge, resume) goes
-  /// through it. A file shorter than HDF5 recorded (a write that failed half-way: disk full, a file-size
-  /// limit) is refused saying so, unless `repair_truncated` (the writer resuming it): then it is extended
-  /// with zeros to its recorded size and opened as a snapshot, whose complete batches the resume
-  /// copies into a fresh archive.
+  /// convert; and when it is a virtual archive whose sources fail archive::CheckVirtualSources
+  /// (missing, replaced, moved, foreign, incomplete, itself, a cycle), before any value is read. Every
+  /// reader (query, boundary, report, sensitivity, dispersion, merge, resume, Python's open_archive)
+  /// goes through it. What it could not check (an archive merged before identities) is in notes(),
+  /// each also sent to the note handler (archive::SetArchiveNoteHandler). A file shorter than HDF5 recorded
+  /// (a write that failed half-way: disk full, a file-size limit) is refused saying so, unless
+  /// `repair_truncated` (the writer resuming it): then it is extended with zeros to its recorded size and
+  /// opened as a snapshot, whose complete batches the resume copies into a fresh archive.
   static ArchiveReader Open(const std::filesystem::path& path, bool repair_truncated = false);
 
   ArchiveReader(ArchiveReader&&) = default;
@@ -39,6 +42,14 @@ class ArchiveReader {
   /// True when opened as a snapshot (SWMR read): a sweep is writing it, or its writer stopped
   /// without closing it (killed). Runs with status 0 may then still be coming.
   bool snapshot() const { return snapshot_; }
+  /// Whether it is a virtual archive (its per-run datasets map other files).
+  bool is_virtual() const { return is_virtual_; }
+  /// A virtual archive's sources, found where HDF5 reads them and checked (empty otherwise).
+  const std::vector<archive::FoundSource>& sources() const { return sources_; }
+  /// Every other file a read of this archive opens: a virtual archive's sources, and theirs.
+  const std::vector<std::filesystem::path>& files_read() const { return files_read_; }
+  /// What opening it could not check, one line each (e.g. an archive merged before identities).
+  const std::vector<std::string>& notes() const { return notes_; }
   const std::filesystem::path& path() const { return path_; }
   hid_t file() const { return file_.get(); }
 
@@ -107,11 +118,15 @@ class ArchiveReader {
 
  private:
   ArchiveReader(std::filesystem::path path, hdf5::Handle file, bool snapshot);
-  void CheckVirtualSources() const;
+  void CheckVirtualSources();
   std::filesystem::path path_;
   hdf5::Handle file_;
   bool snapshot_ = false;
+  bool is_virtual_ = false;
   std::int64_t run_count_ = 0;
+  std::vector<archive::FoundSource> sources_;
+  std::vector<std::filesystem::path> files_read_;
+  std::vector<std::string> notes_;
 };
 
 }  // namespace gesweep

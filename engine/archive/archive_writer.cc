@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "engine/archive/archive_format.h"
+#include "engine/archive/archive_identity.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/dimension_scales.h"
 #include "engine/archive/provenance.h"
@@ -138,6 +139,9 @@ void WriteRootAttributes(hid_t file, const SweepPlan& plan, const RunProvenance&
   const std::int64_t n = plan.run_count();
   hdf5::WriteAttribute(file, "format", archive::kFormatName);
   hdf5::WriteAttribute(file, "format_version", static_cast<std::int64_t>(archive::kFormatVersion));
+  // The identity (engine/archive/archive_identity.h): a new id for every archive created; the
+  // fingerprint, the design runs and the shard below complete it.
+  hdf5::WriteAttribute(file, "archive_id", archive::NewArchiveId());
   hdf5::WriteAttribute(file, "study_name", study.name);
   hdf5::WriteAttribute(file, "study_description", study.description);
   hdf5::WriteAttribute(file, "study_path", study.path);
@@ -460,6 +464,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   std::vector<std::int64_t> complete_blocks;
   std::optional<ArchiveReader> crashed;
   std::string original_start;
+  std::string original_id;  // a resume keeps the archive's identity
   std::string resumed_at;
   if (exists && mode == ArchiveOpenMode::kResume) {
     ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
@@ -473,6 +478,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     complete_blocks = existing.CompleteBlocks(plan.chunk_runs());
     existing.VerifyRunIds(plan, complete_blocks, shown);
     original_start = existing.StringAttribute("start_time");
+    original_id = existing.StringAttribute("archive_id");
     resumed_at = existing.StringAttribute("resumed_at");
     resumed_at += (resumed_at.empty() ? "" : ", ") + UtcTimestamp();
     if (!existing.snapshot()) {
@@ -517,6 +523,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
       if (crashed) {
         hdf5::WriteAttribute(file.get(), "start_time", original_start);
         hdf5::WriteAttribute(file.get(), "resumed_at", resumed_at);
+        // The same archive continued (an archive from before identities gets its first one).
+        if (!original_id.empty()) hdf5::WriteAttribute(file.get(), "archive_id", original_id);
         // Copy the complete batches of the crashed file, each chunk once.
         writer->file_ = std::move(file);
         writer->OpenDatasets();

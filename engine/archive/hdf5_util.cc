@@ -347,6 +347,17 @@ std::vector<std::string> ReadStringListAttribute(hid_t object, const std::string
   return values;
 }
 
+std::vector<std::int64_t> ReadIntegerListAttribute(hid_t object, const std::string& name) {
+  const auto found = OpenAttributeOfClass(object, name, H5T_INTEGER, "an integer");
+  if (!found) return {};
+  Handle space(H5Aget_space(found->attribute.get()), "attribute space");
+  const auto count = static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.get()));
+  std::vector<std::int64_t> values(count);
+  if (count > 0)
+    Check(H5Aread(found->attribute.get(), H5T_NATIVE_INT64, values.data()), "read attribute " + name);
+  return values;
+}
+
 namespace {
 
 struct CopyContext {

@@ -99,6 +99,8 @@ std::optional<std::string> ReadStringAttribute(hid_t object, const std::string& 
 std::optional<std::int64_t> ReadIntegerAttribute(hid_t object, const std::string& name);
 std::optional<double> ReadDoubleAttribute(hid_t object, const std::string& name);
 std::vector<std::string> ReadStringListAttribute(hid_t object, const std::string& name);
+/// An integer attribute (scalar or list) as int64 values; empty when absent, ArchiveError when not integer.
+std::vector<std::int64_t> ReadIntegerListAttribute(hid_t object, const std::string& name);
 
 /// Copies every attribute of `from` to `to` (values and types as stored), but for the dimension
 /// scale attributes (archive::IsDimensionScaleAttribute).

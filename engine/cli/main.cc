@@ -6,8 +6,10 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <set>
 #include <string>
 
+#include "engine/archive/archive_identity.h"
 #include "engine/cli/command.h"
 #include "engine/cli/request_names.h"
 #include "engine/common/errors.h"
@@ -80,6 +82,11 @@ int Run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using gesweep::EscapeForMessage;
+  // What a reader could not check (an archive merged before identities): one line each, once.
+  gesweep::archive::SetArchiveNoteHandler([](const std::string& note) {
+    static std::set<std::string> shown;
+    if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << "\n";
+  });
   try {
     return Run(argc, argv);
   } catch (const gesweep::InputError& e) {

@@ -44,6 +44,13 @@ void CheckOutputPath(const std::filesystem::path& output, OutputKind kind,
   const std::string shown = output.string();
   for (const NamedInput& input : inputs) {
     if (input.path.empty()) continue;
+    if (SameFile(output, input.path) && !input.read_by.empty()) {
+      throw InputError("command line", flag, shown,
+                       "is the " + input.role + " " + input.path.string() + " that the input " +
+                           input.read_by +
+                           " reads, so an input of this command; an output never replaces an input: choose "
+                           "another path");
+    }
     if (SameFile(output, input.path)) {
       const bool literal = output.lexically_normal() == input.path.lexically_normal();
       throw InputError(

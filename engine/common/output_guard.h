@@ -9,14 +9,20 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace gesweep {
 
 /// A file a command reads, with what it is for messages ("study file", "shard archive").
 struct NamedInput {
+  NamedInput(std::filesystem::path path_, std::string role_, std::string read_by_ = "")
+      : path(std::move(path_)), role(std::move(role_)), read_by(std::move(read_by_)) {}
   std::filesystem::path path;
   std::string role;
+  /// The input that reads this file when the command does not name it itself (a virtual archive's
+  /// shard: "merged.h5"); empty for a file the command names.
+  std::string read_by;
 };
 
 /// What a command writes at its output path.

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "engine/archive/archive_error.h"
+#include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_writer.h"
 #include "engine/cli/request_names.h"
 #include "engine/common/describe.h"
@@ -942,6 +943,27 @@ py::dict AircraftTable(const PyAircraft& a) {
   return out;
 }
 
+/// The check every gesweep command makes of an archive before it reads a value (ArchiveReader::Open:
+/// the file, its layout, a virtual archive's sources and theirs), for open_archive to make before h5py
+/// reads anything: {"snapshot": a sweep is writing it or was killed, "virtual": bool, "notes": what
+/// could not be checked}; InputError, in the command's words, naming the file and why otherwise.
+py::dict CheckArchive(const std::string& path) {
+  bool snapshot = false, is_virtual = false;
+  std::vector<std::string> notes;
+  {
+    py::gil_scoped_release release;
+    ArchiveReader reader = ArchiveReader::Open(path);
+    snapshot = reader.snapshot();
+    is_virtual = reader.is_virtual();
+    notes = reader.notes();
+  }
+  py::dict out;
+  out["snapshot"] = snapshot;
+  out["virtual"] = is_virtual;
+  out["notes"] = notes;
+  return out;
+}
+
 }  // namespace
 }  // namespace gesweep::python
 
@@ -998,6 +1020,7 @@ PYBIND11_MODULE(_gesweep, m) {
   m.def("run", &Run, py::arg("study_path"), py::arg("archive_path"), py::arg("threads") = 0,
         py::arg("progress") = py::none(), py::arg("resume") = false, py::arg("force") = false,
         py::arg("shard") = "");
+  m.def("_check_archive", &CheckArchive, py::arg("path"));
   m.def("_bench_sweep_compute_only", &BenchSweepComputeOnly, py::arg("study_path"), py::arg("threads"));
   m.def("_bench_boundary_search", &BenchBoundarySearch, py::arg("aircraft"), py::arg("speed_mps"),
         py::arg("repetitions"));

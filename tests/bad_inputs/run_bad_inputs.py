@@ -583,6 +583,64 @@ def hardening_cases():
 
 hardening_cases()
 
+
+def shard_identity_cases():
+    """Issue 26: a virtual archive whose shard files were replaced, re-run for the wrong shard,
+    swapped, copied over, deleted, moved, linked to the merge, taken from another study, or that
+    reads itself in a cycle, refused by every reader with one line (shard_cases.py makes them); merge
+    as a writer: onto a shard its input reads, onto an archive a sweep is writing; HDF5_VDS_PREFIX
+    pointing at the wrong file."""
+    import fcntl
+    import shard_cases
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        try:
+            cases = shard_cases.make(GESWEEP, tmp / "cases")
+        except RuntimeError as error:
+            failures.append(f"shard identity cases could not be made: {error}")
+            return
+        every_reader = {"shard re-run for the wrong shard over another's file", "a shard deleted",
+                        "a cycle of two virtual archives"}
+        for case in cases:
+            readers = shard_cases.READERS if case.name in every_reader else shard_cases.READERS[:1]
+            for reader, args in readers:
+                with tempfile.TemporaryDirectory() as out:
+                    check(f"{reader} of a virtual archive: {case.name}",
+                          [a.replace("{a}", case.archive).replace("{out}", out) for a in args], case.fragment, out,
+                          protect=case.protect)
+        made = tmp / "cases" / "base"
+        shards = [str(made / "s0.h5"), str(made / "s1.h5")]
+        protect = shards + [str(made / "merged.h5")]
+        with tempfile.TemporaryDirectory() as out:
+            check("merge of a virtual archive -o one of its shards --force",
+                  ["merge", str(made / "merged.h5"), "-o", shards[0], "--force"],
+                  f"is the shard file {shards[0]} that the input {made / 'merged.h5'} reads", out, protect=protect)
+        # A sweep writing the output holds OUTPUT.lock (flock, as gesweep run takes it).
+        with tempfile.TemporaryDirectory() as out:
+            live = pathlib.Path(out) / "live.h5"
+            live.write_bytes(b"the archive a sweep is writing")
+            with open(str(live) + ".lock", "w") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                check("merge --force onto an archive a sweep is writing", ["merge", *shards, "-o", str(live), "--force"],
+                      "archive in use: another gesweep process is writing it", out, keep=["live.h5", "live.h5.lock"],
+                      protect=protect)
+        # HDF5_VDS_PREFIX honoured: a file of that name found there first is the one checked.
+        prefix = tmp / "prefix"
+        prefix.mkdir()
+        shutil.copyfile(made / "s1.h5", prefix / "s0.h5")
+        os.environ["HDF5_VDS_PREFIX"] = str(prefix)
+        try:
+            with tempfile.TemporaryDirectory() as out:
+                check("query with HDF5_VDS_PREFIX naming another shard's file", ["query", str(made / "merged.h5")],
+                      f"shard file {prefix / 's0.h5'} holds runs 4..7 of 8 (shard 1/2), expected runs 0..3", out,
+                      protect=protect + [str(prefix / "s0.h5")])
+        finally:
+            del os.environ["HDF5_VDS_PREFIX"]
+
+
+sys.path.insert(0, str(ROOT))
+shard_identity_cases()
+
 for failure in failures:
     print("FAIL", failure)
 print(f"{count} hostile inputs, {count - len(failures)} passed, {len(failures)} failed")

@@ -15,7 +15,7 @@ import numpy as np
 # Root attributes that differ between two runs of the same study by design: who, where, when, how.
 PROVENANCE_ATTRIBUTES = {
     "command_line", "host", "threads", "start_time", "end_time", "resumed_at", "study_path", "aircraft_path",
-    "merged_from",
+    "merged_from", "archive_id",  # each archive's own identity (schemas/archive.md, "Identity")
 }
 PER_RUN_GROUPS = ("runs/", "design/", "results/", "series/")
 STATUS = "runs/status"

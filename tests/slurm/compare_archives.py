@@ -33,6 +33,9 @@ PROVENANCE_ROOT_ATTRIBUTES = {
     "study_path", "aircraft_path",  # as given on each command line
     "merged_from", "merged_shards", "merge_command_line", "merge_time",  # written by gesweep merge
     "merge_kind", "virtual_sources", "virtual_note",  # how the merge was made (virtual or copied)
+    "archive_id", "merged_from_ids",  # each archive's own identity (schemas/archive.md, "Identity")
+    "virtual_source_ids", "virtual_source_fingerprints", "virtual_source_first_runs",  # a virtual
+    "virtual_source_run_counts", "virtual_source_shards",  # merge's record of the files it maps
     "chunk_runs", "mpi_ranks", "node_index", "node_count",  # how the runs were batched and spread
 }
 

@@ -20,11 +20,11 @@ import numpy as _np
 
 from . import _gesweep
 from ._gesweep import ArchiveError, InputError
-from ._archive import list_products, open_archive
+from ._archive import ArchiveNote, list_products, open_archive
 
 __version__ = _gesweep.__version__
 __all__ = ["Aircraft", "modes", "boundary", "simulate", "land", "run", "open_archive", "list_products",
-           "InputError", "ArchiveError", "MODEL_OPTIONS", "CLASSIFICATION_LEVELS"]
+           "InputError", "ArchiveError", "ArchiveNote", "MODEL_OPTIONS", "CLASSIFICATION_LEVELS"]
 
 #: The model options of docs/model.md that modes, boundary, simulate and land take as keywords:
 #: (key, default, description).

@@ -8,6 +8,9 @@ when its values are asked for, and only the rows asked for. Runs not complete (p
 masked: NaN in every result (integer codes become float64 so that they can hold NaN).
 """
 
+import os
+import warnings
+
 import numpy as np
 import xarray as xr
 from xarray.backends import BackendArray
@@ -16,6 +19,42 @@ from xarray.core import indexing
 import h5py
 
 _OK = 1  # runs/status: 0 pending, 1 ok, 2 failed
+
+
+class ArchiveNote(UserWarning):
+    """What opening an archive could not check (an archive merged before shard identities), as the
+    gesweep command's "note:" line says it."""
+
+
+def _input_error(source, key, value, expected):
+    """gesweep.InputError with the attributes the engine's carry, worded as the engine words it."""
+    from ._gesweep import InputError
+    text = source + (f": {key}" if key else "") + (f" = {value}" if value else "") + f": {expected}"
+    error = InputError(text)
+    error.source, error.key, error.value, error.expected = source, key, value, expected
+    return error
+
+
+def _open_checked(path):
+    """The archive at `path` opened with h5py, after the checks every gesweep command makes before it
+    reads a value (the engine's ArchiveReader::Open, the one checker: the file, its layout, and a
+    virtual archive's shard files -- missing, replaced, moved, foreign, itself, cyclic): those refuse
+    with gesweep.InputError in the command's words; a note on what could not be checked is an
+    ArchiveNote warning."""
+    from ._gesweep import _check_archive
+    try:
+        name = os.fspath(path)
+    except TypeError:
+        raise _input_error("argument", "path", repr(path), "expected a path (str or os.PathLike)") from None
+    if isinstance(name, bytes):
+        name = os.fsdecode(name)
+    checked = _check_archive(name)
+    for note in checked["notes"]:
+        warnings.warn(note, ArchiveNote, stacklevel=3)
+    try:
+        return h5py.File(name, "r", swmr=bool(checked["snapshot"]))
+    except OSError as error:  # changed between the check and the open
+        raise _input_error(name, "", "", f"cannot open the archive: {error}") from None
 
 
 def _text(value):
@@ -198,8 +237,13 @@ def open_archive(path, product=None):
     of each: units, description, levels, path (its HDF5 path). Runs that are pending or failed are
     NaN; `status` (0 pending, 1 ok, 2 failed) says which. ds.attrs: the archive's root attributes.
     Virtual archives of `gesweep merge` read their shards in place (keep them beside it).
+
+    Before h5py reads anything, the archive is checked as every gesweep command checks it: a file
+    that is not an archive, a damaged one, or a virtual archive one of whose shard files is missing,
+    replaced, moved, of another study, the archive itself or part of a cycle raises gesweep.InputError
+    with the command's words; an archive merged before shard identities gives an ArchiveNote warning.
     """
-    f = h5py.File(path, "r")
+    f = _open_checked(path)
     if product is not None:
         return _open_product(f, product)
     status = f["runs/status"][:]
@@ -269,7 +313,7 @@ def open_archive(path, product=None):
 
 def list_products(path):
     """The names of an archive's /analysis products (`gesweep boundary --archive`, `gesweep sensitivity`)."""
-    with h5py.File(path, "r") as f:
+    with _open_checked(path) as f:
         return sorted(f["analysis"]) if "analysis" in f else []
 
 
