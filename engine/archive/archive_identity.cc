@@ -71,7 +71,7 @@ std::string Join(std::string prefix, const std::string& name) {
 std::string ExternalPath(const std::filesystem::path& archive) {
   const std::string name = archive.string();
   const auto slash = name.rfind('/');
-  const std::string directory = slash == std::string::npos ? "" : name.substr(0, slash + 1);
+  std::string directory = slash == std::string::npos ? "" : name.substr(0, slash + 1);
   if (!name.empty() && name[0] == '/') return directory;
   std::error_code ec;
   return Join(std::filesystem::current_path(ec).string(), directory);

@@ -9,7 +9,9 @@
 ///    takes a fraction of a second whatever the size; HDF5 (gesweep, h5py, h5dump, pandas through
 ///    h5py) reads it as one archive. It reads the shard files in place: they must stay where they
 ///    are (their paths are stored relative to the merged file, so moving the whole directory is
-///    fine); ArchiveReader refuses it, naming the file, when a shard is missing or changed.
+///    fine). It records each shard's identity (engine/archive/archive_identity.h), and ArchiveReader
+///    refuses it, naming the file, when a shard is missing, replaced, foreign, itself or cyclic. A
+///    virtual input is replaced by the files it maps, so a merged archive maps plain archives only.
 ///  - copy (`--copy`): a self-contained file made by raw chunk copy (H5Dread_chunk /
 ///    H5Dwrite_chunk): each stored chunk of a shard is copied as it is, nothing is inflated or
 ///    deflated. Shards start at batch boundaries (ShardRange), so their chunks coincide with the
@@ -51,9 +53,12 @@ struct MergeScope {
   int shard_count = 1;
 };
 
-/// Merges `inputs` into `output` (written under OUTPUT.partial, then renamed). Throws InputError
-/// naming the offending shard (missing, overlapping, incomplete, from another study or engine) and
-/// nothing is left under `output`; refuses an existing `output` unless `force`.
+/// Merges `inputs` into `output` (written under OUTPUT.partial, then renamed), holding OUTPUT.lock as
+/// `gesweep run` does (ArchiveLock). Throws InputError naming the offending shard (missing,
+/// overlapping, incomplete, from another study or engine) and nothing is left under `output`; refuses
+/// an existing `output` unless `force`, an `output` that is any file the inputs read (a virtual
+/// input's shards included), and one another gesweep process is writing ("archive in use"). With
+/// kCopy the result is self-contained also when an input is virtual (its shards' chunks are copied).
 MergeReport MergeArchives(const std::vector<std::filesystem::path>& inputs,
                           const std::filesystem::path& output, bool force, const std::string& command_line,
                           MergeKind kind = MergeKind::kVirtual, const MergeScope& scope = MergeScope{});

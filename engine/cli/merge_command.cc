@@ -63,7 +63,11 @@ int Merge(const MergeFlags& flags) {
 
 void AddMergeFlags(CLI::App& app, MergeFlags& flags) {
   app.add_option("archives", flags.inputs, "Shard archives (from gesweep run --shard i/N)")->required();
-  app.add_option("-o,--output", flags.output, "Merged archive to write")->required();
+  app.add_option(
+         "-o,--output", flags.output,
+         "Merged archive to write (locked while it is written, as gesweep run locks its output; never a "
+         "file the inputs read, the shards behind a virtual input included)")
+      ->required();
 }
 
 const CommandRegistrar kRegistrar{CommandWith<MergeFlags>(
