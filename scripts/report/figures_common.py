@@ -14,6 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.transforms import blended_transform_factory  # noqa: E402
 
 _LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
 if _LIB not in sys.path:
@@ -91,3 +92,24 @@ def last_table_row_m(archive):
     """The height of the aircraft table's last finite row (m), or NaN."""
     rows = archive.aircraft.table_heights_m
     return float(rows[-1]) if rows else float("nan")
+
+
+# A legend row uses at most this fraction of the figure's width (the rest is its margins).
+LEGEND_WIDTH_FRACTION = 0.97
+
+
+def legend_row(fig, legend_axis, handles, ncols):
+    """The legend of `handles` in its own axis below the panels, centred on the figure, in `ncols`
+    columns, or in fewer when that many would be wider than the figure (a centred legend wider than
+    its figure loses both ends)."""
+    legend_axis.axis("off")
+    renderer = fig.canvas.get_renderer()
+    # Centred on the figure across (the axis may sit left of a colour bar), on the axis up and down.
+    anchor = blended_transform_factory(fig.transFigure, legend_axis.transAxes)
+    for columns in range(max(1, ncols), 0, -1):
+        legend = legend_axis.legend(handles=handles, loc="center", ncols=columns, frameon=False,
+                                    bbox_to_anchor=(0.5, 0.5), bbox_transform=anchor)
+        if columns == 1 or legend.get_window_extent(renderer).width <= LEGEND_WIDTH_FRACTION * fig.bbox.width:
+            return legend
+        legend.remove()
+    return legend

@@ -28,7 +28,7 @@ UNIT_SUFFIXES = ("_mps", "_radps", "_deg", "_rad", "_m", "_s", "_kg")
 # The groups' colours and markers, in group order (tab10, the report's qualitative palette).
 GROUP_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 # A limit's name is wrapped to lines of this many characters under its tick.
-LIMIT_LABEL_WIDTH = 22
+LIMIT_LABEL_WIDTH = 24
 # A limit as `gesweep dispersion --limit` takes it: column, comparison, value.
 LIMIT = re.compile(r"^\s*(?P<column>[\w/.]+)\s*(?P<op>>=|<=|>|<)\s*(?P<value>\S+)\s*$")
 
@@ -116,9 +116,7 @@ def _ecdf_grid(archive, product, groups, outdir):
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
     legend_axis = fig.add_subplot(grid[nrows, :])
-    legend_axis.axis("off")
-    legend_axis.legend(handles=[handles[g] for g in sorted(handles)], loc="center", ncols=min(4, len(handles)),
-                       frameon=False)
+    common.legend_row(fig, legend_axis, [handles[g] for g in sorted(handles)], ncols=min(4, len(handles)))
     name = common.save(fig, outdir, f"dispersion_{common.slug(archive.study_name)}_ecdf.png")
     by = f", one curve per group of {product['group_by']}" if product["group_by"] else ""
     return Figure(name, f"Dispersion of {archive.study_name}: empirical CDFs",

@@ -156,8 +156,7 @@ def _level_map(archive, analysis, key, rows, outdir, number):
     ax.set_title(_level_map_title(analysis))
     bar = fig.colorbar(mesh, ax=ax, pad=0.02, aspect=30, ticks=range(len(names)))
     bar.ax.set_yticklabels(names)
-    legend_axis.axis("off")
-    legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
+    common.legend_row(fig, legend_axis, list(handles.values()), ncols=2)
     suffix = f" ({archive.key_text(key)})" if key else ""
     standard = _level_map_standard(analysis)
     fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: {standard + ' ' if standard else ''}{analysis.label}{suffix}")

@@ -84,8 +84,7 @@ def _stability_map(archive, key, rows, outdir, number):
         ax.set_xlabel("")
     bar = fig.colorbar(mesh, ax=list(axes[:-1]), pad=0.02, aspect=35)
     bar.set_label(f"σ, Re λ ({SIGMA_UNITS}): red unstable (> 0), blue stable (< 0)")
-    legend_axis.axis("off")
-    legend_axis.legend(handles=list(handles.values()), loc="center", ncols=2, frameon=False)
+    common.legend_row(fig, legend_axis, list(handles.values()), ncols=2)
     suffix = f" ({archive.key_text(key)})" if key else ""
     fig.suptitle(f"{archive.aircraft.name or 'aircraft'}: stability over height and speed{suffix}")
     name = common.save(fig, outdir, f"stability_map_{common.slug(archive.study_name)}_{number}.png")

@@ -219,8 +219,7 @@ def draw(archives, outdir):
     if table_points is not None:
         handles.append(Line2D([], [], marker="o", ls="", mfc="none", mec="k",
                               label=f"Table A2 heights ({table_points[2]})"))
-    legend_axis.axis("off")
-    legend_axis.legend(handles=handles, loc="center", ncols=len(handles), frameon=False)
+    common.legend_row(fig, legend_axis, handles, ncols=len(handles))
     bar = fig.colorbar(scatter, ax=axes, pad=0.01, aspect=30)
     bar.set_label("height H (m)")
     others = {k: v for k, v in key.items() if k != "speed_mps"}

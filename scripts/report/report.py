@@ -11,6 +11,7 @@ opens from disk. Exit codes: 0 ok, 2 bad input (one line on stderr), 1 anything 
 import argparse
 import html
 import os
+import re
 import shutil
 import sys
 import time
@@ -224,8 +225,8 @@ def main(argv):
 
 
 def absent(text):
-    """A section whose data no archive holds: one line saying so."""
-    return f'<p class="absent">{esc(text)}</p>'
+    """A section whose data no archive holds: one line saying so (`...` as code)."""
+    return '<p class="absent">' + re.sub(r"`([^`]+)`", r"<code>\1</code>", esc(text)) + "</p>"
 
 
 def figure_sections(archives, outdir, progress):

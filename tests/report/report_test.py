@@ -57,6 +57,8 @@ MIN_DISPERSION_PANEL_PX = 280
 # The page's column at a 1400 px window (report.py's CSS: 1200 px less its padding): a figure no wider
 # is shown at its own size, not scaled down.
 PAGE_COLUMN_PX = 1168
+# A legend lies inside its figure when within this many pixels of its edges (antialiasing).
+LEGEND_SLACK_PX = 1.0
 # 1 kt in m/s, from its definition (1852 m per hour): the oracle of the wind labels.
 KNOT_MPS = 1852.0 / 3600.0
 # A number in a label: an optional sign (ASCII or Unicode minus), digits with an optional fraction and
@@ -204,7 +206,7 @@ def describe(fig):
     fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
     out = {"maps": [], "axes": [], "legends": [], "labels": [], "lines": [], "texts": label_texts(fig),
-           "size": tuple(fig.get_size_inches() * fig.dpi)}
+           "size": tuple(fig.get_size_inches() * fig.dpi), "figure_box": fig.bbox.frozen()}
     for ax in fig.axes:
         box = ax.get_window_extent(renderer)
         out["axes"].append((ax.get_title(), box))
@@ -351,9 +353,9 @@ class Figures(unittest.TestCase):
         self.assertIn("wheel contact (0.788 m)", texts)
 
 
-    def test_no_label_shows_a_float_of_more_than_four_digits(self):
+    def test_no_label_shows_a_float_of_more_than_four_digits_and_every_legend_is_in_its_figure(self):
         """Every figure family on every archive of the test: legends, ticks and axis labels."""
-        offending, seen = [], 0
+        offending, seen, outside = [], 0, []
         for family in report_figures.families():
             _, described = draw(family.draw, [GRID, FLYING, OPEN_LOOP, LANDING, MORRIS, DISPERSION])
             for name, d in described.items():
@@ -362,8 +364,13 @@ class Figures(unittest.TestCase):
                     for token in NUMBER.findall(text):
                         if significant_digits(token) > MAX_LABEL_DIGITS:
                             offending.append(f"{name}: {where} {text!r} ({token})")
+                frame = d["figure_box"]
+                for texts, box in d["legends"]:
+                    if box.x0 < frame.x0 - LEGEND_SLACK_PX or box.x1 > frame.x1 + LEGEND_SLACK_PX:
+                        outside.append(f"{name}: legend {texts[:2]} spans x {box.x0:.0f}-{box.x1:.0f} of 0-{frame.x1:.0f}")
         self.assertGreater(seen, 100)
         self.assertEqual(offending, [], "\n".join(offending))
+        self.assertEqual(outside, [], "\n".join(outside))
 
     def test_the_check_sees_a_long_float(self):
         for token, digits in (("-15.433333", 8), ("2.5935", 5), ("13.37", 4), ("0.0125", 3), ("2000", 1),
