@@ -13,7 +13,6 @@ from matplotlib.lines import Line2D
 
 import figures_common as common  # (first: it puts scripts/lib on the path)
 import columns  # scripts/lib/columns.py
-import report_labels
 from figures_common import MAX_MAP_PANELS, MISSING_COLOUR, PAPER_SPEED_MPS, Figure
 from figures_maps import height_speed_grid, map_axes, map_overlays
 

@@ -2,7 +2,6 @@
 phugoid's own real part, with every line drawn over a height x speed map (map_overlays) and its axes
 (map_axes), which the level maps share."""
 
-import math
 import os
 
 import matplotlib.pyplot as plt

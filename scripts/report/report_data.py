@@ -155,15 +155,6 @@ class Archive:
             return []
         return _text(self.file[path].attrs.get("levels", []))
 
-    def level_name(self, name, value):
-        """The level name of a choice/boolean parameter value, else the number as text."""
-        levels = self.levels(design_path(name))
-        if not levels and name in ("h_derivatives",):
-            levels = ["false", "true"]
-        if levels and float(value).is_integer() and 0 <= int(value) < len(levels):
-            return levels[int(value)]
-        return f"{value:g}"
-
     def column(self, path):
         """A per-run scalar dataset as float64 (an integer column's fill value as NaN), all rows."""
         if path not in self._cache:
