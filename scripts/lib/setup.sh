@@ -16,6 +16,7 @@ GESWEEP_PACKAGES=(
   pybind11-dev python3-pybind11 python3-dev  # engine/python: the module gesweep (docs/python.md)
   python3-xarray python3-h5netcdf python3-pandas python3-pytest netcdf-bin  # its API and tests/python
   chromium  # headless, for tests/report: the report page loads and shows every figure
+  python3-nbclient python3-ipykernel  # tests/notebook: the tour notebook runs (jupyter-notebook to open it)
 )
 
 gesweep_install_deps() {

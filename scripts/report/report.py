@@ -9,21 +9,23 @@ opens from disk. Exit codes: 0 ok, 2 bad input (one line on stderr), 1 anything 
 """
 
 import argparse
-import functools
 import html
 import os
+import re
 import shutil
 import sys
 import time
 
 import numpy as np
 
+import figures_common
 import report_claims
 import report_figures
+import report_labels
 from report_data import open_archives
 
 CSS = """
-body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1180px;
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1200px;
        color: #1d1d1d; line-height: 1.45; padding: 0 1em; }
 h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 2em; border-bottom: 1px solid #ccc; }
 .sub { color: #555; margin-top: 0; }
@@ -35,7 +37,11 @@ th { background: #f0f0f0; } td.num { text-align: right; font-variant-numeric: ta
 .agrees { background: #e3f4e1; } .differs { background: #fbe3e0; } .nodata { background: #f3f3f3; color: #666; }
 pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
 details { margin: 0.5em 0; } summary { cursor: pointer; }
-nav a { margin-right: 1em; }
+nav a { margin-right: 1em; } nav a.absent { color: #888; }
+p.absent { color: #555; font-style: italic; }
+table.claims { width: 100%; } table.claims td:nth-child(1) { width: 22%; } table.claims td:nth-child(2) { width: 18%; }
+table.claims td:nth-child(3) { width: 42%; } td.claim-engine ul { margin: 0.3em 0 0 1.2em; padding: 0; }
+td .source { color: #666; font-size: 0.9em; }
 div.long { max-height: 36em; overflow-y: auto; display: inline-block; border: 1px solid #ccc; }
 div.long table { margin: 0; } div.long th { position: sticky; top: 0; }
 @media print { div.long { max-height: none; overflow: visible; } }
@@ -81,7 +87,8 @@ def boundary_section(archives):
             for k in keys:
                 levels = boundary["levels"].get(k) or []
                 v = float(boundary[k][i])
-                row.append(levels[int(v)] if levels and v.is_integer() and 0 <= int(v) < len(levels) else fmt(v, 7))
+                # A level in words (report_labels); a number exact, as the archive holds it.
+                row.append(report_labels.value_label(k, v, levels) if levels else fmt(v, 7))
             lower, upper = boundary["grid_lower_height_m"][i], boundary["grid_upper_height_m"][i]
             row += [fmt(float(boundary["height_m"][i]), 7), fmt(float(boundary["height_over_span"][i]), 4),
                     f"{lower:.5g} – {upper:.5g}" if np.isfinite(lower) else "", boundary["reason"][i]]
@@ -107,15 +114,36 @@ def boundary_section(archives):
     return "\n".join(parts)
 
 
+# The claims table's per-run evidence lists at most this many lines (then says how many more).
+MAX_CLAIM_DETAILS = 40
+
+
+def claim_engine_cell(claim):
+    """The engine's side of a claim: its few lines, the archives read, and the per-run evidence
+    collapsed in a <details> block."""
+    text = "<br>".join(esc(line) for line in claim.engine.split("\n"))
+    if claim.sources:
+        text += f'<br><span class="source">from {esc(", ".join(claim.sources))}</span>'
+    if claim.details:
+        shown = claim.details[:MAX_CLAIM_DETAILS]
+        more = len(claim.details) - len(shown)
+        items = "".join(f"<li>{esc(line)}</li>" for line in shown) + (f"<li>… and {more} more</li>" if more else "")
+        text += (f"<details><summary>the {len(claim.details)} run(s) behind it</summary><ul>{items}</ul>"
+                 f"</details>")
+    return text
+
+
 def claims_section(archives):
     rows = report_claims.paper_claims(archives)
     if not rows:
         return ""
-    out = ["<table><tr><th>claim</th><th>paper</th><th>engine (from the archives)</th><th>verdict</th></tr>"]
-    for claim, paper, engine, verdict in rows:
+    out = ['<table class="claims"><tr><th>claim</th><th>paper</th><th>engine (from the archives)</th><th>verdict</th>'
+           "</tr>"]
+    for claim in rows:
+        verdict = claim.verdict
         cls = "agrees" if verdict == "agrees" else ("nodata" if verdict == "no data" else "differs")
-        out.append(f"<tr><td>{esc(claim)}</td><td>{esc(paper)}</td><td>{esc(engine)}</td>"
-                   f'<td class="{cls}">{esc(verdict)}</td></tr>')
+        out.append(f"<tr><td>{esc(claim.claim)}</td><td>{esc(claim.paper)}</td>"
+                   f'<td class="claim-engine">{claim_engine_cell(claim)}</td><td class="{cls}">{esc(verdict)}</td></tr>')
     out.append("</table>")
     return "\n".join(out)
 
@@ -196,48 +224,52 @@ def main(argv):
         return 1
 
 
+def absent(text):
+    """A section whose data no archive holds: one line saying so (`...` as code)."""
+    return '<p class="absent">' + re.sub(r"`([^`]+)`", r"<code>\1</code>", esc(text)) + "</p>"
+
+
+def figure_sections(archives, outdir, progress):
+    """(title, anchor, html, present) of every figure family, in page order (report_figures)."""
+    sections = []
+    for family in report_figures.families():
+        figures = family.draw(archives, outdir)
+        progress(f"{family.title.lower()}: {len(figures)} figure(s)")
+        content = "\n".join(figure_html(f) for f in figures) if figures else absent(family.absent)
+        sections.append((family.title, family.anchor, content, bool(figures)))
+    return sections
+
+
 def write_report(args, archives, progress):
     # Figures of an earlier report in DIR that this one does not draw would be stale: remove ours.
-    # The level maps (one section per rated analysis of the column manifest) follow the stability map.
-    rated = report_figures.rated_analyses()
-    ours = {"stability", "root", "open", "landing", "sensitivity", "dispersion"} | {r.name.split("_")[0] for r in rated}
+    prefixes = tuple(family.prefix for family in report_figures.families())
     for name in os.listdir(args.output):
-        if name.endswith(".png") and name.split("_")[0] in ours:
+        if name.endswith(".png") and name.startswith(prefixes):
             os.remove(os.path.join(args.output, name))
-
-    sections = []
     drawn = []
-    level_sections = [(r.section_title(), r.name, functools.partial(report_figures.level_maps, rated=r))
-                      for r in rated]
-    for title, anchor, draw in ([("Stability map", "map", report_figures.stability_maps)] + level_sections
-                                + [("Root locus against height", "locus", report_figures.root_locus),
-                                   ("Open-loop responses", "open_loop", report_figures.open_loop),
-                                   ("Landing", "landing", report_figures.landing),
-                                   ("Sensitivity", "sensitivity", report_figures.sensitivity),
-                                   ("Dispersion", "dispersion", report_figures.dispersion)]):
-        figures = draw(archives, args.output)
-        progress(f"{title.lower()}: {len(figures)} figure(s)")
-        if figures:
-            drawn += figures
-            sections.append((title, anchor, "\n".join(figure_html(f) for f in figures)))
+    figures_common.observers.append(lambda fig, name: drawn.append(name))
+    sections = figure_sections(archives, args.output, progress)
     boundary = boundary_section(archives)
-    if boundary:
-        sections.insert(1 if sections and sections[0][1] == "map" else 0,
-                        ("Stability boundary per speed", "boundary", boundary))
+    sections.insert(1, ("Stability boundary per speed", "boundary", boundary or absent(
+        "No archive of this report has a refined boundary (/analysis/boundary); `gesweep boundary --archive "
+        "ARCHIVE` writes it for a modes sweep over height."), bool(boundary)))
     claims = claims_section(archives)
-    if claims:
-        sections.append(("The paper's claims beside the engine's findings", "claims",
-                         "<p>The paper: González, Boschetti, Cárdenas and Rodriguez-Celi, <i>Dynamic Ground Effect on "
-                         "the Longitudinal Stability of Airplanes during the Landing</i>, Section IV and Fig. 4–9. "
-                         "The engine's side is read from the archives of this report.</p>" + claims))
-    sections.append(("Runs by status", "status", status_section(archives)))
-    sections.append(("Provenance", "provenance", provenance_section(archives)))
+    sections.append(("The paper's claims beside the engine's findings", "claims",
+                     ("<p>The paper: González, Boschetti, Cárdenas and Rodriguez-Celi, <i>Dynamic Ground Effect on "
+                      "the Longitudinal Stability of Airplanes during the Landing</i>, Section IV and Fig. 4–9. "
+                      "The engine's side is read from the archives of this report, each claim from the archives it "
+                      "is about.</p>" + claims) if claims else absent(
+                         "No archive of this report is of the ANCE, the airplane the paper's claims are about."),
+                     bool(claims)))
+    sections.append(("Runs by status", "status", status_section(archives), True))
+    sections.append(("Provenance", "provenance", provenance_section(archives), True))
 
     studies = ", ".join(a.study_name for a in archives)
     aircraft = sorted({a.aircraft.name for a in archives if a.aircraft.name})
     title = args.title or f"gesweep report: {', '.join(aircraft) or 'archives'}"
-    nav = " ".join(f'<a href="#{anchor}">{esc(name)}</a>' for name, anchor, _ in sections)
-    body = "\n".join(f'<h2 id="{anchor}">{esc(name)}</h2>\n{content}' for name, anchor, content in sections)
+    nav = " ".join(f'<a href="#{anchor}"' + ("" if present else ' class="absent"') + f">{esc(name)}</a>"
+                   for name, anchor, _, present in sections)
+    body = "\n".join(f'<h2 id="{anchor}">{esc(name)}</h2>\n{content}' for name, anchor, content, _ in sections)
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{esc(title)}</title>
 <style>{CSS}</style></head>

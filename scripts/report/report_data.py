@@ -17,8 +17,12 @@ _LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
 if _LIB not in sys.path:
     sys.path.insert(0, _LIB)
 import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from `gesweep columns --json`)
+import report_labels  # noqa: E402  (the one labeller of parameter values)
 
 STATUS_PENDING, STATUS_OK, STATUS_FAILED = 0, 1, 2
+# The /analysis products the report reads (schemas/archive.md, "/analysis").
+BOUNDARY, BOUNDARY_CURVE = "analysis/boundary", "analysis/boundary_curve"
+SENSITIVITY, DISPERSION = "analysis/sensitivity", "analysis/dispersion"
 
 
 def _text(value):
@@ -151,15 +155,6 @@ class Archive:
             return []
         return _text(self.file[path].attrs.get("levels", []))
 
-    def level_name(self, name, value):
-        """The level name of a choice/boolean parameter value, else the number as text."""
-        levels = self.levels(design_path(name))
-        if not levels and name in ("h_derivatives",):
-            levels = ["false", "true"]
-        if levels and float(value).is_integer() and 0 <= int(value) < len(levels):
-            return levels[int(value)]
-        return f"{value:g}"
-
     def column(self, path):
         """A per-run scalar dataset as float64 (an integer column's fill value as NaN), all rows."""
         if path not in self._cache:
@@ -201,7 +196,78 @@ class Archive:
         return [({a: float(k[i]) for i, a in enumerate(axes)}, m) for k, m in zip(keys, members)]
 
     def key_text(self, key):
-        return ", ".join(f"{n} = {self.level_name(n, v)}" for n, v in key.items())
+        """A group's key in words (report_labels: "W20 = 30 kt headwind, with h-derivatives")."""
+        return report_labels.key_label(key, self.design_levels)
+
+    def value_text(self, name, value):
+        """One parameter value in words (report_labels.value_label with the archive's levels)."""
+        return report_labels.value_label(name, value, self.design_levels(name))
+
+    def design_levels(self, name):
+        """The level names of a choice or boolean parameter as the archive stores them, or None (then
+        the labeller takes the manifest's)."""
+        return self.levels(design_path(name)) or None
+
+    def read(self, path):
+        """A whole dataset (a per-run column, a time axis, a product's dataset), read once."""
+        return self._read(path)
+
+    def is_dispersion(self):
+        """Whether the archive is a dispersion study: it has /analysis/dispersion, or its runs fly in
+        turbulence. Such an archive is shown in its own section only (docs/report.md)."""
+        if DISPERSION in self.file:
+            return True
+        turbulence = self.param("turbulence")
+        if turbulence is None:
+            return False
+        levels = self.levels(design_path("turbulence")) or report_labels.parameter("turbulence")["levels"]
+        return any(levels[int(v)] != "none" for v in np.unique(turbulence[self.complete]) if np.isfinite(v))
+
+    def boundary_curve(self):
+        """/analysis/boundary_curve (gesweep boundary --archive: H*(u0) by continuation) as a dict of
+        arrays (speed_mps, height_m, branch), or None."""
+        if BOUNDARY_CURVE not in self.file:
+            return None
+        group = self.file[BOUNDARY_CURVE]
+        return {name: group[name][...] for name in ("speed_mps", "height_m", "branch")}
+
+    def sensitivity_products(self):
+        """Every /analysis/sensitivity result group (gesweep sensitivity) as a dict: path, attrs (text),
+        datasets (name -> array) and units (name -> text)."""
+        products = []
+        for path in self.analysis_groups(SENSITIVITY):
+            group = self.file[path]
+            products.append({"path": path, "attrs": {k: _text(v) for k, v in group.attrs.items()},
+                             "datasets": {n: d[...] for n, d in group.items() if isinstance(d, h5py.Dataset)},
+                             "units": {n: _text(d.attrs.get("units", "")) for n, d in group.items()
+                                       if isinstance(d, h5py.Dataset)}})
+        return products
+
+    def dispersion(self):
+        """/analysis/dispersion (gesweep dispersion, docs/dispersion.md) as a dict: attrs (text), the
+        groups' labels and values, the limits (or None), and `members(g)`: the ok runs of group g; or
+        None when the archive has none."""
+        if DISPERSION not in self.file:
+            return None
+        product = self.file[DISPERSION]
+        attrs = {k: _text(v) for k, v in product.attrs.items()}
+        keys = product["group_value"][...]
+        group_path = attrs.get("group_path", "")
+        grouping = self._read(group_path) if group_path and group_path in self.file else None
+        limits = None
+        if "limits" in product and "probability" in product["limits"]:
+            limits = {name: (_text(d[...]) if d.dtype.kind in "OS" else d[...])
+                      for name, d in product["limits"].items() if isinstance(d, h5py.Dataset)}
+
+        def members(index):
+            if grouping is None:
+                return self.ok
+            return self.ok & (np.isnan(grouping) if np.isnan(keys[index]) else grouping == keys[index])
+
+        return {"attrs": attrs, "labels": _text(product["group_label"][...]), "values": keys,
+                "limits": limits, "members": members, "group_by": attrs.get("group_by", ""),
+                "column_paths": list(attrs.get("column_paths", [])), "columns": list(attrs.get("columns", [])),
+                "column_units": list(attrs.get("column_units", []))}
 
     def analysis_groups(self, prefix):
         """Groups under `prefix` (e.g. analysis/sensitivity) that carry a `method` attribute."""
@@ -218,9 +284,9 @@ class Archive:
 
     def boundary(self):
         """/analysis/boundary as a dict of arrays (with 'keys', 'levels', 'attrs'), or None."""
-        if "analysis/boundary" not in self.file:
+        if BOUNDARY not in self.file:
             return None
-        group = self.file["analysis/boundary"]
+        group = self.file[BOUNDARY]
         out = {"attrs": {k: _text(v) for k, v in group.attrs.items()}}
         for name, dataset in group.items():
             if dataset.dtype.kind == "O":

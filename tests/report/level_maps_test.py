@@ -41,7 +41,7 @@ sys.path.insert(0, os.path.join(ROOT, "scripts", "report"))
 
 
 def setUpModule():
-    global FLYING, RIDE, report_data, report_figures
+    global FLYING, RIDE, report_data, figures_common, figures_levels
     FLYING = os.path.join(WORK, "flying_qualities.h5")
     out = subprocess.run([GESWEEP, "run", "tests/report/flying_qualities_small.toml", "-o", FLYING, "-q"],
                          capture_output=True, text=True, cwd=ROOT, timeout=300)
@@ -78,8 +78,9 @@ def setUpModule():
     with open(MANIFEST, "w", encoding="utf-8") as f:
         json.dump(manifest, f)
     import report_data as data  # noqa: E402  (after GESWEEP_COLUMNS_MANIFEST is set)
-    import report_figures as figures  # noqa: E402
-    report_data, report_figures = data, figures
+    import figures_common as common  # noqa: E402
+    import figures_levels as levels  # noqa: E402
+    report_data, figures_common, figures_levels = data, common, levels
 
 
 def tearDownModule():
@@ -87,22 +88,20 @@ def tearDownModule():
 
 
 def draw_levels(paths):
-    """report_figures.level_maps on archives: (Figure records, {file: (mesh values, legend texts)})."""
+    """figures_levels.draw on archives: (Figure records, {file: (mesh values, legend texts)})."""
     seen = {}
-    original = report_figures._save
 
-    def save(fig, outdir, name):
+    def observe(fig, name):
         ax = fig.axes[0]
         mesh = next(c for c in ax.collections if isinstance(c, QuadMesh))
         legend = [t.get_text() for a in fig.axes if a.get_legend() for t in a.get_legend().get_texts()]
         seen[name] = (np.ma.filled(mesh.get_array().astype(float), np.nan), legend, ax.get_title())
-        return original(fig, outdir, name)
     archives = report_data.open_archives(paths)
-    report_figures._save = save
+    figures_common.observers.append(observe)
     try:
-        figures = report_figures.level_maps(archives, tempfile.mkdtemp(dir=WORK))
+        figures = figures_levels.draw(archives, tempfile.mkdtemp(dir=WORK))
     finally:
-        report_figures._save = original
+        figures_common.observers.remove(observe)
         for archive in archives:
             archive.close()
     return figures, seen

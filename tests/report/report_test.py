@@ -40,8 +40,53 @@ MIN_PIXEL_STD = 0.02
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
                   "--hide-scrollbars", "--force-device-scale-factor=1"]
-# The page is laid out at this window width (CSS pixels) for the screenshot.
-SCREEN_WIDTH = 1280
+# The page is laid out at this window width (CSS pixels) for the screenshot (issue 30: legible at 1400).
+SCREEN_WIDTH = 1400
+# No cell of the claims table is taller than a screen: this many CSS pixels (a laptop's window).
+SCREEN_HEIGHT = 900
+# No cell of the claims table holds more text than this (characters; issue 30: a few lines, the
+# per-run evidence collapsed).
+MAX_CLAIM_CELL_CHARS = 2000
+# No legend, tick label or colour-bar label shows a number with more significant digits than this
+# (issue 30: "W20 = 30 kt headwind", never "-15.433333").
+MAX_LABEL_DIGITS = 4
+# The dispersion panels are in a grid of at most this many columns, each at least this wide (pixels of
+# the PNG, which the page shows at its size): five panels in one row were 200 px each.
+MAX_DISPERSION_COLUMNS = 3
+MIN_DISPERSION_PANEL_PX = 280
+# The page's column at a 1400 px window (report.py's CSS: 1200 px less its padding): a figure no wider
+# is shown at its own size, not scaled down.
+PAGE_COLUMN_PX = 1168
+# A legend lies inside its figure when within this many pixels of its edges (antialiasing).
+LEGEND_SLACK_PX = 1.0
+# 1 kt in m/s, from its definition (1852 m per hour): the oracle of the wind labels.
+KNOT_MPS = 1852.0 / 3600.0
+# A number in a label: an optional sign (ASCII or Unicode minus), digits with an optional fraction and
+# exponent, not part of a word or of a longer dotted number.
+NUMBER = re.compile(r"(?<![\w.])[-−+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
+# README's sections and the report's: each README section that shows a result names the report
+# sections (ids) that show it; the others say why the report has none. A new README section must be
+# added to one of the two (issue 30: the demo's report shows every section README shows).
+README_IN_REPORT = {
+    "Modes and the stability boundary": ("locus", "boundary", "claims"),
+    "Flying qualities (MIL-F-8785C, Category C)": ("flying_qualities",),
+    "Sweeps, archives, queries and reports": ("map", "boundary", "status", "provenance"),
+    "Sobol sensitivity of the boundary": ("sensitivity",),
+    "Open-loop time responses (the paper's Fig. 4)": ("open_loop", "claims"),
+    "Automatic landing": ("landing", "claims"),
+    "Landing dispersion in wind and turbulence": ("dispersion",),
+}
+README_NOT_IN_REPORT = {
+    "Two commands": "how to build and run, no result",
+    "The model in one paragraph": "the model, no result",
+    "From Python": "the module and the notebook (notebooks/), no archive product",
+    "Running on a cluster": "how to run on Slurm, no result",
+    "Which coefficient moves the boundary? Local sensitivities": "printed by gesweep boundary --sensitivities, "
+                                                                  "not stored in an archive",
+    "Performance": "scripts/bench's measurements, not an archive",
+    "Aircraft files": "the input format",
+    "Layout": "the repository's folders",
+}
 # An image as painted in the screenshot matches its PNG when, both averaged over blocks of
 # COMPARE_BLOCKS, the mean absolute difference is below this (0..1 scale): the browser's scaling
 # filter and colour handling move block means by well under 0.01, a broken-image icon by far more.
@@ -56,6 +101,13 @@ TABLE_A2_JUMP = ("1.2968 m and 1.5561 m", "CMα̇ jumps from -18.71 to -9.307")
 PAPER_SPEED_MPS = 32.0208
 
 sys.path.insert(0, os.path.join(ROOT, "scripts", "report"))
+import figures_common  # noqa: E402
+import figures_dispersion  # noqa: E402
+import figures_landing  # noqa: E402
+import figures_levels  # noqa: E402
+import figures_maps  # noqa: E402
+import figures_modes  # noqa: E402
+import figures_open_loop  # noqa: E402
 import report_data  # noqa: E402
 import report_figures  # noqa: E402
 
@@ -95,6 +147,26 @@ def parse(path):
     return page, text
 
 
+def page_sections(text):
+    """{id: html} of each <h2 id=...> section of a report page."""
+    parts = re.split(r'<h2 id="([^"]+)">', text)
+    return {parts[i]: parts[i + 1] for i in range(1, len(parts) - 1, 2)}
+
+
+def claim_rows(text):
+    """The claims table's rows, each a list of its cells' text (tags dropped, the collapsed evidence
+    included)."""
+    table = re.search(r'<table class="claims">(.*?)</table>', text, re.S).group(1)
+    rows = []
+    for row in re.findall(r"<tr>(.*?)</tr>", table, re.S)[1:]:
+        rows.append([html.unescape(re.sub(r"<[^>]+>", " ", cell)) for cell in re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)])
+    return rows
+
+
+def claim_cells(text):
+    return [cell for row in claim_rows(text) for cell in row]
+
+
 def modes_study(name, speeds, heights):
     """A modes study over speeds x heights (logspace from 0.7882 m to 14 m) outside ARCHIVES; its archive."""
     os.makedirs(EXTRA, exist_ok=True)
@@ -111,7 +183,7 @@ def modes_study(name, speeds, heights):
 
 def setUpModule():
     os.makedirs(ARCHIVES)
-    global GRID, OPEN_LOOP, LANDING, MORRIS, FLYING
+    global GRID, OPEN_LOOP, LANDING, MORRIS, FLYING, DISPERSION
     GRID = sweep("tests/query/boundary_grid.toml", "grid.h5")
     FLYING = sweep("tests/report/flying_qualities_small.toml", "flying_qualities.h5")
     out = run("boundary", "--archive", GRID)
@@ -120,6 +192,10 @@ def setUpModule():
     LANDING = sweep("studies/paper/landing.toml", "landing.h5")
     MORRIS = sweep("studies/verification/morris_linear.toml", "morris.h5")
     run("sensitivity", MORRIS, "--output", "linear")  # a colleague's command; its absence only drops a figure
+    DISPERSION = sweep("tests/report/dispersion_small.toml", "dispersion.h5")
+    out = run("dispersion", DISPERSION, "--group-by", "wind_20ft_mps", "--limit", "touchdown_sink_rate_mps>1.83",
+              "--limit", "touchdown_distance_past_transmitter_m>518", "--limit", "touchdown_pitch_deg<0")
+    assert out.returncode == 0, out.stderr
 
 
 EXTRA = os.path.join(WORK, "extra")
@@ -129,7 +205,8 @@ def describe(fig):
     """What the tests check of a drawn figure, in display coordinates of its final layout."""
     fig.draw_without_rendering()
     renderer = fig.canvas.get_renderer()
-    out = {"maps": [], "axes": [], "legends": [], "labels": [], "lines": []}
+    out = {"maps": [], "axes": [], "legends": [], "labels": [], "lines": [], "texts": label_texts(fig),
+           "size": tuple(fig.get_size_inches() * fig.dpi), "figure_box": fig.bbox.frozen()}
     for ax in fig.axes:
         box = ax.get_window_extent(renderer)
         out["axes"].append((ax.get_title(), box))
@@ -147,31 +224,69 @@ def describe(fig):
     return out
 
 
+def label_texts(fig):
+    """Every legend text, tick label and axis label of a drawn figure's axes (colour bars and secondary
+    axes included), as (where, text)."""
+    out = []
+    axes = list(fig.axes)
+    axes += [child for ax in fig.axes for child in ax.child_axes]
+    for ax in axes:
+        for axis_name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            out += [(f"{axis_name} tick", t.get_text()) for t in axis.get_ticklabels() if t.get_visible()]
+            out.append((f"{axis_name} label", axis.get_label().get_text()))
+        legend = ax.get_legend()
+        if legend is not None:
+            out += [("legend", t.get_text()) for t in legend.get_texts()]
+    return [(where, text) for where, text in out if text]
+
+
+def significant_digits(token):
+    """The significant digits a number's text shows: "2.5935" 5, "0.0125" 3, "2000" 1, "1.50" 3."""
+    mantissa = re.split("[eE]", token.lstrip("-−+"))[0]
+    digits = mantissa.replace(".", "").lstrip("0")
+    return len(digits if "." in mantissa else digits.rstrip("0"))
+
+
 def draw(function, paths):
     """Runs a figure function of scripts/report on archives; (Figure records, descriptions by file)."""
     described = {}
-    original = report_figures._save
 
-    def save(fig, outdir, name):
+    def observe(fig, name):
         described[name] = describe(fig)
-        return original(fig, outdir, name)
     archives = report_data.open_archives(paths)
     out_dir = tempfile.mkdtemp(prefix="figures_", dir=WORK)
-    report_figures._save = save
+    figures_common.observers.append(observe)
     try:
         figures = function(archives, out_dir)
     finally:
-        report_figures._save = original
+        figures_common.observers.remove(observe)
         for archive in archives:
             archive.close()
     return figures, described
+
+
+# Every figure family drawn once on every archive of setUpModule (the label checks read all of them;
+# the tests of one family on one archive take their figures from here rather than draw them again).
+_ALL_DRAWN = {}
+
+
+def drawn(family_draw, path):
+    """(Figure records, descriptions by file) of one figure family on all the test's archives, of the
+    figures of the archive `path` only (named by its study, figures_common.slug)."""
+    if family_draw not in _ALL_DRAWN:
+        _ALL_DRAWN[family_draw] = draw(family_draw, [GRID, FLYING, OPEN_LOOP, LANDING, MORRIS, DISPERSION])
+    figures, described = _ALL_DRAWN[family_draw]
+    with h5py.File(path, "r") as f:
+        study = figures_common.slug(str(f.attrs["study_name"]))
+    mine = [figure for figure in figures if study in figure.file]
+    return mine, {figure.file: described[figure.file] for figure in mine}
 
 
 class Figures(unittest.TestCase):
     """The figure fixes of issue 19, checked on the figures as drawn."""
 
     def test_stability_map_legend_clear_of_the_maps_and_the_phugoid_panel(self):
-        figures, described = draw(report_figures.stability_maps, [GRID])
+        figures, described = drawn(figures_maps.draw, GRID)
         self.assertEqual(len(figures), 2)  # one per h_derivatives value
         for figure in figures:
             d = described[figure.file]
@@ -181,7 +296,7 @@ class Figures(unittest.TestCase):
             texts, legend = d["legends"][0]
             for box in d["maps"]:
                 self.assertFalse(legend.overlaps(box), f"the legend covers a map: {texts}")
-            self.assertTrue(any(t.startswith("last table row (13.373 m)") for t in texts), texts)
+            self.assertTrue(any(t.startswith("last table row (13.37 m)") for t in texts), texts)
         # With the h-derivatives the band above the last table row is explained, with values from the
         # archive; without them the height root is neutral at every height, σ is never it, and there is
         # no band to explain.
@@ -199,7 +314,7 @@ class Figures(unittest.TestCase):
         near = modes_study("near_paper_speed", [31.9], 120)
         paper = modes_study("at_paper_speed", [PAPER_SPEED_MPS], 60)
         # The denser group at 31.9 m/s used to win; the paper's own speed does now.
-        figures, described = draw(report_figures.root_locus, [near, paper])
+        figures, described = draw(figures_modes.draw, [near, paper])
         self.assertEqual(len(figures), 1)
         self.assertIn(f"at u0 = {PAPER_SPEED_MPS:g} m/s (the paper's speed)", figures[0].caption)
         self.assertIn("at_paper_speed.h5", figures[0].caption)
@@ -215,11 +330,11 @@ class Figures(unittest.TestCase):
 
     def test_root_locus_off_the_paper_speed_says_which_speed(self):
         near = modes_study("off_paper_speed", [31.5, 33.0], 60)
-        figures, _ = draw(report_figures.root_locus, [near])
+        figures, _ = draw(figures_modes.draw, [near])
         self.assertIn("at u0 = 31.5 m/s, the nearest of its speeds to the paper's 32.0208 m/s", figures[0].caption)
 
     def test_flying_qualities_say_where_each_level_is_lost(self):
-        figures, described = draw(report_figures.level_maps, [FLYING])
+        figures, described = drawn(figures_levels.draw, FLYING)
         self.assertEqual(len(figures), 1)
         self.assertEqual(len(described[figures[0].file]["maps"]), 1)
         # The caption's heights are the archive's: from the top down at the paper's speed, the first
@@ -239,21 +354,71 @@ class Figures(unittest.TestCase):
         self.assertIn(f"At u0 = {PAPER_SPEED_MPS:g} m/s the phugoid is", figures[0].caption)
 
     def test_open_loop_lines_are_told_apart(self):
-        styles = report_figures._distinct_styles(report_figures.MAX_OPEN_LOOP_LINES)
+        styles = figures_open_loop._distinct_styles(figures_open_loop.MAX_OPEN_LOOP_LINES)
         for (a, style_a), (b, style_b) in itertools.combinations(styles, 2):
             if style_a == style_b:
                 self.assertGreaterEqual(float(np.linalg.norm(np.subtract(a[:3], b[:3]))), MIN_LINE_COLOUR_DISTANCE)
-        figures, described = draw(report_figures.open_loop, [OPEN_LOOP])
+        figures, described = drawn(figures_open_loop.draw, OPEN_LOOP)
         lines = [(colour, style) for title, label, colour, style in described[figures[0].file]["lines"]
                  if title == "whole run" and label.startswith("H0 =")]
         self.assertEqual(len(lines), 4)
         self.assertEqual(len(set((str(c), s) for c, s in lines)), 4)
 
     def test_landing_legend_names_the_wheel_contact_line(self):
-        figures, described = draw(report_figures.landing, [LANDING])
+        figures, described = drawn(figures_landing.draw, LANDING)
         texts = [t for legend, _ in described[figures[0].file]["legends"] for t in legend]
         self.assertIn("wheel contact (0.788 m)", texts)
 
+
+    def test_no_label_shows_a_float_of_more_than_four_digits_and_every_legend_is_in_its_figure(self):
+        """Every figure family on every archive of the test: legends, ticks and axis labels."""
+        offending, seen, outside = [], 0, []
+        for family in report_figures.families():
+            drawn(family.draw, GRID)
+            _, described = _ALL_DRAWN[family.draw]
+            for name, d in described.items():
+                for where, text in d["texts"]:
+                    seen += 1
+                    for token in NUMBER.findall(text):
+                        if significant_digits(token) > MAX_LABEL_DIGITS:
+                            offending.append(f"{name}: {where} {text!r} ({token})")
+                frame = d["figure_box"]
+                for texts, box in d["legends"]:
+                    if box.x0 < frame.x0 - LEGEND_SLACK_PX or box.x1 > frame.x1 + LEGEND_SLACK_PX:
+                        outside.append(f"{name}: legend {texts[:2]} spans x {box.x0:.0f}-{box.x1:.0f} of 0-{frame.x1:.0f}")
+        self.assertGreater(seen, 100)
+        self.assertEqual(offending, [], "\n".join(offending))
+        self.assertEqual(outside, [], "\n".join(outside))
+
+    def test_the_check_sees_a_long_float(self):
+        for token, digits in (("-15.433333", 8), ("2.5935", 5), ("13.37", 4), ("0.0125", 3), ("2000", 1),
+                              ("1.50", 3), ("−0.002", 1), ("1e-05", 1)):
+            self.assertEqual([significant_digits(t) for t in NUMBER.findall(f"x = {token} m")], [digits], token)
+        self.assertEqual(NUMBER.findall("scale.CMalpha (3.2.1.2)"), ["3.2"])
+
+    def test_dispersion_panels_in_a_grid_named_in_words(self):
+        figures, described = drawn(figures_dispersion.draw, DISPERSION)
+        self.assertEqual(len(figures), 3)  # the ECDFs, the footprint, the limits
+        ecdf = described[next(f.file for f in figures if f.file.endswith("_ecdf.png"))]
+        panels = [box for title, box in ecdf["axes"] if title]
+        with h5py.File(DISPERSION, "r") as f:
+            columns_written = list(f["analysis/dispersion"].attrs["columns"])
+        self.assertEqual(len(panels), len(columns_written))  # one panel per quantity
+        self.assertLessEqual(len({round(box.x0) for box in panels}), MAX_DISPERSION_COLUMNS)
+        self.assertLessEqual(ecdf["size"][0], PAGE_COLUMN_PX)
+        for box in panels:
+            self.assertGreaterEqual(box.width, MIN_DISPERSION_PANEL_PX)
+        # The groups in the study's words: the winds in knots with their direction, from the archive's
+        # values (u_g, m/s; negative is a headwind) and the definition of the knot.
+        with h5py.File(DISPERSION, "r") as f:
+            winds = np.unique(f["design/wind_20ft_mps"][...])
+        expected = {f"W20 = {round(-w / KNOT_MPS):d} kt headwind" for w in winds}
+        self.assertEqual(expected, {"W20 = 15 kt headwind", "W20 = 30 kt headwind"})
+        for figure in figures:
+            texts = [text for where, text in described[figure.file]["texts"] if where in ("legend", "x tick")]
+            named = {e for e in expected if any(text.startswith(e) for text in texts)}
+            self.assertEqual(named, expected, (figure.file, texts))
+            self.assertFalse(any("wind_20ft_mps" in text for text in texts), texts)
 
 
 def tearDownModule():
@@ -340,16 +505,66 @@ class Report(unittest.TestCase):
         self.assertNotIn("<details", section)
         self.assertIn("<table>", section)
 
-    def test_a_figure_only_when_its_data_exist(self):
+    def test_a_figure_only_when_its_data_exist_and_a_line_where_not(self):
         out_dir = os.path.join(WORK, "landing_only")
         result = run("report", LANDING, "-o", out_dir, "-q")
         self.assertEqual(result.returncode, 0, result.stderr)
         page, text = parse(os.path.join(out_dir, "index.html"))
         self.assertEqual([i["src"].split("_")[0] for i in page.images], ["landing"])
-        self.assertNotIn('id="map"', text)
-        self.assertNotIn('id="boundary"', text)
         self.assertEqual(sorted(f for f in os.listdir(out_dir) if f.endswith(".png")),
                          [i["src"] for i in page.images])
+        # Every section is there; one without data says so in one line, and names what writes it.
+        sections = page_sections(text)
+        for anchor in ("map", "boundary", "flying_qualities", "locus", "open_loop", "sensitivity", "dispersion"):
+            with self.subTest(section=anchor):
+                content = sections[anchor]
+                self.assertNotIn("<img", content)
+                absent = re.findall(r'<p class="absent">(.*?)</p>', content, re.S)
+                self.assertEqual(len(absent), 1, content)
+                self.assertNotIn("\n", absent[0])
+                self.assertRegex(absent[0], r"^No archive of this report ")
+        self.assertIn("<img", sections["landing"])
+        self.assertNotIn('class="absent"', sections["landing"])
+
+    def test_claims_cells_are_short_and_about_their_own_archives(self):
+        _, text = parse(self.index)
+        cells = claim_cells(text)
+        self.assertGreaterEqual(len(cells), 5 * 4)
+        for cell in cells:
+            self.assertLessEqual(len(cell), MAX_CLAIM_CELL_CHARS, cell[:300] + "...")
+        # The landing row is about the paper's landing study only (not the dispersion's 128 landings):
+        # one line per plant, with what h5py reads of it.
+        row = next(r for r in claim_rows(text) if "reaches the runway" in r[0])
+        with h5py.File(LANDING, "r") as f:
+            on = f["design/h_derivatives"][...] == 1
+            touchdown, sink = f["results/landing/touchdown_time_s"][...], f["results/landing/touchdown_sink_rate_mps"][...]
+        engine = row[2]
+        self.assertEqual(engine.count("landed at"), 2)
+        for i, words in ((int(np.nonzero(on)[0][0]), "with"), (int(np.nonzero(~on)[0][0]), "without")):
+            self.assertIn(f"{words} h-derivatives: landed at {touchdown[i]:.5g} s, sink rate {sink[i]:.4g} m/s", engine)
+        self.assertIn("from landing.h5", engine)
+        self.assertNotIn("dispersion.h5", engine)
+
+    def test_every_readme_section_is_in_the_report_or_says_why_not(self):
+        headings, fenced = [], False
+        with open(os.path.join(ROOT, "README.md"), encoding="utf-8") as f:
+            for line in f:
+                fenced ^= line.startswith("```")
+                if line.startswith("## ") and not fenced:
+                    headings.append(line[3:].strip())
+        unmapped = [h for h in headings if h not in README_IN_REPORT and h not in README_NOT_IN_REPORT]
+        self.assertEqual(unmapped, [], "README sections the report test does not know: add each to README_IN_REPORT "
+                                       "(the report sections that show it) or README_NOT_IN_REPORT (why none)")
+        stale = [h for h in list(README_IN_REPORT) + list(README_NOT_IN_REPORT) if h not in headings]
+        self.assertEqual(stale, [], "sections README no longer has")
+        # On the demo-like archives, every section README shows is in the page with its figure or table.
+        sections = page_sections(parse(self.index)[1])
+        for heading, anchors in README_IN_REPORT.items():
+            for anchor in anchors:
+                with self.subTest(readme=heading, section=anchor):
+                    self.assertIn(anchor, sections)
+                    self.assertNotIn('class="absent"', sections[anchor])
+                    self.assertRegex(sections[anchor], r"<img |<table")
 
     def test_bad_input(self):
         cases = [
@@ -383,6 +598,9 @@ class Report(unittest.TestCase):
         dom = chromium(browser, probe, "--dump-dom", "--virtual-time-budget=10000", f"--window-size={SCREEN_WIDTH},1000")
         layout = json.loads(html.unescape(re.search(r'<pre id="probe"[^>]*>(.*?)</pre>', dom, re.S).group(1)))
         self.assertEqual([i["src"] for i in layout["images"]], [i["src"] for i in page.images])
+        # No cell of the claims table is taller than a screen (the evidence behind a claim is collapsed).
+        self.assertGreaterEqual(len(layout["cells"]), 5 * 4)
+        self.assertLess(max(layout["cells"]), SCREEN_HEIGHT, layout["cells"])
         shot = os.path.join(WORK, "screenshot.png")
         height = int(math.ceil(layout["height"]))
         chromium(browser, probe, f"--screenshot={shot}", f"--window-size={SCREEN_WIDTH},{height}")
@@ -404,7 +622,10 @@ class Report(unittest.TestCase):
 
 PROBE_SCRIPT = """<script>
 window.addEventListener("load", function () {
-  var out = {height: document.documentElement.scrollHeight, images: []};
+  var out = {height: document.documentElement.scrollHeight, images: [], cells: []};
+  document.querySelectorAll("table.claims td").forEach(function (td) {
+    out.cells.push(td.getBoundingClientRect().height);
+  });
   document.querySelectorAll("img").forEach(function (img) {
     var r = img.getBoundingClientRect();
     out.images.push({src: img.getAttribute("src"), complete: img.complete,
