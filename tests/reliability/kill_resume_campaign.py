@@ -150,7 +150,7 @@ class Campaign:
             else:
                 notes.append(f"resume finished before {resume_moment:.2f} s")
         # 3. Resume to the end and compare with the reference.
-        result = tools.gesweep(self.binary, self.run_args(archive, True), timeout=600)
+        result = tools.gesweep(self.binary, self.run_args(archive, True), timeout=300)
         if result.returncode != self.reference_exit:
             self.failures.append(f"{label}: --resume exit {result.returncode} (reference {self.reference_exit}): "
                                  f"{result.stderr.strip()[:400]}")
