@@ -43,6 +43,7 @@ const std::vector<Case>& Cases() {
       {"linear_b5.2_d1000_mma", 1000, true, 5.2, 1000, ConditionalSampler::kModifiedMetropolis},
       {"chi2_p1e-6_d10", 10, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
       {"chi2_p1e-6_d1000", 1000, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
+      {"chi2_p1e-6_d10000", 10000, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
   };
   return cases;
 }
