@@ -312,6 +312,16 @@ TEST(SubsetSimulation, RefusesOptionsThatCannotRun) {
   ExpectRefused(with([](auto& o) { o.target_acceptance = 1; }), 2, "target_acceptance", "1");
   ExpectRefused(with([](auto& o) { o.initial_scale = 0; }), 2, "initial_scale", "0");
   ExpectRefused(SubsetOptions{}, 0, "dimension", "0");
+  // A caller that reads the options from a file names it: the message is that file's.
+  SubsetOptions from_file;
+  from_file.level_probability = 0.25;
+  from_file.samples_per_level = 10;  // N * p0 = 2.5
+  try {
+    ValidateSubsetOptions(from_file, "studies/risk.toml");
+    ADD_FAILURE() << "accepted N * p0 = 2.5";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("studies/risk.toml: samples_per_level = 10: ", 0), 0u) << e.what();
+  }
   // The boundary of the rule: N * p0 = 1 is the smallest level that runs.
   SubsetOptions smallest;
   smallest.samples_per_level = 10;
