@@ -1,0 +1,395 @@
+#include "engine/rare/subset_simulation.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "engine/common/errors.h"
+#include "engine/disturbance/run_noise.h"
+
+namespace gesweep::rare {
+namespace {
+
+constexpr std::uint64_t kSeedDomain = 0x7375627365742d31ULL;  // "subset-1": not RunNoise's domain
+constexpr std::uint64_t kPurposeNormal = 0;
+constexpr std::uint64_t kPurposeUniform = 1;
+constexpr std::uint64_t kSeedShuffleChain = 0xffffffffULL;  // a chain number no chain has (chains < 2^31)
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+constexpr double kZ975 = 1.959963984540054;  // the standard normal's 0.975 quantile
+constexpr int kMaxSamplesPerLevel = 10'000'000;
+constexpr int kMaxLevels = 100;
+
+constexpr std::uint64_t Hash(std::uint64_t key, std::uint64_t counter) {
+  return SplitMix64Mix(key ^ SplitMix64Mix(counter + 1));
+}
+
+/// The random numbers of one (seed, level, chain, step): normals for the components and, for the
+/// modified Metropolis, uniforms for their acceptance; each a pure function of its counter.
+class Stream {
+ public:
+  Stream(std::uint64_t seed, int level, std::uint64_t chain, int step)
+      : key_(Hash(Hash(Hash(SplitMix64Mix(seed ^ kSeedDomain), static_cast<std::uint64_t>(level)), chain),
+                  static_cast<std::uint64_t>(step))) {}
+
+  /// In (0, 1].
+  double Uniform(std::uint64_t purpose, std::uint64_t counter) const {
+    return static_cast<double>((Hash(Hash(key_, purpose), counter) >> 11) + 1) * 0x1.0p-53;
+  }
+  /// d standard normals, Box-Muller on the uniform pairs (2k, 2k + 1), both branches.
+  void Normals(std::span<double> out) const {
+    const std::uint64_t normal_key = Hash(key_, kPurposeNormal);
+    const auto uniform = [&](std::uint64_t c) {
+      return static_cast<double>((Hash(normal_key, c) >> 11) + 1) * 0x1.0p-53;
+    };
+    for (std::size_t k = 0; k < out.size(); k += 2) {
+      const double radius = std::sqrt(-2.0 * std::log(uniform(k)));
+      const double angle = kTwoPi * uniform(k + 1);
+      out[k] = radius * std::cos(angle);
+      if (k + 1 < out.size()) out[k + 1] = radius * std::sin(angle);
+    }
+  }
+
+ private:
+  std::uint64_t key_;
+};
+
+std::int64_t SeedCount(const SubsetOptions& options) {
+  return std::llround(options.samples_per_level * options.level_probability);
+}
+
+/// A NaN is outside every event (as +infinity); -infinity and finite values are themselves.
+double Ordered(double g) { return std::isnan(g) ? std::numeric_limits<double>::infinity() : g; }
+
+/// The layout of one level's N samples: chain c holds positions [offset[c], offset[c] + length[c]).
+struct ChainLayout {
+  std::vector<std::int64_t> offset, length;
+};
+
+ChainLayout MakeLayout(std::int64_t n, std::int64_t chains) {
+  ChainLayout layout;
+  std::int64_t at = 0;
+  for (std::int64_t c = 0; c < chains; ++c) {
+    const std::int64_t length = n / chains + (c < n % chains ? 1 : 0);
+    layout.offset.push_back(at);
+    layout.length.push_back(length);
+    at += length;
+  }
+  return layout;
+}
+
+/// gamma of Au & Beck (2001) for the indicator `hit` over the chains of `layout` with mean p,
+/// generalised to chains of unequal length: gamma = (2 / N) sum_k rho(k) * (pairs at lag k).
+double CorrelationFactor(const std::vector<char>& hit, const ChainLayout& layout, double p) {
+  const double r0 = p * (1 - p);
+  if (r0 <= 0) return 0;
+  const std::int64_t longest = *std::max_element(layout.length.begin(), layout.length.end());
+  const auto n = static_cast<double>(hit.size());
+  double gamma = 0;
+  for (std::int64_t lag = 1; lag < longest; ++lag) {
+    std::int64_t pairs = 0, both = 0;
+    for (std::size_t c = 0; c < layout.length.size(); ++c) {
+      const std::int64_t start = layout.offset[c];
+      for (std::int64_t t = 0; t + lag < layout.length[c]; ++t) {
+        ++pairs;
+        both += (hit[start + t] && hit[start + t + lag]) ? 1 : 0;
+      }
+    }
+    if (pairs == 0) break;
+    const double rho = (static_cast<double>(both) / static_cast<double>(pairs) - p * p) / r0;
+    gamma += 2.0 * rho * static_cast<double>(pairs) / n;
+  }
+  return gamma;
+}
+
+/// delta_j for a level's fraction p of N samples (Au & Beck 2001, eq. for the Markov-chain level,
+/// gamma = 0 at the Monte Carlo level). 1 + gamma is held at 0 or above.
+double LevelCov(double p, std::int64_t n, double gamma) {
+  if (p <= 0) return std::numeric_limits<double>::infinity();
+  return std::sqrt((1 - p) / (static_cast<double>(n) * p) * std::max(0.0, 1 + gamma));
+}
+
+}  // namespace
+
+void ValidateSubsetOptions(const SubsetOptions& options, const std::string& source) {
+  const double p0 = options.level_probability;
+  if (!(std::isfinite(p0) && p0 > 0 && p0 < 1)) {
+    throw InputError(source, "level_probability", ShortNumber(p0), "a probability strictly between 0 and 1");
+  }
+  if (options.samples_per_level < 1 || options.samples_per_level > kMaxSamplesPerLevel) {
+    throw InputError(source, "samples_per_level", std::to_string(options.samples_per_level),
+                     "an integer from 1 to " + std::to_string(kMaxSamplesPerLevel));
+  }
+  const double seeds = options.samples_per_level * p0;
+  const double rounded = std::round(seeds);
+  if (std::abs(seeds - rounded) > 1e-9 * std::max(1.0, seeds) || rounded < 1 ||
+      rounded >= options.samples_per_level) {
+    throw InputError(source, "samples_per_level", std::to_string(options.samples_per_level),
+                     "a number N of samples per level with N * level_probability (" + ShortNumber(p0) +
+                         ") an integer from 1 to N - 1 (N * p0 = " + ShortNumber(seeds) + ")");
+  }
+  if (options.max_levels < 1 || options.max_levels > kMaxLevels) {
+    throw InputError(source, "max_levels", std::to_string(options.max_levels),
+                     "an integer from 1 to " + std::to_string(kMaxLevels));
+  }
+  if (options.sampler != ConditionalSampler::kCrankNicolson &&
+      options.sampler != ConditionalSampler::kModifiedMetropolis) {
+    throw InputError(source, "sampler", std::to_string(static_cast<int>(options.sampler)),
+                     "crank_nicolson (0) or modified_metropolis (1)");
+  }
+  if (!(std::isfinite(options.initial_scale) && options.initial_scale > 0 && options.initial_scale <= 1)) {
+    throw InputError(source, "initial_scale", ShortNumber(options.initial_scale), "a number in (0, 1]");
+  }
+  if (!(std::isfinite(options.target_acceptance) && options.target_acceptance > 0 &&
+        options.target_acceptance < 1)) {
+    throw InputError(source, "target_acceptance", ShortNumber(options.target_acceptance),
+                     "a number in (0, 1)");
+  }
+  if (options.adaptation_groups < 1 || options.adaptation_groups > rounded) {
+    throw InputError(
+        source, "adaptation_groups", std::to_string(options.adaptation_groups),
+        "an integer from 1 to the number of chains N * level_probability (" + ShortNumber(rounded) + ")");
+  }
+}
+
+LimitStateBatch ParallelLimitState(std::function<double(std::span<const double> u)> g) {
+  return [g = std::move(g)](const PointBatch& batch, std::span<double> values) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, batch.size()),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) values[i] = g(batch.point(i));
+                      });
+  };
+}
+
+void LognormalInterval95(double p, double cov, double& low, double& high) {
+  if (!(p > 0)) {
+    low = high = 0;
+    return;
+  }
+  if (!std::isfinite(cov)) {
+    low = 0;
+    high = std::numeric_limits<double>::infinity();
+    return;
+  }
+  const double s2 = std::log1p(cov * cov);
+  const double s = std::sqrt(s2);
+  const double mean_log = std::log(p) - s2 / 2;
+  low = std::exp(mean_log - kZ975 * s);
+  high = std::exp(mean_log + kZ975 * s);
+}
+
+std::string SubsetResult::Summary() const {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "P = %.4g, CoV %.3g (upper %.3g), 95%% [%.4g, %.4g], %zu levels, %lld evaluations",
+                probability, coefficient_of_variation, coefficient_of_variation_upper, interval_95_low,
+                interval_95_high, levels.size(), static_cast<long long>(evaluations));
+  std::string line = text;
+  if (failed_evaluations > 0) line += ", " + std::to_string(failed_evaluations) + " failed (NaN)";
+  if (status == Status::kLevelCap) line += ", level cap reached: P < " + ShortNumber(upper_bound);
+  return line;
+}
+
+SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimension,
+                                 const SubsetOptions& options) {
+  const std::string source = "subset simulation";
+  ValidateSubsetOptions(options, source);
+  if (dimension < 1) throw InputError(source, "dimension", std::to_string(dimension), "an integer >= 1");
+  GESWEEP_DEMAND(static_cast<bool>(limit_state));
+
+  const std::int64_t n = options.samples_per_level;
+  const std::int64_t ns = SeedCount(options);
+  const auto d = static_cast<std::size_t>(dimension);
+  SubsetResult result;
+  result.dimension = dimension;
+
+  std::vector<double> x(static_cast<std::size_t>(n) * d), g(static_cast<std::size_t>(n));
+  std::vector<EvaluationTag> tags(static_cast<std::size_t>(n));
+  const auto evaluate = [&](std::span<const double> points, std::span<const EvaluationTag> batch_tags,
+                            std::span<double> values) {
+    std::fill(values.begin(), values.end(), std::numeric_limits<double>::quiet_NaN());
+    limit_state(PointBatch{points, batch_tags, dimension}, values);
+  };
+
+  // Level 1: plain Monte Carlo, sample i from the stream (level 1, chain i, step 0).
+  tbb::parallel_for(std::int64_t{0}, n, [&](std::int64_t i) {
+    Stream(options.seed, 1, static_cast<std::uint64_t>(i), 0).Normals(std::span<double>(x).subspan(i * d, d));
+    tags[i] = EvaluationTag{1, static_cast<int>(i), 0};
+  });
+  evaluate(x, tags, g);
+  ChainLayout layout = MakeLayout(n, n);  // level 1: N chains of one sample, so gamma = 0
+  double lambda = options.initial_scale;
+  double level_acceptance = 1, level_scale = 0;
+  std::int64_t level_evaluations = n;
+  std::int64_t level_failed = std::count_if(g.begin(), g.end(), [](double v) { return std::isnan(v); });
+  double product = 1;  // prod of the previous levels' P_j
+  std::vector<double> deltas;
+
+  for (int level = 1;; ++level) {
+    SubsetLevel record;
+    record.evaluations = level_evaluations;
+    record.failed_evaluations = level_failed;
+    record.acceptance_rate = level_acceptance;
+    record.scale = level_scale;
+    result.evaluations += record.evaluations;
+    result.failed_evaluations += record.failed_evaluations;
+
+    const auto failures = std::count_if(g.begin(), g.end(), [](double v) { return v <= 0; });
+    const bool last = failures >= ns || level == options.max_levels;
+    std::vector<std::int64_t> order(static_cast<std::size_t>(n));
+    double threshold = 0;
+    if (!last) {
+      std::iota(order.begin(), order.end(), std::int64_t{0});
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::int64_t a, std::int64_t b) { return Ordered(g[a]) < Ordered(g[b]); });
+      const double inner = Ordered(g[order[ns - 1]]), outer = Ordered(g[order[ns]]);
+      threshold = std::isfinite(outer) ? (inner + outer) / 2 : inner;
+      // Fewer than N_s samples with a value (the rest NaN): threshold is +infinity, no conditional
+      // level can be formed, and the result says so (kTooManyFailedEvaluations).
+    }
+    std::vector<char> hit(static_cast<std::size_t>(n));
+    for (std::int64_t i = 0; i < n; ++i) hit[i] = g[i] <= threshold ? 1 : 0;
+    const auto hits = std::count(hit.begin(), hit.end(), char{1});
+    record.threshold = threshold;
+    record.conditional_probability = static_cast<double>(hits) / static_cast<double>(n);
+    record.correlation_factor =
+        level == 1 ? 0 : CorrelationFactor(hit, layout, record.conditional_probability);
+    record.coefficient_of_variation = LevelCov(record.conditional_probability, n, record.correlation_factor);
+    result.levels.push_back(record);
+    deltas.push_back(record.coefficient_of_variation);
+
+    if (!std::isfinite(threshold)) {
+      result.status = SubsetResult::Status::kTooManyFailedEvaluations;
+      result.probability = std::numeric_limits<double>::quiet_NaN();
+      break;
+    }
+    if (last) {
+      result.status = failures >= ns ? SubsetResult::Status::kConverged : SubsetResult::Status::kLevelCap;
+      result.probability = product * record.conditional_probability;
+      if (result.status == SubsetResult::Status::kLevelCap) {
+        result.upper_bound = product * static_cast<double>(ns) / static_cast<double>(n);
+      }
+      for (std::int64_t i = 0; i < n; ++i) {
+        if (g[i] <= 0)
+          result.failure_points.insert(result.failure_points.end(), x.begin() + i * d,
+                                       x.begin() + (i + 1) * d);
+      }
+      break;
+    }
+    product *= record.conditional_probability;
+
+    // Seeds: the N_s smallest values, in an order shuffled by (seed, level + 1) so that the groups of
+    // the adaptation are not sorted by g (Papaioannou et al. 2015).
+    std::vector<std::int64_t> seeds(order.begin(), order.begin() + ns);
+    const Stream shuffle(options.seed, level + 1, kSeedShuffleChain, 0);
+    for (std::int64_t i = ns - 1; i > 0; --i) {
+      const auto j = static_cast<std::int64_t>(
+          shuffle.Uniform(kPurposeUniform, static_cast<std::uint64_t>(i)) * static_cast<double>(i + 1) -
+          0x1.0p-60);
+      std::swap(seeds[i], seeds[std::clamp<std::int64_t>(j, 0, i)]);
+    }
+    // Level + 1: N_s chains, chain c of length layout.length[c], its seed at step 0.
+    const int next = level + 1;
+    ChainLayout next_layout = MakeLayout(n, ns);
+    std::vector<double> nx(x.size()), ng(g.size());
+    for (std::int64_t c = 0; c < ns; ++c) {
+      const std::int64_t at = next_layout.offset[c], s = seeds[c];
+      std::copy(x.begin() + s * d, x.begin() + (s + 1) * d, nx.begin() + at * d);
+      ng[at] = g[s];
+    }
+    std::int64_t accepted_total = 0, proposed_total = 0;
+    level_evaluations = 0;
+    level_failed = 0;
+    std::vector<double> candidates, values;
+    std::vector<EvaluationTag> batch_tags;
+    std::vector<std::int64_t> active;
+    std::vector<char> accepted_flags;
+    const int groups = options.adaptation_groups;
+    for (int group = 0; group < groups; ++group) {
+      // One scale for every component. Papaioannou et al. (2015) scale component k by the seeds'
+      // standard deviation s_k; but s_k is a function of the seeds, so the kernel then depends on the
+      // chains' own starting states: in 1000 dimensions that coupling pulled the chi-square level's
+      // chains towards the threshold and biased each conditional probability by about -12 %
+      // (docs/dispersion.md). A scalar lambda does not see the seeds.
+      const double sigma = std::min(lambda, 1.0), rho = std::sqrt(1 - sigma * sigma);
+      const std::int64_t first = ns * group / groups, end = ns * (group + 1) / groups;
+      std::int64_t accepted = 0, proposed = 0;
+      for (std::int64_t step = 1;; ++step) {
+        active.clear();
+        for (std::int64_t c = first; c < end; ++c) {
+          if (step < next_layout.length[c]) active.push_back(c);
+        }
+        if (active.empty()) break;
+        const auto batch = active.size();
+        candidates.resize(batch * d);
+        values.resize(batch);
+        batch_tags.resize(batch);
+        tbb::parallel_for(std::size_t{0}, batch, [&](std::size_t b) {
+          const std::int64_t c = active[b];
+          const double* current = &nx[(next_layout.offset[c] + step - 1) * d];
+          std::span<double> v(candidates.data() + b * d, d);
+          const Stream stream(options.seed, next, static_cast<std::uint64_t>(c), static_cast<int>(step));
+          stream.Normals(v);
+          if (options.sampler == ConditionalSampler::kCrankNicolson) {
+            for (std::size_t k = 0; k < d; ++k) v[k] = rho * current[k] + sigma * v[k];
+          } else {
+            for (std::size_t k = 0; k < d; ++k) {
+              const double proposal = current[k] + sigma * v[k];
+              const double ratio = std::exp(-0.5 * (proposal * proposal - current[k] * current[k]));
+              v[k] = stream.Uniform(kPurposeUniform, k) <= ratio ? proposal : current[k];
+            }
+          }
+          batch_tags[b] = EvaluationTag{next, static_cast<int>(c), static_cast<int>(step)};
+        });
+        evaluate(candidates, batch_tags, values);
+        level_evaluations += static_cast<std::int64_t>(batch);
+        for (std::size_t b = 0; b < batch; ++b) {
+          const std::int64_t c = active[b];
+          const std::int64_t here = next_layout.offset[c] + step;
+          const bool accept = values[b] <= threshold;  // false for NaN
+          if (accept) {
+            std::copy(candidates.begin() + b * d, candidates.begin() + (b + 1) * d, nx.begin() + here * d);
+            ng[here] = values[b];
+          } else {
+            std::copy(nx.begin() + (here - 1) * d, nx.begin() + here * d, nx.begin() + here * d);
+            ng[here] = ng[here - 1];
+          }
+          // A NaN candidate is a failed evaluation of this level even though the chain stays put.
+          if (std::isnan(values[b])) ++level_failed;
+          accepted += accept ? 1 : 0;
+          ++proposed;
+        }
+      }
+      if (proposed > 0) {
+        const double rate = static_cast<double>(accepted) / static_cast<double>(proposed);
+        lambda = std::exp(std::log(lambda) + (rate - options.target_acceptance) / std::sqrt(group + 1.0));
+      }
+      accepted_total += accepted;
+      proposed_total += proposed;
+    }
+    level_acceptance =
+        proposed_total > 0 ? static_cast<double>(accepted_total) / static_cast<double>(proposed_total) : 0;
+    level_scale = lambda;
+    x.swap(nx);
+    g.swap(ng);
+    layout = std::move(next_layout);
+  }
+
+  double sum2 = 0, sum = 0;
+  for (const double delta : deltas) {
+    sum2 += delta * delta;
+    sum += delta;
+  }
+  result.coefficient_of_variation = std::sqrt(sum2);
+  result.coefficient_of_variation_upper = sum;
+  LognormalInterval95(result.probability, result.coefficient_of_variation, result.interval_95_low,
+                      result.interval_95_high);
+  return result;
+}
+
+}  // namespace gesweep::rare
