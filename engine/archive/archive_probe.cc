@@ -75,7 +75,9 @@ std::vector<std::string> Decode(const std::string& report) {
   struct sigaction fallback {};
   fallback.sa_handler = SIG_DFL;
   for (int s : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) ::sigaction(s, &ignore, nullptr);
-  ::sigaction(SIGALRM, &fallback, nullptr);
+  // A crash ends the child at once, silently: not through a handler the parent installed (Python's
+  // faulthandler would print a traceback to its own copy of the terminal).
+  for (int s : {SIGALRM, SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) ::sigaction(s, &fallback, nullptr);
   ::alarm(static_cast<unsigned>(std::ceil(deadline_s)) + 2);
   std::string report;
   try {
@@ -207,7 +209,7 @@ void GuardArchiveDecode(const std::string& shown, const std::function<void()>& p
   const double deadline_s = ArchiveCheckDeadline();
   if (deadline_s == 0) return;
   ProbeOutcome outcome = RunInChild(probe, deadline_s);
-  constexpr const char* kDamaged = ": a damaged archive (tests/fuzz/hdf5_defects; docs/reliability.md 11.4)";
+  constexpr const char* kDamaged = ": a damaged archive (docs/reliability.md, 11.4)";
   switch (outcome.kind) {
     case ProbeOutcome::Kind::kFinished:
     case ProbeOutcome::Kind::kNoProcess:
@@ -230,7 +232,8 @@ void GuardArchiveDecode(const std::string& shown, const std::function<void()>& p
     case ProbeOutcome::Kind::kTimedOut:
       throw InputError(shown, "", "",
                        "libhdf5 did not finish decoding the file within " + ShortNumber(deadline_s) +
-                           " s (GESWEEP_ARCHIVE_CHECK_S)" + kDamaged);
+                           " s: a damaged archive (docs/reliability.md, 11.4; GESWEEP_ARCHIVE_CHECK_S sets "
+                           "the deadline)");
   }
   GESWEEP_UNREACHABLE();
 }

@@ -28,13 +28,14 @@ def test_open_archive_refuses_a_file_that_breaks_libhdf5(gesweep, defects, name)
     seconds = time.monotonic() - start
     assert seconds < damaged_cases.SECONDS, f"{name}: {seconds:.1f} s"
     text = str(raised.value)
-    assert text.startswith(f"{path}: libhdf5 "), text
-    assert damaged_cases.DAMAGED in text or damaged_cases.DAMAGED_TIMEOUT in text, text
+    assert text.startswith(f"{path}: "), text
     assert "\n" not in text
     assert raised.value.source == str(path)
+    if name in damaged_cases.ALWAYS_BREAKS:
+        assert text.startswith(f"{path}: libhdf5 ") and damaged_cases.DAMAGED in text, text
     assert damaged_cases.sha256(path) == before, f"{name}: changed"
-    # The command says the same of it (how libhdf5 failed may differ between processes only in the
-    # signal's name, e.g. a bad free caught as SIGSEGV or SIGABRT; the file and the verdict are the same).
+    # The command refuses it too (in the same words, unless libhdf5's bad free or overflowing read
+    # fails cleanly in one process and by a signal in the other: heap layouts differ).
     line = cli_error("query", path, "--describe")
-    assert line.startswith(f"{path}: libhdf5 "), line
+    assert line.startswith(f"{path}: "), line
     assert damaged_cases.sha256(path) == before
