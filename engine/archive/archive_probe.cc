@@ -57,7 +57,8 @@ std::vector<std::string> Decode(const std::string& report) {
 
 // Everything the child does before it calls the probe is async-signal-safe (the parent may have
 // other threads: Python's, TBB's): system calls only, no allocation, no lock.
-[[noreturn]] void ChildMain(int report_fd, const std::function<void()>& probe, double deadline_s) {
+[[noreturn]] void ChildMain(int report_fd, pid_t parent, const std::function<void()>& probe,
+                            double deadline_s) {
   in_child = true;
   const int null_fd = ::open("/dev/null", O_RDWR | O_CLOEXEC);
   if (null_fd >= 0) {
@@ -69,7 +70,7 @@ std::vector<std::string> Decode(const std::string& report) {
   // Ended with the parent (a parent killed while it waits must not leave a child looping for ever)
   // and, as a second bound, by an alarm a little after the parent's deadline.
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-  if (::getppid() == 1) ::_exit(3);
+  if (::getppid() != parent) ::_exit(3);  // the parent died before prctl took effect
   struct sigaction ignore {};
   ignore.sa_handler = SIG_IGN;
   struct sigaction fallback {};
@@ -116,6 +117,7 @@ ProbeOutcome RunInChild(const std::function<void()>& probe, double deadline_s) {
     outcome.kind = ProbeOutcome::Kind::kNoProcess;
     return outcome;
   }
+  const pid_t parent = ::getpid();
   const pid_t child = ::fork();
   if (child < 0) {
     ::close(pipe_fds[0]);
@@ -125,7 +127,7 @@ ProbeOutcome RunInChild(const std::function<void()>& probe, double deadline_s) {
   }
   if (child == 0) {
     ::close(pipe_fds[0]);
-    ChildMain(pipe_fds[1], probe, deadline_s);
+    ChildMain(pipe_fds[1], parent, probe, deadline_s);
   }
   ::close(pipe_fds[1]);
   const auto deadline =
