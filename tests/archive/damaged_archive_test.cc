@@ -230,5 +230,27 @@ TEST_F(DamagedArchiveTest, RepairedCopyIsRemovedWithTheReader) {
   EXPECT_EQ(Bytes(archive), cut);
 }
 
+TEST_F(DamagedArchiveTest, ResumeOfItsOwnTruncatedArchiveReplacesItWithItsCompleteBatches) {
+  const fs::path study = StudyFile("a.toml", 32.0);
+  const fs::path archive = directory_ / "own.h5";
+  Run(study, archive);
+  const std::string bytes = Bytes(archive);
+  std::ofstream(archive, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() - 1);
+  SweepPlan plan(LoadStudy(study), ShardSpec{0, 1});
+  ArchiveOpenReport report;
+  {
+    auto writer =
+        ArchiveWriter::Open(archive, plan, RunProvenance{"test", 1}, ArchiveOpenMode::kResume, &report);
+    EXPECT_EQ(report.kind, ArchiveOpenReport::Kind::kResumedAfterCrash);
+    EXPECT_EQ(report.runs_complete, 16);
+    EXPECT_TRUE(report.pending_blocks.empty());
+    EXPECT_FALSE(fs::exists(archive.string() + ".repair")) << "the copy outlived the resume's check";
+    writer->Finish();
+  }
+  const ArchiveReader reader = ArchiveReader::Open(archive);
+  EXPECT_EQ(reader.run_count(), 16);
+  EXPECT_EQ(reader.CompleteBlocks(4).size(), 4U);
+}
+
 }  // namespace
 }  // namespace gesweep
