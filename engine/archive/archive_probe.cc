@@ -55,6 +55,34 @@ std::vector<std::string> Decode(const std::string& report) {
   return fields;
 }
 
+// Whether `report` holds all of a report: the finished byte, or a kind and all of its fields.
+bool Complete(const std::string& report) {
+  if (report.empty()) return false;
+  if (report[0] == kFinished) return report.size() == 1;
+  std::size_t expected = 0;
+  switch (report[0]) {
+    case 'R':
+      expected = 7;
+      break;
+    case 'I':
+      expected = 5;
+      break;
+    case 'A':
+      expected = 2;
+      break;
+    default:
+      expected = 1;
+  }
+  std::size_t at = 1, fields = 0;
+  while (at + 8 <= report.size()) {
+    const std::size_t length = std::strtoul(report.substr(at, 8).c_str(), nullptr, 10);
+    if (at + 8 + length > report.size()) return false;
+    at += 8 + length;
+    ++fields;
+  }
+  return fields == expected && at == report.size();
+}
+
 // Everything the child does before it calls the probe is async-signal-safe (the parent may have
 // other threads: Python's, TBB's): system calls only, no allocation, no lock.
 [[noreturn]] void ChildMain(int report_fd, pid_t parent, const std::function<void()>& probe,
@@ -133,9 +161,12 @@ ProbeOutcome RunInChild(const std::function<void()>& probe, double deadline_s) {
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                              std::chrono::duration<double>(deadline_s));
-  bool ended = false, timed_out = false;
+  // Until the report is complete, or the child has gone: not until end of file alone, since a fork
+  // made meanwhile by another thread (a second check) holds a copy of the pipe's write end.
+  bool timed_out = false, reaped = false;
+  int status = 0;
   std::string report;
-  while (!ended) {
+  for (;;) {
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
@@ -145,21 +176,34 @@ ProbeOutcome RunInChild(const std::function<void()>& probe, double deadline_s) {
     struct pollfd wait_for {
       pipe_fds[0], POLLIN, 0
     };
-    const int ready = ::poll(&wait_for, 1, static_cast<int>(std::min<long long>(left.count() + 1, 1000)));
-    if (ready < 0 && errno == EINTR) continue;  // a signal for the parent: it handles it after the check
-    if (ready < 0) break;
-    if (ready == 0) continue;
-    char buffer[4096];
-    const ssize_t got = ::read(pipe_fds[0], buffer, sizeof buffer);
-    if (got < 0 && errno == EINTR) continue;
-    if (got > 0) report.append(buffer, static_cast<std::size_t>(got));
-    ended = got <= 0;  // end of file: the child has gone (or closed its end)
+    const int ready = ::poll(&wait_for, 1, static_cast<int>(std::min<long long>(left.count() + 1, 20)));
+    if (ready < 0 && errno != EINTR) break;
+    if (ready > 0) {
+      char buffer[4096];
+      const ssize_t got = ::read(pipe_fds[0], buffer, sizeof buffer);
+      if (got > 0) {
+        report.append(buffer, static_cast<std::size_t>(got));
+        if (Complete(report)) break;
+        continue;
+      }
+      if (got == 0) break;  // end of file: every write end closed
+      if (errno != EINTR) break;
+    }
+    if (::waitpid(child, &status, WNOHANG) == child) {
+      reaped = true;
+      ::fcntl(pipe_fds[0], F_SETFL, O_NONBLOCK);  // what it wrote before it went
+      char buffer[4096];
+      for (ssize_t got; (got = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) {
+        report.append(buffer, static_cast<std::size_t>(got));
+      }
+      break;
+    }
   }
   ::close(pipe_fds[0]);
   if (timed_out) ::kill(child, SIGKILL);
-  int status = 0;
-  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  while (!reaped && ::waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
+  if (!Complete(report)) report.clear();
   if (timed_out) {
     outcome.kind = ProbeOutcome::Kind::kTimedOut;
   } else if (WIFSIGNALED(status)) {
