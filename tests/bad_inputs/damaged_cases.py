@@ -48,6 +48,17 @@ ALWAYS_BREAKS = (
     "global_heap_object_past_collection_b",  # memcpy of 7.2e16 bytes
 )
 
+# The other commands that open an archive a person names, each given it as {a} (and a scratch
+# folder as {out}); run_bad_inputs.py puts ONE_OF_EACH through them.
+OTHER_READERS = (
+    ("boundary --archive --no-write", ["boundary", "--archive", "{a}", "--no-write"]),
+    ("sensitivity", ["sensitivity", "{a}", "--output", "stability_margin_per_s", "--no-write"]),
+    ("dispersion", ["dispersion", "{a}", "--columns", "stability_margin_per_s", "--no-write"]),
+    ("report", ["report", "{a}", "-o", "{out}/report"]),
+)
+ONE_OF_EACH = ("global_heap_free_space_size_zero_a", "global_heap_object_past_collection_a",
+               "dense_link_bad_free_a")
+
 # Seconds within which each must be refused (the brief: 5 s; under AddressSanitizer startup alone
 # takes a second or two, so there the bound is looser).
 SECONDS = 5.0

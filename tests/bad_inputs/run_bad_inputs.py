@@ -672,6 +672,16 @@ def damaged_archive_cases():
                     check(f"{reader} of {name} (libhdf5 hangs or crashes on it)",
                           [a.replace("{out}", out) for a in args], fragment, out, timeout=seconds,
                           after=unchanged(path, digest))
+        # The other readers, on one file of each kind (a loop, a crash, a bad free): the same guard.
+        for name in damaged_cases.ONE_OF_EACH:
+            path = defects[name]
+            digest = damaged_cases.sha256(path)
+            fragment = f"{path}: libhdf5 " if name in damaged_cases.ALWAYS_BREAKS else f"{path}: "
+            for reader, args in damaged_cases.OTHER_READERS:
+                with tempfile.TemporaryDirectory() as out:
+                    check(f"{reader} of {name} (libhdf5 hangs or crashes on it)",
+                          [a.replace("{a}", str(path)).replace("{out}", out) for a in args], fragment, out,
+                          timeout=seconds, after=unchanged(path, digest))
         for name, path, fragment in targets:
             digest = damaged_cases.sha256(path)
             with tempfile.TemporaryDirectory() as out:
