@@ -644,8 +644,9 @@ shard_identity_cases()
 
 def damaged_archive_cases():
     """Issue 26, item 8 (damaged_cases.py): the eight files on which libhdf5 1.10.8 itself hangs or
-    crashes, through `query --describe`, `merge` and `run --resume` (one line naming the file, exit 2,
-    within 5 s, bytes unchanged); `run --resume` onto files that are not a resumable archive of its
+    crashes, through `query --describe`, `merge`, `run --resume` (and one of each kind through
+    `boundary --archive`, `sensitivity`, `dispersion`, `report`): one line naming the file, exit 2,
+    within 5 s, bytes unchanged; `run --resume` onto files that are not a resumable archive of its
     study (truncated, cut short, empty, text, flipped bytes): refused, the file byte for byte as it was."""
     import damaged_cases
     seconds = damaged_cases.SECONDS_SANITIZED if SANITIZED else damaged_cases.SECONDS
