@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "engine/archive/archive_format.h"
+#include "engine/archive/archive_probe.h"
 #include "engine/archive/archive_writer.h"
 #include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
@@ -149,6 +150,74 @@ void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_coun
   *run_count = runs;
 }
 
+// Reads, and throws away, everything of an open archive that libhdf5 decodes from metadata rather than
+// copies from raw chunks: every attribute of every object (the object headers and, for variable-length
+// values such as the root's strings or DIMENSION_LIST, the global heap collections) and every
+// variable-length dataset (runs/message: the global heap). Run in the child of GuardArchiveDecode, so
+// that a crash or hang of libhdf5 on a damaged structure happens there first. Raw numeric chunks are not
+// read (the readers' own checks cover them, and they cost the file's size).
+void ReadAttributes(hid_t object) {
+  const auto read = [](hid_t location, const char* name, const H5A_info_t*, void*) -> herr_t {
+    const hid_t attribute = H5Aopen(location, name, H5P_DEFAULT);
+    if (attribute < 0) return 0;
+    Handle owned(attribute);
+    const hid_t file_type = H5Aget_type(attribute);
+    const hid_t space_id = H5Aget_space(attribute);
+    Handle type(file_type), space(space_id);
+    if (file_type < 0 || space_id < 0) return 0;
+    Handle memory(H5Tget_native_type(file_type, H5T_DIR_DEFAULT));
+    const hssize_t points = H5Sget_simple_extent_npoints(space_id);
+    const std::size_t size = memory ? H5Tget_size(memory.get()) : 0;
+    constexpr hssize_t kLargest = hssize_t{1} << 26;  // 64 MiB: not an attribute gesweep wrote
+    if (!memory || points <= 0 || size == 0 || points > kLargest / static_cast<hssize_t>(size)) return 0;
+    std::vector<unsigned char> buffer(static_cast<std::size_t>(points) * size);
+    // (Reclaiming frees the variable-length parts; for a fixed-size type it has nothing to do.)
+    if (H5Aread(attribute, memory.get(), buffer.data()) >= 0) {
+      H5Dvlen_reclaim(memory.get(), space_id, H5P_DEFAULT, buffer.data());
+    }
+    return 0;
+  };
+  H5Aiterate2(object, H5_INDEX_NAME, H5_ITER_INC, nullptr, read, nullptr);
+  H5Eclear2(H5E_DEFAULT);
+}
+
+void ReadVariableLengthRows(hid_t dataset) {
+  Handle file_type(H5Dget_type(dataset));
+  Handle space(H5Dget_space(dataset));
+  if (!file_type || !space) return;
+  const bool variable =
+      H5Tdetect_class(file_type.get(), H5T_VLEN) > 0 || H5Tis_variable_str(file_type.get()) > 0;
+  if (!variable || H5Sget_simple_extent_ndims(space.get()) != 1) return;
+  Handle memory(H5Tget_native_type(file_type.get(), H5T_DIR_DEFAULT));
+  hsize_t rows = 0;
+  if (!memory || H5Sget_simple_extent_dims(space.get(), &rows, nullptr) < 0) return;
+  const std::size_t size = H5Tget_size(memory.get());
+  constexpr hsize_t kPiece = 65536;
+  std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min(rows, kPiece)) * size);
+  for (hsize_t first = 0; first < rows; first += kPiece) {
+    hsize_t count = std::min(kPiece, rows - first);
+    Handle piece(H5Screate_simple(1, &count, nullptr));
+    if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, &first, nullptr, &count, nullptr) < 0) return;
+    if (H5Dread(dataset, memory.get(), piece.get(), space.get(), H5P_DEFAULT, buffer.data()) < 0) return;
+    H5Dvlen_reclaim(memory.get(), piece.get(), H5P_DEFAULT, buffer.data());
+  }
+}
+
+herr_t DecodeObject(hid_t file, const char* name, const H5O_info_t* info, void*) {
+  const hid_t raw = H5Oopen(file, name, H5P_DEFAULT);
+  if (raw < 0) return 0;
+  Handle object(raw);
+  ReadAttributes(raw);
+  if (info->type == H5O_TYPE_DATASET) ReadVariableLengthRows(raw);
+  H5Eclear2(H5E_DEFAULT);
+  return 0;
+}
+
+void DecodeMetadata(hid_t file) {
+  H5Ovisit2(file, H5_INDEX_NAME, H5_ITER_INC, DecodeObject, nullptr, H5O_INFO_BASIC);
+  H5Eclear2(H5E_DEFAULT);
+}
+
 }  // namespace
 
 ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
@@ -159,6 +228,18 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
   const std::string shown = path.string();
   // Before HDF5 sees it: a FIFO or a device would block H5Fis_hdf5 for ever or never end.
   RequireRegularFile(path, "archive");
+  // Before HDF5 decodes it in this process: the same open and every metadata read in a child with a
+  // deadline, since on some damaged files libhdf5 itself loops for ever or crashes (11.4).
+  // What the check refuses is refused in its words without decoding the file here again; a file
+  // shorter than recorded goes on to the repair when the caller asked for it.
+  archive::GuardArchiveDecode(
+      shown,
+      [&path] {
+        hdf5::Quiet();
+        const ArchiveReader reader = Open(path);
+        DecodeMetadata(reader.file());
+      },
+      repair_truncated ? "resume_repairs" : "");
   if (H5Fis_hdf5(path.c_str()) <= 0) {
     H5Eclear2(H5E_DEFAULT);
     throw InputError(shown, "", "", "not an HDF5 file (expected a gesweep archive)");
@@ -187,10 +268,43 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
     if (truncated && repair_truncated) {
       // The writer resuming it reads only its complete batches (statuses first, metadata checksummed)
       // into a fresh file that replaces it; the missing tail, zeros, belongs to the batch that failed.
+      // Extended is a copy: until the resume has found it a resumable archive of its study, the file
+      // keeps its bytes (a refused resume leaves it as it was).
       std::error_code ec;
+      const std::filesystem::path copy = path.string() + ".repair";
       if (std::filesystem::file_size(path, ec) == truncated->first && !ec) {
-        std::filesystem::resize_file(path, truncated->second, ec);
-        if (!ec) return Open(path, /*repair_truncated=*/false);
+        std::filesystem::remove(copy, ec);
+        std::filesystem::copy_file(path, copy, ec);
+        if (!ec) std::filesystem::resize_file(copy, truncated->second, ec);
+        if (!ec) {
+          std::shared_ptr<const std::filesystem::path> owner(new std::filesystem::path(copy),
+                                                             [](const std::filesystem::path* p) {
+                                                               std::error_code ignored;
+                                                               std::filesystem::remove(*p, ignored);
+                                                               delete p;
+                                                             });
+          ArchiveReader repaired = [&] {
+            try {
+              return Open(copy, /*repair_truncated=*/false);
+            } catch (const InputError& e) {
+              throw InputError(shown, e.key(), e.value(),
+                               e.expected() + " (in a copy extended to the size HDF5 recorded, " +
+                                   std::to_string(truncated->second) + " bytes)");
+            }
+          }();
+          repaired.path_ = path;
+          repaired.repair_copy_ = std::move(owner);
+          return repaired;
+        }
+        const std::string why = ec.message();
+        std::filesystem::remove(copy, ec);
+        throw InputError(
+            shown, "", "",
+            "the file is " + std::to_string(truncated->second - truncated->first) +
+                " bytes shorter than HDF5 recorded (a write failed half-way); resuming it reads a "
+                "copy extended to " +
+                std::to_string(truncated->second) + " bytes, " + copy.string() +
+                ", which could not be made: " + why + "; the file is unchanged, free the space");
       }
     }
     if (truncated) {
@@ -242,7 +356,10 @@ void ArchiveReader::CheckVirtualSources() {
   }
 }
 
-void ArchiveReader::Close() { file_.Reset(); }
+void ArchiveReader::Close() {
+  file_.Reset();
+  repair_copy_.reset();
+}
 
 std::string ArchiveReader::StringAttribute(const std::string& name) const {
   return hdf5::ReadStringAttribute(file_.get(), name).value_or("");

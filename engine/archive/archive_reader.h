@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,8 +33,11 @@ class ArchiveReader {
   /// goes through it. What it could not check (an archive merged before identities) is in notes(),
   /// each also sent to the note handler (archive::SetArchiveNoteHandler). A file shorter than HDF5 recorded
   /// (a write that failed half-way: disk full, a file-size limit) is refused saying so, unless
-  /// `repair_truncated` (the writer resuming it): then it is extended with zeros to its recorded size and
-  /// opened as a snapshot, whose complete batches the resume copies into a fresh archive.
+  /// `repair_truncated` (the writer resuming it): then a copy of it ("<path>.repair", deleted when the
+  /// reader closes) is extended with zeros to the recorded size and opened (repaired() is true), whose
+  /// complete batches the resume copies into a fresh archive; the file itself is never written.
+  /// Before libhdf5 decodes the file, the whole check runs in a child process with a deadline
+  /// (archive::GuardArchiveDecode): a file on which libhdf5 crashes or hangs is one InputError.
   static ArchiveReader Open(const std::filesystem::path& path, bool repair_truncated = false);
 
   ArchiveReader(ArchiveReader&&) = default;
@@ -44,6 +48,8 @@ class ArchiveReader {
   bool snapshot() const { return snapshot_; }
   /// Whether it is a virtual archive (its per-run datasets map other files).
   bool is_virtual() const { return is_virtual_; }
+  /// True when what is open is a repaired copy of a truncated file (Open with `repair_truncated`).
+  bool repaired() const { return repair_copy_ != nullptr; }
   /// A virtual archive's sources, found where HDF5 reads them and checked (empty otherwise).
   const std::vector<archive::FoundSource>& sources() const { return sources_; }
   /// Every other file a read of this archive opens: a virtual archive's sources, and theirs.
@@ -127,6 +133,7 @@ class ArchiveReader {
   std::vector<archive::FoundSource> sources_;
   std::vector<std::filesystem::path> files_read_;
   std::vector<std::string> notes_;
+  std::shared_ptr<const std::filesystem::path> repair_copy_;  // deleted when the last owner goes
 };
 
 }  // namespace gesweep

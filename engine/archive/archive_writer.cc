@@ -481,7 +481,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     original_id = existing.StringAttribute("archive_id");
     resumed_at = existing.StringAttribute("resumed_at");
     resumed_at += (resumed_at.empty() ? "" : ", ") + UtcTimestamp();
-    if (!existing.snapshot()) {
+    if (!existing.snapshot() && !existing.repaired()) {
       // Closed cleanly: continue in place, opened straight into SWMR mode. When that is impossible
       // (a reader holds the file's lock, e.g. h5py or gesweep query), resume as after a crash:
       // copy the complete batches into a fresh file and rename it over (the reader keeps its view).
@@ -506,9 +506,13 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
         out.kind = ArchiveOpenReport::Kind::kResumedClean;
       }
     } else {
+      // (A truncated file was read through a repaired copy: its complete batches go into a fresh file,
+      // renamed over it only now that it is known to be a resumable archive of this study.)
+      const bool repaired = existing.repaired();
       crashed.emplace(std::move(existing));
       out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
-      out.note = "it was not closed cleanly";
+      out.note = repaired ? "it is shorter than HDF5 recorded (a write failed half-way)"
+                          : "it was not closed cleanly";
     }
   }
 

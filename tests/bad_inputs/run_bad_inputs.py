@@ -641,6 +641,57 @@ def shard_identity_cases():
 sys.path.insert(0, str(ROOT))
 shard_identity_cases()
 
+
+def damaged_archive_cases():
+    """Issue 26, item 8 (damaged_cases.py): the eight files on which libhdf5 1.10.8 itself hangs or
+    crashes, through `query --describe`, `merge`, `run --resume` (and one of each kind through
+    `boundary --archive`, `sensitivity`, `dispersion`, `report`): one line naming the file, exit 2,
+    within 5 s, bytes unchanged; `run --resume` onto files that are not a resumable archive of its
+    study (truncated, cut short, empty, text, flipped bytes): refused, the file byte for byte as it was."""
+    import damaged_cases
+    seconds = damaged_cases.SECONDS_SANITIZED if SANITIZED else damaged_cases.SECONDS
+
+    def unchanged(path, digest):
+        return lambda: [] if damaged_cases.sha256(path) == digest else [f"{path}: sha256 changed"]
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        try:
+            defects = damaged_cases.defect_files(tmp / "defects")
+            study, targets = damaged_cases.resume_targets(GESWEEP, tmp / "resume")
+        except (RuntimeError, AssertionError) as error:
+            failures.append(f"damaged archive cases could not be made: {error}")
+            return
+        for name, path in defects.items():
+            digest = damaged_cases.sha256(path)
+            # The file first; the guard's words where libhdf5 breaks the same way every time.
+            fragment = f"{path}: libhdf5 " if name in damaged_cases.ALWAYS_BREAKS else f"{path}: "
+            for reader, args in (("query --describe", ["query", str(path), "--describe"]),
+                                 ("merge", ["merge", str(path), "-o", "{out}/merged.h5"]),
+                                 ("run --resume", ["run", str(study), "-o", str(path), "--resume", "-q"])):
+                with tempfile.TemporaryDirectory() as out:
+                    check(f"{reader} of {name} (libhdf5 hangs or crashes on it)",
+                          [a.replace("{out}", out) for a in args], fragment, out, timeout=seconds,
+                          after=unchanged(path, digest))
+        # The other readers, on one file of each kind (a loop, a crash, a bad free): the same guard.
+        for name in damaged_cases.ONE_OF_EACH:
+            path = defects[name]
+            digest = damaged_cases.sha256(path)
+            fragment = f"{path}: libhdf5 " if name in damaged_cases.ALWAYS_BREAKS else f"{path}: "
+            for reader, args in damaged_cases.OTHER_READERS:
+                with tempfile.TemporaryDirectory() as out:
+                    check(f"{reader} of {name} (libhdf5 hangs or crashes on it)",
+                          [a.replace("{a}", str(path)).replace("{out}", out) for a in args], fragment, out,
+                          timeout=seconds, after=unchanged(path, digest))
+        for name, path, fragment in targets:
+            digest = damaged_cases.sha256(path)
+            with tempfile.TemporaryDirectory() as out:
+                check(f"run --resume onto {name}", ["run", str(study), "-o", str(path), "--resume", "-q"],
+                      fragment, out, timeout=seconds, after=unchanged(path, digest))
+
+
+damaged_archive_cases()
+
 for failure in failures:
     print("FAIL", failure)
 print(f"{count} hostile inputs, {count - len(failures)} passed, {len(failures)} failed")
