@@ -236,9 +236,11 @@ struct LandingConfig {
                "(relative_tolerance, absolute_tolerance)"));
     v(Field("seed", &seed)
           .CommandLineOnly()
+          .Limit("seed")
           .Doc("Seed of the turbulence (a sweep's seed parameter, docs/disturbance.md)"));
     v(Field("run_index", &run_index)
           .CommandLineOnly()
+          .Limit("run_index")
           .Doc("Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep"));
   }
 };
