@@ -57,7 +57,7 @@ struct DispersionFlags {
     v(Field("confidence_level", &options.confidence_level)
           .Limit("confidence_level")
           .Doc("Level of the intervals"));
-    v(Field("max_groups", &options.max_groups).Doc("Most groups accepted"));
+    v(Field("max_groups", &options.max_groups).Limit("max_groups").Doc("Most groups accepted"));
     v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
   }
 };

@@ -179,6 +179,23 @@ std::vector<InputLimit> BuildTable() {
   level.maximum_exclusive = true;
   t.push_back(level);
 
+  // Settings of the commands themselves (flags only).
+  t.push_back(Whole("threads", 4096, "worker threads of a sweep (left out: every core); beyond 4096 is a typo"));
+  t.back().minimum = 1;
+  t.push_back(Whole("ranks_per_node", 4096,
+                    "with --mpi, the shard writers per node (0: $GESWEEP_RANKS_PER_NODE, else the ranks "
+                    "sharing a machine); as threads"));
+  t.push_back(Positive("dry_run_budget_s", "s", 600,
+                       "the wall time a dry run's measurement may take: it is an estimate, not a run"));
+  t.push_back(Whole("query.memory_mb", 1048576,
+                    "memory for exact medians and quantiles, MiB: 1 MiB to 1 TiB; past it, more passes"));
+  t.back().minimum = 1;
+  t.push_back(Whole("query.limit", kMaximumExactInteger, "rows (or groups) shown: a count, as seed"));
+  t.push_back(Whole("max_groups", 1e8,
+                    "groups a query's aggregate or a dispersion holds in memory, about 100 bytes each per "
+                    "statistic: 1e8 is about 10 GB"));
+  t.back().minimum = 1;
+
   // Settings of the boundary analysis.
   t.push_back(Closed("boundary.tolerance_m", "m", 1e-9, 1e-3,
                      "the boundary is refined to at most 1 mm; below 1 nm bisection resolves nothing"));

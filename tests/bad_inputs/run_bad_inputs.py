@@ -638,8 +638,19 @@ def shard_identity_cases():
             del os.environ["HDF5_VDS_PREFIX"]
 
 
+def integer_cases():
+    """Issue 26, item 3: seeds, run indices and counts parsed exactly at every entry point
+    (integer_cases.py)."""
+    import integer_cases as made
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in made.cases(pathlib.Path(tmp) / "inputs"):
+            with tempfile.TemporaryDirectory() as out:
+                check(case.name, case.args, case.fragment, out)
+
+
 sys.path.insert(0, str(ROOT))
 shard_identity_cases()
+integer_cases()
 
 for failure in failures:
     print("FAIL", failure)
