@@ -98,7 +98,7 @@ std::vector<InputLimit> BuildTable() {
                      "20 ft; beyond 50 m/s no airplane of this model lands"));
   t.push_back(Closed("turbulence_sigma_w_mps", "m/s", 0.0, 50.0,
                      "the specification's severe turbulence at low altitude is sigma_w of about 3 m/s; as "
-                     "wind_20ft_mps (a NaN run parameter: 0.1 |wind_20ft_mps|)"));
+                     "wind_20ft_mps (left out: 0.1 |wind_20ft_mps|)"));
   t.push_back(Closed("gust_amplitude_mps", "m/s", -50.0, 50.0,
                      "the specification's design gusts are a few m/s; as wind_20ft_mps"));
   t.push_back(Positive("gust_half_length_m", "m", 1e4,
@@ -167,6 +167,9 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(Closed("landing.plant_fixed_reference_height_m", "m", 0.0, kMaximumHeight_m, kHeightReason));
   t.push_back(Positive("landing.divergence_pitch_deg", "deg", 90.0,
                        "|pitch| beyond it ends the run as diverged: the small-angle model means nothing"));
+  t.push_back(Closed("landing.flare_asymptote_m", "m", 0.0, 1000.0,
+                     "the height the flare's exponential tends to: at most the largest flare height, and below "
+                     "the run's flare_height_m"));
   t.push_back(Positive("landing.series_duration_s", "s", kMaximumRunDuration_s, kDurationReason));
 
   // Settings of the estimators (sensitivity and dispersion flags).

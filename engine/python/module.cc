@@ -543,7 +543,15 @@ struct KwargsReader {
         *field.value() = ToCount<U>(value, key, std::string(a.limit));
       } else {
         static_assert(std::floating_point<U>);
-        *field.value() = ToNumber(value, key) * a.scale;
+        const double number = ToNumber(value, key);
+        // NaN is never an input (docs/limits.md): an automatic setting is left out, or None.
+        if (std::isnan(number)) {
+          throw InputError(kArguments, key, "nan",
+                           a.limit.empty() ? std::string("expected a number")
+                                           : LimitProblem(RequireInputLimit(a.limit), number) +
+                                                 (a.automatic ? "; leave it out (or None) for the automatic value" : ""));
+        }
+        *field.value() = number * a.scale;
       }
     }
   }

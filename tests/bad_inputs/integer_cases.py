@@ -88,6 +88,7 @@ def study_cases(folder):
     for value in ["-1", str(TWO_53 + 1), str(TWO_53 + 2), str(2**63 - 1)]:
         yield case(f"seed = {value}", study_text(f"seed = {value}\n"),
                    f"parameters.seed = {value}: {SEED_RANGE}")
+    yield case("seed = 2^64", study_text(f"seed = {2**64}\n"), f"'{2**64}' is not representable in 64 bits")
     for value in ["1.5", "1e3", "5.0", "9007199254740993.0"]:
         yield case(f"seed = {value}", study_text(f"seed = {value}\n"),
                    f"{SEED_RANGE} written as an integer")
@@ -111,7 +112,7 @@ def study_cases(folder):
         index = len(made)
         yield case(f"design CSV seed {value}",
                    study_text(design=f'[design]\nkind = "list"\ncsv = "design_{index}.csv"\n'),
-                   f"seed = '{value}': {SEED_RANGE}", csv=f"seed\n3\n{value}\n")
+                   f'seed = "{value}": {SEED_RANGE}', csv=f"seed\n3\n{value}\n")
     # A design's own seed (lhs, morris, monte_carlo): a TOML integer, within the same range.
     for value in ["-1", str(TWO_53 + 1)]:
         yield case(f"monte_carlo design seed = {value}",

@@ -7,9 +7,8 @@ aliases included). Each is one of:
 - checked against the limits table ("LIMIT:<entry>", AddLimitedOption / AddExactIntegerOption): the
   test reads the entry from `gesweep limits --format json` and gives a value just past each end (the
   bound itself when the bound is excluded; for a whole entry one past it, and a fraction), past a
-  double's range, and NaN (taken only by a setting whose NaN means "automatic", AUTOMATIC below, and
-  there it must be accepted); each must be refused with exit 2 and one line "command line: FLAG =
-  VALUE: expected ...";
+  double's range, and NaN (never an input, an "automatic" setting's included: docs/limits.md); each
+  must be refused with exit 2 and one line "command line: FLAG = VALUE: expected ...";
 - a named choice ("CHOICE:<flag>"): a name nobody defined must be refused the same way;
 - declared below: NOT_NUMERIC (paths, names, expressions, positionals; with the reason), or
   LISTS (numbers checked after parsing, each given its bad values here).
@@ -18,7 +17,6 @@ A flag that is none of these fails the test: a new flag must be classified here.
 Usage: every_flag_test.py BUILD/gesweep
 """
 import json
-import math
 import os
 import subprocess
 import sys
@@ -45,13 +43,6 @@ BASE = {
     "run": ["{study}", "-o", "{out}/out.h5"],
     "sensitivity": ["{archive}", "--output", "x"],
     "simulate": ["--aircraft", ANCE, "--height-m", "40", "--speed-mps", "52.21", "--summary-only"],
-}
-
-# Flags whose NaN means "automatic" (docs/limits.md, "NaN: automatic"): `--FLAG nan` is taken.
-AUTOMATIC = {
-    ("land", "--flare-tau-s"), ("land", "--design-height-m"), ("land", "--design-speed-mps"),
-    ("land", "--plant-fixed-reference-height-m"), ("land", "--time-limit-s"),
-    ("land", "--turbulence-sigma-w-mps"), ("simulate", "--turbulence-sigma-w-mps"),
 }
 
 # Flags that take no number: a path, a name, an expression, a positional. (command, first name): why.
@@ -197,14 +188,7 @@ class EveryFlag(unittest.TestCase):
             for value in past_each_end(limit):
                 problems += self.refused(command, flag, value)
                 checked += 1
-            if (command, flag) in AUTOMATIC:
-                with tempfile.TemporaryDirectory() as out:
-                    done = gesweep(command, *self.base(command, out), flag, "nan", "--format", "json",
-                                   timeout=120)
-                if done.returncode != 0:
-                    problems.append(f"{command} {flag} nan (automatic): exit {done.returncode}: {done.stderr.strip()}")
-            else:
-                problems += self.refused(command, flag, "nan")
+            problems += self.refused(command, flag, "nan")
             checked += 1
         self.assertGreater(checked, 200)
         self.assertEqual(problems, [])
