@@ -45,6 +45,9 @@ BASE = {
     "simulate": ["--aircraft", ANCE, "--height-m", "40", "--speed-mps", "52.21", "--summary-only"],
 }
 
+# A flag that excludes one of BASE's: its own base.
+BASE_OF = {("boundary", "--speeds-mps"): ["--aircraft", ANCE]}
+
 # Flags that take no number: a path, a name, an expression, a positional. (command, first name): why.
 NOT_NUMERIC = {
     ("boundary", "--aircraft"): "path", ("boundary", "--archive"): "path", ("boundary", "--by"): "column name",
@@ -136,18 +139,20 @@ class EveryFlag(unittest.TestCase):
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
-    def base(self, command, out):
+    def base(self, command, out, flag=None):
+        args = BASE_OF.get((command, flag), BASE[command])
         return [a.replace("{archive}", self.archive).replace("{study}", self.study).replace("{out}", out)
-                for a in BASE[command]]
+                for a in args]
 
     def refused(self, command, flag, value, fragment=None):
         """The problems of `gesweep COMMAND BASE FLAG VALUE`: [] when it exits 2 with one line naming the
         flag (and `fragment`)."""
         with tempfile.TemporaryDirectory() as out:
-            done = gesweep(command, *self.base(command, out), flag, value)
+            done = gesweep(command, *self.base(command, out, flag), flag, value)
             left = os.listdir(out)
         lines = done.stderr.strip().splitlines()
-        wanted = fragment if fragment is not None else f"command line: {flag} = {value.strip()}: expected"
+        # The flag and the value as typed, then what was expected (or that the number is past a double).
+        wanted = fragment if fragment is not None else f"command line: {flag} = {value.strip()}: "
         problems = []
         if done.returncode != 2:
             problems.append(f"exit {done.returncode}")
@@ -191,13 +196,16 @@ class EveryFlag(unittest.TestCase):
             problems += self.refused(command, flag, "nan")
             checked += 1
         self.assertGreater(checked, 200)
+        self.maxDiff = None
         self.assertEqual(problems, [])
 
     def test_every_choice_refuses_an_unknown_name(self):
         problems = []
         for command, names, kind, _, check in self.flags:
             if check.startswith("CHOICE:"):
-                problems += self.refused(command, names[-1], "no-such-name")
+                problems += self.refused(command, names[-1], "no-such-name",
+                                         f"command line: {names[-1]} = 'no-such-name': expected ")
+        self.maxDiff = None
         self.assertEqual(problems, [])
 
     def test_every_listed_number_refuses_past_each_end(self):
@@ -205,6 +213,7 @@ class EveryFlag(unittest.TestCase):
         for (command, flag), values in LISTS.items():
             for value in values:
                 problems += self.refused(command, flag, value, fragment=f"command line: {flag} = ")
+        self.maxDiff = None
         self.assertEqual(problems, [])
 
     def test_the_turbulence_intensity_is_range_checked(self):
