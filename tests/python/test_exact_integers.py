@@ -71,3 +71,26 @@ def test_replay_from_python_equals_the_stored_row(gesweep, ance, tmp_path):
                          input="none", turbulence="dryden", wind_20ft_mps=-7.717, seed=TWO_53 - 2,
                          run_index=int(index[0]))
     assert r.summary["final_height_m"] != height[0]
+
+
+@pytest.mark.parametrize("key,flag,call", [
+    ("time_limit_s", "--time-limit-s", "land"), ("design_height_m", "--design-height-m", "land"),
+    ("flare_time_constant_s", "--flare-time-constant-s", "land"),
+    ("turbulence_sigma_w_mps", "--turbulence-sigma-w-mps", "land"),
+    ("turbulence_sigma_w_mps", "--turbulence-sigma-w-mps", "simulate"),
+])
+def test_nan_is_never_an_input(gesweep, ance, key, flag, call):
+    """An automatic setting is automatic when left out; NaN is refused, by the flag and the keyword alike
+    (docs/limits.md, "NaN is never an input"). Before: Python took NaN, the flags mostly refused it."""
+    base = (["--height-m", 40, "--speed-mps", 52.21] if call == "simulate" else [])
+    line = cli_error(call, "--aircraft", ANCE, *base, "--summary-only", flag, "nan")
+    assert line.startswith(f"command line: {flag} = nan: expected a number in "), line
+    expected = line.split(": ", 2)[2]
+    args = (40.0, 52.21) if call == "simulate" else ()
+    with pytest.raises(gesweep.InputError) as error:
+        getattr(gesweep, call)(ance, *args, summary_only=True, **{key: float("nan")})
+    assert str(error.value).startswith(f"argument: {key} = nan: {expected}"), str(error.value)
+    # Left out, it is automatic: it flies (land's run shows the value used).
+    r = getattr(gesweep, call)(ance, *args, summary_only=True, **({"duration_s": 1.0} if call == "simulate" else {}))
+    if call == "land":
+        assert r.run[key] == r.run[key], key  # a number, not NaN
