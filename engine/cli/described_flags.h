@@ -156,8 +156,8 @@ class DescribedFlags {
         // only, no wrap, no clamp: AddExactIntegerOption), then by CLI11 into the field itself.
         GESWEEP_DEMAND(!a.limit.empty());  // every integer flag has its range
         const std::string help = Help(a, std::to_string(*value), is_required);
-        entry.options.push_back(
-            AddExactIntegerOption(*app, self->WithShortName(a.key, FlagName(a.key)), *value, std::string(a.limit), help));
+        entry.options.push_back(AddExactIntegerOption(*app, self->WithShortName(a.key, FlagName(a.key)),
+                                                      *value, std::string(a.limit), help));
         entry.names.push_back(FlagName(a.key));
       } else if constexpr (ListValue<U>) {
         // CLI11 parses the values into the field itself, replacing the default list.

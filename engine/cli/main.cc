@@ -38,7 +38,8 @@ void ListFlags(const std::vector<std::pair<CLI::App*, std::function<int()>>>& ac
       const char* kind =
           option->get_positional() && option->get_lnames().empty()
               ? "positional"
-              : (option->get_items_expected_max() == 0 || option->get_type_size_max() == 0 ? "switch" : "value");
+              : (option->get_items_expected_max() == 0 || option->get_type_size_max() == 0 ? "switch"
+                                                                                           : "value");
       std::string check;
       try {
         check = const_cast<CLI::Option*>(option)->get_validator(0)->get_name();

@@ -51,8 +51,8 @@ CLI::Validator ExactIntegerValidator(const std::string& flag, const std::string&
 /// ParseExactInteger against the limits table's whole entry `limit`: digits only, within the range
 /// (shown in --help), else one line (exit 2) naming the flag, the text and the range.
 template <class Integer>
-CLI::Option* AddExactIntegerOption(CLI::App& app, const std::string& flag, Integer& value, const std::string& limit,
-                                   const std::string& description) {
+CLI::Option* AddExactIntegerOption(CLI::App& app, const std::string& flag, Integer& value,
+                                   const std::string& limit, const std::string& description) {
   CLI::Option* option = app.add_option(flag, value, description);
   option->check(ExactIntegerValidator(flag, limit, static_cast<double>(std::numeric_limits<Integer>::max())));
   return option;

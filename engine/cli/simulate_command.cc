@@ -161,8 +161,9 @@ void AddSimulateFlags(CLI::App& app, SimulateFlags& flags) {
   output_dt->excludes(summary);
   AddExactIntegerOption(app, "--seed", flags.seed, "seed",
                         "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
-  AddExactIntegerOption(app, "--run-index", flags.run_index, "run_index",
-                        "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
+  AddExactIntegerOption(
+      app, "--run-index", flags.run_index, "run_index",
+      "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
   app.add_option("--format", flags.format,
                  "csv (default: the time series; with --summary-only one summary row) or json "
                  "({\"run\", \"summary\", \"series\"})");

@@ -112,7 +112,7 @@ std::vector<InputLimit> BuildTable() {
                     "2^53: every whole number up to it is exact as a double, so a seed reads back from an "
                     "archive, JSON or Python as it was given"));
   t.push_back(Whole("run_index", kMaximumExactInteger,
-                    "a run's index in its design (simulate/land --run-index replays run i of a sweep); as "
+                    "a run's index in its design (simulate and land replay run i of a sweep with it); as "
                     "seed"));
 
   // The verification models' inputs.
@@ -167,9 +167,10 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(Closed("landing.plant_fixed_reference_height_m", "m", 0.0, kMaximumHeight_m, kHeightReason));
   t.push_back(Positive("landing.divergence_pitch_deg", "deg", 90.0,
                        "|pitch| beyond it ends the run as diverged: the small-angle model means nothing"));
-  t.push_back(Closed("landing.flare_asymptote_m", "m", 0.0, 1000.0,
-                     "the height the flare's exponential tends to: at most the largest flare height, and below "
-                     "the run's flare_height_m"));
+  t.push_back(
+      Closed("landing.flare_asymptote_m", "m", 0.0, 1000.0,
+             "the height the flare's exponential tends to: at most the largest flare height, and below "
+             "the run's flare_height_m"));
   t.push_back(Positive("landing.series_duration_s", "s", kMaximumRunDuration_s, kDurationReason));
 
   // Settings of the estimators (sensitivity and dispersion flags).
@@ -183,10 +184,11 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(level);
 
   // Settings of the commands themselves (flags only).
-  t.push_back(Whole("threads", 4096, "worker threads of a sweep (left out: every core); beyond 4096 is a typo"));
+  t.push_back(
+      Whole("threads", 4096, "worker threads of a sweep (left out: every core); beyond 4096 is a typo"));
   t.back().minimum = 1;
   t.push_back(Whole("ranks_per_node", 4096,
-                    "with --mpi, the shard writers per node (0: $GESWEEP_RANKS_PER_NODE, else the ranks "
+                    "with MPI, the shard writers per node (0: $GESWEEP_RANKS_PER_NODE, else the ranks "
                     "sharing a machine); as threads"));
   t.push_back(Positive("dry_run_budget_s", "s", 600,
                        "the wall time a dry run's measurement may take: it is an estimate, not a run"));
@@ -243,8 +245,8 @@ std::string WholeText(double bound) { return std::to_string(static_cast<std::uin
 
 std::string DescribeLimit(const InputLimit& limit) {
   if (limit.whole) {
-    return std::string("a whole number in ") + (limit.minimum_exclusive ? "(" : "[") + WholeText(limit.minimum) +
-           ", " + WholeText(limit.maximum) + (limit.maximum_exclusive ? ")" : "]");
+    return std::string("a whole number in ") + (limit.minimum_exclusive ? "(" : "[") +
+           WholeText(limit.minimum) + ", " + WholeText(limit.maximum) + (limit.maximum_exclusive ? ")" : "]");
   }
   std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") +
                      ShortNumber(limit.minimum) + ", " + ShortNumber(limit.maximum) +
@@ -270,20 +272,20 @@ std::uint64_t ParseExactInteger(std::string_view text, std::string_view limit_na
   const InputLimit& limit = RequireInputLimit(limit_name);
   GESWEEP_DEMAND(limit.whole && limit.minimum >= 0 && limit.maximum <= kMaximumExactInteger);
   const auto refuse = [&](std::string_view how) -> std::uint64_t {
-    throw InputError(source, key, std::string(text),
-                     "expected " + DescribeLimit(limit) + std::string(how) + " (" + std::string(limit.reason) +
-                         ")");
+    throw InputError(
+        source, key, std::string(text),
+        "expected " + DescribeLimit(limit) + std::string(how) + " (" + std::string(limit.reason) + ")");
   };
-  const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-    return c >= '0' && c <= '9';
-  });
+  const bool digits =
+      !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (!digits) return refuse(" written in digits (no sign, fraction or exponent)");
   // Digits only, so the value is exact as soon as it has at most 16 of them (2^53 has 16); more,
   // after leading zeros, is past every whole entry's maximum.
   const std::size_t first = std::min(text.find_first_not_of('0'), text.size());
   if (text.size() - first > 16) return refuse("");
   std::uint64_t value = 0;
-  for (std::size_t i = first; i < text.size(); ++i) value = value * 10 + static_cast<std::uint64_t>(text[i] - '0');
+  for (std::size_t i = first; i < text.size(); ++i)
+    value = value * 10 + static_cast<std::uint64_t>(text[i] - '0');
   const auto minimum = static_cast<std::uint64_t>(limit.minimum);
   const auto maximum = static_cast<std::uint64_t>(limit.maximum);
   const bool above = limit.minimum_exclusive ? value > minimum : value >= minimum;

@@ -161,8 +161,8 @@ struct LandingConfig {
           .Unit("s")
           .Limit("flare_tau_s")
           .CommandLineOnly()
-          .Doc(
-              "Flare time constant, s; default (left out): Ho/(u0 sin(glide slope)), continuous sink rate at Ho"));
+          .Doc("Flare time constant, s; default (left out): Ho/(u0 sin(glide slope)), continuous sink rate "
+               "at Ho"));
     v(Field("r_weight", &r_weight)
           .Unit("rad^2")
           .Limit("lqr.r")
@@ -172,7 +172,8 @@ struct LandingConfig {
           .Automatic()
           .Unit("m")
           .Limit("landing.design_height_m")
-          .Doc("Height of the linear model used for the gain, m; default (left out): the wheel-contact height"));
+          .Doc("Height of the linear model used for the gain, m; default (left out): the wheel-contact "
+               "height"));
     v(Field("design_speed_mps", &design_speed_mps)
           .Automatic()
           .Unit("m/s")
@@ -203,7 +204,8 @@ struct LandingConfig {
           .Automatic()
           .Unit("m")
           .Limit("landing.plant_fixed_reference_height_m")
-          .Doc("Fixed reference height with plant_height_reference fixed, m; default (left out): the top table "
+          .Doc("Fixed reference height with plant_height_reference fixed, m; default (left out): the top "
+               "table "
                "height"));
     v(Field("relative_tolerance", &relative_tolerance)
           .Limit("relative_tolerance")
@@ -216,9 +218,9 @@ struct LandingConfig {
           .Automatic()
           .Unit("s")
           .Limit("landing.time_limit_s")
-          .Doc(
-              "Time limit, s (outcome no_touchdown); default (left out): twice the reference trajectory's time to "
-              "the wheels"));
+          .Doc("Time limit, s (outcome no_touchdown); default (left out): twice the reference trajectory's "
+               "time to "
+               "the wheels"));
     v(Field("output_interval_s", &output_interval_s)
           .Unit("s")
           .Limit("output_dt_s")

@@ -96,16 +96,19 @@ std::string ToText(py::handle value, const std::string& key) {
 /// ParseExactInteger, as the command line's flags are; InputError naming `key` otherwise.
 template <class U>
 U ToCount(py::handle value, const std::string& key, const std::string& limit) {
-  const bool integral = !py::isinstance<py::bool_>(value) && !py::isinstance<py::float_>(value) &&
-                        py::hasattr(value, "__index__") &&
-                        !(py::hasattr(value, "dtype") && py::str(value.attr("dtype")).cast<std::string>() == "bool");
+  const bool integral =
+      !py::isinstance<py::bool_>(value) && !py::isinstance<py::float_>(value) &&
+      py::hasattr(value, "__index__") &&
+      !(py::hasattr(value, "dtype") && py::str(value.attr("dtype")).cast<std::string>() == "bool");
   if (!integral)
-    throw InputError(kArguments, key, Repr(value),
-                     "expected an int, " + DescribeLimit(RequireInputLimit(limit)) + " (not a float or a bool)");
+    throw InputError(
+        kArguments, key, Repr(value),
+        "expected an int, " + DescribeLimit(RequireInputLimit(limit)) + " (not a float or a bool)");
   PyObject* index = PyNumber_Index(value.ptr());
   if (index == nullptr) {
     PyErr_Clear();
-    throw InputError(kArguments, key, Repr(value), "expected an int, " + DescribeLimit(RequireInputLimit(limit)));
+    throw InputError(kArguments, key, Repr(value),
+                     "expected an int, " + DescribeLimit(RequireInputLimit(limit)));
   }
   const std::string digits = py::str(py::reinterpret_steal<py::object>(index)).cast<std::string>();
   const std::uint64_t number = ParseExactInteger(digits, limit, kArguments, key);
@@ -547,9 +550,10 @@ struct KwargsReader {
         // NaN is never an input (docs/limits.md): an automatic setting is left out, or None.
         if (std::isnan(number)) {
           throw InputError(kArguments, key, "nan",
-                           a.limit.empty() ? std::string("expected a number")
-                                           : LimitProblem(RequireInputLimit(a.limit), number) +
-                                                 (a.automatic ? "; leave it out (or None) for the automatic value" : ""));
+                           a.limit.empty()
+                               ? std::string("expected a number")
+                               : LimitProblem(RequireInputLimit(a.limit), number) +
+                                     (a.automatic ? "; leave it out (or None) for the automatic value" : ""));
         }
         *field.value() = number * a.scale;
       }

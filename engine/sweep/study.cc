@@ -172,9 +172,10 @@ class StudyParser {
       // been rounded by the TOML reader already, so none is taken).
       auto i = node.as_integer();
       if (!i) {
-        throw InputError(source_, key, DescribeNode(node),
-                         "expected " + DescribeAllowedValues(id) + " written as an integer (no fraction or exponent)",
-                         NodeLine(node));
+        throw InputError(
+            source_, key, DescribeNode(node),
+            "expected " + DescribeAllowedValues(id) + " written as an integer (no fraction or exponent)",
+            NodeLine(node));
       }
       try {
         value = static_cast<double>(ParseExactInteger(std::to_string(i->get()), info.limit, source_, key));
@@ -380,13 +381,16 @@ class StudyParser {
         const double span = spec[1] - spec[0];
         if (log || (n > 1 && (span <= 0 || std::fmod(span, static_cast<double>(n - 1)) != 0.0)) ||
             (n == 1 && spec[0] != spec[1])) {
-          entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
-                     "expected whole values for " + info.name +
-                         ": linspace = [start, stop, n] with stop - start a multiple of n - 1 (or values = [...])");
+          entry.Fail(
+              key,
+              "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
+              "expected whole values for " + info.name +
+                  ": linspace = [start, stop, n] with stop - start a multiple of n - 1 (or values = [...])");
         }
         const auto start = static_cast<std::int64_t>(spec[0]);
         const std::int64_t spacing = n > 1 ? static_cast<std::int64_t>(span) / (n - 1) : 0;
-        for (std::int64_t k = 0; k < n; ++k) parameter.values.push_back(static_cast<double>(start + k * spacing));
+        for (std::int64_t k = 0; k < n; ++k)
+          parameter.values.push_back(static_cast<double>(start + k * spacing));
       }
       if (log && !(spec[0] > 0 && spec[1] > 0)) {
         entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", ...]",
@@ -559,7 +563,8 @@ class StudyParser {
       entry.Fail(key, "[...]",
                  "a range is sampled with fractions, but " +
                      ParameterCatalog()[static_cast<std::size_t>(parameter.id)].name + " takes " +
-                     DescribeAllowedValues(parameter.id) + ": give it in [parameters], a grid or a list design");
+                     DescribeAllowedValues(parameter.id) +
+                     ": give it in [parameters], a grid or a list design");
     }
     parameter.distribution = entry.Has("uniform") ? Distribution::kUniform : Distribution::kLogUniform;
     const std::vector<double> bounds = entry.NumberArray(key);
