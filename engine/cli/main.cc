@@ -30,11 +30,13 @@ namespace {
 void ListFlags(const std::vector<std::pair<CLI::App*, std::function<int()>>>& actions) {
   for (const auto& [sub, action] : actions) {
     for (const CLI::Option* option : sub->get_options()) {
-      if (option->get_name() == "--help" || option->get_name().empty()) continue;
+      const std::vector<std::string>& long_names = option->get_lnames();
+      if (std::find(long_names.begin(), long_names.end(), "help") != long_names.end()) continue;
       std::string names;
       for (const std::string& s : option->get_snames()) names += (names.empty() ? "-" : ",-") + s;
       for (const std::string& l : option->get_lnames()) names += (names.empty() ? "--" : ",--") + l;
-      if (names.empty()) names = option->get_name();
+      if (names.empty()) names = option->get_name(true);  // a positional (get_name is "" when hidden)
+      if (names.empty()) continue;
       const char* kind =
           option->get_positional() && option->get_lnames().empty()
               ? "positional"
