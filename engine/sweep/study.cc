@@ -379,8 +379,7 @@ class StudyParser {
           if (!problem.empty()) entry.Fail(key, FormatNumber(end), problem);
         }
         const double span = spec[1] - spec[0];
-        if (log || (n > 1 && (span <= 0 || std::fmod(span, static_cast<double>(n - 1)) != 0.0)) ||
-            (n == 1 && spec[0] != spec[1])) {
+        if (log || (n > 1 && std::fmod(span, static_cast<double>(n - 1)) != 0.0)) {
           entry.Fail(
               key,
               "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
