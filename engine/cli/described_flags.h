@@ -152,9 +152,12 @@ class DescribedFlags {
           }
         });
       } else if constexpr (IntegerValue<U>) {
-        // A count or a seed: CLI11 parses it into the field itself (a whole number in U's range).
+        // A count or a seed: parsed exactly against its whole entry of the limits table (digits
+        // only, no wrap, no clamp: AddExactIntegerOption), then by CLI11 into the field itself.
+        GESWEEP_DEMAND(!a.limit.empty());  // every integer flag has its range
         const std::string help = Help(a, std::to_string(*value), is_required);
-        entry.options.push_back(app->add_option(self->WithShortName(a.key, FlagName(a.key)), *value, help));
+        entry.options.push_back(AddExactIntegerOption(*app, self->WithShortName(a.key, FlagName(a.key)),
+                                                      *value, std::string(a.limit), help));
         entry.names.push_back(FlagName(a.key));
       } else if constexpr (ListValue<U>) {
         // CLI11 parses the values into the field itself, replacing the default list.

@@ -54,8 +54,10 @@ struct DispersionFlags {
     v(Field("percentiles", &options.percentiles).Doc("Percentiles, 0 to 100"));
     v(Field("tail_probabilities", &options.tail_probabilities)
           .Doc("Tail probabilities of the fitted quantiles"));
-    v(Field("confidence_level", &options.confidence_level).Doc("Level of the intervals"));
-    v(Field("max_groups", &options.max_groups).Doc("Most groups accepted"));
+    v(Field("confidence_level", &options.confidence_level)
+          .Limit("confidence_level")
+          .Doc("Level of the intervals"));
+    v(Field("max_groups", &options.max_groups).Limit("max_groups").Doc("Most groups accepted"));
     v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
   }
 };

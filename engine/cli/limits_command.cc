@@ -11,14 +11,17 @@
 namespace gesweep {
 // `gesweep limits --format json`: one object per entry, its members under their own names.
 GESWEEP_JSON_MEMBERS(InputLimit, name, units, minimum, maximum, minimum_exclusive, maximum_exclusive,
-                     allows_infinity, reason)
+                     allows_infinity, whole, reason)
 }  // namespace gesweep
 
 namespace gesweep::cli {
 namespace {
 
 std::string Bound(const InputLimit& limit, bool upper) {
-  return ShortNumber(upper ? limit.maximum : limit.minimum);
+  const double bound = upper ? limit.maximum : limit.minimum;
+  // A whole entry's bounds in full digits (2^53, not 9.007199255e+15).
+  if (limit.whole) return std::to_string(static_cast<std::uint64_t>(bound));
+  return ShortNumber(bound);
 }
 
 std::string Interval(const InputLimit& limit) {

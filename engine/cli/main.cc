@@ -23,6 +23,36 @@ std::vector<Command>& CommandRegistry() {
 
 namespace {
 
+// `gesweep --list-flags` (hidden): one line per option of every subcommand, tab-separated:
+// subcommand, its names (comma-separated, as in --help), "switch" (takes no value), "positional" or
+// "value", "hidden" for an alias or "shown", and the name of its check ("LIMIT:<limits-table entry>"
+// for a flag checked against the table, "CHOICE:<flag>" for a named choice, "" for none).
+void ListFlags(const std::vector<std::pair<CLI::App*, std::function<int()>>>& actions) {
+  for (const auto& [sub, action] : actions) {
+    for (const CLI::Option* option : sub->get_options()) {
+      const std::vector<std::string>& long_names = option->get_lnames();
+      if (std::find(long_names.begin(), long_names.end(), "help") != long_names.end()) continue;
+      std::string names;
+      for (const std::string& s : option->get_snames()) names += (names.empty() ? "-" : ",-") + s;
+      for (const std::string& l : option->get_lnames()) names += (names.empty() ? "--" : ",--") + l;
+      if (names.empty()) names = option->get_name(true);  // a positional (get_name is "" when hidden)
+      if (names.empty()) continue;
+      const char* kind =
+          option->get_positional() && option->get_lnames().empty()
+              ? "positional"
+              : (option->get_items_expected_max() == 0 || option->get_type_size_max() == 0 ? "switch"
+                                                                                           : "value");
+      std::string check;
+      try {
+        check = const_cast<CLI::Option*>(option)->get_validator(0)->get_name();
+      } catch (const CLI::OptionNotFound&) {
+      }
+      std::cout << sub->get_name() << "\t" << names << "\t" << kind << "\t"
+                << (option->get_group().empty() ? "hidden" : "shown") << "\t" << check << "\n";
+    }
+  }
+}
+
 // Builds the CLI11 app, parses the command line and runs the chosen subcommand: its exit code, or 2
 // for a bad command line (one line on stderr). What it throws (a command's InputError, a failure
 // nothing caught) main turns into one line.
@@ -43,6 +73,11 @@ int Run(int argc, char** argv) {
   for (auto& command : registry) {
     CLI::App* sub = app.add_subcommand(command.name, command.description);
     actions.emplace_back(sub, command.setup(*sub));
+  }
+  // Hidden: every flag of every subcommand, for tests/cli/every_flag_test.py (one line each).
+  if (argc == 2 && std::string(argv[1]) == "--list-flags") {
+    ListFlags(actions);
+    return 0;
   }
   if (argc > 1 && argv[1][0] != '-') {
     const std::string word = argv[1];

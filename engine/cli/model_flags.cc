@@ -132,6 +132,22 @@ CLI::Option* AddLimitedOption(CLI::App& app, const std::string& flag, double& va
   return option;
 }
 
+CLI::Validator ExactIntegerValidator(const std::string& flag, const std::string& limit, double type_maximum) {
+  const InputLimit& range = RequireInputLimit(limit);
+  GESWEEP_DEMAND(range.whole && range.maximum <= type_maximum);
+  // Digits within the range only, so CLI11's own conversion of the text into the field is exact.
+  return CLI::Validator(
+      [flag, limit](std::string& text) -> std::string {
+        try {
+          ParseExactInteger(text, limit, "command line", flag);
+        } catch (const InputError& error) {
+          return error.what();
+        }
+        return "";
+      },
+      DescribeLimit(range), "LIMIT:" + limit);
+}
+
 std::string FormatNumber(double value, int significant) {
   if (significant == 10) return ShortNumber(value);
   if (std::isnan(value)) return "nan";

@@ -3,6 +3,7 @@
 /// docs/model.md (--cdh, --no-h-derivatives, --interpolation).
 
 #include <CLI/CLI.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,21 @@ void RequireWithinLimit(const std::vector<double>& values, const std::string& li
 /// the value and the range.
 CLI::Option* AddLimitedOption(CLI::App& app, const std::string& flag, double& value, const std::string& limit,
                               const std::string& description);
+
+/// The check of AddExactIntegerOption (its message is a whole InputError line, as AddLimitedOption's).
+/// `type_maximum` is the largest value of the flag's field: the entry's maximum must not exceed it.
+CLI::Validator ExactIntegerValidator(const std::string& flag, const std::string& limit, double type_maximum);
+
+/// Adds a whole-number flag (a seed, a run index, a count) bound to `value`, parsed exactly by
+/// ParseExactInteger against the limits table's whole entry `limit`: digits only, within the range
+/// (shown in --help), else one line (exit 2) naming the flag, the text and the range.
+template <class Integer>
+CLI::Option* AddExactIntegerOption(CLI::App& app, const std::string& flag, Integer& value,
+                                   const std::string& limit, const std::string& description) {
+  CLI::Option* option = app.add_option(flag, value, description);
+  option->check(ExactIntegerValidator(flag, limit, static_cast<double>(std::numeric_limits<Integer>::max())));
+  return option;
+}
 
 /// Formats a double for table/CSV output: shortest round-trip form; "inf", "nan".
 std::string FormatNumber(double value, int significant = 10);

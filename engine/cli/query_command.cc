@@ -235,13 +235,19 @@ void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
                  "median(c), quantile(c, p); comma-separated, repeatable (default with --group-by: count)");
   app.add_option("--memory-mb", flags.memory_mb,
                  "Memory for exact medians and quantiles (default " + std::to_string(kDefaultMemoryMb) +
-                     "); past it, more passes");
+                     "); past it, more passes")
+      ->check(ExactIntegerValidator("--memory-mb", "query.memory_mb",
+                                    static_cast<double>(std::numeric_limits<long long>::max())));
   app.add_option("--max-groups", flags.max_groups,
-                 "Refuse more groups than this (default " + std::to_string(kDefaultMaxGroups) + ")");
+                 "Refuse more groups than this (default " + std::to_string(kDefaultMaxGroups) + ")")
+      ->check(ExactIntegerValidator("--max-groups", "max_groups",
+                                    static_cast<double>(std::numeric_limits<long long>::max())));
   app.add_option("--sort", flags.sort,
                  "Column to sort by (missing values last); with --aggregate an output column");
   app.add_option("--limit", flags.limit,
-                 "Show at most this many rows (with --sort: the best n); with --aggregate, groups");
+                 "Show at most this many rows (with --sort: the best n); with --aggregate, groups")
+      ->check(ExactIntegerValidator("--limit", "query.limit",
+                                    static_cast<double>(std::numeric_limits<long long>::max())));
   app.add_option("--format", flags.format, "table (default), csv or json");
 }
 

@@ -72,10 +72,12 @@ struct RunFlags {
                "--dry-run-budget-s); run nothing"));
     v(Field("dry_run_budget_s", &dry_run_budget_s)
           .Unit("s")
+          .Limit("dry_run_budget_s")
           .Doc("Wall time the dry run's measurement may take, s (at most 600)"));
     v(Field("quiet", &quiet).Doc("No progress output"));
     v(Field("mpi", &mpi).Doc("Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi"));
     v(Field("ranks_per_node", &ranks_per_node)
+          .Limit("ranks_per_node")
           .Doc("With --mpi: ranks per node, one shard writer each (0: $GESWEEP_RANKS_PER_NODE, else the "
                "ranks sharing a machine)"));
   }
@@ -642,7 +644,8 @@ int Run(const RunFlags& flags) {
 void AddRunFlags(CLI::App& app, RunFlags& flags) {
   app.add_option("study", flags.study, "Study file (TOML), e.g. studies/stability_map.toml")->required();
   app.add_option("-o,--output", flags.output, "Archive to write (HDF5), e.g. results/stability_map.h5");
-  app.add_option("--threads", flags.threads, "Worker threads, 1 to 4096 (default, when left out: all cores)");
+  app.add_option("--threads", flags.threads, "Worker threads, 1 to 4096 (default, when left out: all cores)")
+      ->check(ExactIntegerValidator("--threads", "threads", std::numeric_limits<int>::max()));
   app.add_option("--shard", flags.shard,
                  "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
   app.add_option("--format", flags.format, "Dry-run output: text (default) or json");

@@ -45,9 +45,11 @@ struct SensitivityFlags {
   /// choice's message would quote the value, these never did).
   template <class V>
   void Describe(V& v) {
-    v(Field("bootstrap", &bootstrap).Doc("Bootstrap resamples for the intervals (0: none)"));
-    v(Field("seed", &seed).Doc("Seed of the bootstrap: same seed, same intervals"));
-    v(Field("confidence_level", &confidence_level).Doc("Level of the intervals"));
+    v(Field("bootstrap", &bootstrap)
+          .Limit("bootstrap_resamples")
+          .Doc("Bootstrap resamples for the intervals (0: none)"));
+    v(Field("seed", &seed).Limit("seed").Doc("Seed of the bootstrap: same seed, same intervals"));
+    v(Field("confidence_level", &confidence_level).Limit("confidence_level").Doc("Level of the intervals"));
     v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
   }
 };
@@ -250,9 +252,7 @@ int Sensitivity(const SensitivityFlags& flags) {
   if (!policy)
     throw InputError("command line", "--failed-runs", flags.failed_runs, "expected drop_blocks or error");
   options.failed_runs = *policy;
-  if (flags.seed > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
-    throw InputError("command line", "--seed", std::to_string(flags.seed), "expected 0 to 2^63 - 1");
-  }
+  // --seed and --bootstrap are within their whole entries of the limits table (parsed exactly).
   options.bootstrap.resamples = flags.bootstrap;
   options.bootstrap.seed = flags.seed;
   options.bootstrap.confidence_level = flags.confidence_level;

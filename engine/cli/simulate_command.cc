@@ -159,10 +159,11 @@ void AddSimulateFlags(CLI::App& app, SimulateFlags& flags) {
                        "Series sampling interval, s (interpolated inside steps); default --step-s");
   auto* summary = app.add_flag("--summary-only", flags.summary_only, "Write the summary only, no series");
   output_dt->excludes(summary);
-  app.add_option("--seed", flags.seed,
-                 "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
-  app.add_option("--run-index", flags.run_index,
-                 "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
+  AddExactIntegerOption(app, "--seed", flags.seed, "seed",
+                        "Seed of the turbulence (a sweep's seed parameter); default 0 (docs/disturbance.md)");
+  AddExactIntegerOption(
+      app, "--run-index", flags.run_index, "run_index",
+      "Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep; default 0");
   app.add_option("--format", flags.format,
                  "csv (default: the time series; with --summary-only one summary row) or json "
                  "({\"run\", \"summary\", \"series\"})");

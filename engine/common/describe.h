@@ -74,6 +74,10 @@ struct FieldAttributes {
   FieldScope scope = FieldScope::kEverywhere;
   StoredAs stored = StoredAs::kFloat64;
   bool in_output = true;  ///< a result field: in CSV/JSON output
+  /// NaN is the field's unset state, its value then computed ("automatic"; docs/limits.md, "NaN").
+  /// NaN is never an input: a flag, a study key and a keyword argument refuse it; left out, the
+  /// field stays unset. CheckFieldRanges passes an unset field.
+  bool automatic = false;
   /// An array field: its components; CSV columns and archive columns are prefix + name
   std::span<const FieldComponent> components;
   /// An array field: the components stored in the archive, in archive order (empty: all)
@@ -104,6 +108,11 @@ class Field {
   /// Struct value = key value × scale.
   Field& Scale(double scale) {
     attributes_.scale = scale;
+    return *this;
+  }
+  /// NaN means "automatic" (FieldAttributes::automatic).
+  Field& Automatic() {
+    attributes_.automatic = true;
     return *this;
   }
   Field& CommandLineOnly() {
@@ -304,7 +313,9 @@ struct RangeChecker {
   template <class U>
   void operator()(const Field<U>& field) {
     if constexpr (std::floating_point<U>) {
-      if (!field.attributes().limit.empty()) CheckFieldLimit(field.attributes(), *field.value(), *source);
+      const FieldAttributes& a = field.attributes();
+      if (a.automatic && std::isnan(*field.value())) return;  // unset: computed
+      if (!a.limit.empty()) CheckFieldLimit(a, *field.value(), *source);
     }
   }
 };

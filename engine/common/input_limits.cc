@@ -1,5 +1,6 @@
 #include "engine/common/input_limits.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -16,6 +17,7 @@ constexpr double kMaximumRunDuration_s = 1e5;  // a day of flight: longer is a t
 constexpr double kMaximumStep_s = 10.0;
 constexpr double kMinimumStep_s = 1e-6;
 constexpr double kMaximumWeight = 1e12;
+constexpr double kMaximumExactInteger = 9007199254740992.0;  // 2^53
 
 InputLimit Closed(std::string_view name, std::string_view units, double minimum, double maximum,
                   std::string_view reason) {
@@ -32,6 +34,13 @@ InputLimit Closed(std::string_view name, std::string_view units, double minimum,
 InputLimit Positive(std::string_view name, std::string_view units, double maximum, std::string_view reason) {
   InputLimit limit = Closed(name, units, 0.0, maximum, reason);
   limit.minimum_exclusive = true;
+  return limit;
+}
+
+// [0, maximum], whole numbers only.
+InputLimit Whole(std::string_view name, double maximum, std::string_view reason) {
+  InputLimit limit = Closed(name, "1", 0.0, maximum, reason);
+  limit.whole = true;
   return limit;
 }
 
@@ -89,7 +98,7 @@ std::vector<InputLimit> BuildTable() {
                      "20 ft; beyond 50 m/s no airplane of this model lands"));
   t.push_back(Closed("turbulence_sigma_w_mps", "m/s", 0.0, 50.0,
                      "the specification's severe turbulence at low altitude is sigma_w of about 3 m/s; as "
-                     "wind_20ft_mps (a NaN run parameter: 0.1 |wind_20ft_mps|)"));
+                     "wind_20ft_mps (left out: 0.1 |wind_20ft_mps|)"));
   t.push_back(Closed("gust_amplitude_mps", "m/s", -50.0, 50.0,
                      "the specification's design gusts are a few m/s; as wind_20ft_mps"));
   t.push_back(Positive("gust_half_length_m", "m", 1e4,
@@ -99,8 +108,12 @@ std::vector<InputLimit> BuildTable() {
                      "the held noise loses the band above about 0.35 per interval (docs/disturbance.md): "
                      "beyond 1 s it misses the short period; below 0.1 ms it costs without changing "
                      "anything the model has"));
-  t.push_back(Closed("seed", "1", 0.0, 9007199254740992.0,
-                     "a whole number: every integer up to 2^53 is exact as a double"));
+  t.push_back(Whole("seed", kMaximumExactInteger,
+                    "2^53: every whole number up to it is exact as a double, so a seed reads back from an "
+                    "archive, JSON or Python as it was given"));
+  t.push_back(Whole("run_index", kMaximumExactInteger,
+                    "a run's index in its design (simulate and land replay run i of a sweep with it); as "
+                    "seed"));
 
   // The verification models' inputs.
   t.push_back(Closed("verification_input", "1", -1e9, 1e9,
@@ -154,7 +167,39 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(Closed("landing.plant_fixed_reference_height_m", "m", 0.0, kMaximumHeight_m, kHeightReason));
   t.push_back(Positive("landing.divergence_pitch_deg", "deg", 90.0,
                        "|pitch| beyond it ends the run as diverged: the small-angle model means nothing"));
+  t.push_back(
+      Closed("landing.flare_asymptote_m", "m", 0.0, 1000.0,
+             "the height the flare's exponential tends to: at most the largest flare height, and below "
+             "the run's flare_height_m"));
   t.push_back(Positive("landing.series_duration_s", "s", kMaximumRunDuration_s, kDurationReason));
+
+  // Settings of the estimators (sensitivity and dispersion flags).
+  t.push_back(Whole("bootstrap_resamples", 1e6,
+                    "bootstrap resamples of sensitivity's intervals (0: none): beyond 1e6 the percentiles "
+                    "change by less than their own sampling error, at the cost of a full pass each"));
+  InputLimit level = Closed("confidence_level", "1", 0.0, 1.0,
+                            "the level of a confidence interval: a probability strictly between 0 and 1");
+  level.minimum_exclusive = true;
+  level.maximum_exclusive = true;
+  t.push_back(level);
+
+  // Settings of the commands themselves (flags only).
+  t.push_back(
+      Whole("threads", 4096, "worker threads of a sweep (left out: every core); beyond 4096 is a typo"));
+  t.back().minimum = 1;
+  t.push_back(Whole("ranks_per_node", 4096,
+                    "with MPI, the shard writers per node (0: $GESWEEP_RANKS_PER_NODE, else the ranks "
+                    "sharing a machine); as threads"));
+  t.push_back(Positive("dry_run_budget_s", "s", 600,
+                       "the wall time a dry run's measurement may take: it is an estimate, not a run"));
+  t.push_back(Whole("query.memory_mb", 1048576,
+                    "memory for exact medians and quantiles, MiB: 1 MiB to 1 TiB; past it, more passes"));
+  t.back().minimum = 1;
+  t.push_back(Whole("query.limit", kMaximumExactInteger, "rows (or groups) shown: a count, as seed"));
+  t.push_back(Whole("max_groups", 1e8,
+                    "groups a query's aggregate or a dispersion holds in memory, about 100 bytes each per "
+                    "statistic: 1e8 is about 10 GB"));
+  t.back().minimum = 1;
 
   // Settings of the boundary analysis.
   t.push_back(Closed("boundary.tolerance_m", "m", 1e-9, 1e-3,
@@ -185,12 +230,24 @@ const InputLimit& RequireInputLimit(std::string_view name) {
 bool WithinLimit(const InputLimit& limit, double value) {
   if (limit.allows_infinity && value == std::numeric_limits<double>::infinity()) return true;
   if (!std::isfinite(value)) return false;
+  if (limit.whole && value != std::floor(value)) return false;
   const bool above_minimum = limit.minimum_exclusive ? value > limit.minimum : value >= limit.minimum;
   const bool below_maximum = limit.maximum_exclusive ? value < limit.maximum : value <= limit.maximum;
   return above_minimum && below_maximum;
 }
 
+namespace {
+
+// A whole bound in full digits (every bound of a whole entry is at most 2^53, exact as a double).
+std::string WholeText(double bound) { return std::to_string(static_cast<std::uint64_t>(bound)); }
+
+}  // namespace
+
 std::string DescribeLimit(const InputLimit& limit) {
+  if (limit.whole) {
+    return std::string("a whole number in ") + (limit.minimum_exclusive ? "(" : "[") +
+           WholeText(limit.minimum) + ", " + WholeText(limit.maximum) + (limit.maximum_exclusive ? ")" : "]");
+  }
   std::string text = std::string("a number in ") + (limit.minimum_exclusive ? "(" : "[") +
                      ShortNumber(limit.minimum) + ", " + ShortNumber(limit.maximum) +
                      (limit.maximum_exclusive ? ")" : "]");
@@ -208,6 +265,33 @@ void CheckInputLimit(std::string_view limit_name, double value, const std::strin
                      const std::string& key) {
   const std::string problem = LimitProblem(RequireInputLimit(limit_name), value);
   if (!problem.empty()) throw InputError(source, key, ShortNumber(value), problem);
+}
+
+std::uint64_t ParseExactInteger(std::string_view text, std::string_view limit_name, const std::string& source,
+                                const std::string& key) {
+  const InputLimit& limit = RequireInputLimit(limit_name);
+  GESWEEP_DEMAND(limit.whole && limit.minimum >= 0 && limit.maximum <= kMaximumExactInteger);
+  const auto refuse = [&](std::string_view how) -> std::uint64_t {
+    throw InputError(
+        source, key, std::string(text),
+        "expected " + DescribeLimit(limit) + std::string(how) + " (" + std::string(limit.reason) + ")");
+  };
+  const bool digits =
+      !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits) return refuse(" written in digits (no sign, fraction or exponent)");
+  // Digits only, so the value is exact as soon as it has at most 16 of them (2^53 has 16); more,
+  // after leading zeros, is past every whole entry's maximum.
+  const std::size_t first = std::min(text.find_first_not_of('0'), text.size());
+  if (text.size() - first > 16) return refuse("");
+  std::uint64_t value = 0;
+  for (std::size_t i = first; i < text.size(); ++i)
+    value = value * 10 + static_cast<std::uint64_t>(text[i] - '0');
+  const auto minimum = static_cast<std::uint64_t>(limit.minimum);
+  const auto maximum = static_cast<std::uint64_t>(limit.maximum);
+  const bool above = limit.minimum_exclusive ? value > minimum : value >= minimum;
+  const bool below = limit.maximum_exclusive ? value < maximum : value <= maximum;
+  if (!above || !below) return refuse("");
+  return value;
 }
 
 void CheckStepCount(double duration_s, double step_s, const std::string& source,

@@ -13,6 +13,7 @@
 /// with one meaning by its key alone ("relative_tolerance"); a family of parameters by its family
 /// ("scale_factor" for every scale.<coefficient>).
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +34,7 @@ struct InputLimit {
   bool minimum_exclusive = false;
   bool maximum_exclusive = false;
   bool allows_infinity = false;  ///< +inf accepted too (a height: free flight)
+  bool whole = false;            ///< a whole number (a seed, a run index, a count): see ParseExactInteger
   std::string_view reason;       ///< one line: why these bounds
 };
 
@@ -48,7 +50,8 @@ const InputLimit& RequireInputLimit(std::string_view name);
 /// Whether `value` is allowed.
 bool WithinLimit(const InputLimit& limit, double value);
 
-/// The allowed values in words: "a number in [1, 300] m/s", "a number in (0, 11000] m, or inf".
+/// The allowed values in words: "a number in [1, 300] m/s", "a number in (0, 11000] m, or inf"; a
+/// whole entry's bounds in full digits: "a whole number in [0, 9007199254740992]".
 std::string DescribeLimit(const InputLimit& limit);
 
 /// "" when `value` is allowed, else "expected <DescribeLimit> (<reason>)".
@@ -59,6 +62,15 @@ std::string LimitProblem(const InputLimit& limit, double value);
 /// ("--speed-mps") or a study key ("parameters.speed_mps").
 void CheckInputLimit(std::string_view limit_name, double value, const std::string& source,
                      const std::string& key);
+
+/// A whole number the limits table's entry `limit_name` (which must be `whole`) allows, parsed
+/// exactly from `text`: one or more decimal digits and nothing else -- no sign, no fraction, no
+/// exponent, no space -- never rounded through a double, never wrapped or clamped. Anything else, or
+/// a value past the entry's range, throws InputError(source, key, text, "expected a whole number in
+/// [0, 9007199254740992] written in digits (<reason>)"). The one parser of seeds, run indices and
+/// counts: flags, study files (a TOML integer, as its digits) and Python's keyword arguments (an int).
+std::uint64_t ParseExactInteger(std::string_view text, std::string_view limit_name, const std::string& source,
+                                const std::string& key);
 
 /// Throws InputError unless duration_s / step_s is at most kMaximumStepsPerRun, naming both values
 /// and both keys: "<step_key> = 1e-09: expected at most 1e8 steps per run: <duration_key> = 30 s /

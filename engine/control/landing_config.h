@@ -157,24 +157,28 @@ struct LandingConfig {
           .CommandLineOnly()
           .Doc("Flare height Ho, m"));
     v(Field("flare_time_constant_s", &flare_time_constant_s)
+          .Automatic()
           .Unit("s")
           .Limit("flare_tau_s")
           .CommandLineOnly()
-          .Doc(
-              "Flare time constant, s; nan (default): Ho/(u0 sin(glide slope)), continuous sink rate at Ho"));
+          .Doc("Flare time constant, s; default (left out): Ho/(u0 sin(glide slope)), continuous sink rate "
+               "at Ho"));
     v(Field("r_weight", &r_weight)
           .Unit("rad^2")
           .Limit("lqr.r")
           .CommandLineOnly()
           .Doc("LQR weight on the elevator command (rad^2)"));
     v(Field("design_height_m", &design_height_m)
+          .Automatic()
           .Unit("m")
           .Limit("landing.design_height_m")
-          .Doc("Height of the linear model used for the gain, m; nan (default): the wheel-contact height"));
+          .Doc("Height of the linear model used for the gain, m; default (left out): the wheel-contact "
+               "height"));
     v(Field("design_speed_mps", &design_speed_mps)
+          .Automatic()
           .Unit("m/s")
           .Limit("speed_mps")
-          .Doc("Speed of the linear model used for the gain, m/s; nan (default): the start speed"));
+          .Doc("Speed of the linear model used for the gain, m/s; default (left out): the start speed"));
     v(Field("design_h_derivatives", &design_h_derivatives)
           .Doc("Include Xh, Zh, Mh in the design model (the plant follows h_derivatives)"));
     v(Field("actuator_pole_per_s", &actuator_pole_per_s)
@@ -197,9 +201,11 @@ struct LandingConfig {
           .Doc("What the plant's h-derivative terms measure dH from: path (the reference trajectory) or "
                "fixed (plant_fixed_reference_height_m)"));
     v(Field("plant_fixed_reference_height_m", &plant_fixed_reference_height_m)
+          .Automatic()
           .Unit("m")
           .Limit("landing.plant_fixed_reference_height_m")
-          .Doc("Fixed reference height with plant_height_reference fixed, m; nan (default): the top table "
+          .Doc("Fixed reference height with plant_height_reference fixed, m; default (left out): the top "
+               "table "
                "height"));
     v(Field("relative_tolerance", &relative_tolerance)
           .Limit("relative_tolerance")
@@ -209,11 +215,12 @@ struct LandingConfig {
           .Doc("Dormand-Prince absolute tolerance"));
     v(Field("max_step_s", &max_step_s).Unit("s").Limit("landing.max_step_s").Doc("Largest step, s"));
     v(Field("time_limit_s", &time_limit_s)
+          .Automatic()
           .Unit("s")
           .Limit("landing.time_limit_s")
-          .Doc(
-              "Time limit, s (outcome no_touchdown); nan (default): twice the reference trajectory's time to "
-              "the wheels"));
+          .Doc("Time limit, s (outcome no_touchdown); default (left out): twice the reference trajectory's "
+               "time to "
+               "the wheels"));
     v(Field("output_interval_s", &output_interval_s)
           .Unit("s")
           .Limit("output_dt_s")
@@ -225,6 +232,7 @@ struct LandingConfig {
           .Doc("|pitch| that ends the run as diverged, deg"));
     v(Field("flare_asymptote_m", &flare_asymptote_m)
           .Unit("m")
+          .Limit("landing.flare_asymptote_m")
           .Doc("Height the flare's exponential tends to, m, in [0, Ho); 0: the ground, the paper's; the "
                "wheel-contact height makes touchdown a long float (docs/landing.md)"));
     v(Field("reset_compensator_at_flare", &reset_compensator_at_flare)
@@ -236,9 +244,11 @@ struct LandingConfig {
                "(relative_tolerance, absolute_tolerance)"));
     v(Field("seed", &seed)
           .CommandLineOnly()
+          .Limit("seed")
           .Doc("Seed of the turbulence (a sweep's seed parameter, docs/disturbance.md)"));
     v(Field("run_index", &run_index)
           .CommandLineOnly()
+          .Limit("run_index")
           .Doc("Run index i of the turbulence RunNoise(seed, i): replays run i of a sweep"));
   }
 };

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 
 namespace gesweep {
 
@@ -17,11 +18,10 @@ void ValidateDisturbanceOptions(const DisturbanceOptions& o, const std::string& 
     throw InputError(source, key, ShortNumber(value), std::string("expected ") + expected);
   };
   if (!std::isfinite(o.wind_20ft_mps)) fail("wind_20ft_mps", o.wind_20ft_mps, "a finite speed in m/s");
-  if (!std::isnan(o.turbulence_sigma_w_mps) &&
-      !(std::isfinite(o.turbulence_sigma_w_mps) && o.turbulence_sigma_w_mps >= 0.0)) {
-    fail("turbulence_sigma_w_mps", o.turbulence_sigma_w_mps,
-         "a finite number >= 0 (m/s), or nan: 0.1 |wind_20ft_mps|");
-  }
+  // NaN: unset (0.1 |wind_20ft_mps|); else the limits table's range (a flag or a keyword never
+  // gives NaN: DisturbanceOptions::Describe marks it Automatic).
+  if (!std::isnan(o.turbulence_sigma_w_mps))
+    CheckInputLimit("turbulence_sigma_w_mps", o.turbulence_sigma_w_mps, source, "turbulence_sigma_w_mps");
   if (!(o.turbulence_sample_interval_s >= 1e-4 && o.turbulence_sample_interval_s <= 1.0)) {
     fail("turbulence_sample_interval_s", o.turbulence_sample_interval_s, "a number in [0.0001, 1] (s)");
   }

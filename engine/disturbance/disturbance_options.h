@@ -71,8 +71,10 @@ struct DisturbanceOptions {
           .Doc("Continuous turbulence: none or dryden (low-altitude Dryden, docs/model.md section 9)"));
     v(Field("turbulence_sigma_w_mps", &turbulence_sigma_w_mps)
           .Unit("m/s")
+          .Limit("turbulence_sigma_w_mps")
+          .Automatic()
           .CommandLineOnly()
-          .Doc("Vertical turbulence intensity sigma_w, m/s, >= 0; nan (default): 0.1 |wind_20ft_mps| "
+          .Doc("Vertical turbulence intensity sigma_w, m/s; default (left out): 0.1 |wind_20ft_mps| "
                "as the specification's low-altitude model"));
     v(Field("gust_axis", &gust_axis)
           .CommandLineOnly()

@@ -61,10 +61,12 @@ struct BoundaryOptions {
           .Doc("hurwitz (every crossing of the imaginary axis, certified) or sampled (the former search, "
                "sigma sampled per table segment; for comparison)"));
     v(Field("lower_height_m", &lower_height_m)
+          .Automatic()
           .Unit("m")
           .Limit("height_m")
           .Doc("Lowest height scanned, m (default: the aircraft's wheel-contact height)"));
     v(Field("upper_height_m", &upper_height_m)
+          .Automatic()
           .Unit("m")
           .Limit("height_m")
           .Doc("Highest height scanned, m (default: the aircraft's last finite table height)"));

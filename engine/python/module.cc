@@ -91,12 +91,28 @@ std::string ToText(py::handle value, const std::string& key) {
   return value.cast<std::string>();
 }
 
-/// A Python whole number >= 0 (a seed, a run index) as U; InputError naming `key` otherwise.
+/// A Python int (or a NumPy integer: anything with __index__, never a bool or a float) within the
+/// limits table's whole entry `limit` (a seed, a run index), as U: parsed exactly from its digits by
+/// ParseExactInteger, as the command line's flags are; InputError naming `key` otherwise.
 template <class U>
-U ToCount(py::handle value, const std::string& key) {
-  const double number = ToNumber(value, key);
-  if (!(number >= 0 && number <= 9007199254740992.0 && number == std::floor(number)))
-    throw InputError(kArguments, key, ShortNumber(number), "expected a whole number >= 0");
+U ToCount(py::handle value, const std::string& key, const std::string& limit) {
+  const bool integral =
+      !py::isinstance<py::bool_>(value) && !py::isinstance<py::float_>(value) &&
+      py::hasattr(value, "__index__") &&
+      !(py::hasattr(value, "dtype") && py::str(value.attr("dtype")).cast<std::string>() == "bool");
+  if (!integral)
+    throw InputError(
+        kArguments, key, Repr(value),
+        "expected an int, " + DescribeLimit(RequireInputLimit(limit)) + " (not a float or a bool)");
+  PyObject* index = PyNumber_Index(value.ptr());
+  if (index == nullptr) {
+    PyErr_Clear();
+    throw InputError(kArguments, key, Repr(value),
+                     "expected an int, " + DescribeLimit(RequireInputLimit(limit)));
+  }
+  const std::string digits = py::str(py::reinterpret_steal<py::object>(index)).cast<std::string>();
+  const std::uint64_t number = ParseExactInteger(digits, limit, kArguments, key);
+  GESWEEP_DEMAND(number <= static_cast<std::uint64_t>(std::numeric_limits<U>::max()));
   return static_cast<U>(number);
 }
 
@@ -526,10 +542,20 @@ struct KwargsReader {
         if (!parsed) throw InputError(kArguments, key, "'" + text + "'", "expected " + EnumChoices<U>());
         *field.value() = *parsed;
       } else if constexpr (IntegerValue<U>) {
-        *field.value() = ToCount<U>(value, key);
+        GESWEEP_DEMAND(!a.limit.empty());  // every integer argument has its range, as its flag
+        *field.value() = ToCount<U>(value, key, std::string(a.limit));
       } else {
         static_assert(std::floating_point<U>);
-        *field.value() = ToNumber(value, key) * a.scale;
+        const double number = ToNumber(value, key);
+        // NaN is never an input (docs/limits.md): an automatic setting is left out, or None.
+        if (std::isnan(number)) {
+          throw InputError(kArguments, key, "nan",
+                           a.limit.empty()
+                               ? std::string("expected a number")
+                               : LimitProblem(RequireInputLimit(a.limit), number) +
+                                     (a.automatic ? "; leave it out (or None) for the automatic value" : ""));
+        }
+        *field.value() = number * a.scale;
       }
     }
   }
@@ -615,7 +641,7 @@ py::tuple Simulate(const PyAircraft& aircraft, const py::object& height_m, const
   // The turbulence is RunNoise(seed, run_index), as `gesweep simulate --seed --run-index`.
   for (auto [key, target] : {std::pair{"seed", &config.seed}, std::pair{"run_index", &config.run_index}}) {
     if (!options.contains(key)) continue;
-    *target = ToCount<std::uint64_t>(options[key], key);
+    *target = ToCount<std::uint64_t>(options[key], key, key);
     PyDict_DelItemString(options.ptr(), key);
   }
   keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "engine/common/errors.h"
+#include "engine/common/input_limits.h"
 #include "engine/common/toml_reader.h"
 #include "engine/sweep/hashing.h"
 
@@ -155,12 +156,33 @@ class StudyParser {
     if (output->Has("max_archive_gb")) study_.max_archive_gb = output->PositiveNumber("max_archive_gb");
   }
 
+  // Whether `id` takes whole numbers only (its limits-table entry is whole: the seed).
+  static bool IsWhole(ParameterId id) {
+    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
+    return info.kind == ParameterKind::kReal && RequireInputLimit(info.limit).whole;
+  }
+
   // A value of parameter `id` from a TOML node: a number for a real, true/false for a boolean, a
   // level name for a choice.
   double ParameterValue(ParameterId id, const toml::node& node, const std::string& key) const {
     const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
     double value = 0;
-    if (info.kind == ParameterKind::kReal) {
+    if (info.kind == ParameterKind::kReal && IsWhole(id)) {
+      // A seed: a TOML integer, its digits checked exactly (a float such as 9007199254740993.0 has
+      // been rounded by the TOML reader already, so none is taken).
+      auto i = node.as_integer();
+      if (!i) {
+        throw InputError(
+            source_, key, DescribeNode(node),
+            "expected " + DescribeAllowedValues(id) + " written as an integer (no fraction or exponent)",
+            NodeLine(node));
+      }
+      try {
+        value = static_cast<double>(ParseExactInteger(std::to_string(i->get()), info.limit, source_, key));
+      } catch (const InputError& error) {
+        throw InputError(source_, key, DescribeNode(node), error.expected(), NodeLine(node));
+      }
+    } else if (info.kind == ParameterKind::kReal) {
       if (auto f = node.as_floating_point()) {
         value = f->get();
       } else if (auto i = node.as_integer()) {
@@ -240,8 +262,12 @@ class StudyParser {
     if (!seed)
       design.Fail("seed", "",
                   "missing key, expected a seed (a whole number >= 0) so the design is reproducible");
-    if (*seed < 0) design.Fail("seed", std::to_string(*seed), "expected a whole number >= 0");
-    return static_cast<std::uint64_t>(*seed);
+    // The TOML integer's own digits, checked exactly against the table's seed entry (as --seed).
+    try {
+      return ParseExactInteger(std::to_string(*seed), "seed", source_, "seed");
+    } catch (const InputError& error) {
+      design.Fail("seed", error.value(), error.expected());
+    }
   }
 
   // The [[design.parameter]] tables of `design`: each a table of the keys `allowed` naming a catalogue
@@ -344,11 +370,32 @@ class StudyParser {
       const auto n = static_cast<std::int64_t>(spec[2]);
       parameter.values.reserve(static_cast<std::size_t>(n));
       const bool log = std::string(key) == "logspace";
+      if (IsWhole(parameter.id)) {
+        // A seed axis: whole ends and a whole spacing, the values start + k * spacing computed in
+        // integers (start + t * (stop - start) in doubles gives 0.9999999999999999 for 1 of [0, 1999]).
+        for (double end : {spec[0], spec[1]}) {
+          const std::string problem =
+              CheckParameterValue(parameter.id, end, study_.aircraft ? &*study_.aircraft : nullptr);
+          if (!problem.empty()) entry.Fail(key, FormatNumber(end), problem);
+        }
+        const double span = spec[1] - spec[0];
+        if (log || (n > 1 && std::fmod(span, static_cast<double>(n - 1)) != 0.0)) {
+          entry.Fail(
+              key,
+              "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
+              "expected whole values for " + info.name +
+                  ": linspace = [start, stop, n] with stop - start a multiple of n - 1 (or values = [...])");
+        }
+        const auto start = static_cast<std::int64_t>(spec[0]);
+        const std::int64_t spacing = n > 1 ? static_cast<std::int64_t>(span) / (n - 1) : 0;
+        for (std::int64_t k = 0; k < n; ++k)
+          parameter.values.push_back(static_cast<double>(start + k * spacing));
+      }
       if (log && !(spec[0] > 0 && spec[1] > 0)) {
         entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", ...]",
                    "expected start and stop > 0 (logspace spaces values geometrically between them)");
       }
-      for (std::int64_t k = 0; k < n; ++k) {
+      for (std::int64_t k = 0; k < n && !IsWhole(parameter.id); ++k) {
         const double t = n == 1 ? 0.0 : static_cast<double>(k) / static_cast<double>(n - 1);
         double value = log ? std::exp(std::log(spec[0]) + t * (std::log(spec[1]) - std::log(spec[0])))
                            : spec[0] + t * (spec[1] - spec[0]);
@@ -411,7 +458,7 @@ class StudyParser {
           if (key == "values") {
             ParseDiscrete(entry, parameter);
           } else {
-            if (info.kind != ParameterKind::kReal) {
+            if (info.kind != ParameterKind::kReal || IsWhole(parameter.id)) {
               entry.Fail(key, "[...]",
                          "expected values = [...] (with optional weights = [...]) for " + name +
                              ": a continuous distribution needs a real-valued parameter (" +
@@ -511,6 +558,13 @@ class StudyParser {
       entry.Fail("name", "",
                  "expected exactly one of uniform = [lower, upper] or loguniform = [lower, upper]");
     const char* key = entry.Has("uniform") ? "uniform" : "loguniform";
+    if (IsWhole(parameter.id)) {
+      entry.Fail(key, "[...]",
+                 "a range is sampled with fractions, but " +
+                     ParameterCatalog()[static_cast<std::size_t>(parameter.id)].name + " takes " +
+                     DescribeAllowedValues(parameter.id) +
+                     ": give it in [parameters], a grid or a list design");
+    }
     parameter.distribution = entry.Has("uniform") ? Distribution::kUniform : Distribution::kLogUniform;
     const std::vector<double> bounds = entry.NumberArray(key);
     if (bounds.size() != 2 || !(bounds[0] < bounds[1])) {
@@ -667,7 +721,15 @@ class StudyParser {
         const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
         double value = 0;
         bool parsed = false;
-        if (info.kind == ParameterKind::kReal) {
+        if (IsWhole(id)) {
+          // A seed: its digits, exactly (strtod would round 9007199254740993 to 2^53).
+          try {
+            value = static_cast<double>(ParseExactInteger(cells[c], info.limit, csv_source, header[c]));
+          } catch (const InputError& error) {
+            throw InputError(csv_source, header[c], Quote(cells[c]), error.expected(), line_number);
+          }
+          parsed = true;
+        } else if (info.kind == ParameterKind::kReal) {
           const std::string magnitude = MagnitudeProblem(cells[c]);
           if (!magnitude.empty()) {
             throw InputError(csv_source, header[c], Quote(cells[c]), "the number " + magnitude, line_number);

@@ -275,7 +275,7 @@ def special_study_cases():
         run("--resume with --force", ["run", str(good), "-o", "{out}/out.h5", "--resume", "--force"],
             "cannot be combined")
         run("bad --shard", ["run", str(good), "-o", "{out}/out.h5", "--shard", "3/3"], "expected i/N")
-        run("bad --threads", ["run", str(good), "-o", "{out}/out.h5", "--threads", "-2"], "expected 1 to 4096")
+        run("bad --threads", ["run", str(good), "-o", "{out}/out.h5", "--threads", "-2"], "--threads = -2: expected a whole number in [1, 4096]")
 
         # Shards and merges.
         shards = tmp / "shards"
@@ -439,7 +439,7 @@ def hardening_cases():
             ["run", str(ROOT / "study" / "step_count_rk4.toml"), "--dry-run"], "expected a number in [1e-06, 10] s",
             timeout=20)
         run("run --dry-run-budget-s 0", ["run", str(study), "--dry-run", "--dry-run-budget-s", "0"],
-            "--dry-run-budget-s = 0: expected a time in (0, 600] s")
+            "--dry-run-budget-s = 0: expected a number in (0, 600] s")
 
         # 3. One table of limits: every flag says flag, value and range.
         run("modes --speed-mps 1e308", ["modes", "--aircraft", str(ANCE), "--speed-mps", "1e308", "--heights-m", "2"],
@@ -472,7 +472,7 @@ def hardening_cases():
         run("simulate --turbulence-sigma-w-mps -1", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
                                                      "--speed-mps", "32", "--turbulence", "dryden",
                                                      "--turbulence-sigma-w-mps", "-1"],
-            "--turbulence-sigma-w-mps = -1: expected a finite number >= 0 (m/s)")
+            "--turbulence-sigma-w-mps = -1: expected a number in [0, 50] m/s")
         run("simulate --gust-half-length-m 0", ["simulate", "--aircraft", str(ANCE), "--height-m", "2",
                                                 "--speed-mps", "32", "--gust-half-length-m", "0"],
             "--gust-half-length-m = 0: expected a number in (0, 10000] m")
@@ -483,7 +483,7 @@ def hardening_cases():
             "--turbulence = 'foo': expected none or dryden")
         run("land --turbulence-sigma-w-mps -0.5", ["land", "--aircraft", str(ANCE), "--turbulence", "dryden",
                                                    "--turbulence-sigma-w-mps", "-0.5"],
-            "--turbulence-sigma-w-mps = -0.5: expected a finite number >= 0 (m/s)")
+            "--turbulence-sigma-w-mps = -0.5: expected a number in [0, 50] m/s")
         run("land --gust-half-length-m 0", ["land", "--aircraft", str(ANCE), "--gust-half-length-m", "0"],
             "--gust-half-length-m = 0: expected a number in (0, 10000] m")
         run("land --flare-asymptote-m 10", ["land", "--aircraft", str(ANCE), "--flare-asymptote-m", "10"],
@@ -492,7 +492,7 @@ def hardening_cases():
                                                   "euler"],
             "--turbulent-integrator = 'euler': expected rk4 or dopri5")
         run("run --threads 0", ["run", str(study), "-o", "{out}/out.h5", "--threads", "0"],
-            "--threads = 0: expected 1 to 4096 worker threads")
+            "--threads = 0: expected a whole number in [1, 4096]")
         (tmp / "past.csv").write_text("height_m\n2.0\n1e999\n")
         (tmp / "past.toml").write_text(study_text("aircraft.toml", '[design]\nkind = "list"\ncsv = "past.csv"\n'))
         run("design CSV value past a double", ["run", str(tmp / "past.toml"), "-o", "{out}/out.h5"],
@@ -638,8 +638,19 @@ def shard_identity_cases():
             del os.environ["HDF5_VDS_PREFIX"]
 
 
+def integer_cases():
+    """Issue 26, item 3: seeds, run indices and counts parsed exactly at every entry point
+    (integer_cases.py)."""
+    import integer_cases as made
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in made.cases(pathlib.Path(tmp) / "inputs"):
+            with tempfile.TemporaryDirectory() as out:
+                check(case.name, case.args, case.fragment, out)
+
+
 sys.path.insert(0, str(ROOT))
 shard_identity_cases()
+integer_cases()
 
 
 def damaged_archive_cases():

@@ -94,5 +94,43 @@ TEST(StepCount, RefusesMoreThanTheLimitNamingBothValues) {
   EXPECT_NO_THROW(CheckStepCount(1e5, 0.0, "s.toml", "duration_s", "max_step_s"));
 }
 
+// Whole numbers (issue 26, item 3): digits only, compared as integers, never through a double.
+TEST(ExactInteger, TakesDigitsWithinTheRangeExactly) {
+  EXPECT_EQ(ParseExactInteger("0", "seed", "command line", "--seed"), 0u);
+  EXPECT_EQ(ParseExactInteger("9007199254740992", "seed", "command line", "--seed"), 9007199254740992u);
+  EXPECT_EQ(ParseExactInteger("9007199254740991", "seed", "command line", "--seed"), 9007199254740991u);
+  EXPECT_EQ(ParseExactInteger("000000000000000000000042", "seed", "command line", "--seed"), 42u);
+  EXPECT_EQ(ParseExactInteger("4096", "threads", "command line", "--threads"), 4096u);
+}
+
+TEST(ExactInteger, RefusesEverythingElseNamingTheRange) {
+  const std::string range = "expected a whole number in [0, 9007199254740992]";
+  // 2^53 + 1 rounds to 2^53 as a double; 2^64 and 2^64 + 1 wrap or clamp in a uint64.
+  for (const char* text :
+       {"9007199254740993", "18446744073709551616", "18446744073709551617", "99999999999999999999999999999",
+        "-1", "+5", "1.5", "1e3", "5.0", "0x10", " 7", "7 ", "", "-0"}) {
+    try {
+      ParseExactInteger(text, "seed", "command line", "--seed");
+      ADD_FAILURE() << "took '" << text << "'";
+    } catch (const InputError& e) {
+      const std::string line = e.what();
+      EXPECT_EQ(line.rfind("command line: --seed", 0), 0u) << line;
+      EXPECT_NE(line.find(range), std::string::npos) << line;
+    }
+  }
+  EXPECT_THROW(ParseExactInteger("0", "threads", "command line", "--threads"), InputError);  // [1, 4096]
+  EXPECT_THROW(ParseExactInteger("4097", "threads", "command line", "--threads"), InputError);
+}
+
+TEST(ExactInteger, WholeEntriesRefuseFractionsAndSayWhole) {
+  const InputLimit& seed = RequireInputLimit("seed");
+  EXPECT_TRUE(seed.whole);
+  EXPECT_TRUE(WithinLimit(seed, 9007199254740992.0));
+  EXPECT_FALSE(WithinLimit(seed, 1.5));
+  EXPECT_FALSE(WithinLimit(seed, -1.0));
+  EXPECT_EQ(DescribeLimit(seed), "a whole number in [0, 9007199254740992]");
+  EXPECT_EQ(DescribeLimit(RequireInputLimit("run_index")), "a whole number in [0, 9007199254740992]");
+}
+
 }  // namespace
 }  // namespace gesweep

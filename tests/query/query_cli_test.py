@@ -159,7 +159,7 @@ class QueryAgainstH5py(unittest.TestCase):
             (["--columns", "height_m,damping_ratio"], "ambiguous column 'damping_ratio'"),
             (["--sort", "eigenvalues"], "not a per-run scalar column"),
             (["--format", "xml"], "expected table, csv or json"),
-            (["--limit", "-5"], "expected a count >= 0"),
+            (["--limit", "-5"], "--limit = -5: expected a whole number in [0, 9007199254740992]"),
             (["--describe", "--where", "height_m > 1"], "takes no --where"),
         ]
         for args, says in cases:

@@ -46,7 +46,7 @@ turbulence = "dryden"
 kind = "grid"
 [[design.parameter]]
 name = "seed"
-values = [5.0, 9.0]
+values = [5, 9]
 [[design.parameter]]
 name = "wind_20ft_mps"
 values = [-7.717, 5.0]
@@ -54,6 +54,33 @@ values = [-7.717, 5.0]
 [output]
 time_series = true
 output_dt_s = 0.05
+"""
+
+
+# Seeds as exact integers (issue 26, item 3): a linspace of seeds, whose 16th value the double formula
+# start + t (stop - start) made 14.999999999999998 (flown as seed 14, stored as 15 to a reader), and
+# seeds at the top of the range, 2^53 - 1 and 2^53, that a double holds exactly and the flags take.
+EXACT_STUDY = """format_version = 1
+name = "exact_replay"
+aircraft = "{aircraft}"
+
+[analyses.open_loop]
+duration_s = 4.0
+integrator = "rk4"
+step_s = 0.01
+input = "none"
+
+[parameters]
+height_m = 40.0
+speed_mps = 52.21
+turbulence = "dryden"
+wind_20ft_mps = -7.717
+
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "seed"
+{axis}
 """
 
 
@@ -119,6 +146,50 @@ class Replay(unittest.TestCase):
     def test_air_motion_series_are_stored(self):
         finite = self.w_g[np.isfinite(self.w_g)]
         self.assertGreater(np.abs(finite).max(), 0.1, "turbulence in the stored w_g")
+
+
+class ExactSeeds(unittest.TestCase):
+    """Every stored run replays with its stored seed and run index, seeds near 2^53 included."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.rows = {}
+        for name, axis in (("linspace", "linspace = [0, 22, 23]"),
+                           ("top", f"values = [{2**53 - 1}, {2**53}, {2**53 - 2}]")):
+            study = os.path.join(cls.tmp.name, name + ".toml")
+            with open(study, "w") as f:
+                f.write(EXACT_STUDY.format(aircraft=ANCE, axis=axis))
+            archive = os.path.join(cls.tmp.name, name + ".h5")
+            run("run", study, "-o", archive, "--quiet")
+            with h5py.File(archive, "r") as f:
+                cls.rows[name] = (f["runs/index"][:], f["design/seed"][:], f["results/open_loop/final_height_m"][:])
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def replay(self, seed, run_index):
+        return json.loads(run("simulate", "--aircraft", ANCE, "--height-m", "40", "--speed-mps", "52.21",
+                              "--duration-s", "4", "--integrator", "rk4", "--step-s", "0.01", "--input", "none",
+                              "--turbulence", "dryden", "--wind-20ft-mps", "-7.717", "--seed", seed,
+                              "--run-index", str(run_index), "--summary-only", "--format", "json"))["summary"]
+
+    def test_stored_seeds_are_whole(self):
+        index, seed, _ = self.rows["linspace"]
+        self.assertEqual(list(seed), [float(k) for k in range(23)])  # 15.0, not 14.999999999999998
+        self.assertEqual(list(self.rows["top"][1]), [2.0**53 - 1, 2.0**53, 2.0**53 - 2])
+
+    def test_every_run_replays_to_the_bit(self):
+        for name, (index, seed, height) in self.rows.items():
+            for row in range(len(index)):
+                if name == "linspace" and row not in (0, 13, 14, 15, 16, 22):
+                    continue  # the rows around the one the double formula got wrong
+                text = str(int(seed[row]))  # exact: every stored seed is at most 2^53
+                summary = self.replay(text, int(index[row]))
+                self.assertEqual(summary["final_height_m"], height[row], f"{name} run {row}: seed {text}")
+        # The two top seeds differ in their last bit only, and fly different turbulence.
+        self.assertNotEqual(self.rows["top"][2][0], self.rows["top"][2][1])
 
 
 if __name__ == "__main__":
