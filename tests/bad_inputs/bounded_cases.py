@@ -109,7 +109,7 @@ def read_only_directory(folder):
     if os.geteuid() == 0:
         mount = folder / "read_only_mount"
         mount.mkdir()
-        made = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=64m", "tmpfs", str(mount)],
+        made = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=1m", "tmpfs", str(mount)],
                               capture_output=True, text=True)
         if made.returncode == 0:
             return mount, "it is on a read-only file system"
