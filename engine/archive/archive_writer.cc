@@ -447,7 +447,8 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     const std::string why = error == EROFS    ? ": it is on a read-only file system"
                             : error == EACCES ? ": it is read-only for this user (permission denied)"
                                               : std::string(": ") + std::strerror(error);
-    throw InputError("command line", "output", shown, "cannot write in the directory " + directory.string() + why);
+    throw InputError("command line", "output", shown,
+                     "cannot write in the directory " + directory.string() + why);
   }
 
   std::unique_ptr<ArchiveWriter> writer(new ArchiveWriter(path, plan));

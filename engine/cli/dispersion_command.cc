@@ -194,8 +194,8 @@ void PrintTable(const Dispersion& d) {
         std::cout << "\n";
       };
       if (s.no_spread) {  // a stated result: nothing to fit
-        std::cout << std::left << std::setw(static_cast<int>(w)) << d.columns[c] << "no spread: all " << s.values
-                  << " values are " << General(s.minimum) << "; no tail law fitted\n";
+        std::cout << std::left << std::setw(static_cast<int>(w)) << d.columns[c] << "no spread: all "
+                  << s.values << " values are " << General(s.minimum) << "; no tail law fitted\n";
         continue;
       }
       row(s.normal, "normal up", s.normal.upper_quantiles);

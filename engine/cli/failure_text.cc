@@ -41,8 +41,9 @@ std::string FailureInWords(const std::exception& error) {
       std::string_view(error.what()).find("boost::math") != std::string_view::npos) {
     return "a numerical failure: an internal computation had no valid result" + std::string(kReport);
   }
-  return "an internal failure (" + std::string(dynamic_cast<const std::logic_error*>(&error) ? "logic" : "runtime") +
-         " error)" + std::string(kReport);
+  return "an internal failure (" +
+         std::string(dynamic_cast<const std::logic_error*>(&error) ? "logic" : "runtime") + " error)" +
+         std::string(kReport);
 }
 
 }  // namespace gesweep::cli

@@ -31,13 +31,12 @@ std::string Interval(const InputLimit& limit) {
 int RunLimits(const std::string& format) {
   RequireFormat(format, {"text", "markdown", "json"});
   if (format == "json") {
-    std::cout
-        << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun},
-                          {"maximum_noise_samples_per_run", kMaximumNoiseSamplesPerRun},
-                          {"maximum_run_memory_bytes", kMaximumRunMemoryBytes},
-                          {"limits", InputLimits()}}
-               .dump(2)
-        << "\n";
+    std::cout << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun},
+                                {"maximum_noise_samples_per_run", kMaximumNoiseSamplesPerRun},
+                                {"maximum_run_memory_bytes", kMaximumRunMemoryBytes},
+                                {"limits", InputLimits()}}
+                     .dump(2)
+              << "\n";
     return 0;
   }
   if (format == "markdown") {

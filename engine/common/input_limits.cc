@@ -250,7 +250,8 @@ void CheckNoiseSamples(double duration_s, double interval_s, const std::string& 
                        " turbulence noise samples per run, but " + duration_key + " = " +
                        ShortNumber(duration_s) + " s / " + interval_key + " = " + ShortNumber(interval_s) +
                        " s = " + ShortNumber(samples) + " samples (about " +
-                       ApproximateBytes(samples * kNoiseBytesPerSample) + " of memory and as many integration " +
+                       ApproximateBytes(samples * kNoiseBytesPerSample) +
+                       " of memory and as many integration " +
                        "steps); take a larger sample interval or a shorter run (docs/limits.md)");
 }
 
@@ -260,7 +261,8 @@ void CheckRunMemory(double bytes, const std::string& breakdown, const std::strin
   throw InputError(source, key, value,
                    "expected at most " + ApproximateBytes(kMaximumRunMemoryBytes) +
                        " of memory per run, but the run would hold " + breakdown + " = about " +
-                       ApproximateBytes(bytes) + "; take a larger interval or a shorter run (docs/limits.md)");
+                       ApproximateBytes(bytes) +
+                       "; take a larger interval or a shorter run (docs/limits.md)");
 }
 
 }  // namespace gesweep

@@ -130,11 +130,11 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSampleBytes;
   if (bytes > kMaximumRunMemoryBytes) {
     std::string breakdown = ShortNumber(series_samples) + " series samples (" + time_limit_key + " = " +
-                            ShortNumber(time_limit_s) + " s / output_interval_s) x " + ShortNumber(kSampleBytes) +
-                            " bytes";
+                            ShortNumber(time_limit_s) + " s / output_interval_s) x " +
+                            ShortNumber(kSampleBytes) + " bytes";
     if (noise_samples > 0)
-      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " + ShortNumber(kNoiseBytesPerSample) +
-                   " bytes";
+      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
+                   ShortNumber(kNoiseBytesPerSample) + " bytes";
     CheckRunMemory(bytes, breakdown, source, "output_interval_s", ShortNumber(c.output_interval_s));
   }
 }

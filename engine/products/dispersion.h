@@ -120,7 +120,8 @@ struct DispersionOptions {
   std::vector<std::string> limits;   ///< "column>value" or "column<value"
   std::string group_by;              ///< a column to group the runs by; empty: one group
   std::vector<double> percentiles = {0.1, 1, 5, 50, 95, 99, 99.9};
-  std::vector<double> tail_probabilities = {1e-3, 1e-4, 1e-5, 1e-6};  ///< each in [kLowestTailProbability, 0.5)
+  std::vector<double> tail_probabilities = {1e-3, 1e-4, 1e-5,
+                                            1e-6};  ///< each in [kLowestTailProbability, 0.5)
   double confidence_level = 0.95;
   int max_groups = 1000;
 };

@@ -470,11 +470,11 @@ void CheckOpenLoopWork(const OpenLoopConfig& config, const std::string& source) 
   constexpr double kSeriesBytesPerSample = 12 * sizeof(double);
   const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSeriesBytesPerSample;
   if (bytes > kMaximumRunMemoryBytes) {
-    std::string breakdown = ShortNumber(series_samples) + " series samples x " +
-                            ShortNumber(kSeriesBytesPerSample) + " bytes";
+    std::string breakdown =
+        ShortNumber(series_samples) + " series samples x " + ShortNumber(kSeriesBytesPerSample) + " bytes";
     if (noise_samples > 0)
-      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " + ShortNumber(kNoiseBytesPerSample) +
-                   " bytes";
+      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
+                   ShortNumber(kNoiseBytesPerSample) + " bytes";
     CheckRunMemory(bytes, breakdown, source, "series_interval_s", ShortNumber(config.series_interval_s));
   }
 }
