@@ -90,6 +90,15 @@ class OpenLoopAnalysis final : public Analysis {
                config_.elevator.kind != ElevatorInputKind::kNone &&
                config_.elevator.kind != ElevatorInputKind::kStep) {
       out << "expected pulse_duration_s > 0 for a " << ToString(config_.elevator.kind);
+    } else {
+      // Bounded work (docs/limits.md): the noise table and the series of this run, before any run.
+      OpenLoopConfig config = config_;
+      ApplyDisturbanceParameters(p, config.disturbance);
+      try {
+        CheckOpenLoopWork(config, "open_loop");
+      } catch (const InputError& e) {
+        out << e.key() << " = " << e.value() << ": " << e.expected();
+      }
     }
     return out.str();
   }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -441,7 +442,13 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     throw RequestError("command line", "output", shown, "already exists", "resume_or_force");
   }
   if (access(directory.c_str(), W_OK) != 0) {
-    throw InputError("command line", "output", shown, "cannot write in the directory " + directory.string());
+    // Why, in words: a read-only file system or directory is not "not enough space".
+    const int error = errno;
+    const std::string why = error == EROFS    ? ": it is on a read-only file system"
+                            : error == EACCES ? ": it is read-only for this user (permission denied)"
+                                              : std::string(": ") + std::strerror(error);
+    throw InputError("command line", "output", shown,
+                     "cannot write in the directory " + directory.string() + why);
   }
 
   std::unique_ptr<ArchiveWriter> writer(new ArchiveWriter(path, plan));

@@ -27,7 +27,7 @@ namespace gesweep {
 // own names; ToJson adds the settings and groups, the column's name and fits, the limit's text and
 // intervals. Non-finite numbers are null.
 GESWEEP_JSON_MEMBERS(ColumnDispersion, runs, values, failed, without_value, pending, mean, standard_deviation,
-                     minimum, maximum, percentiles)
+                     minimum, maximum, percentiles, no_spread)
 GESWEEP_JSON_MEMBERS(Dispersion, archive, study_name, design_kind, run_count, columns, column_units, group_by)
 GESWEEP_JSON_MEMBERS(LimitExceedance, exceed, values, failed, probability, normal_probability,
                      gumbel_probability, gev_probability)
@@ -195,6 +195,11 @@ void PrintTable(const Dispersion& d) {
         for (double q : quantiles) std::cout << std::setw(12) << General(q);
         std::cout << "\n";
       };
+      if (s.no_spread) {  // a stated result: nothing to fit
+        std::cout << std::left << std::setw(static_cast<int>(w)) << d.columns[c] << "no spread: all "
+                  << s.values << " values are " << General(s.minimum) << "; no tail law fitted\n";
+        continue;
+      }
       row(s.normal, "normal up", s.normal.upper_quantiles);
       row(s.normal, "normal low", s.normal.lower_quantiles);
       row(s.gumbel_max, "gumbel max", s.gumbel_max.upper_quantiles);

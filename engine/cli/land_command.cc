@@ -79,7 +79,8 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
     ValidateLandingConfig(config, model.aircraft(), "command line");
   } catch (const InputError& error) {
     std::string expected = error.expected();
-    for (const char* field : {"time_limit_s", "max_step_s"}) {  // inside the step-count sentence
+    for (const char* field : {"time_limit_s", "max_step_s", "turbulence_sample_interval_s",
+                              "output_interval_s"}) {  // inside the step-count and work sentences
       const std::string from = std::string(field) + " ";
       const auto at = expected.find(from);
       if (at != std::string::npos)

@@ -34,9 +34,12 @@ std::string Interval(const InputLimit& limit) {
 int RunLimits(const std::string& format) {
   RequireFormat(format, {"text", "markdown", "json"});
   if (format == "json") {
-    std::cout
-        << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun}, {"limits", InputLimits()}}.dump(2)
-        << "\n";
+    std::cout << nlohmann::json{{"maximum_steps_per_run", kMaximumStepsPerRun},
+                                {"maximum_noise_samples_per_run", kMaximumNoiseSamplesPerRun},
+                                {"maximum_run_memory_bytes", kMaximumRunMemoryBytes},
+                                {"limits", InputLimits()}}
+                     .dump(2)
+              << "\n";
     return 0;
   }
   if (format == "markdown") {
@@ -56,6 +59,12 @@ int RunLimits(const std::string& format) {
     std::cout << "\nAt most " << ShortNumber(kMaximumStepsPerRun)
               << " integration steps per run: duration_s / step_s (RK4), duration_s / max_step_s (dopri5 "
                  "with a largest step), a landing's time limit / max_step_s.\n";
+    std::cout << "\nAt most " << ShortNumber(kMaximumNoiseSamplesPerRun)
+              << " turbulence noise samples per run: duration_s (or a landing's time limit) / "
+                 "turbulence_sample_interval_s, "
+              << ShortNumber(kNoiseBytesPerSample) << " bytes each.\n";
+    std::cout << "\nAt most " << ApproximateBytes(kMaximumRunMemoryBytes)
+              << " of memory per run for its own tables: the noise samples and the time series it keeps.\n";
     return 0;
   }
   std::size_t name_width = 5, range_width = 5;
@@ -70,6 +79,9 @@ int RunLimits(const std::string& format) {
   }
   std::cout << "# at most " << ShortNumber(kMaximumStepsPerRun)
             << " integration steps per run (duration / step, or a landing's time limit / max_step_s)\n";
+  std::cout << "# at most " << ShortNumber(kMaximumNoiseSamplesPerRun)
+            << " turbulence noise samples per run (duration / turbulence_sample_interval_s), and "
+            << ApproximateBytes(kMaximumRunMemoryBytes) << " of memory per run for its noise and series\n";
   return 0;
 }
 

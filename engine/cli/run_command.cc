@@ -22,6 +22,7 @@
 #include "engine/archive/write_cost.h"
 #include "engine/cli/command.h"
 #include "engine/cli/described_flags.h"
+#include "engine/cli/failure_text.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/request_names.h"
 #include "engine/cli/signals.h"
@@ -372,6 +373,9 @@ constexpr std::uintmax_t kMinimumFreeBytes = 16u << 20;
 void CheckFreeSpace(const RunFlags& flags, const SweepPlan& plan) {
   std::filesystem::path directory = std::filesystem::path(flags.output).parent_path();
   if (directory.empty()) directory = ".";
+  // A directory that cannot be written at all (a read-only file system, a read-only directory) is
+  // the writer's to refuse, with its reason: "not enough space" would send the person the wrong way.
+  if (access(directory.c_str(), W_OK) != 0) return;
   std::error_code ec;
   const std::filesystem::space_info space = std::filesystem::space(directory, ec);
   if (ec) return;  // unknown (the writer reports a missing directory itself)
@@ -629,7 +633,7 @@ int Run(const RunFlags& flags) {
       return failed(e.cause());
     } catch (const std::exception& e) {
       printer.Stop();
-      return failed(e.what());
+      return failed(FailureInWords(e));  // never a library's own text (issue 26, item 6)
     }
   }
   try {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "engine/common/errors.h"
@@ -304,6 +305,48 @@ void CheckStepCount(double duration_s, double step_s, const std::string& source,
                        " integration steps per run, but " + duration_key + " = " + ShortNumber(duration_s) +
                        " s / " + step_key + " = " + ShortNumber(step_s) + " s = " + ShortNumber(steps) +
                        " steps; take a larger step or a shorter run (docs/limits.md)");
+}
+
+double NoiseSampleCount(double duration_s, double interval_s) {
+  if (!(interval_s > 0.0) || !std::isfinite(interval_s) || !(duration_s > 0.0) || !std::isfinite(duration_s))
+    return 0.0;
+  return std::floor(duration_s / interval_s);
+}
+
+std::string ApproximateBytes(double bytes) {
+  const char* units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
+  int unit = 0;
+  while (unit < 5 && bytes >= 1000.0) {
+    bytes /= 1000.0;
+    ++unit;
+  }
+  char text[48];
+  std::snprintf(text, sizeof text, "%.3g %s", bytes, units[unit]);
+  return text;
+}
+
+void CheckNoiseSamples(double duration_s, double interval_s, const std::string& source,
+                       const std::string& duration_key, const std::string& interval_key) {
+  const double samples = NoiseSampleCount(duration_s, interval_s);
+  if (samples <= kMaximumNoiseSamplesPerRun) return;
+  throw InputError(source, interval_key, ShortNumber(interval_s),
+                   "expected at most " + ShortNumber(kMaximumNoiseSamplesPerRun) +
+                       " turbulence noise samples per run, but " + duration_key + " = " +
+                       ShortNumber(duration_s) + " s / " + interval_key + " = " + ShortNumber(interval_s) +
+                       " s = " + ShortNumber(samples) + " samples (about " +
+                       ApproximateBytes(samples * kNoiseBytesPerSample) +
+                       " of memory and as many integration " +
+                       "steps); take a larger sample interval or a shorter run (docs/limits.md)");
+}
+
+void CheckRunMemory(double bytes, const std::string& breakdown, const std::string& source,
+                    const std::string& key, const std::string& value) {
+  if (bytes <= kMaximumRunMemoryBytes) return;
+  throw InputError(source, key, value,
+                   "expected at most " + ApproximateBytes(kMaximumRunMemoryBytes) +
+                       " of memory per run, but the run would hold " + breakdown + " = about " +
+                       ApproximateBytes(bytes) +
+                       "; take a larger interval or a shorter run (docs/limits.md)");
 }
 
 }  // namespace gesweep

@@ -25,6 +25,21 @@ namespace gesweep {
 /// Eq. (1) take about 7 s on one core (docs/limits.md); more is almost certainly a typo in a step.
 inline constexpr double kMaximumStepsPerRun = 1e8;
 
+/// The most turbulence noise samples one run may hold (duration / turbulence_sample_interval_s). A
+/// turbulent run builds its table of held samples (instants, segments) before its first step, and
+/// every sample is an integration step of its own: 1e7 covers the longest run (1e5 s) at the
+/// default interval of 0.01 s, and 1000 s at the finest (1e-4 s); 1e9 would take about 32 GB.
+inline constexpr double kMaximumNoiseSamplesPerRun = 1e7;
+
+/// Bytes one held noise sample takes while a run is set up and flown: its instant (8), its segment
+/// of the field's table (16) and the open loop's elevator of the segment (8).
+inline constexpr double kNoiseBytesPerSample = 32;
+
+/// The most memory one run's own tables may take, bytes (its noise table and the time series it
+/// keeps until it is stored): 1 GiB, so that a sweep on every core of a node (a run in flight per
+/// worker thread) stays within a node's memory. The noise table alone is at most 320 MB.
+inline constexpr double kMaximumRunMemoryBytes = 1073741824.0;
+
 /// The range of one input quantity. Values are finite unless `allows_infinity` (then +inf also).
 struct InputLimit {
   std::string_view name;   ///< see the file comment
@@ -78,5 +93,24 @@ std::uint64_t ParseExactInteger(std::string_view text, std::string_view limit_na
 /// adaptive method without a largest step) or either value is not finite (checked elsewhere).
 void CheckStepCount(double duration_s, double step_s, const std::string& source,
                     const std::string& duration_key, const std::string& step_key);
+
+/// The noise samples a turbulent run of duration_s holds at interval_s: floor(duration / interval).
+/// 0 when either is not finite and positive (checked elsewhere).
+double NoiseSampleCount(double duration_s, double interval_s);
+
+/// Throws InputError unless NoiseSampleCount(duration_s, interval_s) is at most
+/// kMaximumNoiseSamplesPerRun, naming both values, both keys, the count and the memory it would take:
+/// "<interval_key> = 0.0001: expected at most 1e+07 turbulence noise samples per run, but
+/// <duration_key> = 100000 s / <interval_key> = 0.0001 s = 1e+09 samples (about 32 GB)".
+void CheckNoiseSamples(double duration_s, double interval_s, const std::string& source,
+                       const std::string& duration_key, const std::string& interval_key);
+
+/// Throws InputError(source, key, value, ...) unless `bytes` is at most kMaximumRunMemoryBytes;
+/// `breakdown` says what they are ("1e+08 series samples x 96 bytes"), and goes into the message.
+void CheckRunMemory(double bytes, const std::string& breakdown, const std::string& source,
+                    const std::string& key, const std::string& value);
+
+/// Bytes in words: "32 GB", "1.07 GB", "320 MB", "4 kB" (decimal units, 3 significant digits).
+std::string ApproximateBytes(double bytes);
 
 }  // namespace gesweep

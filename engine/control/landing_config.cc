@@ -6,6 +6,7 @@
 
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/control/landing_simulation.h"
 
 namespace gesweep {
 namespace {
@@ -116,6 +117,26 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
           "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
   CheckStepCount(time_limit_s, c.max_step_s, source,
                  std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s", "max_step_s");
+  // Bounded work (docs/limits.md): the noise table built before the first step, and the series kept.
+  const std::string time_limit_key = std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s";
+  const bool turbulent = c.disturbance.turbulence == TurbulenceModel::kDryden;
+  const double noise_samples =
+      turbulent ? NoiseSampleCount(time_limit_s, c.disturbance.turbulence_sample_interval_s) : 0.0;
+  CheckNoiseSamples(turbulent ? time_limit_s : 0.0, c.disturbance.turbulence_sample_interval_s, source,
+                    time_limit_key, "turbulence_sample_interval_s");
+  const double series_samples =
+      c.output_interval_s > 0.0 ? std::floor(time_limit_s / c.output_interval_s) + 2 : 0.0;
+  constexpr double kSampleBytes = sizeof(LandingSample);
+  const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSampleBytes;
+  if (bytes > kMaximumRunMemoryBytes) {
+    std::string breakdown = ShortNumber(series_samples) + " series samples (" + time_limit_key + " = " +
+                            ShortNumber(time_limit_s) + " s / output_interval_s) x " +
+                            ShortNumber(kSampleBytes) + " bytes";
+    if (noise_samples > 0)
+      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
+                   ShortNumber(kNoiseBytesPerSample) + " bytes";
+    CheckRunMemory(bytes, breakdown, source, "output_interval_s", ShortNumber(c.output_interval_s));
+  }
 }
 
 }  // namespace gesweep

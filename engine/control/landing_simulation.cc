@@ -382,8 +382,11 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
   std::vector<double> breakpoints;
   std::vector<DisturbanceField::Segment> field_segments;
   if constexpr (kAir) {
-    breakpoints = field->Breakpoints(0.0, result.time_limit_s);
-    field_segments = field->SegmentTable(breakpoints, 0.0);
+    // SIGINT/SIGTERM are read while the noise table is built (up to kMaximumNoiseSamplesPerRun
+    // instants): a stop empties it and Integrate stops before its first step.
+    breakpoints = field->Breakpoints(0.0, result.time_limit_s, cancel);
+    field_segments = field->SegmentTable(breakpoints, 0.0, cancel);
+    if (cancel != nullptr && cancel->load()) breakpoints.clear();
   }
   LandingProblem<kAir> problem(plant, config, result.design, result, store_series, field, &field_segments);
   typename LandingProblem<kAir>::State x0{};

@@ -72,11 +72,15 @@ std::int64_t DisturbanceField::SampleIndexAt(double t) const {
   return k;
 }
 
-std::vector<double> DisturbanceField::Breakpoints(double start_s, double end_s) const {
+std::vector<double> DisturbanceField::Breakpoints(double start_s, double end_s,
+                                                  const std::atomic<bool>* cancel) const {
   std::vector<double> b;
   if (turbulent_) {
     const double dt = options_.turbulence_sample_interval_s;
     for (std::int64_t k = SampleIndexAt(start_s) + 1;; ++k) {
+      if (cancel != nullptr && k % kCancelCheckInterval == 0 && cancel->load(std::memory_order_relaxed)) {
+        return {};  // SIGINT/SIGTERM while the table is built: the run stops before its first step
+      }
       const double t = static_cast<double>(k) * dt;
       if (!(t < end_s)) break;
       if (t > start_s) b.push_back(t);
@@ -90,9 +94,11 @@ std::vector<double> DisturbanceField::Breakpoints(double start_s, double end_s) 
 }
 
 std::vector<DisturbanceField::Segment> DisturbanceField::SegmentTable(std::span<const double> breakpoints_s,
-                                                                      double start_s) const {
+                                                                      double start_s,
+                                                                      const std::atomic<bool>* cancel) const {
   std::vector<Segment> table(breakpoints_s.size() + 1);
   for (std::size_t s = 0; s < table.size(); ++s) {
+    if (cancel != nullptr && s % kCancelCheckInterval == 0 && cancel->load(std::memory_order_relaxed)) break;
     const double t = s == 0 ? start_s : breakpoints_s[s - 1];  // the segment's left end
     table[s].sample_index = SampleIndexAt(t);
     table[s].gust_started = t >= options_.gust_start_s;

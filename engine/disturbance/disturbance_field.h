@@ -16,6 +16,7 @@
 /// (a one-sample cache of the noise and a one-height cache of the height's terms): one field per run.
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -76,11 +77,19 @@ class DisturbanceField {
 
   /// The instants where the field's input jumps in (start_s, end_s), ascending: k·Δt_n (k ≥ 1) with
   /// turbulence, and gust_start_s with a gust.
-  std::vector<double> Breakpoints(double start_s, double end_s) const;
+  /// `cancel` (may be null) is read every kCancelCheckInterval instants: once it is true the list
+  /// is abandoned and empty (the run is being stopped; the integrator stops before its first step).
+  std::vector<double> Breakpoints(double start_s, double end_s,
+                                  const std::atomic<bool>* cancel = nullptr) const;
 
   /// For each segment of an ascending breakpoint list (segment s = [b_{s−1}, b_s), segment 0 from
   /// start_s, as integrator.h numbers them) the Segment in force. The list must contain Breakpoints().
-  std::vector<Segment> SegmentTable(std::span<const double> breakpoints_s, double start_s) const;
+  /// `cancel` as for Breakpoints: once true the table keeps its size but is left unfilled.
+  std::vector<Segment> SegmentTable(std::span<const double> breakpoints_s, double start_s,
+                                    const std::atomic<bool>* cancel = nullptr) const;
+
+  /// How many table entries are built between two reads of a cancellation flag (a few ms of work).
+  static constexpr std::int64_t kCancelCheckInterval = 1 << 16;
 
   /// The number of sample instants k·Δt_n (k ≥ 1) at or before t: the held sample's index at t.
   std::int64_t SampleIndexAt(double time_s) const;

@@ -112,6 +112,9 @@ ProportionInterval ClopperPearsonInterval(std::int64_t k, std::int64_t n, double
 
 LocationScale FitNormal(const std::vector<double>& values) {
   if (values.size() < 2) return {kNaN, kNaN};
+  // One value repeated has no spread, whatever the rounding of its mean makes of Σ (x − x̄)².
+  const auto [lowest, highest] = std::minmax_element(values.begin(), values.end());
+  if (*lowest == *highest) return {kNaN, kNaN};
   const double mean = Mean(values);
   const double sigma = std::sqrt(SumOfSquares(values, mean) / static_cast<double>(values.size()));
   if (!(sigma > 0)) return {kNaN, kNaN};
@@ -145,10 +148,19 @@ LocationScale FitGumbelMax(const std::vector<double>& values) {
     return b + weighted / weights;
   };
   double low = 1e-6, high = 1.0;
-  while (g(high) < 0) high *= 2;
+  // g(low) < 0 < g(high) for any sample with a spread; a sample without one (its values equal but
+  // for the rounding of their mean) has none to fit: not fitted, never an exception out of Boost.
+  if (!(g(low) < 0)) return {kNaN, kNaN};
+  while (g(high) < 0 && high < 1e6) high *= 2;
+  if (!(g(high) > 0)) return {kNaN, kNaN};
   std::uintmax_t iterations = 200;
-  const auto bracket = boost::math::tools::toms748_solve(
-      g, low, high, boost::math::tools::eps_tolerance<double>(52), iterations);
+  std::pair<double, double> bracket;
+  try {
+    bracket = boost::math::tools::toms748_solve(g, low, high, boost::math::tools::eps_tolerance<double>(52),
+                                                iterations);
+  } catch (const std::exception&) {  // Boost's evaluation_error: no root to the precision asked
+    return {kNaN, kNaN};
+  }
   const double b = 0.5 * (bracket.first + bracket.second);
   const double location_y = -b * (log_sum(b) - std::log(static_cast<double>(y.size())));
   return {mean + s * location_y, s * b};
@@ -381,6 +393,25 @@ ColumnDispersion Describe(std::vector<double>& sample, const DispersionOptions& 
   }
   for (double p : options.percentiles) c.percentiles.push_back(Percentile(sample, p));
   c.normal.law = "normal";
+  c.gumbel_max.law = "gumbel_max";
+  c.gumbel_min.law = "gumbel_min";
+  c.gev_max.law = "gev_max";
+  if (sample.size() >= 2 && sample.front() == sample.back()) {
+    // No spread: a stated result, not a fit. The mean is the value itself (the sum's rounding left
+    // out), the spread 0, and the laws' parameters and quantiles NaN (nothing to fit).
+    c.no_spread = true;
+    c.mean = sample.front();
+    c.standard_deviation = 0.0;
+    for (TailFit* fit : {&c.normal, &c.gumbel_max, &c.gumbel_min, &c.gev_max}) {
+      fit->fit = {kNaN, kNaN};
+      fit->goodness.statistic = kNaN;
+    }
+    c.gev_max.shape = kNaN;
+    const std::vector<double> none(options.tail_probabilities.size(), kNaN);
+    c.normal.upper_quantiles = c.normal.lower_quantiles = c.gumbel_max.upper_quantiles = none;
+    c.gumbel_min.lower_quantiles = c.gev_max.upper_quantiles = none;
+    return c;
+  }
   c.normal.fit = FitNormal(sample);
   c.normal.goodness = AndersonDarlingNormal(sample);
   c.gumbel_max.law = "gumbel_max";
@@ -451,12 +482,15 @@ void CheckDispersionOptions(const DispersionOptions& options) {
       throw InputError("command line", "percentiles", ShortNumber(p), "expected 0 to 100");
   }
   for (double p : options.tail_probabilities) {
-    if (!(p > 0 && p < 0.5))
-      throw InputError("command line", "tail_probabilities", ShortNumber(p), "expected 0 < p < 0.5");
+    if (!(p >= kLowestTailProbability && p < 0.5))
+      throw InputError("command line", "tail_probabilities", ShortNumber(p),
+                       "expected a probability in [" + ShortNumber(kLowestTailProbability) +
+                           ", 0.5) (the upper quantiles are taken at 1 - p in double precision: below " +
+                           ShortNumber(kLowestTailProbability) + " p keeps fewer than 4 digits)");
   }
-  if (!(options.confidence_level > 0 && options.confidence_level < 1)) {
+  if (!(options.confidence_level > 0 && options.confidence_level <= kHighestConfidenceLevel)) {
     throw InputError("command line", "confidence_level", ShortNumber(options.confidence_level),
-                     "expected a level between 0 and 1, e.g. 0.95");
+                     "expected a level in (0, 1 - 1e-12], e.g. 0.95");
   }
 }
 
@@ -733,6 +767,10 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
     per_column("mean", column_units, "Mean", [](const ColumnDispersion& c) { return c.mean; });
     per_column("standard_deviation", column_units, "Standard deviation (divisor n - 1)",
                [](const ColumnDispersion& c) { return c.standard_deviation; });
+    per_count("no_spread",
+              "1: every value of the sample is the same (standard deviation 0, no tail law fitted: the fits' "
+              "parameters and quantiles are NaN); 0 otherwise",
+              [](const ColumnDispersion& c) { return static_cast<std::int64_t>(c.no_spread ? 1 : 0); });
     per_column("minimum", column_units, "Smallest value",
                [](const ColumnDispersion& c) { return c.minimum; });
     per_column("maximum", column_units, "Largest value", [](const ColumnDispersion& c) { return c.maximum; });

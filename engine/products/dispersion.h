@@ -108,12 +108,20 @@ struct DispersionLimit {
 };
 
 /// What to compute.
+/// The smallest tail probability p whose quantiles are computed: the upper ones are taken at 1 − p
+/// in double precision, which holds p to 4 significant digits (5.5e-17 / p) down to 1e-12; below
+/// 1.1e-16, 1 − p is 1 and the quantile infinite.
+inline constexpr double kLowestTailProbability = 1e-12;
+/// The highest confidence level of the intervals: z is taken at 0.5 + 0.5 level, as the tails above.
+inline constexpr double kHighestConfidenceLevel = 1.0 - 1e-12;
+
 struct DispersionOptions {
   std::vector<std::string> columns;  ///< empty: the landing defaults the archive has
   std::vector<std::string> limits;   ///< "column>value" or "column<value"
   std::string group_by;              ///< a column to group the runs by; empty: one group
   std::vector<double> percentiles = {0.1, 1, 5, 50, 95, 99, 99.9};
-  std::vector<double> tail_probabilities = {1e-3, 1e-4, 1e-5, 1e-6};
+  std::vector<double> tail_probabilities = {1e-3, 1e-4, 1e-5,
+                                            1e-6};  ///< each in [kLowestTailProbability, 0.5)
   double confidence_level = 0.95;
   int max_groups = 1000;
 };
@@ -141,6 +149,9 @@ struct ColumnDispersion {
   std::int64_t pending = 0;        ///< not run yet
   double mean = 0, standard_deviation = 0, minimum = 0, maximum = 0;  ///< standard deviation: n − 1
   std::vector<double> percentiles;                                    ///< one per option
+  /// Every value of the sample is the same (two or more values): its standard deviation is 0, every
+  /// percentile is that value, and no tail law is fitted (the fits and their quantiles are NaN).
+  bool no_spread = false;
   TailFit normal, gumbel_max, gumbel_min, gev_max;
 };
 

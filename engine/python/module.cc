@@ -32,6 +32,7 @@
 #include "engine/archive/archive_error.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_writer.h"
+#include "engine/cli/failure_text.h"
 #include "engine/cli/request_names.h"
 #include "engine/common/describe.h"
 #include "engine/common/described_values.h"
@@ -1027,6 +1028,14 @@ PYBIND11_MODULE(_gesweep, m) {
       PyErr_SetObject(InputErrorType().ptr(), error.ptr());
     } catch (const ArchiveError& e) {
       PyErr_SetString(ArchiveErrorType().ptr(), e.what());
+    } catch (const std::domain_error& e) {
+      // Boost.Math's and the standard library's numerical failures: the project's words, not theirs
+      // (issue 26, item 6). pybind11's own exceptions are none of these, and pass on to its translators.
+      PyErr_SetString(PyExc_RuntimeError, cli::FailureInWords(e).c_str());
+    } catch (const std::overflow_error& e) {
+      PyErr_SetString(PyExc_RuntimeError, cli::FailureInWords(e).c_str());
+    } catch (const std::underflow_error& e) {
+      PyErr_SetString(PyExc_RuntimeError, cli::FailureInWords(e).c_str());
     }
   });
 

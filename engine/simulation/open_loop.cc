@@ -351,11 +351,15 @@ OpenLoopResult RunDisturbed(Derivatives derivatives, const DisturbanceField& fie
   const ElevatorSchedule schedule = MakeElevatorSchedule(config.elevator);
   // The input's jumps and the field's (noise samples, gust entry) in one ascending list; the
   // elevator of each merged segment is the schedule's value at the segment's left end.
-  std::vector<double> breakpoints = field.Breakpoints(0.0, config.duration_s);
+  // SIGINT/SIGTERM are read while the tables are built, too (a turbulent run's table holds up to
+  // kMaximumNoiseSamplesPerRun instants): a stop empties them and Integrate stops before its first step.
+  std::vector<double> breakpoints = field.Breakpoints(0.0, config.duration_s, cancel);
   breakpoints.insert(breakpoints.end(), schedule.breakpoints_s.begin(), schedule.breakpoints_s.end());
   std::sort(breakpoints.begin(), breakpoints.end());
   breakpoints.erase(std::unique(breakpoints.begin(), breakpoints.end()), breakpoints.end());
-  const std::vector<DisturbanceField::Segment> field_segments = field.SegmentTable(breakpoints, 0.0);
+  if (cancel != nullptr && cancel->load()) breakpoints.clear();
+  const std::vector<DisturbanceField::Segment> field_segments = field.SegmentTable(breakpoints, 0.0, cancel);
+  if (cancel != nullptr && cancel->load()) breakpoints.clear();
   std::vector<double> elevator(breakpoints.size() + 1);
   for (std::size_t s = 0; s < elevator.size(); ++s) {
     const double left_s = s == 0 ? 0.0 : breakpoints[s - 1];
@@ -438,6 +442,7 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
   }
   ValidateIntegratorOptions(config.integrator, source);
   ValidateDisturbanceOptions(FieldOptions(model, config), source);
+  CheckOpenLoopWork(config, source);
   const IntegratorOptions& integrator = config.integrator;
   // An adaptive run without a largest step has no step count known before it runs; its steps are
   // bounded by the cancellation flag (SIGINT/SIGTERM, the dry run's deadline).
@@ -447,6 +452,30 @@ void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig
       config.duration_s / step_s > kMaximumStepsPerRun) {  // the keys are looked up on failure only
     CheckStepCount(config.duration_s, step_s, source, std::string(KeyOf(config, &config.duration_s)),
                    std::string(KeyOf(config, &step_s)));
+  }
+}
+
+void CheckOpenLoopWork(const OpenLoopConfig& config, const std::string& source) {
+  const double interval_s = config.disturbance.turbulence_sample_interval_s;
+  const bool turbulent = config.disturbance.turbulence == TurbulenceModel::kDryden;
+  const double noise_samples = turbulent ? NoiseSampleCount(config.duration_s, interval_s) : 0.0;
+  if (noise_samples > kMaximumNoiseSamplesPerRun) {
+    CheckNoiseSamples(config.duration_s, interval_s, source, std::string(KeyOf(config, &config.duration_s)),
+                      std::string(KeyOf(config, &config.disturbance.turbulence_sample_interval_s)));
+  }
+  // The series RunDisturbed and RunStillAir reserve: 9 state columns, u_g and w_g, q_g.
+  const double series_samples = config.series_interval_s > 0.0 && std::isfinite(config.duration_s)
+                                    ? std::floor(config.duration_s / config.series_interval_s) + 3
+                                    : 0.0;
+  constexpr double kSeriesBytesPerSample = 12 * sizeof(double);
+  const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSeriesBytesPerSample;
+  if (bytes > kMaximumRunMemoryBytes) {
+    std::string breakdown =
+        ShortNumber(series_samples) + " series samples x " + ShortNumber(kSeriesBytesPerSample) + " bytes";
+    if (noise_samples > 0)
+      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
+                   ShortNumber(kNoiseBytesPerSample) + " bytes";
+    CheckRunMemory(bytes, breakdown, source, "series_interval_s", ShortNumber(config.series_interval_s));
   }
 }
 

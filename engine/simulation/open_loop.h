@@ -169,6 +169,14 @@ struct OpenLoopConfig {
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config,
                             const std::string& source);
 
+/// The work a run of `config` takes before and while it flies, checked against the limits table's
+/// bounds on work (engine/common/input_limits.h): at most kMaximumNoiseSamplesPerRun held noise
+/// samples with turbulence (duration_s / turbulence_sample_interval_s), and at most
+/// kMaximumRunMemoryBytes for its noise table and its series. Throws InputError(source, <field>, ...)
+/// naming the numbers. Needs no model: a sweep calls it on the design's extreme runs before the
+/// first one (Analysis::CheckRun); ValidateOpenLoopConfig calls it too.
+void CheckOpenLoopWork(const OpenLoopConfig& config, const std::string& source);
+
 /// How a run ended (docs/model.md §7).
 enum class OpenLoopEndEvent {
   kTouchdown,  ///< H fell to the touchdown (wheel-contact) height

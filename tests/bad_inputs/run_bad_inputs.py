@@ -703,6 +703,42 @@ def damaged_archive_cases():
 
 damaged_archive_cases()
 
+
+def bounded_work_cases():
+    """Issue 26, items 5 and 6 (bounded_cases.py): runs of 1e9 noise samples refused up front (study, dry
+    run, flags; within a second, under a 1 GB address-space limit), dispersion's tail probability and
+    confidence level past their range, `run -o` into a read-only directory, a constant column."""
+    import time
+    import bounded_cases
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            cases = bounded_cases.noise_cases(tmp) + bounded_cases.dispersion_cases(GESWEEP, tmp)
+        except RuntimeError as error:
+            failures.append(f"bounded work cases could not be made: {error}")
+            return
+        directory, words = bounded_cases.read_only_directory(tmp)
+        if directory is None:
+            print(f"SKIP run -o into a read-only directory: {words}")
+        else:
+            cases.append(bounded_cases.read_only_case(tmp, directory, words))
+        try:
+            for case in cases:
+                options = dict(case.kwargs)
+                within_s = options.pop("within_s", None)
+                with tempfile.TemporaryDirectory() as out:
+                    started = time.monotonic()
+                    check(case.name, [a.replace("{out}", out) for a in case.args], case.fragment, out, **options)
+                    elapsed = time.monotonic() - started
+                if within_s is not None and elapsed > within_s:
+                    failures.append(f"{case.name}: took {elapsed:.2f} s, expected a refusal within {within_s} s")
+        finally:
+            bounded_cases.release_read_only(directory)
+        problems = bounded_cases.constant_column_problems(GESWEEP, tmp)
+        failures.extend(problems)
+
+
+bounded_work_cases()
+
 for failure in failures:
     print("FAIL", failure)
 print(f"{count} hostile inputs, {count - len(failures)} passed, {len(failures)} failed")

@@ -132,5 +132,40 @@ TEST(ExactInteger, WholeEntriesRefuseFractionsAndSayWhole) {
   EXPECT_EQ(DescribeLimit(RequireInputLimit("run_index")), "a whole number in [0, 9007199254740992]");
 }
 
+// Issue 26, item 5: a turbulent run's noise table bounded before it is built.
+TEST(NoiseSamples, RefusesMoreThanTheLimitNamingTheNumbersAndTheMemory) {
+  EXPECT_EQ(NoiseSampleCount(1e5, 0.01), 1e7);
+  EXPECT_EQ(NoiseSampleCount(0.0, 0.01), 0.0);
+  EXPECT_EQ(NoiseSampleCount(1e5, 0.0), 0.0);
+  EXPECT_NO_THROW(CheckNoiseSamples(1e5, 0.01, "s.toml", "duration_s", "turbulence_sample_interval_s"));
+  EXPECT_NO_THROW(CheckNoiseSamples(1000.0, 1e-4, "s.toml", "duration_s", "turbulence_sample_interval_s"));
+  EXPECT_THROW(CheckNoiseSamples(1000.5, 1e-4, "s.toml", "duration_s", "turbulence_sample_interval_s"),
+               InputError);
+  try {
+    CheckNoiseSamples(1e5, 1e-4, "s.toml", "duration_s", "turbulence_sample_interval_s");  // the issue's 1e9
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    const std::string text = e.what();
+    EXPECT_EQ(e.key(), "turbulence_sample_interval_s");
+    EXPECT_NE(text.find("duration_s = 100000 s"), std::string::npos) << text;
+    EXPECT_NE(text.find("1000000000 samples"), std::string::npos) << text;
+    EXPECT_NE(text.find("about 32 GB"), std::string::npos) << text;  // 1e9 x 32 bytes
+  }
+}
+
+TEST(RunMemory, RefusesMoreThanAGibibyteNamingTheBreakdown) {
+  EXPECT_NO_THROW(CheckRunMemory(1073741824.0, "x", "s.toml", "output_dt_s", "1"));
+  try {
+    CheckRunMemory(9.6e9, "1e+08 series samples x 96 bytes", "s.toml", "output_dt_s", "1e-05");
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("at most 1.07 GB of memory per run"), std::string::npos) << text;
+    EXPECT_NE(text.find("1e+08 series samples x 96 bytes = about 9.6 GB"), std::string::npos) << text;
+  }
+  EXPECT_EQ(ApproximateBytes(3.2e10), "32 GB");
+  EXPECT_EQ(ApproximateBytes(512), "512 bytes");
+}
+
 }  // namespace
 }  // namespace gesweep

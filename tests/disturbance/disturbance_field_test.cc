@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -358,6 +359,24 @@ TEST(SteadyHeadwind, ReachedFromTheStillAirTrim) {
   EXPECT_NEAR(r.air.airspeed_mps, 32.0208, kSettled_mps);
   EXPECT_NEAR(r.final_state[kPitchRate], 0.0, kSettledPitchRate_radps);
   EXPECT_GT(r.final_state[kDeltaH], 1.0) << "the excess airspeed was traded for height";
+}
+
+// Issue 26, item 5: SIGINT/SIGTERM are heard while a run's noise table is built (the flag is read
+// every kCancelCheckInterval entries), so a stop never waits for the table.
+TEST(DisturbanceField, TheNoiseTableStopsBeingBuiltOnceCancelled) {
+  DisturbanceOptions o = Turbulent();
+  o.turbulence_sample_interval_s = 1e-4;
+  const DisturbanceField field(o, 1, 2);
+  std::atomic<bool> cancel{false};
+  const std::vector<double> whole = field.Breakpoints(0.0, 1000.0, &cancel);
+  EXPECT_EQ(whole.size(), 9999999u);  // k = 1 .. 1e7 - 1: 1e7 samples, the limit (input_limits.h)
+  cancel.store(true);
+  EXPECT_TRUE(field.Breakpoints(0.0, 1000.0, &cancel).empty());
+  const std::vector<Segment> table = field.SegmentTable(whole, 0.0, &cancel);
+  ASSERT_EQ(table.size(), whole.size() + 1);  // sized as the list, left unfilled
+  EXPECT_EQ(table.back().sample_index, 0);
+  cancel.store(false);
+  EXPECT_EQ(field.SegmentTable(whole, 0.0, &cancel).back().sample_index, 9999999);
 }
 
 }  // namespace

@@ -204,7 +204,7 @@ class PeerDispersionTest(unittest.TestCase):
             self.assertEqual(len(normal["upper_quantiles"]), len(tails))
         for flag, value, words in (("--percentiles", "5,abc", "Could not convert"),
                                    ("--percentiles", "5,150", "expected 0 to 100"),
-                                   ("--tail-probabilities", "1e-3,0.7", "expected 0 < p < 0.5")):
+                                   ("--tail-probabilities", "1e-3,0.7", "expected a probability in [1e-12, 0.5)")):
             bad = subprocess.run([GESWEEP, "dispersion", self.archive, "--no-write", flag, value],
                                  capture_output=True, text=True)
             self.assertEqual(bad.returncode, 2, bad.stderr)

@@ -164,5 +164,19 @@ TEST(Dispersion, DegenerateSamplesGiveNaNFitsNotCrashes) {
   EXPECT_TRUE(std::isnan(WilsonInterval(0, 0, 0.95).lower));
 }
 
+// Issue 26, item 6: a sample of one value repeated whose mean is not that value in double precision
+// (0.788 summed 128 times and divided by 128) has a tiny rounding "spread": the Gumbel fit has nothing
+// to fit and says so (NaN), instead of Boost's "toms748_solve ... do not bracket the root" escaping.
+TEST(Dispersion, AConstantSampleWithARoundedMeanGivesNaNFitsNotABoostError) {
+  for (double value : {0.788, -0.018145290618198744, 4.39103344685948, 452.4985925138531}) {
+    const std::vector<double> sample(128, value);
+    LocationScale fit{};
+    EXPECT_NO_THROW(fit = FitGumbelMax(sample)) << value;
+    EXPECT_TRUE(std::isnan(fit.scale)) << value;
+    std::vector<double> negated(128, -value);
+    EXPECT_NO_THROW(fit = FitGumbelMax(negated)) << value;
+  }
+}
+
 }  // namespace
 }  // namespace gesweep

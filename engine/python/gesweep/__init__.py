@@ -14,6 +14,7 @@ the wrong type) with the one line the gesweep command prints. docs/python.md doc
 """
 
 import inspect as _inspect
+import os as _os
 from collections import namedtuple as _namedtuple
 
 import numpy as _np
@@ -65,6 +66,43 @@ def _numbers(value, key):
         raise _input_error(key, value, "expected a number or an array of numbers") from None
 
 
+def _aircraft(aircraft):
+    """The native aircraft of an Aircraft; InputError naming `aircraft` for anything else (a path
+    included: gesweep.Aircraft.load(path) makes one)."""
+    if not isinstance(aircraft, Aircraft):
+        hint = (" (load it first: gesweep.Aircraft.load(path))"
+                if isinstance(aircraft, (str, bytes, _os.PathLike)) else "")
+        raise _input_error("aircraft", aircraft, "expected a gesweep.Aircraft" + hint)
+    return aircraft._native
+
+
+def _flag(value, key):
+    """`value` when it is True or False (a NumPy bool too); InputError naming `key` otherwise."""
+    if isinstance(value, (bool, _np.bool_)):
+        return bool(value)
+    raise _input_error(key, value, "expected True or False")
+
+
+def _threads(threads):
+    """The worker threads as the engine takes them (0: every core); InputError naming `threads`."""
+    if threads is None:
+        return 0
+    if isinstance(threads, (bool, _np.bool_)) or not isinstance(threads, (int, _np.integer)):
+        raise _input_error("threads", threads, "expected a whole number of worker threads, 1 to 4096, or None")
+    if not 1 <= int(threads) <= 4096:
+        raise _input_error("threads", threads, "expected 1 to 4096 worker threads, or None")
+    return int(threads)
+
+
+def _path(value, key):
+    """A path argument as a str; InputError naming `key` when it is not a str or os.PathLike."""
+    try:
+        name = _os.fspath(value)
+    except TypeError:
+        raise _input_error(key, value, "expected a path (str or os.PathLike)") from None
+    return _os.fsdecode(name) if isinstance(name, bytes) else name
+
+
 def _given(options):
     """The keyword arguments given, less those left at None (the engine's default)."""
     return {k: v for k, v in options.items() if v is not None}
@@ -85,7 +123,7 @@ class Aircraft:
     @classmethod
     def load(cls, path):
         """Loads an aircraft file (TOML). Raises InputError naming the file, key, value and line."""
-        return cls(_gesweep.NativeAircraft.load(str(path)))
+        return cls(_gesweep.NativeAircraft.load(_path(path, "path")))
 
     @property
     def table(self):
@@ -122,11 +160,18 @@ def modes(aircraft, height_m, speed_mps, *, threads=None, out=None, **model_opti
     memory: for repeated calls over large arrays, as NumPy's out=).
     Model options (keywords):
 """
-    h, u = _np.broadcast_arrays(_numbers(height_m, "height_m"), _numbers(speed_mps, "speed_mps"))
+    native = _aircraft(aircraft)
+    threads = _threads(threads)
+    height, speed = _numbers(height_m, "height_m"), _numbers(speed_mps, "speed_mps")
+    try:
+        h, u = _np.broadcast_arrays(height, speed)
+    except ValueError:
+        raise _input_error("speed_mps", f"an array of shape {speed.shape}",
+                           f"expected a shape that broadcasts with height_m's {height.shape}") from None
     shape = h.shape
     flat = None if out is None else _flat_outputs(out, shape)
-    result = _gesweep.modes(aircraft._native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
-                            int(threads or 0), flat, **_given(model_options))
+    result = _gesweep.modes(native, _np.ascontiguousarray(h).ravel(), _np.ascontiguousarray(u).ravel(),
+                            threads, flat, **_given(model_options))
     if out is not None:
         return out
     return {k: v.reshape(shape + v.shape[1:]) for k, v in result.items()}
@@ -168,13 +213,17 @@ def boundary(aircraft, speed_mps, *, method="hurwitz", sensitivities=False, **mo
     A list of speeds gives a list of such dicts.
     Model options (keywords):
 """
+    native = _aircraft(aircraft)
+    if not isinstance(method, str):
+        raise _input_error("method", method, "expected 'hurwitz' or 'sampled'")
+    sensitivities = _flag(sensitivities, "sensitivities")
     options = _given(model_options) if model_options else model_options
-    if isinstance(speed_mps, (float, int)):  # the common case, without NumPy's conversion
-        return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
-    if _np.ndim(speed_mps) > 0:
-        return [_gesweep.boundary(aircraft._native, float(u), method, sensitivities, **options)
-                for u in _numbers(speed_mps, "speed_mps").ravel()]
-    return _gesweep.boundary(aircraft._native, speed_mps, method, sensitivities, **options)
+    if isinstance(speed_mps, (float, int)) and not isinstance(speed_mps, bool):  # without NumPy's conversion
+        return _gesweep.boundary(native, speed_mps, method, sensitivities, **options)
+    speeds = _numbers(speed_mps, "speed_mps")
+    if speeds.ndim > 0:
+        return [_gesweep.boundary(native, float(u), method, sensitivities, **options) for u in speeds.ravel()]
+    return _gesweep.boundary(native, speed_mps, method, sensitivities, **options)
 
 
 boundary.__doc__ += _MODEL_DOC
@@ -223,7 +272,7 @@ def simulate(aircraft, height_m, speed_mps, *, summary_only=False, output_dt_s=N
     summary_only=True.
     Settings (keywords; the fields of the engine's OpenLoopConfig, as `gesweep simulate --help`):
 """
-    run_, summary, series = _gesweep.simulate(aircraft._native, height_m, speed_mps, summary_only, output_dt_s,
+    run_, summary, series = _gesweep.simulate(_aircraft(aircraft), height_m, speed_mps, summary_only, output_dt_s,
                                               **_given(options))
     return Response(run_, summary, _frame(series))
 
@@ -249,7 +298,7 @@ def land(aircraft, *, summary_only=False, **options):
     Settings (keywords; the fields of the engine's LandingConfig, as `gesweep land --help`; nan:
     automatic, as the text says):
 """
-    run_, summary, series = _gesweep.land(aircraft._native, summary_only, **_given(options))
+    run_, summary, series = _gesweep.land(_aircraft(aircraft), summary_only, **_given(options))
     return Response(run_, summary, _frame(series))
 
 
@@ -272,5 +321,14 @@ def run(study_path, archive_path, *, threads=None, progress=None, resume=False, 
     Failed runs are data (status 2 in the archive), counted in the result: a dict with archive, runs,
     runs_run, runs_ok, runs_failed, runs_pending, cancelled, threads, seconds.
     """
-    return _gesweep.run(str(study_path), str(archive_path), int(threads or 0), progress, bool(resume),
-                        bool(force), shard or "")
+    # Every argument checked before any work: a wrong one is refused at once, not after the sweep.
+    study = _path(study_path, "study_path")
+    archive = _path(archive_path, "archive_path")
+    workers = _threads(threads)
+    if progress is not None and not callable(progress):
+        raise _input_error("progress", progress, "expected a function progress(done, to_do), or None")
+    resume = _flag(resume, "resume")
+    force = _flag(force, "force")
+    if shard is not None and not isinstance(shard, str):
+        raise _input_error("shard", shard, "expected a string 'i/N' (0 <= i < N), or None")
+    return _gesweep.run(study, archive, workers, progress, resume, force, shard or "")

@@ -243,6 +243,9 @@ def open_archive(path, product=None):
     replaced, moved, of another study, the archive itself or part of a cycle raises gesweep.InputError
     with the command's words; an archive merged before shard identities gives an ArchiveNote warning.
     """
+    if product is not None and not isinstance(product, str):
+        raise _input_error("argument", "product", repr(product),
+                           "expected the name of a product under /analysis (a str; see list_products), or None")
     f = _open_checked(path)
     if product is not None:
         return _open_product(f, product)

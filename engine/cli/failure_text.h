@@ -1,0 +1,16 @@
+#pragma once
+/// A failure no command caught, in the project's words (issue 26, item 6): what a library threw
+/// (Boost.Math, the standard library, nlohmann::json) never reaches a person as the library's own
+/// text ("Error in function boost::math::...", "std::bad_alloc", "[json.exception...]"). Bad input is
+/// an InputError and an archive's I/O an ArchiveError, each with its own line; this is for the rest.
+
+#include <exception>
+#include <string>
+
+namespace gesweep::cli {
+
+/// One line saying what failed, in the project's words, with the library's detail kept only where it
+/// is the operating system's (a file system error names the path and the system's reason).
+std::string FailureInWords(const std::exception& error);
+
+}  // namespace gesweep::cli
