@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -137,6 +138,9 @@ struct RunContext {
   /// The run's global index in the design (0, 1, ...), the same whoever runs it (threads, MPI ranks,
   /// shards): run i's turbulence is RunNoise(seed, i) (docs/disturbance.md).
   std::uint64_t run_index = 0;
+  /// Empty in a sweep. A subset simulation (engine/rare/landing_risk.h) sets the run's noise as a
+  /// point of the standard-normal space instead of RunNoise(seed, run_index).
+  std::span<const double> noise_point = {};
   double value(ParameterId id) const { return parameters[static_cast<std::size_t>(id)]; }
 };
 
@@ -186,6 +190,19 @@ class Analysis {
   /// Fills its columns for one run. Thread-safe (const, no shared mutable state). May throw; the
   /// runner turns any exception into a failed run.
   virtual AnalysisOutcome Run(const RunContext& context, OutputRow& row) const = 0;
+  /// The dimension of the run's noise as a point of the standard-normal space (RunContext::noise_point):
+  /// 0 for an analysis that draws no noise (default) or a run without turbulence.
+  virtual std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const {
+    (void)parameters;
+    (void)aircraft;
+    return 0;
+  }
+  /// The interval, s, at which the noise point's streams are held (docs/disturbance.md); 0 for an
+  /// analysis that draws no noise (default).
+  virtual double NoiseSampleInterval(const RunParameters& parameters) const {
+    (void)parameters;
+    return 0;
+  }
 };
 
 /// Builds an analysis from its settings table ([analyses.<name>]); throws InputError on bad or

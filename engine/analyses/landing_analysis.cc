@@ -129,7 +129,7 @@ class LandingAnalysis final : public Analysis {
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
     LandingConfig config = ConfigFor(context.parameters);
     config.run_index = context.run_index;
-    const LandingResult r = SimulateLanding(*context.model, config, context.cancel);
+    const LandingResult r = SimulateLanding(*context.model, config, context.cancel, context.noise_point);
     if (r.cancelled) return AnalysisOutcome::Cancelled();
     summary_.Fill(r, row);
     if (r.design.ok()) {
@@ -144,6 +144,14 @@ class LandingAnalysis final : public Analysis {
       return AnalysisOutcome::Failed(std::string(ToString(r.outcome)) + ": " + note);
     }
     return AnalysisOutcome::Ok(r.outcome == LandingOutcome::kLanded && !truncated ? "" : note);
+  }
+
+  std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const override {
+    return LandingNoiseDimension(aircraft, ConfigFor(parameters));
+  }
+
+  double NoiseSampleInterval(const RunParameters& parameters) const override {
+    return ConfigFor(parameters).disturbance.turbulence_sample_interval_s;
   }
 
  private:

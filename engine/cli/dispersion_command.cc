@@ -15,6 +15,8 @@
 #include <sstream>
 
 #include "engine/cli/command.h"
+#include "engine/cli/risk_output.h"
+#include "engine/risk/risk_archive.h"
 #include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
@@ -233,6 +235,14 @@ int RunDispersion(const DispersionFlags& flags) {
   if (flags.options.max_groups < 1) {
     throw InputError("command line", "--max-groups", std::to_string(flags.options.max_groups),
                      "expected >= 1");
+  }
+  if (risk::IsRiskArchive(flags.archive)) {
+    // A subset simulation's archive (`gesweep risk`): its estimates, per limit of its [subset] table.
+    if (!flags.options.limits.empty() || !flags.options.group_by.empty() || !flags.options.columns.empty()) {
+      throw InputError("command line", !flags.options.limits.empty() ? "--limit" : !flags.options.group_by.empty() ? "--group-by" : "--columns", "",
+                       "none with a subset-simulation archive: its limits are its study's [subset] table");
+    }
+    return PrintRiskArchive(flags.archive, flags.format);
   }
   const FlagNames names = {{"columns", "--columns"},
                            {"limits", "--limit"},

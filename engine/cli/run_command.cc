@@ -569,6 +569,12 @@ int Run(const RunFlags& flags) {
   ShardSpec shard;
   if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
   Study study = LoadStudy(flags.study);
+  if (study.subset_line != 0) {
+    throw InputError(study.path, "subset", "",
+                     "a study with a [subset] table is a subset simulation: run it with `gesweep risk " +
+                         study.path + " -o ARCHIVE` (docs/dispersion.md)",
+                     study.subset_line);
+  }
   if (!flags.output.empty()) CheckArchivePath(flags, study);
   SweepPlan plan(std::move(study), shard);
   const int threads = flags.threads.value_or(tbb::info::default_concurrency());

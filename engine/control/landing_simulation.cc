@@ -517,8 +517,18 @@ LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& res
   return used;
 }
 
+std::uint64_t LandingNoiseDimension(const Aircraft& aircraft, const LandingConfig& config) {
+  ValidateLandingConfig(config, aircraft, "landing config");
+  if (config.disturbance.turbulence != TurbulenceModel::kDryden) return 0;
+  DisturbanceOptions disturbance = config.disturbance;
+  disturbance.wing_span_m = aircraft.wingspan_m;
+  const DisturbanceField field(disturbance, 0, 0);
+  const double limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
+  return NoisePointDimension(static_cast<std::uint64_t>(field.SampleIndexAt(limit_s)) + 2);
+}
+
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
-                              const std::atomic<bool>* cancel) {
+                              const std::atomic<bool>* cancel, std::span<const double> noise_point) {
   const Aircraft& aircraft = plant.aircraft();
   ValidateLandingConfig(config, aircraft, "landing config");
 
@@ -555,7 +565,15 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   }
   DisturbanceOptions disturbance = config.disturbance;
   disturbance.wing_span_m = aircraft.wingspan_m;
-  const DisturbanceField field(disturbance, config.seed, config.run_index);
+  if (!noise_point.empty()) {
+    const std::uint64_t needed = LandingNoiseDimension(aircraft, config);
+    if (noise_point.size() < needed) {
+      throw InputError("landing config", "noise point", std::to_string(noise_point.size()) + " values",
+                       "at least " + std::to_string(needed) + " (LandingNoiseDimension)");
+    }
+  }
+  const DisturbanceField field = noise_point.empty() ? DisturbanceField(disturbance, config.seed, config.run_index)
+                                                     : DisturbanceField(disturbance, noise_point);
   if (field.active()) {
     Fly<true>(plant, config, result, store_series, &field, cancel);
   } else {

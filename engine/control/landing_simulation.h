@@ -8,6 +8,8 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -204,7 +206,16 @@ LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& res
 /// (throws InputError with source "landing config"); numerical outcomes are in the result, never thrown.
 /// `cancel` (may be null) is read before every integration step: once true the run stops there with
 /// result.cancelled.
+/// `noise_point` (may be empty): the run's noise as a point of the standard-normal space
+/// (RunNoise(point), engine/disturbance/run_noise.h) instead of RunNoise(seed, run_index); it must
+/// hold at least LandingNoiseDimension values (InputError otherwise). A subset simulation flies it.
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
-                              const std::atomic<bool>* cancel = nullptr);
+                              const std::atomic<bool>* cancel = nullptr,
+                              std::span<const double> noise_point = {});
+
+/// The dimension of a landing's noise point: the initial state and every held sample up to the
+/// landing's time limit (LandingTimeLimit) and one more; 0 without turbulence (the landing then draws
+/// no noise). Validates `config` as SimulateLanding does.
+std::uint64_t LandingNoiseDimension(const Aircraft& aircraft, const LandingConfig& config);
 
 }  // namespace gesweep

@@ -14,8 +14,14 @@ namespace gesweep {
 
 DisturbanceField::DisturbanceField(const DisturbanceOptions& options, std::uint64_t study_seed,
                                    std::uint64_t run_index)
+    : DisturbanceField(options, RunNoise(study_seed, run_index)) {}
+
+DisturbanceField::DisturbanceField(const DisturbanceOptions& options, std::span<const double> noise_point)
+    : DisturbanceField(options, RunNoise(noise_point)) {}
+
+DisturbanceField::DisturbanceField(const DisturbanceOptions& options, const RunNoise& noise)
     : options_(options),
-      noise_(study_seed, run_index),
+      noise_(noise),
       cached_height_m_(std::numeric_limits<double>::quiet_NaN()),
       cached_rates_height_m_(std::numeric_limits<double>::quiet_NaN()) {
   ValidateDisturbanceOptions(options_, "disturbance options");

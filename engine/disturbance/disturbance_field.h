@@ -63,6 +63,8 @@ class DisturbanceField {
 
   /// Throws InputError (source "disturbance options") when the options are out of range.
   DisturbanceField(const DisturbanceOptions& options, std::uint64_t study_seed, std::uint64_t run_index);
+  /// The noise is the given point (RunNoise(point)); it must outlive the field.
+  DisturbanceField(const DisturbanceOptions& options, std::span<const double> noise_point);
 
   const DisturbanceOptions& options() const { return options_; }
   const RunNoise& noise() const { return noise_; }
@@ -108,6 +110,7 @@ class DisturbanceField {
   AirMotion Motion(const Segment& segment, double height_m, double inertial_speed_mps, const State& x) const;
 
  private:
+  DisturbanceField(const DisturbanceOptions& options, const RunNoise& noise);
   DisturbanceOptions options_;
   RunNoise noise_;
   double sigma_w_mps_ = 0;

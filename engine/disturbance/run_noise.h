@@ -15,6 +15,7 @@
 /// does) keeps two runs' streams from being shifted copies of each other.
 
 #include <cstdint>
+#include <span>
 
 namespace gesweep {
 
@@ -35,10 +36,24 @@ enum class NoiseStream : int {
   kInitialState = 2,  ///< the filters' stationary initial states (sample indices 0, 1, 2)
 };
 
-/// One run's noise.
+/// The layout of a run's noise as a point u of a standard-normal space (the subset simulation's
+/// coordinates, docs/dispersion.md): u[0..2] are the initial-state samples 0, 1, 2; the two
+/// turbulence streams of sample k are u[3 + 2k] (kTurbulenceU) and u[3 + 2k + 1] (kTurbulenceW).
+constexpr std::uint64_t NoisePointIndex(NoiseStream stream, std::uint64_t sample_index) {
+  if (stream == NoiseStream::kInitialState) return sample_index;
+  return 3 + 2 * sample_index + (stream == NoiseStream::kTurbulenceW ? 1 : 0);
+}
+/// The dimension of a point that holds the initial state and samples 0 .. sample_count - 1.
+constexpr std::uint64_t NoisePointDimension(std::uint64_t sample_count) { return 3 + 2 * sample_count; }
+
+/// One run's noise: the counter-based stream of (study seed, run index), or a given point u of the
+/// standard-normal space in the layout of NoisePointIndex (a run of a subset simulation).
 class RunNoise {
  public:
   RunNoise(std::uint64_t study_seed, std::uint64_t run_index);
+  /// The noise is `point` (not copied: it must outlive this object). A sample past the point's end
+  /// is a programming error (GESWEEP_DEMAND): the caller sizes the point for the run's whole time.
+  explicit RunNoise(std::span<const double> point);
 
   /// The run key, a function of (study seed, run index) alone.
   std::uint64_t key() const { return key_; }
@@ -46,9 +61,12 @@ class RunNoise {
   double Uniform(std::uint64_t counter) const;
   /// A standard normal variate N(0, 1) for (stream, sample index k ≥ 0).
   double StandardNormal(NoiseStream stream, std::uint64_t sample_index) const;
+  /// Whether the noise is a given point.
+  bool from_point() const { return !point_.empty(); }
 
  private:
-  std::uint64_t key_;
+  std::uint64_t key_ = 0;
+  std::span<const double> point_;
 };
 
 }  // namespace gesweep

@@ -195,6 +195,98 @@ std::string SubsetResult::Summary() const {
   return line;
 }
 
+namespace {
+
+/// A sample's place in a level's order: by value (NaN as +infinity), ties by position in the level.
+struct SampleKey {
+  double g = 0;
+  std::int64_t position = 0;
+  EvaluationTag tag;  ///< the evaluation that gave the sample's point (not part of the order)
+};
+bool Before(const SampleKey& a, const SampleKey& b) {
+  const double x = Ordered(a.g), y = Ordered(b.g);
+  return x < y || (x == y && a.position < b.position);
+}
+
+/// The `capacity` samples of a level that come first in SampleKey order, with their points: the
+/// seeds of the next level's chains. Offered the level's samples one by one (a bounded max-heap),
+/// so a level holds capacity * d doubles of points, not N * d.
+class SeedSelection {
+ public:
+  SeedSelection(std::int64_t capacity, std::size_t dimension)
+      : capacity_(capacity), d_(dimension), points_(static_cast<std::size_t>(capacity) * dimension) {}
+  void Clear() {
+    keys_.clear();
+    heap_.clear();
+  }
+  void Offer(const SampleKey& key, const double* point) {
+    const auto later = [&](std::int64_t a, std::int64_t b) { return Before(keys_[a], keys_[b]); };
+    std::int64_t slot;
+    if (static_cast<std::int64_t>(heap_.size()) < capacity_) {
+      slot = static_cast<std::int64_t>(keys_.size());
+      keys_.push_back(key);
+    } else {
+      if (!Before(key, keys_[heap_.front()])) return;
+      std::pop_heap(heap_.begin(), heap_.end(), later);
+      slot = heap_.back();
+      heap_.pop_back();
+      keys_[slot] = key;
+    }
+    std::copy(point, point + d_, points_.begin() + slot * static_cast<std::int64_t>(d_));
+    heap_.push_back(slot);
+    std::push_heap(heap_.begin(), heap_.end(), later);
+  }
+  /// The slots in SampleKey order.
+  std::vector<std::int64_t> Sorted() const {
+    std::vector<std::int64_t> slots(heap_);
+    std::sort(slots.begin(), slots.end(), [&](std::int64_t a, std::int64_t b) { return Before(keys_[a], keys_[b]); });
+    return slots;
+  }
+  const SampleKey& key(std::int64_t slot) const { return keys_[slot]; }
+  const double* point(std::int64_t slot) const { return points_.data() + slot * static_cast<std::int64_t>(d_); }
+
+ private:
+  std::int64_t capacity_;
+  std::size_t d_;
+  std::vector<double> points_;
+  std::vector<SampleKey> keys_;
+  std::vector<std::int64_t> heap_;
+};
+
+/// The failing samples (g <= 0) of a level, as they are met: their count, the sum of their points and
+/// the one nearest the origin (the most likely under N(0, I); the first met among equals).
+struct FailureRecord {
+  std::int64_t count = 0;
+  std::vector<double> sum;
+  double nearest_norm2 = std::numeric_limits<double>::infinity();
+  std::vector<double> nearest;
+  EvaluationTag nearest_tag;
+  double nearest_g = 0;
+  void Reset(std::size_t d) {
+    count = 0;
+    sum.assign(d, 0.0);
+    nearest_norm2 = std::numeric_limits<double>::infinity();
+    nearest.clear();
+  }
+  void Offer(const double* point, std::size_t d, double g, const EvaluationTag& tag) {
+    if (!(g <= 0)) return;
+    ++count;
+    double norm2 = 0;
+    for (std::size_t k = 0; k < d; ++k) {
+      sum[k] += point[k];
+      norm2 += point[k] * point[k];
+    }
+    if (norm2 < nearest_norm2) {
+      nearest_norm2 = norm2;
+      nearest.assign(point, point + d);
+      nearest_tag = tag;
+      nearest_g = g;
+    }
+  }
+};
+
+}  // namespace
+
 SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimension,
                                  const SubsetOptions& options) {
   const std::string source = "subset simulation";
@@ -208,20 +300,39 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   SubsetResult result;
   result.dimension = dimension;
 
-  std::vector<double> x(static_cast<std::size_t>(n) * d), g(static_cast<std::size_t>(n));
-  std::vector<EvaluationTag> tags(static_cast<std::size_t>(n));
-  const auto evaluate = [&](std::span<const double> points, std::span<const EvaluationTag> batch_tags,
-                            std::span<double> values) {
-    std::fill(values.begin(), values.end(), std::numeric_limits<double>::quiet_NaN());
-    limit_state(PointBatch{points, batch_tags, dimension}, values);
+  // Memory: the level's values (N), the seeds of the next level and the chains' states (N_s points
+  // each) and one batch of candidates, whatever N: a level never holds its N points.
+  std::vector<double> g(static_cast<std::size_t>(n));
+  SeedSelection selection(ns, d), next_selection(ns, d);
+  FailureRecord failures_seen;
+  failures_seen.Reset(d);
+  std::vector<double> candidates, values;
+  std::vector<EvaluationTag> batch_tags;
+  const auto evaluate = [&](std::span<const double> points, std::span<const EvaluationTag> tags,
+                            std::span<double> out) {
+    std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
+    limit_state(PointBatch{points, tags, dimension}, out);
   };
 
-  // Level 1: plain Monte Carlo, sample i from the stream (level 1, chain i, step 0).
-  tbb::parallel_for(std::int64_t{0}, n, [&](std::int64_t i) {
-    Stream(options.seed, 1, static_cast<std::uint64_t>(i), 0).Normals(std::span<double>(x).subspan(i * d, d));
-    tags[i] = EvaluationTag{1, static_cast<int>(i), 0};
-  });
-  evaluate(x, tags, g);
+  // Level 1: plain Monte Carlo, sample i from the stream (level 1, chain i, step 0), in batches of
+  // N_s (the batches change nothing: every sample is its own stream).
+  for (std::int64_t first = 0; first < n; first += ns) {
+    const std::int64_t batch = std::min(ns, n - first);
+    candidates.resize(static_cast<std::size_t>(batch) * d);
+    values.resize(static_cast<std::size_t>(batch));
+    batch_tags.resize(static_cast<std::size_t>(batch));
+    tbb::parallel_for(std::int64_t{0}, batch, [&](std::int64_t b) {
+      Stream(options.seed, 1, static_cast<std::uint64_t>(first + b), 0)
+          .Normals(std::span<double>(candidates).subspan(b * d, d));
+      batch_tags[b] = EvaluationTag{1, static_cast<int>(first + b), 0};
+    });
+    evaluate(candidates, batch_tags, values);
+    for (std::int64_t b = 0; b < batch; ++b) {
+      g[first + b] = values[b];
+      selection.Offer(SampleKey{values[b], first + b, batch_tags[b]}, &candidates[b * d]);
+      failures_seen.Offer(&candidates[b * d], d, values[b], batch_tags[b]);
+    }
+  }
   ChainLayout layout = MakeLayout(n, n);  // level 1: N chains of one sample, so gamma = 0
   double lambda = options.initial_scale;
   double level_acceptance = 1, level_scale = 0;
@@ -229,6 +340,8 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   std::int64_t level_failed = std::count_if(g.begin(), g.end(), [](double v) { return std::isnan(v); });
   double product = 1;  // prod of the previous levels' P_j
   std::vector<double> deltas;
+  std::vector<double> state(static_cast<std::size_t>(ns) * d);  // the chains' current points
+  std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));  // the evaluations that gave them
 
   for (int level = 1;; ++level) {
     SubsetLevel record;
@@ -241,9 +354,9 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
 
     const auto failures = std::count_if(g.begin(), g.end(), [](double v) { return v <= 0; });
     const bool last = failures >= ns || level == options.max_levels;
-    std::vector<std::int64_t> order(static_cast<std::size_t>(n));
     double threshold = 0;
     if (!last) {
+      std::vector<std::int64_t> order(static_cast<std::size_t>(n));
       std::iota(order.begin(), order.end(), std::int64_t{0});
       std::stable_sort(order.begin(), order.end(),
                        [&](std::int64_t a, std::int64_t b) { return Ordered(g[a]) < Ordered(g[b]); });
@@ -274,10 +387,13 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
       if (result.status == SubsetResult::Status::kLevelCap) {
         result.upper_bound = product * static_cast<double>(ns) / static_cast<double>(n);
       }
-      for (std::int64_t i = 0; i < n; ++i) {
-        if (g[i] <= 0)
-          result.failure_points.insert(result.failure_points.end(), x.begin() + i * d,
-                                       x.begin() + (i + 1) * d);
+      result.failure_count = failures_seen.count;
+      if (failures_seen.count > 0) {
+        result.failure_mean = failures_seen.sum;
+        for (double& v : result.failure_mean) v /= static_cast<double>(failures_seen.count);
+        result.most_likely_failure = failures_seen.nearest;
+        result.most_likely_failure_tag = failures_seen.nearest_tag;
+        result.most_likely_failure_value = failures_seen.nearest_g;
       }
       break;
     }
@@ -285,7 +401,9 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
 
     // Seeds: the N_s smallest values, in an order shuffled by (seed, level + 1) so that the groups of
     // the adaptation are not sorted by g (Papaioannou et al. 2015).
-    std::vector<std::int64_t> seeds(order.begin(), order.begin() + ns);
+    const std::vector<std::int64_t> sorted = selection.Sorted();
+    GESWEEP_DEMAND(static_cast<std::int64_t>(sorted.size()) == ns);
+    std::vector<std::int64_t> seeds(sorted);
     const Stream shuffle(options.seed, level + 1, kSeedShuffleChain, 0);
     for (std::int64_t i = ns - 1; i > 0; --i) {
       const auto j = static_cast<std::int64_t>(
@@ -296,19 +414,21 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
     // Level + 1: N_s chains, chain c of length layout.length[c], its seed at step 0.
     const int next = level + 1;
     ChainLayout next_layout = MakeLayout(n, ns);
-    std::vector<double> nx(x.size()), ng(g.size());
+    std::vector<double> ng(g.size());
+    next_selection.Clear();
+    failures_seen.Reset(d);
     for (std::int64_t c = 0; c < ns; ++c) {
-      const std::int64_t at = next_layout.offset[c], s = seeds[c];
-      std::copy(x.begin() + s * d, x.begin() + (s + 1) * d, nx.begin() + at * d);
-      ng[at] = g[s];
+      const std::int64_t at = next_layout.offset[c];
+      std::copy(selection.point(seeds[c]), selection.point(seeds[c]) + d, state.begin() + c * d);
+      ng[at] = selection.key(seeds[c]).g;
+      state_tag[c] = selection.key(seeds[c]).tag;
+      next_selection.Offer(SampleKey{ng[at], at, state_tag[c]}, &state[c * d]);
+      failures_seen.Offer(&state[c * d], d, ng[at], state_tag[c]);
     }
     std::int64_t accepted_total = 0, proposed_total = 0;
     level_evaluations = 0;
     level_failed = 0;
-    std::vector<double> candidates, values;
-    std::vector<EvaluationTag> batch_tags;
     std::vector<std::int64_t> active;
-    std::vector<char> accepted_flags;
     const int groups = options.adaptation_groups;
     for (int group = 0; group < groups; ++group) {
       // One scale for every component. Papaioannou et al. (2015) scale component k by the seeds'
@@ -331,7 +451,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
         batch_tags.resize(batch);
         tbb::parallel_for(std::size_t{0}, batch, [&](std::size_t b) {
           const std::int64_t c = active[b];
-          const double* current = &nx[(next_layout.offset[c] + step - 1) * d];
+          const double* current = &state[c * d];
           std::span<double> v(candidates.data() + b * d, d);
           const Stream stream(options.seed, next, static_cast<std::uint64_t>(c), static_cast<int>(step));
           stream.Normals(v);
@@ -353,12 +473,14 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
           const std::int64_t here = next_layout.offset[c] + step;
           const bool accept = values[b] <= threshold;  // false for NaN
           if (accept) {
-            std::copy(candidates.begin() + b * d, candidates.begin() + (b + 1) * d, nx.begin() + here * d);
+            std::copy(candidates.begin() + b * d, candidates.begin() + (b + 1) * d, state.begin() + c * d);
             ng[here] = values[b];
+            state_tag[c] = batch_tags[b];
           } else {
-            std::copy(nx.begin() + (here - 1) * d, nx.begin() + here * d, nx.begin() + here * d);
             ng[here] = ng[here - 1];
           }
+          next_selection.Offer(SampleKey{ng[here], here, state_tag[c]}, &state[c * d]);
+          failures_seen.Offer(&state[c * d], d, ng[here], state_tag[c]);
           // A NaN candidate is a failed evaluation of this level even though the chain stays put.
           if (std::isnan(values[b])) ++level_failed;
           accepted += accept ? 1 : 0;
@@ -375,7 +497,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
     level_acceptance =
         proposed_total > 0 ? static_cast<double>(accepted_total) / static_cast<double>(proposed_total) : 0;
     level_scale = lambda;
-    x.swap(nx);
+    std::swap(selection, next_selection);
     g.swap(ng);
     layout = std::move(next_layout);
   }

@@ -118,12 +118,21 @@ struct SubsetResult {
   std::int64_t failed_evaluations = 0;  ///< NaN values over all levels
   int dimension = 0;
   std::vector<SubsetLevel> levels;
-  /// The samples of the last level with g <= 0 (row-major, dimension columns): the failing points.
-  std::vector<double> failure_points;
+  /// The samples of the last level with g <= 0 (a chain's repeated state counted each time, as in the
+  /// estimate): how many, their mean point (the "design point" of the event as a mean; empty when
+  /// none) and the one nearest the origin, the most likely under N(0, I), with the tag of the
+  /// evaluation that gave it (a seed's or a repeated state's own evaluation) and its value g.
+  std::int64_t failure_count = 0;
+  std::vector<double> failure_mean;
+  std::vector<double> most_likely_failure;
+  EvaluationTag most_likely_failure_tag;
+  double most_likely_failure_value = 0;
   std::string Summary() const;  ///< one line: P, CoV, interval, levels, evaluations
 };
 
-/// Runs subset simulation of `limit_state` in `dimension` standard-normal dimensions. Throws
+/// Runs subset simulation of `limit_state` in `dimension` standard-normal dimensions. Memory: about
+/// 4 N_s * dimension doubles and N values, whatever N (a level's points are not kept: only the two
+/// levels' seeds, the chains' states and one batch of at most N_s candidates). Throws
 /// InputError (through ValidateSubsetOptions, with source "subset simulation") for options that
 /// cannot run or a dimension below 1.
 SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimension,

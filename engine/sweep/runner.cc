@@ -127,7 +127,7 @@ const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
 }
 
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row, const std::atomic<bool>* cancel) {
+                int row, const std::atomic<bool>* cancel, std::span<const double> noise_point) {
   const auto r = static_cast<std::size_t>(row);
   const Design& design = plan.design();
   design.Row(design_index, workspace.design_row.data());
@@ -156,7 +156,8 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
     }
   }
   // The run's global index in the design: its turbulence is RunNoise(seed, design_index).
-  const RunContext context{workspace.parameters, model, cancel, static_cast<std::uint64_t>(design_index)};
+  const RunContext context{workspace.parameters, model, cancel, static_cast<std::uint64_t>(design_index),
+                           noise_point};
   OutputRow output(&block.results, &plan.schema(), row);
   for (const auto& analysis : plan.study().analyses) {
     AnalysisOutcome outcome;

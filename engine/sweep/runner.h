@@ -11,6 +11,7 @@
 /// thread count, sharding or rank count.
 
 #include <atomic>
+#include <span>
 #include <cstdint>
 #include <exception>
 #include <optional>
@@ -117,8 +118,10 @@ void TruncateMessage(std::string& message);
 /// message and results. Never throws for a numerical problem or an exception of an analysis: the
 /// run is marked failed with the message. `cancel` (may be null) reaches inside the analyses (time
 /// responses check it between integration steps): a run it stops keeps status kPending.
+/// `noise_point` (empty in a sweep): the run's noise as a point of the standard-normal space
+/// (RunContext::noise_point), as a subset simulation flies it (engine/risk).
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row, const std::atomic<bool>* cancel = nullptr);
+                int row, const std::atomic<bool>* cancel = nullptr, std::span<const double> noise_point = {});
 
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {

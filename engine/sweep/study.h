@@ -62,6 +62,9 @@ struct Study {
   bool needs_model() const;
   /// The line of the [design] table in the study file, for errors raised after parsing.
   int design_line = 0;
+  /// The line of the study's [subset] table (a subset simulation, `gesweep risk`, docs/dispersion.md);
+  /// 0 when it has none. `gesweep run` refuses such a study.
+  int subset_line = 0;
 };
 
 /// Reads and validates a study file. Throws InputError on any problem.

@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <mutex>
 #include <set>
 #include <tuple>
@@ -123,10 +124,14 @@ TEST(SubsetOracle, StatedCovMatchesTheSpreadOfRepetitions) {
 TEST(SubsetSimulation, MonteCarloLevelIsThePlainFraction) {
   std::mutex mutex;
   std::vector<double> seen;
+  std::map<int, std::vector<double>> failing;  // by sample index: the points with g <= 0
   const LimitStateBatch g = [&](const PointBatch& batch, std::span<double> values) {
     for (std::size_t i = 0; i < batch.size(); ++i) values[i] = LinearLimitState(batch.point(i), 0.5);
     const std::lock_guard lock(mutex);
     seen.insert(seen.end(), values.begin(), values.end());
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      if (values[i] <= 0) failing[batch.tags[i].chain].assign(batch.point(i).begin(), batch.point(i).end());
+    }
   };
   const int n = 1000;
   const auto result = RunSubsetSimulation(g, 5, Options(n, 3));
@@ -137,7 +142,16 @@ TEST(SubsetSimulation, MonteCarloLevelIsThePlainFraction) {
   EXPECT_EQ(result.probability, p);
   EXPECT_DOUBLE_EQ(result.coefficient_of_variation, std::sqrt((1 - p) / (n * p)));
   EXPECT_EQ(result.evaluations, n);
-  EXPECT_EQ(result.failure_points.size(), static_cast<std::size_t>(failures) * 5);
+  EXPECT_EQ(result.failure_count, failures);
+  // The mean failing point, from the callback's own record of the points with g <= 0.
+  ASSERT_EQ(result.failure_mean.size(), 5u);
+  for (std::size_t k = 0; k < 5; ++k) {
+    double sum = 0;
+    for (const auto& [index, point] : failing) sum += point[k];
+    EXPECT_NEAR(result.failure_mean[k], sum / static_cast<double>(failing.size()), 1e-12);
+  }
+  EXPECT_EQ(LinearLimitState(result.most_likely_failure, 0.5), result.most_likely_failure_value);
+  EXPECT_LE(result.most_likely_failure_value, 0);
 }
 
 // Every evaluation is counted once, tagged uniquely, and the total is N + (m - 1)(N - N_s).
@@ -180,9 +194,12 @@ void ExpectIdentical(const SubsetResult& a, const SubsetResult& b) {
         << "level " << j + 1;
     EXPECT_TRUE(SameBits(a.levels[j].scale, b.levels[j].scale)) << "level " << j + 1;
   }
-  ASSERT_EQ(a.failure_points.size(), b.failure_points.size());
-  EXPECT_EQ(0, std::memcmp(a.failure_points.data(), b.failure_points.data(),
-                           a.failure_points.size() * sizeof(double)));
+  EXPECT_EQ(a.failure_count, b.failure_count);
+  ASSERT_EQ(a.failure_mean.size(), b.failure_mean.size());
+  EXPECT_EQ(0, std::memcmp(a.failure_mean.data(), b.failure_mean.data(), a.failure_mean.size() * sizeof(double)));
+  ASSERT_EQ(a.most_likely_failure.size(), b.most_likely_failure.size());
+  EXPECT_EQ(0, std::memcmp(a.most_likely_failure.data(), b.most_likely_failure.data(),
+                           a.most_likely_failure.size() * sizeof(double)));
 }
 
 SubsetResult RunOnThreads(int threads, ConditionalSampler sampler) {
@@ -327,6 +344,36 @@ TEST(SubsetSimulation, RefusesOptionsThatCannotRun) {
   smallest.samples_per_level = 10;
   smallest.adaptation_groups = 1;
   EXPECT_NO_THROW(RunSubsetSimulation(Linear(1.0), 2, smallest));
+}
+
+// The most likely failing point is the point of the evaluation its tag names (a seed's or a
+// repeated state's own evaluation, not a later level's), and no failing sample of the last level,
+// as the callback saw them, is nearer the origin.
+TEST(SubsetSimulation, MostLikelyFailureIsTheTaggedEvaluation) {
+  std::mutex mutex;
+  std::map<std::tuple<int, int, int>, std::vector<double>> points;
+  const LimitStateBatch g = [&](const PointBatch& batch, std::span<double> values) {
+    for (std::size_t i = 0; i < batch.size(); ++i) values[i] = LinearLimitState(batch.point(i), 3.0);
+    const std::lock_guard lock(mutex);
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      const auto& t = batch.tags[i];
+      points[{t.level, t.chain, t.step}].assign(batch.point(i).begin(), batch.point(i).end());
+    }
+  };
+  const auto result = RunSubsetSimulation(g, 8, Options(500, 11));
+  ASSERT_EQ(result.status, SubsetResult::Status::kConverged);
+  ASSERT_GT(result.failure_count, 0);
+  const auto& t = result.most_likely_failure_tag;
+  const auto found = points.find({t.level, t.chain, t.step});
+  ASSERT_NE(found, points.end());
+  EXPECT_EQ(found->second, result.most_likely_failure);
+  EXPECT_EQ(LinearLimitState(found->second, 3.0), result.most_likely_failure_value);
+  // On the linear limit state the most likely failure lies near the design point beta * a: its norm
+  // is at least beta (every failing point is at distance >= beta from the origin).
+  double norm2 = 0;
+  for (const double v : result.most_likely_failure) norm2 += v * v;
+  EXPECT_GE(std::sqrt(norm2), 3.0 - 1e-12);
+  EXPECT_LT(std::sqrt(norm2), 3.0 + 1.5);
 }
 
 }  // namespace

@@ -1,0 +1,428 @@
+// gesweep risk: the landing risk by subset simulation (docs/dispersion.md, "Landing risk by subset
+// simulation").
+//   gesweep risk STUDY -o ARCHIVE [--threads N] [--resume] [--force] [--format table|json] [-q]
+//   gesweep risk ARCHIVE --replay ROW [--format table|json]
+// STUDY has a [subset] table (the limits and the method). The run journals every batch of landings
+// (ARCHIVE.journal) so that a killed run resumes with --resume to the same estimate bit for bit; the
+// archive is written whole at the end. --replay flies one stored landing again from the archive
+// alone (its recipe: the study, the tag and the values before it) and compares it bit for bit.
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "engine/archive/archive_lock.h"
+#include "engine/archive/provenance.h"
+#include "engine/cli/command.h"
+#include "engine/cli/json_util.h"
+#include "engine/cli/model_flags.h"
+#include "engine/cli/risk_output.h"
+#include "engine/cli/signals.h"
+#include "engine/common/errors.h"
+#include "engine/common/output_guard.h"
+#include "engine/disturbance/run_noise.h"
+#include "engine/risk/risk_archive.h"
+#include "engine/sweep/runner.h"
+#include "engine/sweep/study.h"
+
+namespace gesweep::cli {
+namespace {
+
+using nlohmann::ordered_json;
+using risk::Evaluation;
+using risk::EvaluationKey;
+
+/// A number, or null when it is not finite (JsonNumber's rule, in an ordered document).
+ordered_json Num(double value) { return std::isfinite(value) ? ordered_json(value) : ordered_json(nullptr); }
+
+struct RiskFlags {
+  std::string input;
+  std::string output;
+  std::optional<int> threads;
+  std::optional<long long> replay;
+  std::string format = "table";
+  bool resume = false;
+  bool force = false;
+  bool quiet = false;
+  DescribedFlags described{{{"quiet", "-q"}}};
+
+  template <class V>
+  void Describe(V& v) {
+    v(Field("resume", &resume)
+          .Doc("Continue an interrupted run from its journal (ARCHIVE.journal): the same estimate bit for bit"));
+    v(Field("force", &force).Doc("Replace an existing archive (and discard the journal of an interrupted run)"));
+    v(Field("quiet", &quiet).Doc("No progress lines"));
+  }
+};
+
+std::string CommandLine(const RiskFlags& flags) {
+  std::string line = "gesweep risk " + flags.input;
+  if (!flags.output.empty()) line += " -o " + flags.output;
+  if (flags.threads) line += " --threads " + std::to_string(*flags.threads);
+  if (flags.resume) line += " --resume";
+  if (flags.force) line += " --force";
+  return line;
+}
+
+ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run,
+                       const risk::LimitRisk& r) {
+  const auto& limit = spec.limits[static_cast<std::size_t>(r.limit)];
+  const auto& s = r.subset;
+  ordered_json j;
+  j["cell"] = r.cell;
+  j["cell_label"] = risk::CellLabel(plan, r.cell);
+  j["limit"] = limit.text;
+  j["column"] = limit.column;
+  j["units"] = limit.units;
+  j["above"] = limit.above;
+  j["value"] = limit.value;
+  j["status"] = s.status == rare::SubsetResult::Status::kConverged ? "converged"
+                : s.status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
+                                                                     : "too_many_failed_runs";
+  j["probability"] = Num(s.probability);
+  j["coefficient_of_variation"] = Num(s.coefficient_of_variation);
+  j["coefficient_of_variation_correlated_levels"] = Num(s.coefficient_of_variation_upper);
+  j["interval_95"] = {Num(s.interval_95_low), Num(s.interval_95_high)};
+  j["upper_bound"] = s.status == rare::SubsetResult::Status::kLevelCap ? Num(s.upper_bound)
+                                                                       : ordered_json(nullptr);
+  j["runs"] = s.evaluations;
+  j["failed_runs"] = s.failed_evaluations;
+  j["dimension"] = r.dimension;
+  ordered_json thresholds = ordered_json::array(), levels = ordered_json::array();
+  const auto curve = risk::ExceedanceCurve(r, limit);
+  for (std::size_t k = 0; k < s.levels.size(); ++k) {
+    const auto& level = s.levels[k];
+    if (k + 1 < s.levels.size()) thresholds.push_back(Num(curve[k].value));
+    levels.push_back({{"threshold", Num(curve[k].value)},
+                      {"conditional_probability", Num(level.conditional_probability)},
+                      {"coefficient_of_variation", Num(level.coefficient_of_variation)},
+                      {"correlation_factor", Num(level.correlation_factor)},
+                      {"acceptance_rate", Num(level.acceptance_rate)},
+                      {"scale", Num(level.scale)},
+                      {"runs", level.evaluations},
+                      {"failed_runs", level.failed_evaluations}});
+  }
+  j["thresholds"] = thresholds;
+  j["levels"] = levels;
+  ordered_json exceedance = ordered_json::array();
+  for (const auto& p : curve) {
+    exceedance.push_back({{"value", Num(p.value)},
+                          {"probability", Num(p.probability)},
+                          {"coefficient_of_variation", Num(p.coefficient_of_variation)},
+                          {"interval_95", {Num(p.low), Num(p.high)}}});
+  }
+  j["exceedance"] = exceedance;
+  ordered_json design;
+  design["failing_runs_last_level"] = s.failure_count;
+  if (r.most_likely_row >= 0) {
+    const Evaluation& e = run.evaluations[static_cast<std::size_t>(r.most_likely_row)];
+    design["most_likely_row"] = r.most_likely_row;
+    design["most_likely_tag"] = {{"level", e.key.level}, {"chain", e.key.chain}, {"step", e.key.step}};
+    design["most_likely_value"] = Num(limit.above ? limit.value - e.g : limit.value + e.g);
+    double norm2 = 0;
+    for (const double v : s.most_likely_failure) norm2 += v * v;
+    design["most_likely_distance"] = std::sqrt(norm2);
+  }
+  j["design_point"] = design;
+  return j;
+}
+
+ordered_json ResultJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run,
+                        const std::string& archive) {
+  ordered_json j;
+  j["archive"] = archive;
+  j["study"] = plan.study().name;
+  j["method"] = {{"name", "subset_simulation"},
+                 {"sampler", spec.subset.sampler == rare::ConditionalSampler::kCrankNicolson ? "crank_nicolson"
+                                                                                             : "modified_metropolis"},
+                 {"level_probability", spec.subset.level_probability},
+                 {"samples_per_level", spec.subset.samples_per_level},
+                 {"max_levels", spec.subset.max_levels},
+                 {"seed", spec.subset.seed}};
+  j["runs"] = static_cast<std::int64_t>(run.evaluations.size());
+  ordered_json limits = ordered_json::array();
+  for (const auto& r : run.results) limits.push_back(LimitJson(plan, spec, run, r));
+  j["limits"] = limits;
+  return j;
+}
+
+/// The landing series of a point, flown on the study with its series stored.
+risk::PointSeries FlySeries(const SweepPlan& series_plan, std::int64_t cell, const risk::RiskSpec& spec,
+                            std::span<const double> point, const std::string& name) {
+  RunWorkspace workspace(series_plan);
+  ResultBlock block;
+  block.Allocate(series_plan);
+  block.Reset(series_plan, 0);
+  ExecuteRun(series_plan, cell, workspace, block, 0, nullptr, point);
+  (void)spec;
+  risk::PointSeries series;
+  series.name = name;
+  const auto& schema = series_plan.schema();
+  for (std::size_t c = 0; c < schema.columns.size(); ++c) {
+    const auto& column = schema.columns[c];
+    if (column.time_axis.empty()) continue;
+    if (series.time_s.empty()) {
+      for (const auto& axis : schema.axes) {
+        if (axis.path == column.time_axis) series.time_s = axis.times_s;
+      }
+    }
+    series.columns.push_back(column.path.substr(column.path.rfind('/') + 1));
+    series.units.push_back(column.units);
+    const double* values = block.results[c].data();
+    series.values.emplace_back(values, values + column.width);
+  }
+  return series;
+}
+
+std::vector<risk::DesignPoint> DesignPoints(const SweepPlan& plan, const risk::RiskSpec& spec,
+                                            const risk::RiskRun& run) {
+  Study study = ParseStudy(plan.study().text, plan.study().path);
+  study.storage.time_series = true;
+  const SweepPlan series_plan(std::move(study), ShardSpec{});
+  std::vector<risk::DesignPoint> points;
+  for (const auto& r : run.results) {
+    risk::DesignPoint point;
+    point.cell = r.cell;
+    point.limit = r.limit;
+    point.sample_interval_s = risk::CellSampleInterval(plan, r.cell);
+    point.mean_noise = r.subset.failure_mean;
+    point.most_likely_noise = r.subset.most_likely_failure;
+    const std::vector<double> zero(r.dimension, 0.0);
+    point.series.push_back(FlySeries(series_plan, r.cell, spec, zero, "steady"));
+    if (!point.mean_noise.empty()) {
+      point.series.push_back(FlySeries(series_plan, r.cell, spec, point.mean_noise, "mean_failure"));
+      point.series.push_back(FlySeries(series_plan, r.cell, spec, point.most_likely_noise, "most_likely"));
+    }
+    points.push_back(std::move(point));
+  }
+  return points;
+}
+
+void CheckThreads(const RiskFlags& flags) {
+  if (flags.threads && (*flags.threads < 1 || *flags.threads > 4096)) {
+    throw InputError("command line", "--threads", std::to_string(*flags.threads), "an integer from 1 to 4096");
+  }
+  RequireFormat(flags.format, {"table", "json"});
+}
+
+int Replay(const RiskFlags& flags) {
+  if (!flags.output.empty() || flags.resume || flags.force) {
+    throw InputError("command line", "--replay", std::to_string(*flags.replay),
+                     "without -o, --resume or --force: a replay reads the archive and writes nothing");
+  }
+  return GuardArchive([&] {
+    RequireRegularFile(flags.input, "archive");
+    const risk::RiskArchive archive = risk::ReadRiskArchive(flags.input, false);
+    const auto rows = static_cast<long long>(archive.evaluations.size());
+    if (*flags.replay < 0 || *flags.replay >= rows) {
+      throw InputError("command line", "--replay", std::to_string(*flags.replay),
+                       "a row of the archive's evaluations, 0 to " + std::to_string(rows - 1));
+    }
+    Study study = ParseStudy(archive.study_text, archive.study_path);
+    const SweepPlan plan(std::move(study), ShardSpec{});
+    const risk::RiskSpec spec = risk::ReadRiskSpec(plan);
+    if (spec.fingerprint != archive.fingerprint) {
+      throw InputError(flags.input, "spec_fingerprint", "",
+                       "the study as this engine reads it now: its fingerprint differs from the archive's "
+                       "(another engine, or a changed aircraft file), so a replay would not fly the same landings");
+    }
+    std::map<EvaluationKey, Evaluation> cache;
+    for (const auto& e : archive.evaluations) cache.emplace(e.key, e);
+    const Evaluation& stored = archive.evaluations[static_cast<std::size_t>(*flags.replay)];
+    std::vector<double> point;
+    risk::RiskRunOptions options;
+    options.cache = &cache;
+    options.capture = stored.key;
+    options.captured_point = &point;
+    options.only = std::pair<std::int64_t, int>{stored.key.cell, stored.key.limit};
+    (void)risk::RunRisk(plan, spec, options);
+    if (point.empty()) {
+      throw InputError(flags.input, "", "", "evaluations that reach row " + std::to_string(*flags.replay) +
+                                                ": the subset simulation over the stored values never proposes it");
+    }
+    const Evaluation flown = risk::FlyPoint(plan, stored.key.cell, stored.key.limit, spec, point);
+    bool identical = std::bit_cast<std::uint64_t>(flown.g) == std::bit_cast<std::uint64_t>(stored.g) &&
+                     flown.status == stored.status && flown.values.size() == stored.values.size();
+    for (std::size_t k = 0; identical && k < flown.values.size(); ++k) {
+      identical = std::bit_cast<std::uint64_t>(flown.values[k]) == std::bit_cast<std::uint64_t>(stored.values[k]);
+    }
+    ordered_json j;
+    j["archive"] = flags.input;
+    j["row"] = *flags.replay;
+    j["cell"] = stored.key.cell;
+    j["limit"] = stored.key.limit;
+    j["level"] = stored.key.level;
+    j["chain"] = stored.key.chain;
+    j["step"] = stored.key.step;
+    j["identical"] = identical;
+    j["g"] = Num(flown.g);
+    j["stored_g"] = Num(stored.g);
+    ordered_json values;
+    for (std::size_t k = 0; k < flown.values.size(); ++k) {
+      const std::string& path = archive.value_columns[k];
+      values[path.substr(path.rfind('/') + 1)] = Num(flown.values[k]);
+    }
+    j["values"] = values;
+    if (flags.format == "json") {
+      std::cout << j.dump(2) << "\n";
+    } else {
+      std::cout << "row " << *flags.replay << " (cell " << stored.key.cell << ", limit " << stored.key.limit
+                << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step " << stored.key.step
+                << "): " << (identical ? "identical to the archive, bit for bit" : "DIFFERS from the archive")
+                << "\n";
+    }
+    if (!identical) {
+      std::cerr << "gesweep: the replay of row " << *flags.replay << " differs from the archive's values\n";
+      return 1;
+    }
+    return 0;
+  });
+}
+
+int RunRiskCommand(const RiskFlags& flags) {
+  CheckThreads(flags);
+  if (flags.replay) return Replay(flags);
+  Study study = LoadStudy(flags.input);
+  if (flags.output.empty()) {
+    throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/landing_risk.h5");
+  }
+  const std::filesystem::path output(flags.output), journal = risk::JournalPath(output);
+  const std::filesystem::path partial(output.string() + ".partial");
+  CheckOutputPath(output, OutputKind::kFile, study.inputs, "-o", {journal, partial});
+  RequireOutputDirectory(output, "-o");
+  if (flags.resume && flags.force) {
+    throw InputError("command line", "--resume", "", "not with --force: resume a run, or start it over");
+  }
+  const SweepPlan plan(std::move(study), ShardSpec{});
+  const risk::RiskSpec spec = risk::ReadRiskSpec(plan);
+  const auto value_columns = risk::RiskColumns(plan);
+  const auto value_count = static_cast<std::uint32_t>(value_columns.size());
+  return GuardArchive([&] {
+    const ArchiveLock lock = ArchiveLock::AcquireOutput(output, "-o");
+    const bool output_exists = std::filesystem::exists(output);
+    const bool journal_exists = std::filesystem::exists(journal);
+    if (flags.resume && !journal_exists) {
+      throw InputError("command line", "--resume", "",
+                       output_exists ? "a run to resume: " + output.string() + " is complete (no journal)"
+                                     : "a journal " + journal.string() + " to resume from: there is none");
+    }
+    if (!flags.resume && !flags.force && output_exists) {
+      throw InputError("command line", "-o", output.string(), "a new archive: it exists (--force replaces it)");
+    }
+    if (!flags.resume && !flags.force && journal_exists) {
+      throw InputError("command line", "-o", output.string(),
+                       "no interrupted run: " + journal.string() +
+                           " holds one (--resume continues it, --force starts over)");
+    }
+    risk::JournalContents resumed;
+    if (flags.resume) {
+      resumed = risk::ReadJournal(journal, spec.fingerprint, value_count);
+    } else if (journal_exists) {
+      std::filesystem::remove(journal);
+    }
+    risk::JournalWriter writer(journal, spec.fingerprint, value_count, flags.resume ? resumed.valid_length : 0);
+    if (flags.resume && !flags.quiet) {
+      std::cerr << "gesweep: resuming from " << journal.string() << ": " << resumed.records << " landings"
+                << (resumed.torn_tail ? " (a torn last record dropped)" : "") << "\n";
+    }
+    SignalCancellation signals;
+    risk::RiskRunOptions options;
+    options.cancel = signals.flag();
+    options.cache = flags.resume ? &resumed.evaluations : nullptr;
+    options.on_batch = [&](std::span<const Evaluation> batch) { writer.Append(batch); };
+    if (!flags.quiet) options.progress = [](const std::string& line) { std::cerr << "gesweep: " << line << "\n"; };
+    const int threads = flags.threads.value_or(tbb::info::default_concurrency());
+    risk::RiskRun run;
+    tbb::task_arena arena(threads);
+    arena.execute([&] { run = risk::RunRisk(plan, spec, options); });
+    if (run.cancelled || signals.cancelled()) {
+      std::cerr << "gesweep: stopped by signal " << signals.signal() << ": the landings made are in "
+                << journal.string() << "; `" << CommandLine(flags) << " --resume` continues\n";
+      return signals.exit_code();
+    }
+    risk::RiskArchive archive;
+    archive.study_path = plan.study().path;
+    archive.study_text = plan.study().text;
+    archive.fingerprint = spec.fingerprint;
+    archive.command_line = CommandLine(flags);
+    archive.result_json = ResultJson(plan, spec, run, output.string()).dump(2);
+    for (const int c : value_columns) archive.value_columns.push_back(plan.schema().columns[static_cast<std::size_t>(c)].path);
+    archive.evaluations = std::move(run.evaluations);
+    archive.design_points = DesignPoints(plan, spec, run);
+    risk::WriteRiskArchive(output, archive);
+    std::filesystem::remove(journal);
+    if (flags.format == "json") {
+      std::cout << archive.result_json << "\n";
+    } else {
+      PrintRiskTable(archive.result_json);
+      std::cout << "# written to " << output.string() << " (" << archive.evaluations.size() << " landings)\n";
+    }
+    return 0;
+  });
+}
+
+void AddRiskFlags(CLI::App& app, RiskFlags& flags) {
+  app.add_option("input", flags.input, "Study with a [subset] table (or, with --replay, its archive)")->required();
+  app.add_option("-o,--output", flags.output,
+                 "Archive to write (its journal ARCHIVE.journal is kept while the run goes, for --resume)");
+  app.add_option("--threads", flags.threads, "Threads (default: every core); the estimate does not depend on them")
+      ->check(ExactIntegerValidator("--threads", "threads", std::numeric_limits<int>::max()));
+  app.add_option("--replay", flags.replay,
+                 "Fly row ROW of the archive's evaluations again from the archive alone and compare bit for bit")
+      ->check(ExactIntegerValidator("--replay", "run_index", static_cast<double>(std::numeric_limits<long long>::max())));
+  app.add_option("--format", flags.format, "table (default) or json");
+}
+
+const CommandRegistrar kRegistrar{CommandWith<RiskFlags>(
+    "risk",
+    "Landing risk by subset simulation: for each limit of the study's [subset] table, the probability "
+    "that a landing in its turbulence exceeds it, with its coefficient of variation and 95 % interval",
+    AddRiskFlags, RunRiskCommand)};
+
+}  // namespace
+
+void PrintRiskTable(const std::string& result_json) {
+  const auto j = nlohmann::json::parse(result_json);
+  std::cout << "# subset simulation: " << j["method"]["sampler"].get<std::string>() << ", p0 = "
+            << j["method"]["level_probability"].get<double>() << ", N = "
+            << j["method"]["samples_per_level"].get<long long>() << " per level, " << j["runs"].get<long long>()
+            << " landings\n";
+  for (const auto& l : j["limits"]) {
+    const auto number = [](const nlohmann::json& v) {
+      if (v.is_null()) return std::string("-");
+      char text[32];
+      std::snprintf(text, sizeof text, "%.3g", v.get<double>());
+      return std::string(text);
+    };
+    const std::string cell = l["cell_label"].get<std::string>();
+    std::cout << (cell.empty() ? "" : cell + ": ") << l["limit"].get<std::string>() << "  P = "
+              << number(l["probability"]) << "  CoV " << number(l["coefficient_of_variation"]) << "  95 % ["
+              << number(l["interval_95"][0]) << ", " << number(l["interval_95"][1]) << "]  "
+              << l["levels"].size() << (l["levels"].size() == 1 ? " level, " : " levels, ") << l["runs"].get<long long>() << " landings ("
+              << l["failed_runs"].get<long long>() << " failed)";
+    if (l["status"] == "level_cap") std::cout << "  below the level cap: P < " << number(l["upper_bound"]);
+    if (l["status"] == "too_many_failed_runs") std::cout << "  too many failed runs for a threshold";
+    std::cout << "\n";
+  }
+}
+
+int PrintRiskArchive(const std::filesystem::path& path, const std::string& format) {
+  return GuardArchive([&] {
+    const risk::RiskArchive archive = risk::ReadRiskArchive(path, false);
+    if (format == "json") {
+      std::cout << archive.result_json << "\n";
+    } else {
+      PrintRiskTable(archive.result_json);
+    }
+    return 0;
+  });
+}
+
+}  // namespace gesweep::cli

@@ -1,0 +1,16 @@
+#pragma once
+/// The estimates of a subset-simulation archive as `gesweep risk` prints them (a table, or the
+/// archive's result_json); `gesweep dispersion` prints the same for such an archive.
+#include <filesystem>
+#include <string>
+
+namespace gesweep::cli {
+
+/// Reads the archive (risk::ReadRiskArchive's checks) and prints its estimates in `format` ("table"
+/// or "json") to stdout; returns the exit code (0).
+int PrintRiskArchive(const std::filesystem::path& archive, const std::string& format);
+
+/// The table of a result_json document.
+void PrintRiskTable(const std::string& result_json);
+
+}  // namespace gesweep::cli

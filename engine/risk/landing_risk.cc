@@ -1,0 +1,402 @@
+#include "engine/risk/landing_risk.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <mutex>
+
+#include "engine/common/errors.h"
+#include "engine/common/toml_reader.h"
+#include "engine/disturbance/run_noise.h"
+#include "engine/sweep/runner.h"
+
+namespace gesweep::risk {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::int64_t kMaxCells = 64;
+constexpr std::size_t kMaxLimits = 16;
+constexpr long long kMaxSeed = 9007199254740992LL;  // 2^53, as a sweep's seeds
+
+/// Thrown by the limit state once the cancellation flag is seen after a batch; RunRisk catches it.
+struct Cancelled {};
+/// Thrown once a replay's evaluation has been reached.
+struct Captured {};
+
+std::string Trim(std::string_view text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return "";
+  const auto last = text.find_last_not_of(" \t");
+  return std::string(text.substr(first, last - first + 1));
+}
+
+std::uint64_t Mix(std::uint64_t hash, std::uint64_t value) { return SplitMix64Mix(hash ^ SplitMix64Mix(value + 1)); }
+
+std::uint64_t MixText(std::uint64_t hash, const std::string& text) {
+  hash = Mix(hash, text.size());
+  for (const unsigned char c : text) hash = Mix(hash, c);
+  return hash;
+}
+
+/// The scalar float64 result columns a limit may name, by their name (the path's last part).
+std::string LimitColumnNames(const SweepPlan& plan) {
+  std::string names;
+  for (const auto& column : plan.schema().columns) {
+    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0) continue;
+    if (!names.empty()) names += ", ";
+    names += column.path.substr(column.path.rfind('/') + 1);
+  }
+  return names;
+}
+
+RiskLimit ParseRiskLimit(const SweepPlan& plan, const std::string& text, const TomlSection& section) {
+  const auto fail = [&](const std::string& why) {
+    section.Fail("limits", "\"" + text + "\"", why);
+  };
+  const auto at = text.find_first_of("<>");
+  if (at == std::string::npos || text.find_first_of("<>", at + 1) != std::string::npos) {
+    fail("a limit 'COLUMN > VALUE' or 'COLUMN < VALUE', e.g. \"touchdown_sink_rate_mps > 3.05\"");
+  }
+  RiskLimit limit;
+  limit.text = text;
+  limit.above = text[at] == '>';
+  limit.column = Trim(std::string_view(text).substr(0, at));
+  const std::string number = Trim(std::string_view(text).substr(at + 1));
+  char* end = nullptr;
+  errno = 0;
+  limit.value = number.empty() ? kNaN : std::strtod(number.c_str(), &end);
+  if (number.empty() || end != number.c_str() + number.size() || errno == ERANGE || !std::isfinite(limit.value)) {
+    fail("a finite number after '" + std::string(1, text[at]) + "'");
+  }
+  const auto& columns = plan.schema().columns;
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    const auto& column = columns[c];
+    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0) continue;
+    if (column.path.substr(column.path.rfind('/') + 1) != limit.column) continue;
+    limit.path = column.path;
+    limit.units = column.units;
+    limit.column_index = static_cast<int>(c);
+    return limit;
+  }
+  section.Fail("limits", "\"" + text + "\"",
+               "a limit on a scalar result column of the study's analyses: one of " + LimitColumnNames(plan));
+}
+
+rare::SubsetOptions ReadSubsetOptions(const TomlSection& section) {
+  rare::SubsetOptions options;
+  if (const auto p0 = section.OptionalNumber("level_probability")) options.level_probability = *p0;
+  const auto integer = [&](std::string_view key, long long low, long long high, auto& target) {
+    const auto value = section.OptionalInteger(key);
+    if (!value) return;
+    if (*value < low || *value > high) {
+      section.Fail(key, std::to_string(*value),
+                   "an integer from " + std::to_string(low) + " to " + std::to_string(high));
+    }
+    target = static_cast<std::remove_reference_t<decltype(target)>>(*value);
+  };
+  integer("samples_per_level", 1, 10'000'000, options.samples_per_level);
+  integer("max_levels", 1, 100, options.max_levels);
+  integer("seed", 0, kMaxSeed, options.seed);
+  integer("adaptation_groups", 1, 10'000'000, options.adaptation_groups);
+  if (const auto sampler = section.OptionalString("sampler")) {
+    if (*sampler == "crank_nicolson") {
+      options.sampler = rare::ConditionalSampler::kCrankNicolson;
+    } else if (*sampler == "modified_metropolis") {
+      options.sampler = rare::ConditionalSampler::kModifiedMetropolis;
+    } else {
+      section.Fail("sampler", "\"" + *sampler + "\"", "\"crank_nicolson\" (the default) or \"modified_metropolis\"");
+    }
+  }
+  if (const auto scale = section.OptionalNumber("initial_scale")) options.initial_scale = *scale;
+  if (const auto target = section.OptionalNumber("target_acceptance")) options.target_acceptance = *target;
+  try {
+    rare::ValidateSubsetOptions(options, section.source());
+  } catch (const InputError& e) {
+    section.Fail(e.key(), e.value(), e.expected());
+  }
+  return options;
+}
+
+}  // namespace
+
+std::vector<int> RiskColumns(const SweepPlan& plan) {
+  std::vector<int> columns;
+  const auto& all = plan.schema().columns;
+  for (std::size_t c = 0; c < all.size(); ++c) {
+    if (all[c].width == 1 && all[c].type != ColumnType::kComplex) columns.push_back(static_cast<int>(c));
+  }
+  return columns;
+}
+
+RunParameters CellParameters(const SweepPlan& plan, std::int64_t cell) {
+  RunParameters parameters = plan.base_parameters();
+  std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
+  plan.design().Row(cell, row.data());
+  for (int c = 0; c < plan.design().column_count(); ++c) {
+    parameters[static_cast<std::size_t>(plan.design().spec().parameters[static_cast<std::size_t>(c)].id)] =
+        row[static_cast<std::size_t>(c)];
+  }
+  return parameters;
+}
+
+std::uint64_t CellDimension(const SweepPlan& plan, std::int64_t cell) {
+  const RunParameters parameters = CellParameters(plan, cell);
+  std::uint64_t dimension = 0;
+  for (const auto& analysis : plan.study().analyses) {
+    dimension = std::max(dimension, analysis->NoiseDimension(parameters, *plan.study().aircraft));
+  }
+  return dimension;
+}
+
+double CellSampleInterval(const SweepPlan& plan, std::int64_t cell) {
+  const RunParameters parameters = CellParameters(plan, cell);
+  double interval = 0;
+  for (const auto& analysis : plan.study().analyses) {
+    interval = std::max(interval, analysis->NoiseSampleInterval(parameters));
+  }
+  return interval;
+}
+
+std::string CellLabel(const SweepPlan& plan, std::int64_t cell) {
+  std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
+  plan.design().Row(cell, row.data());
+  std::string label;
+  for (int c = 0; c < plan.design().column_count(); ++c) {
+    const auto id = plan.design().spec().parameters[static_cast<std::size_t>(c)].id;
+    const auto& info = ParameterCatalog()[static_cast<std::size_t>(id)];
+    if (!label.empty()) label += ", ";
+    const double value = row[static_cast<std::size_t>(c)];
+    const auto level = static_cast<std::size_t>(value);
+    label += info.name + " = " +
+             (!info.levels.empty() && value >= 0 && level < info.levels.size() && static_cast<double>(level) == value
+                  ? info.levels[level]
+                  : ShortNumber(value));
+  }
+  return label;
+}
+
+std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit) {
+  return Mix(Mix(SplitMix64Mix(seed ^ 0x6c616e64696e6721ULL), static_cast<std::uint64_t>(cell)),
+             static_cast<std::uint64_t>(limit));
+}
+
+RiskSpec ReadRiskSpec(const SweepPlan& plan) {
+  const Study& study = plan.study();
+  if (study.subset_line == 0) {
+    throw InputError(study.path, "subset", "", "a [subset] table (the limits and the method, docs/dispersion.md)");
+  }
+  const toml::table root = ParseToml(study.text, study.path);
+  const toml::table* table = root["subset"].as_table();
+  if (table == nullptr) throw InputError(study.path, "subset", "", "a table [subset]", study.subset_line);
+  const TomlSection section(*table, study.path, "subset");
+  section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed", "sampler",
+                             "initial_scale", "target_acceptance", "adaptation_groups"});
+  RiskSpec spec;
+  spec.subset = ReadSubsetOptions(section);
+
+  const bool has_landing = std::any_of(study.analyses.begin(), study.analyses.end(),
+                                       [](const auto& a) { return a->name() == "landing"; });
+  if (!has_landing) {
+    throw InputError(study.path, "analyses", "", "[analyses.landing]: a subset simulation estimates a landing's risk",
+                     study.subset_line);
+  }
+  const DesignKind kind = study.design.kind;
+  if (kind != DesignKind::kSingle && kind != DesignKind::kGrid && kind != DesignKind::kList) {
+    throw InputError(study.path, "design.kind", "",
+                     "single, grid or list with a [subset] table: each design row is a cell with its own "
+                     "estimates (random parameters do not join the subset simulation's space yet)",
+                     study.design_line);
+  }
+  if (plan.design_runs() > kMaxCells) {
+    throw InputError(study.path, "design", std::to_string(plan.design_runs()) + " rows",
+                     "at most " + std::to_string(kMaxCells) + " cells with a [subset] table (each runs " +
+                         "a subset simulation per limit)",
+                     study.design_line);
+  }
+  for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
+    if (CellDimension(plan, cell) == 0) {
+      throw InputError(study.path, "parameters.turbulence", CellLabel(plan, cell),
+                       "turbulence = \"dryden\" in every cell: without turbulence a landing draws no noise, and "
+                       "a subset simulation has no random input to sample",
+                       study.subset_line);
+    }
+  }
+
+  const toml::node* limits = table->get("limits");
+  const toml::array* array = limits != nullptr ? limits->as_array() : nullptr;
+  if (array == nullptr || array->empty() || array->size() > kMaxLimits) {
+    section.Fail("limits", limits == nullptr ? "" : DescribeNode(*limits),
+                 "an array of 1 to " + std::to_string(kMaxLimits) +
+                     " limits, e.g. limits = [\"touchdown_sink_rate_mps > 3.05\"]");
+  }
+  for (const auto& node : *array) {
+    const auto text = node.value<std::string>();
+    if (!text) section.Fail("limits", DescribeNode(node), "a string 'COLUMN > VALUE' or 'COLUMN < VALUE'");
+    spec.limits.push_back(ParseRiskLimit(plan, *text, section));
+  }
+
+  std::uint64_t hash = Mix(0x7269736b2d303031ULL, study.fingerprint);
+  const auto& o = spec.subset;
+  for (const std::uint64_t v :
+       {std::bit_cast<std::uint64_t>(o.level_probability), static_cast<std::uint64_t>(o.samples_per_level),
+        static_cast<std::uint64_t>(o.max_levels), o.seed, static_cast<std::uint64_t>(o.sampler),
+        std::bit_cast<std::uint64_t>(o.initial_scale), std::bit_cast<std::uint64_t>(o.target_acceptance),
+        static_cast<std::uint64_t>(o.adaptation_groups)}) {
+    hash = Mix(hash, v);
+  }
+  for (const auto& limit : spec.limits) hash = MixText(hash, limit.text);
+  spec.fingerprint = hash;
+  return spec;
+}
+
+namespace {
+
+/// A thread's run state: the runner's workspace and a result block of one row.
+struct FlightWorkspace {
+  explicit FlightWorkspace(const SweepPlan& plan) : workspace(plan) { block.Allocate(plan); }
+  RunWorkspace workspace;
+  ResultBlock block;
+};
+
+Evaluation Fly(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int limit, const RiskSpec& spec,
+               std::span<const double> point, const std::atomic<bool>* cancel) {
+  ResultBlock& block = w.block;
+  block.rows = 1;
+  for (std::size_t c = 0; c < block.results.size(); ++c) {
+    const auto width = static_cast<std::size_t>(plan.schema().columns[c].doubles_per_run());
+    std::fill(block.results[c].begin(), block.results[c].begin() + static_cast<std::ptrdiff_t>(width), kNaN);
+  }
+  block.status[0] = static_cast<std::int8_t>(RunStatus::kPending);
+  ExecuteRun(plan, cell, w.workspace, block, 0, cancel, point);
+  Evaluation e;
+  e.status = block.status[0];
+  e.message = block.message[0];
+  for (const int c : RiskColumns(plan)) e.values.push_back(block.results[static_cast<std::size_t>(c)][0]);
+  e.g = kNaN;
+  if (limit >= 0 && e.status == static_cast<std::int8_t>(RunStatus::kOk)) {
+    const RiskLimit& l = spec.limits[static_cast<std::size_t>(limit)];
+    const double x = block.results[static_cast<std::size_t>(l.column_index)][0];
+    if (std::isfinite(x)) e.g = l.above ? l.value - x : x - l.value;
+  }
+  return e;
+}
+
+}  // namespace
+
+Evaluation FlyPoint(const SweepPlan& plan, std::int64_t cell, int limit, const RiskSpec& spec,
+                    std::span<const double> point, const std::atomic<bool>* cancel) {
+  FlightWorkspace w(plan);
+  return Fly(plan, w, cell, limit, spec, point, cancel);
+}
+
+RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOptions& options) {
+  RiskRun run;
+  tbb::enumerable_thread_specific<FlightWorkspace> workspaces([&] { return FlightWorkspace(plan); });
+  std::mutex capture_mutex;
+  try {
+    for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
+      const std::uint64_t dimension = CellDimension(plan, cell);
+      for (int limit = 0; limit < static_cast<int>(spec.limits.size()); ++limit) {
+        if (options.only && *options.only != std::pair<std::int64_t, int>{cell, limit}) continue;
+        rare::SubsetOptions subset = spec.subset;
+        subset.seed = SimulationSeed(spec.subset.seed, cell, limit);
+        int last_level = 0;
+        const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
+          std::vector<Evaluation> made(batch.size());
+          std::vector<char> fresh(batch.size(), 0);
+          std::atomic<bool> captured{false};
+          tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
+            const rare::EvaluationTag& tag = batch.tags[i];
+            const EvaluationKey key{static_cast<std::int32_t>(cell), limit, tag.level, tag.chain, tag.step};
+            if (options.capture && key == *options.capture && options.captured_point != nullptr) {
+              const std::lock_guard lock(capture_mutex);
+              options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
+              captured = true;
+            }
+            const Evaluation* cached = nullptr;
+            if (options.cache != nullptr) {
+              const auto found = options.cache->find(key);
+              if (found != options.cache->end()) cached = &found->second;
+            }
+            if (cached != nullptr) {
+              made[i] = *cached;
+            } else {
+              made[i] = Fly(plan, workspaces.local(), cell, limit, spec, batch.point(i), options.cancel);
+              made[i].key = key;
+              fresh[i] = 1;
+            }
+            values[i] = made[i].g;
+          });
+          // A run the flag stopped is no evaluation: it is neither kept nor journaled, and the
+          // simulation stops after the complete ones are.
+          bool stopped = false;
+          std::vector<Evaluation> journal;
+          for (std::size_t i = 0; i < made.size(); ++i) {
+            if (made[i].status == static_cast<std::int8_t>(RunStatus::kPending)) {
+              stopped = true;
+              continue;
+            }
+            if (fresh[i]) journal.push_back(made[i]);
+          }
+          if (options.on_batch && !journal.empty()) options.on_batch(journal);
+          if (stopped || (options.cancel != nullptr && options.cancel->load())) throw Cancelled{};
+          if (captured) throw Captured{};
+          const std::size_t before = run.evaluations.size();
+          for (auto& e : made) run.evaluations.push_back(std::move(e));
+          if (!batch.tags.empty() && batch.tags[0].level != last_level) {
+            if (options.progress && last_level > 0) {
+              options.progress("cell " + std::to_string(cell) + ", " +
+                               spec.limits[static_cast<std::size_t>(limit)].text + ": level " +
+                               std::to_string(last_level) + " done, " + std::to_string(before) +
+                               " landings so far");
+            }
+            last_level = batch.tags[0].level;
+          }
+        };
+        LimitRisk risk;
+        risk.cell = cell;
+        risk.limit = limit;
+        risk.dimension = dimension;
+        risk.subset = rare::RunSubsetSimulation(g, static_cast<int>(dimension), subset);
+        if (risk.subset.failure_count > 0) {
+          const auto& t = risk.subset.most_likely_failure_tag;
+          const EvaluationKey key{static_cast<std::int32_t>(cell), limit, t.level, t.chain, t.step};
+          for (std::size_t r = 0; r < run.evaluations.size(); ++r) {
+            if (run.evaluations[r].key == key) risk.most_likely_row = static_cast<std::int64_t>(r);
+          }
+        }
+        run.results.push_back(std::move(risk));
+      }
+    }
+  } catch (const Cancelled&) {
+    run.cancelled = true;
+  } catch (const Captured&) {
+  }
+  return run;
+}
+
+std::vector<ExceedancePoint> ExceedanceCurve(const LimitRisk& risk, const RiskLimit& limit) {
+  std::vector<ExceedancePoint> curve;
+  double product = 1, variance = 0;
+  const auto& levels = risk.subset.levels;
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    product *= levels[j].conditional_probability;
+    variance += levels[j].coefficient_of_variation * levels[j].coefficient_of_variation;
+    ExceedancePoint point;
+    // g = limit − x above a limit (x − limit below it): the level's threshold b_j is x = limit ∓ b_j.
+    point.value = limit.above ? limit.value - levels[j].threshold : limit.value + levels[j].threshold;
+    point.probability = product;
+    point.coefficient_of_variation = std::sqrt(variance);
+    rare::LognormalInterval95(point.probability, point.coefficient_of_variation, point.low, point.high);
+    curve.push_back(point);
+  }
+  return curve;
+}
+
+}  // namespace gesweep::risk

@@ -1,0 +1,145 @@
+#pragma once
+/// The landing risk by subset simulation (docs/dispersion.md, "Landing risk by subset simulation"):
+/// a study with a [subset] table names limits on the landing's results ("touchdown_sink_rate_mps >
+/// 3.05"), and for every cell of its design (every row: e.g. with and without the h-derivatives) and
+/// every limit, RunRisk estimates the probability that a landing in the study's turbulence exceeds
+/// it, with engine/rare's subset simulation in the standard-normal space of the landing's noise
+/// (RunNoise's point layout, engine/disturbance/run_noise.h).
+///
+/// Every landing of every level is one Evaluation, kept in the archive with its (cell, limit,
+/// level, chain, step): the recipe that makes it again. Its noise is a pure function of the study's
+/// seed, its tag and the values of the evaluations before it, so RunRisk over the stored values
+/// (RiskRunOptions::cache) flies nothing, reaches the same points bit for bit, and can fly any one
+/// of them again (a replay) or the ones that are missing (a resume).
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "engine/rare/subset_simulation.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace gesweep::risk {
+
+/// A limit event on one scalar result column of the landing.
+struct RiskLimit {
+  std::string text;    ///< as written, e.g. "touchdown_sink_rate_mps > 3.05"
+  std::string column;  ///< the column's name, e.g. "touchdown_sink_rate_mps"
+  std::string path;    ///< its archive path, e.g. "results/landing/touchdown_sink_rate_mps"
+  std::string units;
+  int column_index = 0;  ///< in the plan's schema
+  bool above = true;     ///< ">" (the event is value > limit) or "<"
+  double value = 0;
+};
+
+/// What the study's [subset] table says.
+struct RiskSpec {
+  rare::SubsetOptions subset;  ///< p0, N, the level cap, the seed, the sampler
+  std::vector<RiskLimit> limits;
+  /// A hash of everything that decides the evaluations (the study's fingerprint, the options and
+  /// the limits): a resume refuses a journal of another spec.
+  std::uint64_t fingerprint = 0;
+};
+
+/// Reads and checks the [subset] table of the plan's study; throws InputError naming the study file,
+/// the key (subset.level_probability, ...), the value, the expectation and the line. Refuses a study
+/// without a landing analysis, without turbulence, or with time series stored.
+RiskSpec ReadRiskSpec(const SweepPlan& plan);
+
+/// The tag of one evaluation.
+struct EvaluationKey {
+  std::int32_t cell = 0, limit = 0, level = 0, chain = 0, step = 0;
+  auto tie() const { return std::tie(cell, limit, level, chain, step); }
+  bool operator<(const EvaluationKey& other) const { return tie() < other.tie(); }
+  bool operator==(const EvaluationKey& other) const { return tie() == other.tie(); }
+};
+
+/// One landing of a subset simulation.
+struct Evaluation {
+  EvaluationKey key;
+  std::int8_t status = 0;  ///< RunStatus (engine/sweep/runner.h): kOk or kFailed
+  double g = 0;            ///< the limit state (failure g <= 0); NaN: a failed run or no value
+  std::string message;     ///< the run's message (why it failed; a note)
+  std::vector<double> values;  ///< the RiskColumns of the run
+};
+
+/// The columns an evaluation keeps: every float64 scalar column of the plan's schema, schema order.
+std::vector<int> RiskColumns(const SweepPlan& plan);
+
+/// The parameters of one cell (a design row over the study's fixed parameters).
+RunParameters CellParameters(const SweepPlan& plan, std::int64_t cell);
+
+/// The standard-normal dimension of a cell's landings (the landing's LandingNoiseDimension).
+std::uint64_t CellDimension(const SweepPlan& plan, std::int64_t cell);
+
+/// The interval, s, at which a cell's noise streams are held (the sample interval of its turbulence).
+double CellSampleInterval(const SweepPlan& plan, std::int64_t cell);
+
+/// "h_derivatives = 0, wind_20ft_mps = -15.43" (empty for a design of one run).
+std::string CellLabel(const SweepPlan& plan, std::int64_t cell);
+
+/// The seed of one (cell, limit) subset simulation: SplitMix64 of the study's seed and the pair.
+std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit);
+
+/// Flies the landing of `cell` with noise `point` and evaluates limit `limit` on it (g is NaN when
+/// `limit` is negative). Never throws for a failed run.
+Evaluation FlyPoint(const SweepPlan& plan, std::int64_t cell, int limit, const RiskSpec& spec,
+                    std::span<const double> point, const std::atomic<bool>* cancel = nullptr);
+
+/// One (cell, limit) estimate.
+struct LimitRisk {
+  std::int64_t cell = 0;
+  int limit = 0;
+  rare::SubsetResult subset;
+  std::uint64_t dimension = 0;
+  /// The failing landings of the last level: the row (in RiskRun::evaluations) of the most likely one
+  /// (the failing point nearest the origin), -1 when none failed.
+  std::int64_t most_likely_row = -1;
+};
+
+/// What RunRisk gives.
+struct RiskRun {
+  std::vector<LimitRisk> results;        ///< cell-major: cell 0's limits, then cell 1's, ...
+  std::vector<Evaluation> evaluations;   ///< every landing, in the order they were made
+  bool cancelled = false;                ///< stopped by the flag: `results` is incomplete
+};
+
+struct RiskRunOptions {
+  const std::atomic<bool>* cancel = nullptr;
+  /// Evaluations already made (a resume, a replay): taken instead of flying them.
+  const std::map<EvaluationKey, Evaluation>* cache = nullptr;
+  /// Called after each batch with its new evaluations (not those from the cache), in order: the journal.
+  std::function<void(std::span<const Evaluation>)> on_batch;
+  /// One line per level (may be empty).
+  std::function<void(const std::string&)> progress;
+  /// A replay: the point of this evaluation is copied into *captured_point when it is reached.
+  /// The run stops once it has been captured.
+  std::optional<EvaluationKey> capture;
+  std::vector<double>* captured_point = nullptr;
+  /// Only this (cell, limit) simulation (a replay); all when empty.
+  std::optional<std::pair<std::int64_t, int>> only;
+};
+
+/// Runs every (cell, limit) subset simulation of the plan's design. The threads are the calling
+/// thread's task arena's; the result does not depend on them.
+RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOptions& options);
+
+/// The exceedance curve of one estimate: P(X > x) (or P(X < x)) at the intermediate thresholds
+/// x_j (where it is the product of the first j levels' conditional probabilities) and at the limit,
+/// with the lognormal 95 % band of the levels' accumulated coefficient of variation.
+struct ExceedancePoint {
+  double value = 0;  ///< x, in the column's units
+  double probability = 0;
+  double coefficient_of_variation = 0;
+  double low = 0, high = 0;
+};
+std::vector<ExceedancePoint> ExceedanceCurve(const LimitRisk& risk, const RiskLimit& limit);
+
+}  // namespace gesweep::risk
