@@ -15,14 +15,14 @@
 #include <sstream>
 
 #include "engine/cli/command.h"
-#include "engine/cli/risk_output.h"
-#include "engine/risk/risk_archive.h"
 #include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/risk_output.h"
 #include "engine/common/errors.h"
 #include "engine/products/dispersion.h"
 #include "engine/query/run_columns.h"
+#include "engine/risk/risk_archive.h"
 
 namespace gesweep {
 // The header of a dispersion and the statistics of a column and of a limit in a group, under their
@@ -239,7 +239,11 @@ int RunDispersion(const DispersionFlags& flags) {
   if (risk::IsRiskArchive(flags.archive)) {
     // A subset simulation's archive (`gesweep risk`): its estimates, per limit of its [subset] table.
     if (!flags.options.limits.empty() || !flags.options.group_by.empty() || !flags.options.columns.empty()) {
-      throw InputError("command line", !flags.options.limits.empty() ? "--limit" : !flags.options.group_by.empty() ? "--group-by" : "--columns", "",
+      throw InputError("command line",
+                       !flags.options.limits.empty()     ? "--limit"
+                       : !flags.options.group_by.empty() ? "--group-by"
+                                                         : "--columns",
+                       "",
                        "none with a subset-simulation archive: its limits are its study's [subset] table");
     }
     return PrintRiskArchive(flags.archive, flags.format);

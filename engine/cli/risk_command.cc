@@ -56,8 +56,10 @@ struct RiskFlags {
   template <class V>
   void Describe(V& v) {
     v(Field("resume", &resume)
-          .Doc("Continue an interrupted run from its journal (ARCHIVE.journal): the same estimate bit for bit"));
-    v(Field("force", &force).Doc("Replace an existing archive (and discard the journal of an interrupted run)"));
+          .Doc("Continue an interrupted run from its journal (ARCHIVE.journal): the same estimate bit for "
+               "bit"));
+    v(Field("force", &force)
+          .Doc("Replace an existing archive (and discard the journal of an interrupted run)"));
     v(Field("quiet", &quiet).Doc("No progress lines"));
   }
 };
@@ -83,15 +85,15 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   j["units"] = limit.units;
   j["above"] = limit.above;
   j["value"] = limit.value;
-  j["status"] = s.status == rare::SubsetResult::Status::kConverged ? "converged"
+  j["status"] = s.status == rare::SubsetResult::Status::kConverged  ? "converged"
                 : s.status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
-                                                                     : "too_many_failed_runs";
+                                                                    : "too_many_failed_runs";
   j["probability"] = Num(s.probability);
   j["coefficient_of_variation"] = Num(s.coefficient_of_variation);
   j["coefficient_of_variation_correlated_levels"] = Num(s.coefficient_of_variation_upper);
   j["interval_95"] = {Num(s.interval_95_low), Num(s.interval_95_high)};
-  j["upper_bound"] = s.status == rare::SubsetResult::Status::kLevelCap ? Num(s.upper_bound)
-                                                                       : ordered_json(nullptr);
+  j["upper_bound"] =
+      s.status == rare::SubsetResult::Status::kLevelCap ? Num(s.upper_bound) : ordered_json(nullptr);
   j["runs"] = s.evaluations;
   j["failed_runs"] = s.failed_evaluations;
   j["dimension"] = r.dimension;
@@ -134,18 +136,19 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   return j;
 }
 
-ordered_json ResultJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run,
-                        const std::string& archive) {
+// What the archive stores: the estimates, not where the file was written (an archive may be moved or
+// merged; 1 and 2 threads, a resumed run and an uninterrupted one store the same bytes).
+ordered_json ResultJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run) {
   ordered_json j;
-  j["archive"] = archive;
   j["study"] = plan.study().name;
-  j["method"] = {{"name", "subset_simulation"},
-                 {"sampler", spec.subset.sampler == rare::ConditionalSampler::kCrankNicolson ? "crank_nicolson"
-                                                                                             : "modified_metropolis"},
-                 {"level_probability", spec.subset.level_probability},
-                 {"samples_per_level", spec.subset.samples_per_level},
-                 {"max_levels", spec.subset.max_levels},
-                 {"seed", spec.subset.seed}};
+  j["method"] = {
+      {"name", "subset_simulation"},
+      {"sampler", spec.subset.sampler == rare::ConditionalSampler::kCrankNicolson ? "crank_nicolson"
+                                                                                  : "modified_metropolis"},
+      {"level_probability", spec.subset.level_probability},
+      {"samples_per_level", spec.subset.samples_per_level},
+      {"max_levels", spec.subset.max_levels},
+      {"seed", spec.subset.seed}};
   j["runs"] = static_cast<std::int64_t>(run.evaluations.size());
   ordered_json limits = ordered_json::array();
   for (const auto& r : run.results) limits.push_back(LimitJson(plan, spec, run, r));
@@ -207,7 +210,8 @@ std::vector<risk::DesignPoint> DesignPoints(const SweepPlan& plan, const risk::R
 
 void CheckThreads(const RiskFlags& flags) {
   if (flags.threads && (*flags.threads < 1 || *flags.threads > 4096)) {
-    throw InputError("command line", "--threads", std::to_string(*flags.threads), "an integer from 1 to 4096");
+    throw InputError("command line", "--threads", std::to_string(*flags.threads),
+                     "an integer from 1 to 4096");
   }
   RequireFormat(flags.format, {"table", "json"});
 }
@@ -229,9 +233,10 @@ int Replay(const RiskFlags& flags) {
     const SweepPlan plan(std::move(study), ShardSpec{});
     const risk::RiskSpec spec = risk::ReadRiskSpec(plan);
     if (spec.fingerprint != archive.fingerprint) {
-      throw InputError(flags.input, "spec_fingerprint", "",
-                       "the study as this engine reads it now: its fingerprint differs from the archive's "
-                       "(another engine, or a changed aircraft file), so a replay would not fly the same landings");
+      throw InputError(
+          flags.input, "spec_fingerprint", "",
+          "the study as this engine reads it now: its fingerprint differs from the archive's "
+          "(another engine, or a changed aircraft file), so a replay would not fly the same landings");
     }
     std::map<EvaluationKey, Evaluation> cache;
     for (const auto& e : archive.evaluations) cache.emplace(e.key, e);
@@ -244,14 +249,16 @@ int Replay(const RiskFlags& flags) {
     options.only = std::pair<std::int64_t, int>{stored.key.cell, stored.key.limit};
     (void)risk::RunRisk(plan, spec, options);
     if (point.empty()) {
-      throw InputError(flags.input, "", "", "evaluations that reach row " + std::to_string(*flags.replay) +
-                                                ": the subset simulation over the stored values never proposes it");
+      throw InputError(flags.input, "", "",
+                       "evaluations that reach row " + std::to_string(*flags.replay) +
+                           ": the subset simulation over the stored values never proposes it");
     }
     const Evaluation flown = risk::FlyPoint(plan, stored.key.cell, stored.key.limit, spec, point);
     bool identical = std::bit_cast<std::uint64_t>(flown.g) == std::bit_cast<std::uint64_t>(stored.g) &&
                      flown.status == stored.status && flown.values.size() == stored.values.size();
     for (std::size_t k = 0; identical && k < flown.values.size(); ++k) {
-      identical = std::bit_cast<std::uint64_t>(flown.values[k]) == std::bit_cast<std::uint64_t>(stored.values[k]);
+      identical =
+          std::bit_cast<std::uint64_t>(flown.values[k]) == std::bit_cast<std::uint64_t>(stored.values[k]);
     }
     ordered_json j;
     j["archive"] = flags.input;
@@ -274,7 +281,8 @@ int Replay(const RiskFlags& flags) {
       std::cout << j.dump(2) << "\n";
     } else {
       std::cout << "row " << *flags.replay << " (cell " << stored.key.cell << ", limit " << stored.key.limit
-                << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step " << stored.key.step
+                << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step "
+                << stored.key.step
                 << "): " << (identical ? "identical to the archive, bit for bit" : "DIFFERS from the archive")
                 << "\n";
     }
@@ -291,7 +299,8 @@ int RunRiskCommand(const RiskFlags& flags) {
   if (flags.replay) return Replay(flags);
   Study study = LoadStudy(flags.input);
   if (flags.output.empty()) {
-    throw InputError("command line", "-o", "", "missing: the archive to write, e.g. -o results/landing_risk.h5");
+    throw InputError("command line", "-o", "",
+                     "missing: the archive to write, e.g. -o results/landing_risk.h5");
   }
   const std::filesystem::path output(flags.output), journal = risk::JournalPath(output);
   const std::filesystem::path partial(output.string() + ".partial");
@@ -314,7 +323,8 @@ int RunRiskCommand(const RiskFlags& flags) {
                                      : "a journal " + journal.string() + " to resume from: there is none");
     }
     if (!flags.resume && !flags.force && output_exists) {
-      throw InputError("command line", "-o", output.string(), "a new archive: it exists (--force replaces it)");
+      throw InputError("command line", "-o", output.string(),
+                       "a new archive: it exists (--force replaces it)");
     }
     if (!flags.resume && !flags.force && journal_exists) {
       throw InputError("command line", "-o", output.string(),
@@ -327,7 +337,8 @@ int RunRiskCommand(const RiskFlags& flags) {
     } else if (journal_exists) {
       std::filesystem::remove(journal);
     }
-    risk::JournalWriter writer(journal, spec.fingerprint, value_count, flags.resume ? resumed.valid_length : 0);
+    risk::JournalWriter writer(journal, spec.fingerprint, value_count,
+                               flags.resume ? resumed.valid_length : 0);
     if (flags.resume && !flags.quiet) {
       std::cerr << "gesweep: resuming from " << journal.string() << ": " << resumed.records << " landings"
                 << (resumed.torn_tail ? " (a torn last record dropped)" : "") << "\n";
@@ -337,7 +348,8 @@ int RunRiskCommand(const RiskFlags& flags) {
     options.cancel = signals.flag();
     options.cache = flags.resume ? &resumed.evaluations : nullptr;
     options.on_batch = [&](std::span<const Evaluation> batch) { writer.Append(batch); };
-    if (!flags.quiet) options.progress = [](const std::string& line) { std::cerr << "gesweep: " << line << "\n"; };
+    if (!flags.quiet)
+      options.progress = [](const std::string& line) { std::cerr << "gesweep: " << line << "\n"; };
     const int threads = flags.threads.value_or(tbb::info::default_concurrency());
     risk::RiskRun run;
     tbb::task_arena arena(threads);
@@ -352,14 +364,15 @@ int RunRiskCommand(const RiskFlags& flags) {
     archive.study_text = plan.study().text;
     archive.fingerprint = spec.fingerprint;
     archive.command_line = CommandLine(flags);
-    archive.result_json = ResultJson(plan, spec, run, output.string()).dump(2);
-    for (const int c : value_columns) archive.value_columns.push_back(plan.schema().columns[static_cast<std::size_t>(c)].path);
+    archive.result_json = ResultJson(plan, spec, run).dump(2);
+    for (const int c : value_columns)
+      archive.value_columns.push_back(plan.schema().columns[static_cast<std::size_t>(c)].path);
     archive.evaluations = std::move(run.evaluations);
     archive.design_points = DesignPoints(plan, spec, run);
     risk::WriteRiskArchive(output, archive);
     std::filesystem::remove(journal);
     if (flags.format == "json") {
-      std::cout << archive.result_json << "\n";
+      std::cout << WithArchive(archive.result_json, output) << "\n";
     } else {
       PrintRiskTable(archive.result_json);
       std::cout << "# written to " << output.string() << " (" << archive.evaluations.size() << " landings)\n";
@@ -369,14 +382,18 @@ int RunRiskCommand(const RiskFlags& flags) {
 }
 
 void AddRiskFlags(CLI::App& app, RiskFlags& flags) {
-  app.add_option("input", flags.input, "Study with a [subset] table (or, with --replay, its archive)")->required();
+  app.add_option("input", flags.input, "Study with a [subset] table (or, with --replay, its archive)")
+      ->required();
   app.add_option("-o,--output", flags.output,
                  "Archive to write (its journal ARCHIVE.journal is kept while the run goes, for --resume)");
-  app.add_option("--threads", flags.threads, "Threads (default: every core); the estimate does not depend on them")
+  app.add_option("--threads", flags.threads,
+                 "Threads (default: every core); the estimate does not depend on them")
       ->check(ExactIntegerValidator("--threads", "threads", std::numeric_limits<int>::max()));
-  app.add_option("--replay", flags.replay,
-                 "Fly row ROW of the archive's evaluations again from the archive alone and compare bit for bit")
-      ->check(ExactIntegerValidator("--replay", "run_index", static_cast<double>(std::numeric_limits<long long>::max())));
+  app.add_option(
+         "--replay", flags.replay,
+         "Fly row ROW of the archive's evaluations again from the archive alone and compare bit for bit")
+      ->check(ExactIntegerValidator("--replay", "run_index",
+                                    static_cast<double>(std::numeric_limits<long long>::max())));
   app.add_option("--format", flags.format, "table (default) or json");
 }
 
@@ -388,12 +405,20 @@ const CommandRegistrar kRegistrar{CommandWith<RiskFlags>(
 
 }  // namespace
 
+std::string WithArchive(const std::string& result_json, const std::filesystem::path& archive) {
+  ordered_json j;
+  j["archive"] = archive.string();
+  const ordered_json stored = ordered_json::parse(result_json);
+  for (const auto& [key, value] : stored.items()) j[key] = value;
+  return j.dump(2);
+}
+
 void PrintRiskTable(const std::string& result_json) {
   const auto j = nlohmann::json::parse(result_json);
-  std::cout << "# subset simulation: " << j["method"]["sampler"].get<std::string>() << ", p0 = "
-            << j["method"]["level_probability"].get<double>() << ", N = "
-            << j["method"]["samples_per_level"].get<long long>() << " per level, " << j["runs"].get<long long>()
-            << " landings\n";
+  std::cout << "# subset simulation: " << j["method"]["sampler"].get<std::string>()
+            << ", p0 = " << j["method"]["level_probability"].get<double>()
+            << ", N = " << j["method"]["samples_per_level"].get<long long>() << " per level, "
+            << j["runs"].get<long long>() << " landings\n";
   for (const auto& l : j["limits"]) {
     const auto number = [](const nlohmann::json& v) {
       if (v.is_null()) return std::string("-");
@@ -402,11 +427,12 @@ void PrintRiskTable(const std::string& result_json) {
       return std::string(text);
     };
     const std::string cell = l["cell_label"].get<std::string>();
-    std::cout << (cell.empty() ? "" : cell + ": ") << l["limit"].get<std::string>() << "  P = "
-              << number(l["probability"]) << "  CoV " << number(l["coefficient_of_variation"]) << "  95 % ["
-              << number(l["interval_95"][0]) << ", " << number(l["interval_95"][1]) << "]  "
-              << l["levels"].size() << (l["levels"].size() == 1 ? " level, " : " levels, ") << l["runs"].get<long long>() << " landings ("
-              << l["failed_runs"].get<long long>() << " failed)";
+    std::cout << (cell.empty() ? "" : cell + ": ") << l["limit"].get<std::string>()
+              << "  P = " << number(l["probability"]) << "  CoV " << number(l["coefficient_of_variation"])
+              << "  95 % [" << number(l["interval_95"][0]) << ", " << number(l["interval_95"][1]) << "]  "
+              << l["levels"].size() << (l["levels"].size() == 1 ? " level, " : " levels, ")
+              << l["runs"].get<long long>() << " landings (" << l["failed_runs"].get<long long>()
+              << " failed)";
     if (l["status"] == "level_cap") std::cout << "  below the level cap: P < " << number(l["upper_bound"]);
     if (l["status"] == "too_many_failed_runs") std::cout << "  too many failed runs for a threshold";
     std::cout << "\n";
@@ -417,7 +443,7 @@ int PrintRiskArchive(const std::filesystem::path& path, const std::string& forma
   return GuardArchive([&] {
     const risk::RiskArchive archive = risk::ReadRiskArchive(path, false);
     if (format == "json") {
-      std::cout << archive.result_json << "\n";
+      std::cout << WithArchive(archive.result_json, path) << "\n";
     } else {
       PrintRiskTable(archive.result_json);
     }

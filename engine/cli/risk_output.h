@@ -10,6 +10,9 @@ namespace gesweep::cli {
 /// or "json") to stdout; returns the exit code (0).
 int PrintRiskArchive(const std::filesystem::path& archive, const std::string& format);
 
+/// A result_json document as printed: "archive" (the file read or written) first, then the document.
+std::string WithArchive(const std::string& result_json, const std::filesystem::path& archive);
+
 /// The table of a result_json document.
 void PrintRiskTable(const std::string& result_json);
 

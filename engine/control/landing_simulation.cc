@@ -572,8 +572,9 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
                        "at least " + std::to_string(needed) + " (LandingNoiseDimension)");
     }
   }
-  const DisturbanceField field = noise_point.empty() ? DisturbanceField(disturbance, config.seed, config.run_index)
-                                                     : DisturbanceField(disturbance, noise_point);
+  const DisturbanceField field = noise_point.empty()
+                                     ? DisturbanceField(disturbance, config.seed, config.run_index)
+                                     : DisturbanceField(disturbance, noise_point);
   if (field.active()) {
     Fly<true>(plant, config, result, store_series, &field, cancel);
   } else {

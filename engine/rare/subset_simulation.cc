@@ -239,11 +239,14 @@ class SeedSelection {
   /// The slots in SampleKey order.
   std::vector<std::int64_t> Sorted() const {
     std::vector<std::int64_t> slots(heap_);
-    std::sort(slots.begin(), slots.end(), [&](std::int64_t a, std::int64_t b) { return Before(keys_[a], keys_[b]); });
+    std::sort(slots.begin(), slots.end(),
+              [&](std::int64_t a, std::int64_t b) { return Before(keys_[a], keys_[b]); });
     return slots;
   }
   const SampleKey& key(std::int64_t slot) const { return keys_[slot]; }
-  const double* point(std::int64_t slot) const { return points_.data() + slot * static_cast<std::int64_t>(d_); }
+  const double* point(std::int64_t slot) const {
+    return points_.data() + slot * static_cast<std::int64_t>(d_);
+  }
 
  private:
   std::int64_t capacity_;
@@ -340,7 +343,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   std::int64_t level_failed = std::count_if(g.begin(), g.end(), [](double v) { return std::isnan(v); });
   double product = 1;  // prod of the previous levels' P_j
   std::vector<double> deltas;
-  std::vector<double> state(static_cast<std::size_t>(ns) * d);  // the chains' current points
+  std::vector<double> state(static_cast<std::size_t>(ns) * d);         // the chains' current points
   std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));  // the evaluations that gave them
 
   for (int level = 1;; ++level) {

@@ -23,6 +23,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::int64_t kMaxCells = 64;
 constexpr std::size_t kMaxLimits = 16;
 constexpr long long kMaxSeed = 9007199254740992LL;  // 2^53, as a sweep's seeds
+/// The fewest chains a study's level may have (N * p0): below it the chains' correlation, and so the
+/// coefficient of variation, rests on too few chains to report.
+constexpr long long kMinChains = 10;
 
 /// Thrown by the limit state once the cancellation flag is seen after a batch; RunRisk catches it.
 struct Cancelled {};
@@ -36,7 +39,9 @@ std::string Trim(std::string_view text) {
   return std::string(text.substr(first, last - first + 1));
 }
 
-std::uint64_t Mix(std::uint64_t hash, std::uint64_t value) { return SplitMix64Mix(hash ^ SplitMix64Mix(value + 1)); }
+std::uint64_t Mix(std::uint64_t hash, std::uint64_t value) {
+  return SplitMix64Mix(hash ^ SplitMix64Mix(value + 1));
+}
 
 std::uint64_t MixText(std::uint64_t hash, const std::string& text) {
   hash = Mix(hash, text.size());
@@ -48,7 +53,8 @@ std::uint64_t MixText(std::uint64_t hash, const std::string& text) {
 std::string LimitColumnNames(const SweepPlan& plan) {
   std::string names;
   for (const auto& column : plan.schema().columns) {
-    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0) continue;
+    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0)
+      continue;
     if (!names.empty()) names += ", ";
     names += column.path.substr(column.path.rfind('/') + 1);
   }
@@ -56,9 +62,7 @@ std::string LimitColumnNames(const SweepPlan& plan) {
 }
 
 RiskLimit ParseRiskLimit(const SweepPlan& plan, const std::string& text, const TomlSection& section) {
-  const auto fail = [&](const std::string& why) {
-    section.Fail("limits", "\"" + text + "\"", why);
-  };
+  const auto fail = [&](const std::string& why) { section.Fail("limits", "\"" + text + "\"", why); };
   const auto at = text.find_first_of("<>");
   if (at == std::string::npos || text.find_first_of("<>", at + 1) != std::string::npos) {
     fail("a limit 'COLUMN > VALUE' or 'COLUMN < VALUE', e.g. \"touchdown_sink_rate_mps > 3.05\"");
@@ -71,13 +75,15 @@ RiskLimit ParseRiskLimit(const SweepPlan& plan, const std::string& text, const T
   char* end = nullptr;
   errno = 0;
   limit.value = number.empty() ? kNaN : std::strtod(number.c_str(), &end);
-  if (number.empty() || end != number.c_str() + number.size() || errno == ERANGE || !std::isfinite(limit.value)) {
+  if (number.empty() || end != number.c_str() + number.size() || errno == ERANGE ||
+      !std::isfinite(limit.value)) {
     fail("a finite number after '" + std::string(1, text[at]) + "'");
   }
   const auto& columns = plan.schema().columns;
   for (std::size_t c = 0; c < columns.size(); ++c) {
     const auto& column = columns[c];
-    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0) continue;
+    if (column.width != 1 || column.type != ColumnType::kFloat64 || column.path.rfind("results/", 0) != 0)
+      continue;
     if (column.path.substr(column.path.rfind('/') + 1) != limit.column) continue;
     limit.path = column.path;
     limit.units = column.units;
@@ -110,11 +116,21 @@ rare::SubsetOptions ReadSubsetOptions(const TomlSection& section) {
     } else if (*sampler == "modified_metropolis") {
       options.sampler = rare::ConditionalSampler::kModifiedMetropolis;
     } else {
-      section.Fail("sampler", "\"" + *sampler + "\"", "\"crank_nicolson\" (the default) or \"modified_metropolis\"");
+      section.Fail("sampler", "\"" + *sampler + "\"",
+                   "\"crank_nicolson\" (the default) or \"modified_metropolis\"");
     }
   }
   if (const auto scale = section.OptionalNumber("initial_scale")) options.initial_scale = *scale;
   if (const auto target = section.OptionalNumber("target_acceptance")) options.target_acceptance = *target;
+  // A study asks for more than the method's minimum of one chain: the coefficient of variation of a
+  // level is estimated from the chains' correlation, which takes several chains (docs/dispersion.md).
+  const double p0 = options.level_probability, chains = options.samples_per_level * p0;
+  if (p0 > 0 && p0 < 1 && std::abs(chains - std::round(chains)) <= 1e-9 * std::max(1.0, chains) &&
+      std::round(chains) < kMinChains) {
+    section.Fail("samples_per_level", std::to_string(options.samples_per_level),
+                 "at least " + std::to_string(kMinChains) + " chains: N * level_probability >= " +
+                     std::to_string(kMinChains) + " (here " + ShortNumber(chains) + ")");
+  }
   try {
     rare::ValidateSubsetOptions(options, section.source());
   } catch (const InputError& e) {
@@ -174,7 +190,8 @@ std::string CellLabel(const SweepPlan& plan, std::int64_t cell) {
     const double value = row[static_cast<std::size_t>(c)];
     const auto level = static_cast<std::size_t>(value);
     label += info.name + " = " +
-             (!info.levels.empty() && value >= 0 && level < info.levels.size() && static_cast<double>(level) == value
+             (!info.levels.empty() && value >= 0 && level < info.levels.size() &&
+                      static_cast<double>(level) == value
                   ? info.levels[level]
                   : ShortNumber(value));
   }
@@ -189,22 +206,23 @@ std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t
 RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   const Study& study = plan.study();
   if (study.subset_line == 0) {
-    throw InputError(study.path, "subset", "", "a [subset] table (the limits and the method, docs/dispersion.md)");
+    throw InputError(study.path, "subset", "",
+                     "a [subset] table (the limits and the method, docs/dispersion.md)");
   }
   const toml::table root = ParseToml(study.text, study.path);
   const toml::table* table = root["subset"].as_table();
   if (table == nullptr) throw InputError(study.path, "subset", "", "a table [subset]", study.subset_line);
   const TomlSection section(*table, study.path, "subset");
-  section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed", "sampler",
-                             "initial_scale", "target_acceptance", "adaptation_groups"});
+  section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed",
+                             "sampler", "initial_scale", "target_acceptance", "adaptation_groups"});
   RiskSpec spec;
   spec.subset = ReadSubsetOptions(section);
 
   const bool has_landing = std::any_of(study.analyses.begin(), study.analyses.end(),
                                        [](const auto& a) { return a->name() == "landing"; });
   if (!has_landing) {
-    throw InputError(study.path, "analyses", "", "[analyses.landing]: a subset simulation estimates a landing's risk",
-                     study.subset_line);
+    throw InputError(study.path, "analyses", "",
+                     "[analyses.landing]: a subset simulation estimates a landing's risk", study.subset_line);
   }
   const DesignKind kind = study.design.kind;
   if (kind != DesignKind::kSingle && kind != DesignKind::kGrid && kind != DesignKind::kList) {
@@ -221,10 +239,11 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   }
   for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
     if (CellDimension(plan, cell) == 0) {
-      throw InputError(study.path, "parameters.turbulence", CellLabel(plan, cell),
-                       "turbulence = \"dryden\" in every cell: without turbulence a landing draws no noise, and "
-                       "a subset simulation has no random input to sample",
-                       study.subset_line);
+      throw InputError(
+          study.path, "parameters.turbulence", CellLabel(plan, cell),
+          "turbulence = \"dryden\" in every cell: without turbulence a landing draws no noise, and "
+          "a subset simulation has no random input to sample",
+          study.subset_line);
     }
   }
 

@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/archive/subset_archive.h"
 #include "engine/rare/subset_simulation.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -52,23 +53,6 @@ struct RiskSpec {
 /// the key (subset.level_probability, ...), the value, the expectation and the line. Refuses a study
 /// without a landing analysis, without turbulence, or with time series stored.
 RiskSpec ReadRiskSpec(const SweepPlan& plan);
-
-/// The tag of one evaluation.
-struct EvaluationKey {
-  std::int32_t cell = 0, limit = 0, level = 0, chain = 0, step = 0;
-  auto tie() const { return std::tie(cell, limit, level, chain, step); }
-  bool operator<(const EvaluationKey& other) const { return tie() < other.tie(); }
-  bool operator==(const EvaluationKey& other) const { return tie() == other.tie(); }
-};
-
-/// One landing of a subset simulation.
-struct Evaluation {
-  EvaluationKey key;
-  std::int8_t status = 0;  ///< RunStatus (engine/sweep/runner.h): kOk or kFailed
-  double g = 0;            ///< the limit state (failure g <= 0); NaN: a failed run or no value
-  std::string message;     ///< the run's message (why it failed; a note)
-  std::vector<double> values;  ///< the RiskColumns of the run
-};
 
 /// The columns an evaluation keeps: every float64 scalar column of the plan's schema, schema order.
 std::vector<int> RiskColumns(const SweepPlan& plan);
@@ -106,9 +90,9 @@ struct LimitRisk {
 
 /// What RunRisk gives.
 struct RiskRun {
-  std::vector<LimitRisk> results;        ///< cell-major: cell 0's limits, then cell 1's, ...
-  std::vector<Evaluation> evaluations;   ///< every landing, in the order they were made
-  bool cancelled = false;                ///< stopped by the flag: `results` is incomplete
+  std::vector<LimitRisk> results;       ///< cell-major: cell 0's limits, then cell 1's, ...
+  std::vector<Evaluation> evaluations;  ///< every landing, in the order they were made
+  bool cancelled = false;               ///< stopped by the flag: `results` is incomplete
 };
 
 struct RiskRunOptions {

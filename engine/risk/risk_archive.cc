@@ -8,8 +8,7 @@
 #include <fstream>
 #include <set>
 
-#include "engine/archive/archive_probe.h"
-#include "engine/archive/hdf5_util.h"
+#include "engine/archive/archive_error.h"
 #include "engine/common/errors.h"
 #include "engine/disturbance/run_noise.h"
 
@@ -62,7 +61,8 @@ void WriteAll(int fd, const unsigned char* data, std::size_t size, const std::fi
 
 std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
   std::vector<unsigned char> payload;
-  for (const std::int32_t v : {e.key.cell, e.key.limit, e.key.level, e.key.chain, e.key.step}) Put(payload, v);
+  for (const std::int32_t v : {e.key.cell, e.key.limit, e.key.level, e.key.chain, e.key.step})
+    Put(payload, v);
   Put(payload, e.status);
   Put(payload, e.g);
   Put(payload, static_cast<std::uint32_t>(e.message.size()));
@@ -76,7 +76,8 @@ std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
   return record;
 }
 
-bool DecodeRecord(const unsigned char* p, const unsigned char* end, std::uint32_t value_count, Evaluation& e) {
+bool DecodeRecord(const unsigned char* p, const unsigned char* end, std::uint32_t value_count,
+                  Evaluation& e) {
   std::int32_t* keys[] = {&e.key.cell, &e.key.limit, &e.key.level, &e.key.chain, &e.key.step};
   for (std::int32_t* k : keys) {
     if (!Get(p, end, *k)) return false;
@@ -142,7 +143,8 @@ JournalContents ReadJournal(const std::filesystem::path& path, std::uint64_t fin
   const std::string source = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(source, "", "", "a journal of `gesweep risk` to resume from: it cannot be read");
-  const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
   if (data.size() < kHeaderLength || std::memcmp(data.data(), kJournalMagic, kMagicLength) != 0) {
     throw InputError(source, "", "", "a journal of `gesweep risk` (it does not start as one)");
   }
@@ -153,9 +155,10 @@ JournalContents ReadJournal(const std::filesystem::path& path, std::uint64_t fin
   Get(p, end, stored_fingerprint);
   Get(p, end, stored_count);
   if (stored_fingerprint != fingerprint || stored_count != value_count) {
-    throw InputError(source, "", "",
-                     "the journal of this study and [subset] table: it was written for another study, spec or "
-                     "engine (delete it, or resume with the study it was made with)");
+    throw InputError(
+        source, "", "",
+        "the journal of this study and [subset] table: it was written for another study, spec or "
+        "engine (delete it, or resume with the study it was made with)");
   }
   JournalContents contents;
   contents.valid_length = kHeaderLength;
@@ -181,286 +184,14 @@ JournalContents ReadJournal(const std::filesystem::path& path, std::uint64_t fin
                            " (at byte " + std::to_string(start - data.data()) + ") is damaged");
     }
     if (!contents.evaluations.emplace(e.key, e).second) {
-      throw InputError(source, "", "", "a journal with each landing once: record " +
-                                           std::to_string(contents.records + 1) + " repeats a tag");
+      throw InputError(source, "", "",
+                       "a journal with each landing once: record " + std::to_string(contents.records + 1) +
+                           " repeats a tag");
     }
     ++contents.records;
     contents.valid_length = static_cast<std::uint64_t>(p - data.data());
   }
   return contents;
-}
-
-// --- The archive ----------------------------------------------------------------------------------
-
-namespace {
-
-using hdf5::Check;
-using hdf5::Handle;
-
-template <class T>
-hid_t NativeType();
-template <>
-hid_t NativeType<double>() {
-  return H5T_NATIVE_DOUBLE;
-}
-template <>
-hid_t NativeType<std::int32_t>() {
-  return H5T_NATIVE_INT32;
-}
-template <>
-hid_t NativeType<std::int8_t>() {
-  return H5T_NATIVE_INT8;
-}
-
-template <class T>
-void WriteVector(hid_t group, const std::string& name, const std::vector<T>& values, std::int64_t columns = 1) {
-  const hsize_t rows = static_cast<hsize_t>(columns > 1 ? values.size() / static_cast<std::size_t>(columns)
-                                                        : values.size());
-  const hsize_t dims[2] = {rows, static_cast<hsize_t>(columns)};
-  Handle space(H5Screate_simple(columns > 1 ? 2 : 1, dims, nullptr), "dataspace " + name);
-  Handle properties(H5Pcreate(H5P_DATASET_CREATE), "properties " + name);
-  if (rows > 0) {
-    const hsize_t chunk[2] = {std::min<hsize_t>(rows, columns > 1 ? 1024 : 65536), static_cast<hsize_t>(columns)};
-    Check(H5Pset_chunk(properties.get(), columns > 1 ? 2 : 1, chunk), "chunk " + name);
-    Check(H5Pset_deflate(properties.get(), 1), "deflate " + name);
-  }
-  Handle set(H5Dcreate2(group, name.c_str(), NativeType<T>(), space.get(), H5P_DEFAULT, properties.get(), H5P_DEFAULT),
-             "create " + name);
-  if (!values.empty()) {
-    Check(H5Dwrite(set.get(), NativeType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + name);
-  }
-  set.Close("close " + name);
-}
-
-template <class T>
-std::vector<T> ReadVector(hid_t group, const std::string& name, std::vector<std::int64_t>* dims = nullptr) {
-  Handle set(H5Dopen2(group, name.c_str(), H5P_DEFAULT), "open " + name);
-  const std::vector<std::int64_t> d = hdf5::Dimensions(set.get());
-  std::int64_t count = 1;
-  for (const auto v : d) count *= v;
-  std::vector<T> values(static_cast<std::size_t>(count));
-  if (count > 0) {
-    Check(H5Dread(set.get(), NativeType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "read " + name);
-  }
-  if (dims != nullptr) *dims = d;
-  return values;
-}
-
-Handle CreateGroup(hid_t parent, const std::string& name) {
-  return Handle(H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + name);
-}
-Handle OpenGroup(hid_t parent, const std::string& name) {
-  return Handle(H5Gopen2(parent, name.c_str(), H5P_DEFAULT), "open group " + name);
-}
-
-std::string DesignPointName(std::int64_t cell, int limit) {
-  return "cell_" + std::to_string(cell) + "_limit_" + std::to_string(limit);
-}
-
-void WriteDesignPoint(hid_t parent, const DesignPoint& point) {
-  Handle group = CreateGroup(parent, DesignPointName(point.cell, point.limit));
-  hdf5::WriteAttribute(group.get(), "cell", static_cast<std::int64_t>(point.cell));
-  hdf5::WriteAttribute(group.get(), "limit", static_cast<std::int64_t>(point.limit));
-  hdf5::WriteAttribute(group.get(), "sample_interval_s", point.sample_interval_s);
-  hdf5::WriteAttribute(group.get(), "noise_layout",
-                       "u[0..2]: initial filter states; u[3 + 2k]: u-stream sample k; u[3 + 2k + 1]: w-stream "
-                       "sample k, held on [k dt, (k + 1) dt) (engine/disturbance/run_noise.h)");
-  WriteVector(group.get(), "mean_noise", point.mean_noise);
-  WriteVector(group.get(), "most_likely_noise", point.most_likely_noise);
-  for (const auto& series : point.series) {
-    Handle s = CreateGroup(group.get(), series.name);
-    WriteVector(s.get(), "time_s", series.time_s);
-    for (std::size_t c = 0; c < series.columns.size(); ++c) {
-      WriteVector(s.get(), series.columns[c], series.values[c]);
-      Handle set(H5Dopen2(s.get(), series.columns[c].c_str(), H5P_DEFAULT), "open " + series.columns[c]);
-      hdf5::WriteAttribute(set.get(), "units", series.units[c]);
-    }
-  }
-}
-
-[[noreturn]] void Refuse(const std::filesystem::path& path, const std::string& what) {
-  throw InputError(path.string(), "", "", "a subset-simulation archive of gesweep: " + what);
-}
-
-RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_points) {
-  hdf5::Quiet();
-  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, hdf5::FileAccess().get()), "open " + path.string());
-  const auto kind = hdf5::ReadStringAttribute(file.get(), "gesweep_archive_kind");
-  if (!kind || *kind != kRiskArchiveKind) Refuse(path, "its root has no gesweep_archive_kind = subset_simulation");
-  const auto version = hdf5::ReadIntegerAttribute(file.get(), "format_version");
-  if (!version || *version != kRiskArchiveVersion) {
-    Refuse(path, "format_version " + std::to_string(kRiskArchiveVersion) + " (this engine's)");
-  }
-  RiskArchive a;
-  a.study_path = hdf5::ReadStringAttribute(file.get(), "study_path").value_or("");
-  a.study_text = hdf5::ReadStringAttribute(file.get(), "study_text").value_or("");
-  a.command_line = hdf5::ReadStringAttribute(file.get(), "command_line").value_or("");
-  a.result_json = hdf5::ReadStringAttribute(file.get(), "result_json").value_or("");
-  const std::string fingerprint = hdf5::ReadStringAttribute(file.get(), "spec_fingerprint").value_or("");
-  char* end = nullptr;
-  a.fingerprint = std::strtoull(fingerprint.c_str(), &end, 16);
-  if (fingerprint.size() != 16 || end != fingerprint.c_str() + 16) Refuse(path, "a 16-digit spec_fingerprint");
-  if (a.study_text.empty() || a.result_json.empty()) Refuse(path, "its study_text and result_json");
-
-  Handle evaluations = OpenGroup(file.get(), "subset/evaluations");
-  const auto cell = ReadVector<std::int32_t>(evaluations.get(), "cell");
-  const auto limit = ReadVector<std::int32_t>(evaluations.get(), "limit");
-  const auto level = ReadVector<std::int32_t>(evaluations.get(), "level");
-  const auto chain = ReadVector<std::int32_t>(evaluations.get(), "chain");
-  const auto step = ReadVector<std::int32_t>(evaluations.get(), "step");
-  const auto status = ReadVector<std::int8_t>(evaluations.get(), "status");
-  const auto g = ReadVector<double>(evaluations.get(), "g");
-  std::vector<std::int64_t> dims;
-  const auto values = ReadVector<double>(evaluations.get(), "values", &dims);
-  a.value_columns = hdf5::ReadStringListAttribute(evaluations.get(), "columns");
-  const std::size_t n = cell.size();
-  for (const std::size_t size : {limit.size(), level.size(), chain.size(), step.size(), status.size(), g.size()}) {
-    if (size != n) Refuse(path, "evaluation columns of one length (" + std::to_string(n) + ")");
-  }
-  const auto k = static_cast<std::int64_t>(a.value_columns.size());
-  if (!(dims.size() == 2 && dims[0] == static_cast<std::int64_t>(n) && dims[1] == k) &&
-      !(n == 0 && values.empty())) {
-    Refuse(path, "a values matrix of " + std::to_string(n) + " rows and " + std::to_string(k) + " columns");
-  }
-  const auto message_rows = hdf5::ReadIntegerListAttribute(evaluations.get(), "message_rows");
-  const auto messages = hdf5::ReadStringListAttribute(evaluations.get(), "messages");
-  if (message_rows.size() != messages.size()) Refuse(path, "one message per message row");
-  std::set<EvaluationKey> seen;
-  a.evaluations.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    Evaluation& e = a.evaluations[i];
-    e.key = EvaluationKey{cell[i], limit[i], level[i], chain[i], step[i]};
-    if (cell[i] < 0 || limit[i] < 0 || level[i] < 1 || chain[i] < 0 || step[i] < 0) {
-      Refuse(path, "tags in range (row " + std::to_string(i) + ")");
-    }
-    if (status[i] != 1 && status[i] != 2) Refuse(path, "statuses ok (1) or failed (2) (row " + std::to_string(i) + ")");
-    if (!seen.insert(e.key).second) Refuse(path, "each landing once (row " + std::to_string(i) + " repeats a tag)");
-    e.status = status[i];
-    e.g = g[i];
-    e.values.assign(values.begin() + static_cast<std::ptrdiff_t>(i) * k,
-                    values.begin() + static_cast<std::ptrdiff_t>(i + 1) * k);
-  }
-  for (std::size_t m = 0; m < message_rows.size(); ++m) {
-    if (message_rows[m] < 0 || message_rows[m] >= static_cast<std::int64_t>(n)) Refuse(path, "message rows in range");
-    a.evaluations[static_cast<std::size_t>(message_rows[m])].message = messages[m];
-  }
-  if (with_design_points && hdf5::Exists(file.get(), "subset/design_points")) {
-    Handle points = OpenGroup(file.get(), "subset/design_points");
-    const auto names = hdf5::ReadStringListAttribute(points.get(), "names");
-    for (const auto& name : names) {
-      Handle group = OpenGroup(points.get(), name);
-      DesignPoint point;
-      point.cell = hdf5::ReadIntegerAttribute(group.get(), "cell").value_or(-1);
-      point.limit = static_cast<int>(hdf5::ReadIntegerAttribute(group.get(), "limit").value_or(-1));
-      point.sample_interval_s = hdf5::ReadDoubleAttribute(group.get(), "sample_interval_s").value_or(0);
-      point.mean_noise = ReadVector<double>(group.get(), "mean_noise");
-      point.most_likely_noise = ReadVector<double>(group.get(), "most_likely_noise");
-      a.design_points.push_back(std::move(point));
-    }
-  }
-  file.Close("close " + path.string());
-  return a;
-}
-
-}  // namespace
-
-void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& a) {
-  hdf5::Quiet();
-  const std::filesystem::path partial(path.string() + ".partial");
-  std::filesystem::remove(partial);
-  {
-    Handle file(H5Fcreate(partial.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, hdf5::FileAccess().get()),
-                "create " + partial.string());
-    hdf5::WriteAttribute(file.get(), "gesweep_archive_kind", kRiskArchiveKind);
-    hdf5::WriteAttribute(file.get(), "format_version", static_cast<std::int64_t>(kRiskArchiveVersion));
-    hdf5::WriteAttribute(file.get(), "study_path", a.study_path);
-    hdf5::WriteAttribute(file.get(), "study_text", a.study_text);
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(a.fingerprint));
-    hdf5::WriteAttribute(file.get(), "spec_fingerprint", std::string(hex));
-    hdf5::WriteAttribute(file.get(), "command_line", a.command_line);
-    hdf5::WriteAttribute(file.get(), "result_json", a.result_json);
-    Handle subset = CreateGroup(file.get(), "subset");
-    Handle evaluations = CreateGroup(subset.get(), "evaluations");
-    const std::size_t n = a.evaluations.size();
-    std::vector<std::int32_t> cell(n), limit(n), level(n), chain(n), step(n);
-    std::vector<std::int8_t> status(n);
-    std::vector<double> g(n), values;
-    std::vector<std::int64_t> message_rows;
-    std::vector<std::string> messages;
-    values.reserve(n * a.value_columns.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      const Evaluation& e = a.evaluations[i];
-      cell[i] = e.key.cell;
-      limit[i] = e.key.limit;
-      level[i] = e.key.level;
-      chain[i] = e.key.chain;
-      step[i] = e.key.step;
-      status[i] = e.status;
-      g[i] = e.g;
-      GESWEEP_DEMAND(e.values.size() == a.value_columns.size());
-      values.insert(values.end(), e.values.begin(), e.values.end());
-      if (!e.message.empty()) {
-        message_rows.push_back(static_cast<std::int64_t>(i));
-        messages.push_back(e.message);
-      }
-    }
-    WriteVector(evaluations.get(), "cell", cell);
-    WriteVector(evaluations.get(), "limit", limit);
-    WriteVector(evaluations.get(), "level", level);
-    WriteVector(evaluations.get(), "chain", chain);
-    WriteVector(evaluations.get(), "step", step);
-    WriteVector(evaluations.get(), "status", status);
-    WriteVector(evaluations.get(), "g", g);
-    WriteVector(evaluations.get(), "values", values, std::max<std::int64_t>(1, static_cast<std::int64_t>(a.value_columns.size())));
-    hdf5::WriteAttribute(evaluations.get(), "columns", a.value_columns);
-    hdf5::WriteAttribute(evaluations.get(), "message_rows", message_rows);
-    hdf5::WriteAttribute(evaluations.get(), "messages", messages);
-    hdf5::WriteAttribute(evaluations.get(), "status_levels", std::vector<std::string>{"pending", "ok", "failed"});
-    Handle points = CreateGroup(subset.get(), "design_points");
-    std::vector<std::string> names;
-    for (const auto& point : a.design_points) {
-      WriteDesignPoint(points.get(), point);
-      names.push_back(DesignPointName(point.cell, point.limit));
-    }
-    hdf5::WriteAttribute(points.get(), "names", names);
-    file.Close("close " + partial.string());
-  }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error) throw ArchiveError("rename " + partial.string() + " to " + path.string() + ": " + error.message());
-}
-
-bool IsRiskArchive(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char signature[8] = {};
-  if (!in.read(signature, 8) || std::memcmp(signature, "\x89HDF\r\n\x1a\n", 8) != 0) return false;
-  const auto check = [&] {
-    hdf5::Quiet();
-    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, hdf5::FileAccess().get());
-    if (file < 0) return false;
-    bool is = false;
-    if (H5Aexists(file, "gesweep_archive_kind") > 0) {
-      try {
-        is = hdf5::ReadStringAttribute(file, "gesweep_archive_kind").value_or("") == kRiskArchiveKind;
-      } catch (const std::exception&) {
-        is = false;
-      }
-    }
-    H5Fclose(file);
-    return is;
-  };
-  try {
-    archive::GuardArchiveDecode(path.string(), [&] { (void)check(); });
-  } catch (const std::exception&) {
-    return false;  // a damaged file: whoever opens it next says so
-  }
-  return check();
-}
-
-RiskArchive ReadRiskArchive(const std::filesystem::path& path, bool with_design_points) {
-  archive::GuardArchiveDecode(path.string(), [&] { (void)ReadUnguarded(path, with_design_points); });
-  return ReadUnguarded(path, with_design_points);
 }
 
 }  // namespace gesweep::risk

@@ -22,12 +22,10 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/subset_archive.h"
 #include "engine/risk/landing_risk.h"
 
 namespace gesweep::risk {
-
-inline constexpr const char* kRiskArchiveKind = "subset_simulation";
-inline constexpr int kRiskArchiveVersion = 1;
 
 /// The journal beside an archive: ARCHIVE.journal.
 std::filesystem::path JournalPath(const std::filesystem::path& archive);
@@ -55,56 +53,12 @@ struct JournalContents {
   std::map<EvaluationKey, Evaluation> evaluations;
   std::uint64_t valid_length = 0;  ///< bytes up to the end of the last whole record
   std::int64_t records = 0;
-  bool torn_tail = false;          ///< a partial last record was dropped
+  bool torn_tail = false;  ///< a partial last record was dropped
 };
 
 /// Reads a journal; throws InputError (source the journal) when it is not one, is of another
 /// fingerprint or value count, or has a damaged record before its last.
 JournalContents ReadJournal(const std::filesystem::path& path, std::uint64_t fingerprint,
                             std::uint32_t value_count);
-
-/// One design point's landing series: the time axis and the series columns by name.
-struct PointSeries {
-  std::string name;  ///< "steady" (u = 0: no turbulence), "mean_failure", "most_likely"
-  std::vector<double> time_s;
-  std::vector<std::string> columns;        ///< series names, e.g. "w_g_mps"
-  std::vector<std::string> units;
-  std::vector<std::vector<double>> values;  ///< one per column, time_s.size() each
-};
-
-/// What the archive keeps of one (cell, limit) estimate beyond result_json.
-struct DesignPoint {
-  std::int64_t cell = 0;
-  int limit = 0;
-  double sample_interval_s = 0;          ///< the held noise's interval Δt_n
-  std::vector<double> mean_noise;        ///< the mean failing point (empty when none failed)
-  std::vector<double> most_likely_noise;
-  std::vector<PointSeries> series;
-};
-
-/// Everything an archive holds.
-struct RiskArchive {
-  std::string study_path;
-  std::string study_text;
-  std::uint64_t fingerprint = 0;
-  std::string command_line;
-  std::string result_json;
-  std::vector<std::string> value_columns;  ///< the archive paths of Evaluation::values
-  std::vector<Evaluation> evaluations;
-  std::vector<DesignPoint> design_points;
-};
-
-/// Writes `archive` to `path` + ".partial" and renames it onto `path`. Throws ArchiveError.
-void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& archive);
-
-/// Whether `path` is a subset-simulation archive (an HDF5 file whose root says so). False for any
-/// other file, readable or not; never throws.
-bool IsRiskArchive(const std::filesystem::path& path);
-
-/// Reads an archive back (guarded: the decode runs first in a child with a deadline, as every
-/// archive a person names). Checks what it reads: the kind and version, equal lengths of the
-/// evaluation columns, tags and statuses in range, unique tags, the value matrix's width; throws
-/// InputError (source the archive) with one line otherwise. `with_design_points` false skips them.
-RiskArchive ReadRiskArchive(const std::filesystem::path& path, bool with_design_points = true);
 
 }  // namespace gesweep::risk

@@ -11,10 +11,10 @@
 /// thread count, sharding or rank count.
 
 #include <atomic>
-#include <span>
 #include <cstdint>
 #include <exception>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 

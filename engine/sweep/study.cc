@@ -37,9 +37,8 @@ class StudyParser {
 
   Study Parse() {
     TomlSection root(root_, source_, "");
-    root.RejectUnknownKeys(
-        {"format_version", "name", "description", "aircraft", "analyses", "output", "parameters", "design",
-         "subset"});
+    root.RejectUnknownKeys({"format_version", "name", "description", "aircraft", "analyses", "output",
+                            "parameters", "design", "subset"});
     // [subset] (a subset simulation of the study's landings, `gesweep risk`): read by engine/risk.
     if (root.Has("subset")) study_.subset_line = std::max(1, root.LineOf("subset"));
     const auto version = root.OptionalInteger("format_version");

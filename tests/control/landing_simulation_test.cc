@@ -13,6 +13,7 @@
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/common/errors.h"
+#include "engine/disturbance/run_noise.h"
 #include "tests/testing/test_paths.h"
 
 namespace gesweep {
@@ -223,6 +224,50 @@ TEST(LandingSimulation, ConcurrentRunsMatchSequentialOnes) {
     EXPECT_EQ(sequential[i].touchdown_time_s, concurrent[i].touchdown_time_s);
     EXPECT_EQ(sequential[i].design.gain, concurrent[i].design.gain);
   }
+}
+
+TEST(LandingSimulation, NoisePointOfTheSeedStreamIsTheSeededLanding) {
+  // A subset simulation flies a landing from a point u of the standard-normal space
+  // (NoisePointIndex's layout). The point filled with the seeded stream's own variates must give the
+  // seeded landing bit for bit: the point is the same noise, not a re-parametrisation of it. The oracle
+  // is the seeded landing itself (RunNoise(seed, run_index)), which the point path does not use.
+  const LongitudinalModel model = Ance();
+  LandingConfig config;
+  config.start_height_m = 30.0;
+  config.output_interval_s = 0.0;
+  config.disturbance.wind_20ft_mps = -15.433333;
+  config.disturbance.turbulence = TurbulenceModel::kDryden;
+  config.seed = 2027;
+  config.run_index = 11;
+  const std::uint64_t dimension = LandingNoiseDimension(model.aircraft(), config);
+  ASSERT_GT(dimension, 3u);
+  const RunNoise seeded(config.seed, config.run_index);
+  std::vector<double> point(dimension);
+  for (std::uint64_t k = 0; k < 3; ++k) {
+    point[NoisePointIndex(NoiseStream::kInitialState, k)] =
+        seeded.StandardNormal(NoiseStream::kInitialState, k);
+  }
+  for (std::uint64_t k = 0; NoisePointIndex(NoiseStream::kTurbulenceW, k) < dimension; ++k) {
+    point[NoisePointIndex(NoiseStream::kTurbulenceU, k)] =
+        seeded.StandardNormal(NoiseStream::kTurbulenceU, k);
+    point[NoisePointIndex(NoiseStream::kTurbulenceW, k)] =
+        seeded.StandardNormal(NoiseStream::kTurbulenceW, k);
+  }
+  const LandingResult from_seed = SimulateLanding(model, config);
+  const LandingResult from_point = SimulateLanding(model, config, nullptr, point);
+  ASSERT_EQ(from_seed.outcome, LandingOutcome::kLanded);
+  EXPECT_EQ(from_point.outcome, from_seed.outcome);
+  EXPECT_EQ(from_point.touchdown_time_s, from_seed.touchdown_time_s);
+  EXPECT_EQ(from_point.touchdown_sink_rate_mps, from_seed.touchdown_sink_rate_mps);
+  EXPECT_EQ(from_point.touchdown_pitch_deg, from_seed.touchdown_pitch_deg);
+  EXPECT_EQ(from_point.touchdown_distance_past_transmitter_m,
+            from_seed.touchdown_distance_past_transmitter_m);
+  // And the point is the noise: another point gives another landing.
+  point[NoisePointIndex(NoiseStream::kTurbulenceW, 100)] += 3.0;
+  EXPECT_NE(SimulateLanding(model, config, nullptr, point).touchdown_time_s, from_seed.touchdown_time_s);
+  // A point shorter than the landing's noise is refused, not read past its end.
+  point.resize(dimension - 1);
+  EXPECT_THROW(SimulateLanding(model, config, nullptr, point), InputError);
 }
 
 TEST(LandingSimulation, InvalidConfigIsAnInputError) {

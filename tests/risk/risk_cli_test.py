@@ -1,0 +1,237 @@
+#!/usr/bin/python3
+"""`gesweep risk`: the landing risk by subset simulation, end to end (issue 27; docs/dispersion.md,
+"Landing risk by subset simulation").
+
+    /usr/bin/python3 tests/risk/risk_cli_test.py GESWEEP
+
+The oracles are the engine's own uninterrupted, single-threaded run (an identity, not a number it
+produced): what is checked is that the estimate does not depend on how it was reached.
+1. Threads: the same study on 1 and on 2 threads writes the same estimate (result_json) and the same
+   evaluations, bit for bit.
+2. Kill and resume: SIGTERM during a level (exit 143, no archive, a journal), then SIGKILL during a level
+   of the resumed run; `--resume` twice finishes to the uninterrupted archive's estimate and evaluations,
+   bit for bit.
+3. Replay: every row of the last level of each limit, flown again from the archive alone
+   (`--replay ROW --format json`), gives the stored values bit for bit.
+4. `gesweep dispersion ARCHIVE --format json` has, per limit, probability, coefficient_of_variation,
+   interval_95 (around the probability), runs and thresholds (increasing towards the limit), and its
+   probability is the product of the levels' conditional probabilities, recounted here from the
+   archive's chain states (an independent recount of the estimator's arithmetic).
+5. A limit no landing reaches within the level cap is a clearly reported result: status level_cap
+   and an upper bound p0^max_levels.
+6. Bad input: one line naming file, key, value and expectation, exit 2, nothing written."""
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import h5py
+import numpy as np
+
+GESWEEP = os.path.abspath(sys.argv[1])
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+ANCE = ROOT / "studies" / "aircraft" / "ance.toml"
+
+# A short turbulent landing (from 30 m, about 1 ms of CPU each in Release): a firm-landing limit whose
+# probability is a few per cent (two levels), and an unreachable one (the level cap).
+SUBSET = '''level_probability = 0.1
+samples_per_level = {n}
+max_levels = {levels}
+seed = 7'''
+STUDY = '''format_version = 1
+name = "risk_test"
+aircraft = "{aircraft}"
+[analyses.landing]
+[parameters]
+height_m = 30.0
+speed_mps = 52.21
+wind_shear = "logarithmic"
+turbulence = "{turbulence}"
+wind_20ft_mps = -15.433333
+[subset]
+limits = [{limits}]
+{subset}
+'''
+LIMITS = '"touchdown_sink_rate_mps > 1.83", "touchdown_sink_rate_mps > 30"'
+
+failures = []
+
+
+def check(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAIL:", what)
+
+
+def write_study(directory, name, n=100, levels=3, limits=LIMITS, turbulence="dryden", subset=None):
+    path = pathlib.Path(directory) / name
+    path.write_text(STUDY.format(aircraft=ANCE, turbulence=turbulence, limits=limits,
+                                 subset=subset if subset is not None else SUBSET.format(n=n, levels=levels)))
+    return path
+
+
+def risk(*args, **kw):
+    return subprocess.run([GESWEEP, "risk", *map(str, args)], capture_output=True, text=True, **kw)
+
+
+def contents(path):
+    """The archive's estimate and evaluations, as exact values."""
+    with h5py.File(path, "r") as f:
+        e = f["subset/evaluations"]
+        return (f.attrs["result_json"], {k: e[k][()] for k in e.keys()})
+
+
+def same(a, b):
+    if a[0] != b[0] or a[1].keys() != b[1].keys():
+        return False
+    return all(np.array_equal(a[1][k].view(np.uint8), b[1][k].view(np.uint8)) for k in a[1])
+
+
+def run_until_level(study, out, sig, threads, level):
+    """Starts `gesweep risk` and sends `sig` once its progress shows `level` done, i.e. during the next."""
+    p = subprocess.Popen([GESWEEP, "risk", str(study), "-o", str(out), "--threads", str(threads)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for line in p.stderr:
+        if f"level {level} done" in line:
+            p.send_signal(sig)
+            break
+    out_text, err_rest = p.communicate(timeout=600)
+    return p.returncode, out_text
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        study = write_study(tmp, "risk.toml", n=200, levels=3)
+        one, two = tmp / "one.h5", tmp / "two.h5"
+        r1 = risk(study, "-o", one, "--threads", 1)
+        check(r1.returncode == 0, f"risk on 1 thread exits 0: {r1.returncode} {r1.stderr}")
+        r2 = risk(study, "-o", two, "--threads", 2)
+        check(r2.returncode == 0, f"risk on 2 threads exits 0: {r2.returncode} {r2.stderr}")
+        reference = contents(one)
+        check(same(reference, contents(two)), "1 and 2 threads: the same estimate and evaluations, bit for bit")
+        check(r1.stdout == r2.stdout.replace("two.h5", "one.h5"), "1 and 2 threads: the same table")
+
+        # 2. Kill and resume.
+        cut = tmp / "cut.h5"
+        code, _ = run_until_level(study, cut, signal.SIGTERM, 2, 1)
+        check(code == 143, f"SIGTERM during level 2 exits 143: {code}")
+        check(not cut.exists(), "a stopped run leaves no archive")
+        journal = pathlib.Path(str(cut) + ".journal")
+        check(journal.exists(), "a stopped run leaves its journal")
+        resumed = subprocess.Popen([GESWEEP, "risk", str(study), "-o", str(cut), "--resume", "--threads", "2"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        # The second limit's first level starts after the first limit's levels: kill during it.
+        for line in resumed.stderr:
+            if "> 30: level 1" in line or "> 1.83: level 2 done" in line:
+                resumed.send_signal(signal.SIGKILL)
+                break
+        resumed.communicate(timeout=600)
+        check(resumed.returncode == -signal.SIGKILL or resumed.returncode == 0,
+              f"the resumed run was killed (or had finished): {resumed.returncode}")
+        final = risk(study, "-o", cut, "--resume", "--threads", 1)
+        check(final.returncode == 0, f"--resume after SIGKILL exits 0: {final.returncode} {final.stderr}")
+        if final.returncode == 0:
+            check(same(reference, contents(cut)), "kill + resume: the uninterrupted estimate and evaluations, bit for bit")
+            check(not journal.exists(), "a finished run removes its journal")
+
+        # 3. Replay the last level of each limit.
+        result = json.loads(reference[0])
+        values_stored = reference[1]["values"]
+        with h5py.File(one, "r") as f:
+            columns = [c.decode() if isinstance(c, bytes) else c for c in f["subset/evaluations"].attrs["columns"]]
+        replayed = 0
+        for limit in range(len(result["limits"])):
+            rows = np.flatnonzero(reference[1]["limit"] == limit)
+            last = reference[1]["level"][rows].max()
+            for row in rows[reference[1]["level"][rows] == last][:12]:
+                r = risk(one, "--replay", row, "--format", "json")
+                check(r.returncode == 0, f"replay of row {row} exits 0: {r.returncode} {r.stderr}")
+                if r.returncode != 0:
+                    continue
+                j = json.loads(r.stdout)
+                flown = np.array([j["values"][c.rsplit("/", 1)[-1]] for c in columns], dtype=np.float64)
+                check(np.array_equal(flown.view(np.uint64), values_stored[row].view(np.uint64)),
+                      f"replay of row {row}: the stored values bit for bit")
+                check(j["identical"] is True, f"replay of row {row} says identical")
+                replayed += 1
+        check(replayed >= 12, f"at least 12 last-level rows replayed: {replayed}")
+
+        # 4. dispersion's JSON, and the estimator's product recounted from the chain states.
+        d = subprocess.run([GESWEEP, "dispersion", str(one), "--format", "json"], capture_output=True, text=True)
+        check(d.returncode == 0, f"dispersion ARCHIVE --format json exits 0: {d.stderr}")
+        limits = json.loads(d.stdout)["limits"]
+        check(len(limits) == 2, f"two limits: {len(limits)}")
+        firm, cap = limits[0], limits[1]
+        for key in ("probability", "coefficient_of_variation", "interval_95", "runs", "thresholds"):
+            check(key in firm and key in cap, f"dispersion JSON has {key} for each limit")
+        check(firm["status"] == "converged", f"firm landing converged: {firm['status']}")
+        p = firm["probability"]
+        check(0 < firm["interval_95"][0] < p < firm["interval_95"][1] < 1, f"interval around P: {firm['interval_95']}")
+        t = firm["thresholds"]
+        check(all(a < b for a, b in zip(t, t[1:])) and t[-1] <= 1.83, f"thresholds rise to the limit: {t}")
+        ev = reference[1]
+        rows = ev["limit"] == 0
+        check(firm["runs"] == int(rows.sum()), f"runs counts the limit's rows: {firm['runs']} vs {rows.sum()}")
+        check(np.prod([lv["conditional_probability"] for lv in firm["levels"]]) == p or
+              abs(np.prod([lv["conditional_probability"] for lv in firm["levels"]]) / p - 1) < 1e-12,
+              "P is the product of the levels' conditional probabilities")
+        # Level 1 is plain Monte Carlo: its conditional probability is the share of its N landings past
+        # the first threshold, p0 by construction unless the limit itself is reached first.
+        level1 = ev["g"][rows & (ev["level"] == 1)]
+        check(len(level1) == 200, f"level 1 has N = 200 landings: {len(level1)}")
+        column = next(i for i, c in enumerate(columns) if c.rsplit("/", 1)[-1] == firm["column"])
+        sink = ev["values"][rows & (ev["level"] == 1), column]
+        check(np.count_nonzero(sink > t[0]) == 20,
+              f"the first threshold leaves N p0 = 20 of level 1 above it: {np.count_nonzero(sink > t[0])}")
+        # 5. The unreachable limit.
+        check(cap["status"] == "level_cap", f"sink > 30 m/s stops at the level cap: {cap['status']}")
+        check(cap["upper_bound"] is not None and abs(cap["upper_bound"] - 0.1 ** 3) < 1e-15,
+              f"its upper bound is p0^max_levels: {cap['upper_bound']}")
+        check("below the level cap" in r1.stdout, "the table says the probability is below the level cap")
+
+        # 6. Bad inputs: one line, exit 2, nothing written.
+        bad = {
+            "p0": write_study(tmp, "p0.toml", subset="level_probability = 1.5\nsamples_per_level = 100"),
+            "p0_zero": write_study(tmp, "p0z.toml", subset="level_probability = 0\nsamples_per_level = 100"),
+            "n_fraction": write_study(tmp, "nf.toml", subset="level_probability = 0.1\nsamples_per_level = 105"),
+            "n_small": write_study(tmp, "ns.toml", subset="level_probability = 0.1\nsamples_per_level = 10"),
+            "column": write_study(tmp, "col.toml", limits='"touchdown_sink_mps > 3.05"'),
+            "operator": write_study(tmp, "op.toml", limits='"touchdown_sink_rate_mps >= 3.05"'),
+            "still_air": write_study(tmp, "still.toml", turbulence="none"),
+        }
+        expect = {
+            "p0": ("level_probability", "1.5"), "p0_zero": ("level_probability", "0"),
+            "n_fraction": ("samples_per_level", "105"), "n_small": ("samples_per_level", "10"),
+            "column": ("limits", "touchdown_sink_mps"), "operator": ("limits", ">="),
+            "still_air": ("turbulence", ""),
+        }
+        for name, path in bad.items():
+            out = tmp / f"bad_{name}.h5"
+            r = risk(path, "-o", out)
+            lines = r.stderr.strip().splitlines()
+            key, value = expect[name]
+            check(r.returncode == 2, f"{name}: exit 2, got {r.returncode}: {r.stderr}")
+            check(len(lines) == 1 and path.name in lines[0] and key in lines[0] and value in lines[0],
+                  f"{name}: one line naming the file, {key} and {value!r}: {lines}")
+            check(not out.exists() and not pathlib.Path(str(out) + ".journal").exists(), f"{name}: nothing written")
+        # An existing archive is never overwritten.
+        r = risk(study, "-o", one)
+        check(r.returncode == 2 and "exists" in r.stderr, f"an existing -o is refused: {r.returncode} {r.stderr}")
+        check(same(reference, contents(one)), "the refused run left the archive as it was")
+        # A replay row out of range.
+        r = risk(one, "--replay", 10 ** 9)
+        check(r.returncode == 2 and "--replay" in r.stderr, f"--replay past the rows: exit 2: {r.stderr}")
+
+    if failures:
+        print(f"{len(failures)} failures")
+        sys.exit(1)
+    print("risk CLI: threads, kill + resume, replay, dispersion JSON, level cap and bad inputs hold")
+
+
+if __name__ == "__main__":
+    main()
