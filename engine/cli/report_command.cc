@@ -14,6 +14,7 @@
 
 #include "engine/archive/archive_error.h"
 #include "engine/archive/archive_reader.h"
+#include "engine/archive/subset_archive.h"
 #include "engine/cli/command.h"
 #include "engine/cli/report_script.h"
 #include "engine/common/errors.h"
@@ -98,9 +99,16 @@ int RunReport(const ReportFlags& flags) {
                      "the directory " + parent.string() + " does not exist");
   }
   try {
-    // The same validation as query and boundary (ArchiveReader::Open): a damaged or foreign archive
-    // is refused with one line (exit 2) before the script starts or the directory is made.
-    for (const auto& path : archives) ArchiveReader::Open(path);
+    // The same validation as query and boundary (ArchiveReader::Open), or as `gesweep risk` for a
+    // subset-simulation archive: a damaged or foreign archive is refused with one line (exit 2) before
+    // the script starts or the directory is made.
+    for (const auto& path : archives) {
+      if (risk::IsRiskArchive(path)) {
+        (void)risk::ReadRiskArchive(path, false);
+      } else {
+        ArchiveReader::Open(path);
+      }
+    }
   } catch (const ArchiveError& e) {
     std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
     return 1;

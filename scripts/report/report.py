@@ -157,6 +157,18 @@ def status_section(archives):
     return table(["archive", "study", "runs", "ok", "failed", "pending", "snapshot"], rows, numeric={2, 3, 4, 5})
 
 
+def risk_status_section(risks):
+    """The landings of each subset-simulation archive by status (none is pending: the archive is written whole)."""
+    if not risks:
+        return ""
+    rows = []
+    for archive in risks:
+        ok, failed, _ = archive.counts()
+        rows.append([os.path.basename(archive.path), archive.study_name, archive.run_count, ok, failed])
+    return "<p>Landings of the subset simulations (gesweep risk):</p>" + table(
+        ["archive", "study", "landings", "ok", "failed"], rows, numeric={2, 3, 4})
+
+
 PROVENANCE_KEYS = ["study_name", "study_description", "study_path", "study_fingerprint", "aircraft_name",
                    "aircraft_path", "analyses", "engine_version", "git_commit", "compiler", "hdf5_version", "host",
                    "threads", "command_line", "shard", "start_time", "end_time", "resumed_at", "complete",
@@ -249,6 +261,8 @@ def write_report(args, archives, progress):
     drawn = []
     figures_common.observers.append(lambda fig, name: drawn.append(name))
     sections = figure_sections(archives, args.output, progress)
+    risks = [a for a in archives if a.is_risk]
+    archives = [a for a in archives if not a.is_risk]  # the sections below read sweep archives
     boundary = boundary_section(archives)
     sections.insert(1, ("Stability boundary per speed", "boundary", boundary or absent(
         "No archive of this report has a refined boundary (/analysis/boundary); `gesweep boundary --archive "
@@ -261,10 +275,10 @@ def write_report(args, archives, progress):
                       "is about.</p>" + claims) if claims else absent(
                          "No archive of this report is of the ANCE, the airplane the paper's claims are about."),
                      bool(claims)))
-    sections.append(("Runs by status", "status", status_section(archives), True))
-    sections.append(("Provenance", "provenance", provenance_section(archives), True))
+    sections.append(("Runs by status", "status", status_section(archives) + risk_status_section(risks), True))
+    sections.append(("Provenance", "provenance", provenance_section(archives + risks), True))
 
-    studies = ", ".join(a.study_name for a in archives)
+    studies = ", ".join(a.study_name for a in archives + risks)
     aircraft = sorted({a.aircraft.name for a in archives if a.aircraft.name})
     title = args.title or f"gesweep report: {', '.join(aircraft) or 'archives'}"
     nav = " ".join(f'<a href="#{anchor}"' + ("" if present else ' class="absent"') + f">{esc(name)}</a>"
@@ -275,7 +289,7 @@ def write_report(args, archives, progress):
 <style>{CSS}</style></head>
 <body>
 <h1>{esc(title)}</h1>
-<p class="sub">{len(archives)} archive(s) (studies {esc(studies)});
+<p class="sub">{len(archives) + len(risks)} archive(s) (studies {esc(studies)});
 written {esc(time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime()))} by <code>gesweep report</code>.</p>
 <nav>{nav}</nav>
 {body}
@@ -285,7 +299,7 @@ written {esc(time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime()))} by <code>ge
     with open(path + ".partial", "w", encoding="utf-8") as out:
         out.write(page)
     os.replace(path + ".partial", path)
-    for archive in archives:
+    for archive in archives + risks:
         archive.close()
     progress(f"wrote {path} with {len(drawn)} figure(s)")
     return 0

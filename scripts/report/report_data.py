@@ -5,6 +5,7 @@ in SWMR-read mode, and only complete runs (status ok or failed) are used: a nonz
 after the run's values (docs/sweep.md, "Crash safety"), and statuses are read before values.
 """
 
+import json
 import math
 import os
 import sys
@@ -103,6 +104,8 @@ def validate_layout(file, path):
 
 class Archive:
     """One archive: attributes, parameters per run, result columns, series."""
+
+    is_risk = False
 
     def __init__(self, path):
         self.path = path
@@ -298,12 +301,83 @@ class Archive:
         return out
 
 
+RISK_KIND, RISK_VERSION = "subset_simulation", 1
+
+
+class RiskArchive:
+    """A subset-simulation archive of `gesweep risk` (docs/dispersion.md, "Landing risk by subset
+    simulation"; schemas/archive.md, "Subset-simulation archives"): its estimates (result_json), the
+    evaluations and the design points' series. Checked as read: the kind and version, equal lengths of
+    the evaluation columns, the value matrix's width, each estimate's cell and limit among the
+    evaluations' and its runs equal to the count of its rows."""
+
+    is_risk = True
+    snapshot = False
+
+    def __init__(self, path):
+        self.path = path
+        self.file = h5py.File(path, "r")
+        self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
+        if self.attrs.get("gesweep_archive_kind") != RISK_KIND or int(self.attrs.get("format_version", -1)) != RISK_VERSION:
+            raise ValueError(f"{path}: not a subset-simulation archive of this version ({RISK_KIND} {RISK_VERSION})")
+        self.result = json.loads(self.attrs["result_json"])
+        e = self.file["subset/evaluations"]
+        self.columns = [str(c) for c in _text(e.attrs["columns"])]
+        self.evaluations = {k: e[k][...] for k in ("cell", "limit", "level", "chain", "step", "status", "g")}
+        n = len(self.evaluations["g"])
+        if any(len(v) != n for v in self.evaluations.values()):
+            raise ValueError(f"{path}: evaluation columns of unequal lengths")
+        self.values = e["values"][...]
+        if self.values.shape != (n, len(self.columns)) and n:
+            raise ValueError(f"{path}: a values matrix of {self.values.shape}, not ({n}, {len(self.columns)})")
+        for limit in self.result["limits"]:
+            rows = (self.evaluations["cell"] == limit["cell"]) & (self.evaluations["limit"] == self.limit_index(limit))
+            if int(rows.sum()) != int(limit["runs"]):
+                raise ValueError(f"{path}: {limit['limit']} counts {limit['runs']} runs, its rows are {int(rows.sum())}")
+        self.run_count = n
+        self.study_name = self.result.get("study", path)
+        self.aircraft = Aircraft("")
+
+    def limit_index(self, limit):
+        """The limit's index among the study's limits (its order in result_json within its cell)."""
+        same_cell = [l for l in self.result["limits"] if l["cell"] == limit["cell"]]
+        return same_cell.index(limit)
+
+    def counts(self):
+        status = self.evaluations["status"]
+        return int((status == STATUS_OK).sum()), int((status == STATUS_FAILED).sum()), 0
+
+    def rows(self, limit, level=None):
+        """The rows of a limit's evaluations (of one level, or all)."""
+        e = self.evaluations
+        rows = (e["cell"] == limit["cell"]) & (e["limit"] == self.limit_index(limit))
+        return rows & (e["level"] == level) if level is not None else rows
+
+    def column(self, name):
+        """The index in the value matrix of the column named `name` (its last path component)."""
+        return next(i for i, c in enumerate(self.columns) if c.rsplit("/", 1)[-1] == name)
+
+    def design_series(self, limit):
+        """{series name: {column: array}} of a limit's design point ("steady", "mean_failure",
+        "most_likely"), or {} when none of its runs failed."""
+        name = f"subset/design_points/cell_{limit['cell']}_limit_{self.limit_index(limit)}"
+        if name not in self.file:
+            return {}
+        group = self.file[name]
+        return {k: {c: d[...] for c, d in group[k].items()} for k in group if isinstance(group[k], h5py.Group)}
+
+    def close(self):
+        self.file.close()
+
+
 def open_archives(paths):
     """Opens and validates every archive before anything is drawn; ValueError (one line) for a bad one."""
     archives = []
     try:
         for path in paths:
-            archives.append(Archive(path))
+            with h5py.File(path, "r") as probe:
+                kind = _text(probe.attrs.get("gesweep_archive_kind", ""))
+            archives.append(RiskArchive(path) if kind == RISK_KIND else Archive(path))
     except (KeyError, TypeError) as error:  # a layout h5py cannot read as the report expects
         for archive in archives:
             archive.close()
