@@ -18,7 +18,8 @@ produced): what is checked is that the estimate does not depend on how it was re
    probability is the product of the levels' conditional probabilities, recounted here from the
    archive's chain states (an independent recount of the estimator's arithmetic).
 5. A limit no landing reaches within the level cap is a clearly reported result: status level_cap
-   and an upper bound p0^max_levels.
+   and an upper bound p0^max_levels. `gesweep report` of the archive draws the exceedance curve and the
+   firm limit's design point (and none for the unreachable limit).
 6. Bad input: one line naming file, key, value and expectation, exit 2, nothing written."""
 import json
 import os
@@ -193,6 +194,19 @@ def main():
         check(cap["upper_bound"] is not None and abs(cap["upper_bound"] - 0.1 ** 3) < 1e-15,
               f"its upper bound is p0^max_levels: {cap['upper_bound']}")
         check("below the level cap" in r1.stdout, "the table says the probability is below the level cap")
+
+        # 5b. The report draws the exceedance curve and the design point from the archive.
+        page = tmp / "report"
+        r = subprocess.run([GESWEEP, "report", str(one), "-o", str(page), "--quiet"], capture_output=True, text=True)
+        check(r.returncode == 0, f"gesweep report of a risk archive exits 0: {r.returncode} {r.stderr}")
+        if r.returncode == 0:
+            html = (page / "index.html").read_text()
+            check("Exceedance curves by subset simulation" in html, "the report has the exceedance figure")
+            check("Design point of touchdown_sink_rate_mps &gt; 1.83" in html, "the report has the firm limit's design point")
+            check("Design point of touchdown_sink_rate_mps &gt; 30" not in html, "no design point for a limit no landing reached")
+            pngs = sorted(p.name for p in page.glob("*.png"))
+            check(any(n.endswith("_exceedance.png") for n in pngs) and any(n.endswith("_design_point.png") for n in pngs),
+                  f"the figures are written: {pngs}")
 
         # 6. Bad inputs: one line, exit 2, nothing written.
         bad = {
