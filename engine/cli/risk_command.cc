@@ -109,9 +109,11 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
                       {"acceptance_rate", Num(level.acceptance_rate)},
                       {"scale", Num(level.scale)},
                       {"runs", level.evaluations},
-                      {"failed_runs", level.failed_evaluations}});
+                      {"failed_runs", level.failed_evaluations},
+                      {"ancestors", level.ancestors}});
   }
   j["thresholds"] = thresholds;
+  j["last_level_ancestors"] = s.levels.empty() ? 0 : s.levels.back().ancestors;
   j["levels"] = levels;
   ordered_json exceedance = ordered_json::array();
   for (const auto& p : curve) {

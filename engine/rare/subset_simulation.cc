@@ -202,6 +202,7 @@ struct SampleKey {
   double g = 0;
   std::int64_t position = 0;
   EvaluationTag tag;  ///< the evaluation that gave the sample's point (not part of the order)
+  std::int64_t ancestor = 0;  ///< the Monte Carlo sample the point descends from (not part of the order)
 };
 bool Before(const SampleKey& a, const SampleKey& b) {
   const double x = Ordered(a.g), y = Ordered(b.g);
@@ -332,7 +333,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
     evaluate(candidates, batch_tags, values);
     for (std::int64_t b = 0; b < batch; ++b) {
       g[first + b] = values[b];
-      selection.Offer(SampleKey{values[b], first + b, batch_tags[b]}, &candidates[b * d]);
+      selection.Offer(SampleKey{values[b], first + b, batch_tags[b], first + b}, &candidates[b * d]);
       failures_seen.Offer(&candidates[b * d], d, values[b], batch_tags[b]);
     }
   }
@@ -345,6 +346,8 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   std::vector<double> deltas;
   std::vector<double> state(static_cast<std::size_t>(ns) * d);         // the chains' current points
   std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));  // the evaluations that gave them
+  std::vector<std::int64_t> state_ancestor(static_cast<std::size_t>(ns));  // their Monte Carlo ancestors
+  std::int64_t level_ancestors = n;
 
   for (int level = 1;; ++level) {
     SubsetLevel record;
@@ -352,6 +355,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
     record.failed_evaluations = level_failed;
     record.acceptance_rate = level_acceptance;
     record.scale = level_scale;
+    record.ancestors = level_ancestors;
     result.evaluations += record.evaluations;
     result.failed_evaluations += record.failed_evaluations;
 
@@ -425,8 +429,14 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
       std::copy(selection.point(seeds[c]), selection.point(seeds[c]) + d, state.begin() + c * d);
       ng[at] = selection.key(seeds[c]).g;
       state_tag[c] = selection.key(seeds[c]).tag;
-      next_selection.Offer(SampleKey{ng[at], at, state_tag[c]}, &state[c * d]);
+      state_ancestor[c] = selection.key(seeds[c]).ancestor;
+      next_selection.Offer(SampleKey{ng[at], at, state_tag[c], state_ancestor[c]}, &state[c * d]);
       failures_seen.Offer(&state[c * d], d, ng[at], state_tag[c]);
+    }
+    {
+      std::vector<std::int64_t> distinct(state_ancestor);
+      std::sort(distinct.begin(), distinct.end());
+      level_ancestors = std::unique(distinct.begin(), distinct.end()) - distinct.begin();
     }
     std::int64_t accepted_total = 0, proposed_total = 0;
     level_evaluations = 0;
@@ -482,7 +492,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
           } else {
             ng[here] = ng[here - 1];
           }
-          next_selection.Offer(SampleKey{ng[here], here, state_tag[c]}, &state[c * d]);
+          next_selection.Offer(SampleKey{ng[here], here, state_tag[c], state_ancestor[c]}, &state[c * d]);
           failures_seen.Offer(&state[c * d], d, ng[here], state_tag[c]);
           // A NaN candidate is a failed evaluation of this level even though the chain stays put.
           if (std::isnan(values[b])) ++level_failed;

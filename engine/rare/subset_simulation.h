@@ -99,6 +99,10 @@ struct SubsetLevel {
   double scale = 0;                     ///< lambda after the level's last group (0 at level 1)
   std::int64_t evaluations = 0;         ///< limit-state evaluations of the level
   std::int64_t failed_evaluations = 0;  ///< of those, NaN values
+  /// How many of the Monte Carlo level's samples the level's N samples descend from (N at level 1,
+  /// at most N_s after): a count far below N_s says the chains have collapsed onto few families, and
+  /// that delta_j, which sees only the correlation within chains, understates the error.
+  std::int64_t ancestors = 0;
 };
 
 /// What a run gives.

@@ -215,6 +215,37 @@ SubsetResult RunOnThreads(int threads, ConditionalSampler sampler) {
   return result;
 }
 
+// The ancestry count of each level, on a limit state whose chains can never move: every candidate of
+// a Markov-chain level is rejected (value +inf), so a level's samples are its seeds, each repeated
+// along its chain. Then by construction: level 1 has N ancestors (each sample its own); level 2's
+// N_s seeds are N_s distinct level-1 samples; and level 3's seeds, the N_s smallest of level 2, are
+// the N/N_s = N_s copies of level 2's best seed: one ancestor, and one from then on.
+TEST(SubsetSimulation, AncestorsCountTheFamiliesLeft) {
+  const LimitStateBatch frozen = [](const PointBatch& batch, std::span<double> values) {
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      values[i] = batch.tags[i].level == 1 ? LinearLimitState(batch.point(i), 6.0)
+                                           : std::numeric_limits<double>::infinity();
+    }
+  };
+  SubsetOptions options = Options(100, 5);  // p0 = 0.1: 10 chains of 10
+  options.max_levels = 4;
+  const SubsetResult result = RunSubsetSimulation(frozen, 3, options);
+  ASSERT_EQ(result.levels.size(), 4u) << result.Summary();
+  EXPECT_EQ(result.levels[0].ancestors, 100);
+  EXPECT_EQ(result.levels[1].ancestors, 10);
+  EXPECT_EQ(result.levels[2].ancestors, 1);
+  EXPECT_EQ(result.levels[3].ancestors, 1);
+  // On a limit state whose chains move, the count never grows and starts at N, then N_s.
+  const SubsetResult moving = RunSubsetSimulation(Linear(4.0), 10, Options(1000, 12));
+  ASSERT_GE(moving.levels.size(), 3u);
+  EXPECT_EQ(moving.levels[0].ancestors, 1000);
+  EXPECT_EQ(moving.levels[1].ancestors, 100);
+  for (std::size_t j = 2; j < moving.levels.size(); ++j) {
+    EXPECT_LE(moving.levels[j].ancestors, moving.levels[j - 1].ancestors);
+    EXPECT_GE(moving.levels[j].ancestors, 1);
+  }
+}
+
 TEST(SubsetSimulation, BitIdenticalOnOneAndTwoThreads) {
   for (const auto sampler : {ConditionalSampler::kCrankNicolson, ConditionalSampler::kModifiedMetropolis}) {
     const auto one = RunOnThreads(1, sampler), two = RunOnThreads(2, sampler);
