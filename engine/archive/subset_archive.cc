@@ -266,6 +266,9 @@ void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& a) {
 }
 
 bool IsRiskArchive(const std::filesystem::path& path) {
+  // Only a regular file is read: opening a FIFO or a device would block, or read what it streams.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   std::ifstream in(path, std::ios::binary);
   char signature[8] = {};
   if (!in.read(signature, 8) || std::memcmp(signature, "\x89HDF\r\n\x1a\n", 8) != 0) return false;

@@ -103,7 +103,8 @@ int RunReport(const ReportFlags& flags) {
     // subset-simulation archive: a damaged or foreign archive is refused with one line (exit 2) before
     // the script starts or the directory is made.
     for (const auto& path : archives) {
-      if (risk::IsRiskArchive(path)) {
+      // Only a regular file is probed (a FIFO would block the probe; ArchiveReader::Open refuses it).
+      if (std::filesystem::is_regular_file(path) && risk::IsRiskArchive(path)) {
         (void)risk::ReadRiskArchive(path, false);
       } else {
         ArchiveReader::Open(path);

@@ -437,6 +437,15 @@ void PrintRiskTable(const std::string& result_json) {
               << " failed)";
     if (l["status"] == "level_cap") std::cout << "  below the level cap: P < " << number(l["upper_bound"]);
     if (l["status"] == "too_many_failed_runs") std::cout << "  too many failed runs for a threshold";
+    // The collapse diagnostic (docs/dispersion.md): a last level that descends from fewer than a tenth
+    // of the chains' worth of first-level landings is one family, and its CoV is no error bar.
+    const long long chains = std::llround(j["method"]["samples_per_level"].get<double>() *
+                                          j["method"]["level_probability"].get<double>());
+    const long long ancestors = l.value("last_level_ancestors", chains);
+    if (l["levels"].size() > 2 && ancestors * 10 < chains) {
+      std::cout << "  COLLAPSED: the last level descends from " << ancestors
+                << " first-level landing(s); the CoV understates the error, check with other seeds";
+    }
     std::cout << "\n";
   }
 }

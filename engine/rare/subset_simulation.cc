@@ -201,7 +201,7 @@ namespace {
 struct SampleKey {
   double g = 0;
   std::int64_t position = 0;
-  EvaluationTag tag;  ///< the evaluation that gave the sample's point (not part of the order)
+  EvaluationTag tag;          ///< the evaluation that gave the sample's point (not part of the order)
   std::int64_t ancestor = 0;  ///< the Monte Carlo sample the point descends from (not part of the order)
 };
 bool Before(const SampleKey& a, const SampleKey& b) {
@@ -344,8 +344,8 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   std::int64_t level_failed = std::count_if(g.begin(), g.end(), [](double v) { return std::isnan(v); });
   double product = 1;  // prod of the previous levels' P_j
   std::vector<double> deltas;
-  std::vector<double> state(static_cast<std::size_t>(ns) * d);         // the chains' current points
-  std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));  // the evaluations that gave them
+  std::vector<double> state(static_cast<std::size_t>(ns) * d);             // the chains' current points
+  std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));      // the evaluations that gave them
   std::vector<std::int64_t> state_ancestor(static_cast<std::size_t>(ns));  // their Monte Carlo ancestors
   std::int64_t level_ancestors = n;
 
