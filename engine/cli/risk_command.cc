@@ -210,13 +210,8 @@ std::vector<risk::DesignPoint> DesignPoints(const SweepPlan& plan, const risk::R
   return points;
 }
 
-void CheckThreads(const RiskFlags& flags) {
-  if (flags.threads && (*flags.threads < 1 || *flags.threads > 4096)) {
-    throw InputError("command line", "--threads", std::to_string(*flags.threads),
-                     "an integer from 1 to 4096");
-  }
-  RequireFormat(flags.format, {"table", "json"});
-}
+// --threads is checked against the limits table by its validator (AddRiskFlags).
+void CheckFormat(const RiskFlags& flags) { RequireFormat(flags.format, {"table", "json"}); }
 
 int Replay(const RiskFlags& flags) {
   if (!flags.output.empty() || flags.resume || flags.force) {
@@ -297,7 +292,7 @@ int Replay(const RiskFlags& flags) {
 }
 
 int RunRiskCommand(const RiskFlags& flags) {
-  CheckThreads(flags);
+  CheckFormat(flags);
   if (flags.replay) return Replay(flags);
   Study study = LoadStudy(flags.input);
   if (flags.output.empty()) {

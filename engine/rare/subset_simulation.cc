@@ -133,6 +133,11 @@ void ValidateSubsetOptions(const SubsetOptions& options, const std::string& sour
                      "a number N of samples per level with N * level_probability (" + ShortNumber(p0) +
                          ") an integer from 1 to N - 1 (N * p0 = " + ShortNumber(seeds) + ")");
   }
+  if (rounded < options.min_chains) {
+    throw InputError(source, "samples_per_level", std::to_string(options.samples_per_level),
+                     "at least " + std::to_string(options.min_chains) + " chains: N * level_probability >= " +
+                         std::to_string(options.min_chains) + " (here " + ShortNumber(seeds) + ")");
+  }
   if (options.max_levels < 1 || options.max_levels > kMaxLevels) {
     throw InputError(source, "max_levels", std::to_string(options.max_levels),
                      "an integer from 1 to " + std::to_string(kMaxLevels));

@@ -54,6 +54,9 @@ struct SubsetOptions {
   double initial_scale = 0.6;       ///< lambda at level 2, in (0, 1] (Papaioannou et al. 2015)
   double target_acceptance = 0.44;  ///< a*, in (0, 1)
   int adaptation_groups = 10;       ///< groups of chains per level, lambda updated after each; 1..N_s
+  /// The fewest chains N * p0 a level may have (1: the method's minimum). A caller that reports the
+  /// chains' correlation asks for more (the landing risk asks for 10, docs/dispersion.md).
+  int min_chains = 1;
 };
 
 /// Refuses options that cannot run, as an InputError naming `source`, the key, the value and the

@@ -25,7 +25,7 @@ constexpr std::size_t kMaxLimits = 16;
 constexpr long long kMaxSeed = 9007199254740992LL;  // 2^53, as a sweep's seeds
 /// The fewest chains a study's level may have (N * p0): below it the chains' correlation, and so the
 /// coefficient of variation, rests on too few chains to report.
-constexpr long long kMinChains = 10;
+constexpr int kMinChains = 10;
 
 /// Thrown by the limit state once the cancellation flag is seen after a batch; RunRisk catches it.
 struct Cancelled {};
@@ -124,13 +124,7 @@ rare::SubsetOptions ReadSubsetOptions(const TomlSection& section) {
   if (const auto target = section.OptionalNumber("target_acceptance")) options.target_acceptance = *target;
   // A study asks for more than the method's minimum of one chain: the coefficient of variation of a
   // level is estimated from the chains' correlation, which takes several chains (docs/dispersion.md).
-  const double p0 = options.level_probability, chains = options.samples_per_level * p0;
-  if (p0 > 0 && p0 < 1 && std::abs(chains - std::round(chains)) <= 1e-9 * std::max(1.0, chains) &&
-      std::round(chains) < kMinChains) {
-    section.Fail("samples_per_level", std::to_string(options.samples_per_level),
-                 "at least " + std::to_string(kMinChains) + " chains: N * level_probability >= " +
-                     std::to_string(kMinChains) + " (here " + ShortNumber(chains) + ")");
-  }
+  options.min_chains = kMinChains;
   try {
     rare::ValidateSubsetOptions(options, section.source());
   } catch (const InputError& e) {

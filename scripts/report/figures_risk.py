@@ -17,6 +17,7 @@ import numpy as np
 from scipy import stats
 
 import figures_common as common
+import report_data
 from figures_common import Figure
 
 # Seconds before the most likely failing landing's touchdown that the design-point figure shows.
@@ -60,15 +61,15 @@ def _plain_curves(plain, column):
         if column not in names:
             continue
         c = names.index(column)
-        stats = archive.file["analysis/dispersion"]
+        stored = archive.file[report_data.DISPERSION]
         for g, label in enumerate(product["labels"]):
             values = archive.column(product["column_paths"][c])[product["members"](g)]
             values = np.sort(values[np.isfinite(values)])
             fits = {}
             for fit in ("normal", "gumbel_max", "gumbel_min", "gev_max"):
                 keys = [f"{fit}_location", f"{fit}_scale"] + ([f"{fit}_shape"] if fit.startswith("gev") else [])
-                if all(k in stats for k in keys):
-                    fits[fit] = [float(stats[k][g, c]) for k in keys]
+                if all(k in stored for k in keys):
+                    fits[fit] = [float(stored[k][g, c]) for k in keys]
             out.append((f"{archive.study_name} ({label}, {values.size} runs)", values, fits))
     return out
 
@@ -116,9 +117,10 @@ def _exceedance(archive, cell, limits, plain, outdir):
             m = values.size
             p = (np.arange(m, 0, -1) - 1) / m if above else np.arange(1, m + 1) / m
             ax.step(values[p > 0], p[p > 0], where="post", color=PLAIN_COLOUR, lw=1.2, label=f"plain MC: {label}")
-            grid = np.linspace(values[0], max(values[-1], max(l["value"] for l in mine)) if above else values[-1], 400)
-            if not above:
-                grid = np.linspace(min(values[0], min(l["value"] for l in mine)), values[-1], 400)
+            # The fits are drawn from the sample's range out to the furthest limit.
+            furthest = max(l["value"] for l in mine) if above else min(l["value"] for l in mine)
+            grid = np.linspace(values[0], max(values[-1], furthest), 400) if above else \
+                np.linspace(min(values[0], furthest), values[-1], 400)
             for fit, style in FITS:
                 tail = _fit_tail(fit, fits[fit], grid, above) if fit in fits else None
                 if tail is not None:

@@ -330,8 +330,13 @@ class RiskArchive:
         self.values = e["values"][...]
         if self.values.shape != (n, len(self.columns)) and n:
             raise ValueError(f"{path}: a values matrix of {self.values.shape}, not ({n}, {len(self.columns)})")
+        # A limit's index among its cell's limits: its order in result_json within the cell.
+        self._index, seen = {}, {}
         for limit in self.result["limits"]:
-            rows = (self.evaluations["cell"] == limit["cell"]) & (self.evaluations["limit"] == self.limit_index(limit))
+            self._index[id(limit)] = seen.get(limit["cell"], 0)
+            seen[limit["cell"]] = self._index[id(limit)] + 1
+        for limit in self.result["limits"]:
+            rows = self.rows(limit)
             if int(rows.sum()) != int(limit["runs"]):
                 raise ValueError(f"{path}: {limit['limit']} counts {limit['runs']} runs, its rows are {int(rows.sum())}")
         self.run_count = n
@@ -339,9 +344,8 @@ class RiskArchive:
         self.aircraft = Aircraft("")
 
     def limit_index(self, limit):
-        """The limit's index among the study's limits (its order in result_json within its cell)."""
-        same_cell = [l for l in self.result["limits"] if l["cell"] == limit["cell"]]
-        return same_cell.index(limit)
+        """The limit's index among its cell's limits (its order in result_json within the cell)."""
+        return self._index[id(limit)]
 
     def counts(self):
         status = self.evaluations["status"]
