@@ -112,8 +112,8 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
   if (!kind || *kind != kRiskArchiveKind)
     Refuse(path, "its root has no gesweep_archive_kind = subset_simulation");
   const auto version = hdf5::ReadIntegerAttribute(file.get(), "format_version");
-  if (!version || *version != kRiskArchiveVersion) {
-    Refuse(path, "format_version " + std::to_string(kRiskArchiveVersion) + " (this engine's)");
+  if (!version || (*version != 1 && *version != kRiskArchiveVersion)) {
+    Refuse(path, "format_version 1 or " + std::to_string(kRiskArchiveVersion) + " (this engine's)");
   }
   RiskArchive a;
   a.study_path = hdf5::ReadStringAttribute(file.get(), "study_path").value_or("");
@@ -130,6 +130,9 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
   Handle evaluations = OpenGroup(file.get(), "subset/evaluations");
   const auto cell = ReadVector<std::int32_t>(evaluations.get(), "cell");
   const auto limit = ReadVector<std::int32_t>(evaluations.get(), "limit");
+  // Version 1 had no repetitions: every landing is repetition 0's.
+  const auto repetition = *version >= 2 ? ReadVector<std::int32_t>(evaluations.get(), "repetition")
+                                        : std::vector<std::int32_t>(cell.size(), 0);
   const auto level = ReadVector<std::int32_t>(evaluations.get(), "level");
   const auto chain = ReadVector<std::int32_t>(evaluations.get(), "chain");
   const auto step = ReadVector<std::int32_t>(evaluations.get(), "step");
@@ -140,7 +143,7 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
   a.value_columns = hdf5::ReadStringListAttribute(evaluations.get(), "columns");
   const std::size_t n = cell.size();
   for (const std::size_t size :
-       {limit.size(), level.size(), chain.size(), step.size(), status.size(), g.size()}) {
+       {limit.size(), repetition.size(), level.size(), chain.size(), step.size(), status.size(), g.size()}) {
     if (size != n) Refuse(path, "evaluation columns of one length (" + std::to_string(n) + ")");
   }
   const auto k = static_cast<std::int64_t>(a.value_columns.size());
@@ -155,8 +158,8 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
   a.evaluations.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     Evaluation& e = a.evaluations[i];
-    e.key = EvaluationKey{cell[i], limit[i], level[i], chain[i], step[i]};
-    if (cell[i] < 0 || limit[i] < 0 || level[i] < 1 || chain[i] < 0 || step[i] < 0) {
+    e.key = EvaluationKey{cell[i], limit[i], repetition[i], level[i], chain[i], step[i]};
+    if (cell[i] < 0 || limit[i] < 0 || repetition[i] < 0 || level[i] < 1 || chain[i] < 0 || step[i] < 0) {
       Refuse(path, "tags in range (row " + std::to_string(i) + ")");
     }
     if (status[i] != static_cast<std::int8_t>(RunStatus::kOk) &&
@@ -214,7 +217,7 @@ void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& a) {
     Handle subset = CreateGroup(file.get(), "subset");
     Handle evaluations = CreateGroup(subset.get(), "evaluations");
     const std::size_t n = a.evaluations.size();
-    std::vector<std::int32_t> cell(n), limit(n), level(n), chain(n), step(n);
+    std::vector<std::int32_t> cell(n), limit(n), repetition(n), level(n), chain(n), step(n);
     std::vector<std::int8_t> status(n);
     std::vector<double> g(n), values;
     std::vector<std::int64_t> message_rows;
@@ -224,6 +227,7 @@ void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& a) {
       const Evaluation& e = a.evaluations[i];
       cell[i] = e.key.cell;
       limit[i] = e.key.limit;
+      repetition[i] = e.key.repetition;
       level[i] = e.key.level;
       chain[i] = e.key.chain;
       step[i] = e.key.step;
@@ -238,6 +242,7 @@ void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& a) {
     }
     WriteVector(evaluations.get(), "cell", cell);
     WriteVector(evaluations.get(), "limit", limit);
+    WriteVector(evaluations.get(), "repetition", repetition);
     WriteVector(evaluations.get(), "level", level);
     WriteVector(evaluations.get(), "chain", chain);
     WriteVector(evaluations.get(), "step", step);

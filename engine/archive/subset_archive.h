@@ -17,12 +17,14 @@
 namespace gesweep::risk {
 
 inline constexpr const char* kRiskArchiveKind = "subset_simulation";
-inline constexpr int kRiskArchiveVersion = 1;
+/// 2 adds the evaluations' `repetition` tag (independent repetitions of a study's simulations); a
+/// version-1 archive is read with every repetition 0.
+inline constexpr int kRiskArchiveVersion = 2;
 
 /// The tag of one evaluation.
 struct EvaluationKey {
-  std::int32_t cell = 0, limit = 0, level = 0, chain = 0, step = 0;
-  auto tie() const { return std::tie(cell, limit, level, chain, step); }
+  std::int32_t cell = 0, limit = 0, repetition = 0, level = 0, chain = 0, step = 0;
+  auto tie() const { return std::tie(cell, limit, repetition, level, chain, step); }
   bool operator<(const EvaluationKey& other) const { return tie() < other.tie(); }
   bool operator==(const EvaluationKey& other) const { return tie() == other.tie(); }
 };

@@ -77,6 +77,16 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
                        const risk::LimitRisk& r) {
   const auto& limit = spec.limits[static_cast<std::size_t>(r.limit)];
   const auto& s = r.subset;
+  const auto& pooled = r.pooled;
+  const auto status_name = [](rare::SubsetResult::Status status) {
+    return status == rare::SubsetResult::Status::kConverged  ? "converged"
+           : status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
+                                                              : "too_many_failed_runs";
+  };
+  const long long chains = std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
+  const auto collapsed = [&](const rare::SubsetResult& run) {
+    return run.levels.size() > 2 && run.levels.back().ancestors * 10 < chains;
+  };
   ordered_json j;
   j["cell"] = r.cell;
   j["cell_label"] = risk::CellLabel(plan, r.cell);
@@ -85,18 +95,44 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   j["units"] = limit.units;
   j["above"] = limit.above;
   j["value"] = limit.value;
-  j["status"] = s.status == rare::SubsetResult::Status::kConverged  ? "converged"
-                : s.status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
-                                                                    : "too_many_failed_runs";
-  j["probability"] = Num(s.probability);
-  j["coefficient_of_variation"] = Num(s.coefficient_of_variation);
-  j["coefficient_of_variation_correlated_levels"] = Num(s.coefficient_of_variation_upper);
-  j["interval_95"] = {Num(s.interval_95_low), Num(s.interval_95_high)};
+  // The estimate: the K repetitions pooled (for K = 1 the run's own figures). Levels, thresholds,
+  // the exceedance curve and the design point below are the first repetition's.
+  j["status"] = status_name(pooled.status);
+  j["probability"] = Num(pooled.probability);
+  j["coefficient_of_variation"] = Num(pooled.coefficient_of_variation);
+  j["coefficient_of_variation_correlated_levels"] =
+      pooled.repetitions == 1 ? Num(s.coefficient_of_variation_upper) : ordered_json(nullptr);
+  j["interval_95"] = {Num(pooled.interval_95_low), Num(pooled.interval_95_high)};
   j["upper_bound"] =
-      s.status == rare::SubsetResult::Status::kLevelCap ? Num(s.upper_bound) : ordered_json(nullptr);
-  j["runs"] = s.evaluations;
-  j["failed_runs"] = s.failed_evaluations;
+      pooled.status == rare::SubsetResult::Status::kLevelCap ? Num(pooled.upper_bound) : ordered_json(nullptr);
+  j["runs"] = pooled.evaluations;
+  j["failed_runs"] = pooled.failed_evaluations;
   j["dimension"] = r.dimension;
+  int collapsed_runs = collapsed(s) ? 1 : 0;
+  for (const auto& other : r.other_repetitions) collapsed_runs += collapsed(other) ? 1 : 0;
+  j["collapsed_runs"] = collapsed_runs;
+  ordered_json repetitions;
+  repetitions["count"] = pooled.repetitions;
+  repetitions["measured_coefficient_of_variation_one_run"] = Num(pooled.measured_coefficient_of_variation_one_run);
+  repetitions["mean_stated_coefficient_of_variation"] = Num(pooled.mean_stated_coefficient_of_variation);
+  ordered_json estimates = ordered_json::array();
+  const auto estimate = [&](int repetition, const rare::SubsetResult& run) {
+    estimates.push_back({{"repetition", repetition},
+                         {"seed", risk::SimulationSeed(spec.subset.seed, r.cell, r.limit, repetition)},
+                         {"status", status_name(run.status)},
+                         {"probability", Num(run.probability)},
+                         {"coefficient_of_variation", Num(run.coefficient_of_variation)},
+                         {"interval_95", {Num(run.interval_95_low), Num(run.interval_95_high)}},
+                         {"levels", run.levels.size()},
+                         {"runs", run.evaluations},
+                         {"last_level_ancestors", run.levels.empty() ? 0 : run.levels.back().ancestors},
+                         {"collapsed", collapsed(run)}});
+  };
+  estimate(0, s);
+  for (std::size_t k = 0; k < r.other_repetitions.size(); ++k)
+    estimate(static_cast<int>(k + 1), r.other_repetitions[k]);
+  repetitions["estimates"] = estimates;
+  j["repetitions"] = repetitions;
   ordered_json thresholds = ordered_json::array(), levels = ordered_json::array();
   const auto curve = risk::ExceedanceCurve(r, limit);
   for (std::size_t k = 0; k < s.levels.size(); ++k) {
@@ -150,7 +186,8 @@ ordered_json ResultJson(const SweepPlan& plan, const risk::RiskSpec& spec, const
       {"level_probability", spec.subset.level_probability},
       {"samples_per_level", spec.subset.samples_per_level},
       {"max_levels", spec.subset.max_levels},
-      {"seed", spec.subset.seed}};
+      {"seed", spec.subset.seed},
+      {"repetitions", spec.repetitions}};
   j["runs"] = static_cast<std::int64_t>(run.evaluations.size());
   ordered_json limits = ordered_json::array();
   for (const auto& r : run.results) limits.push_back(LimitJson(plan, spec, run, r));
@@ -243,7 +280,7 @@ int Replay(const RiskFlags& flags) {
     options.cache = &cache;
     options.capture = stored.key;
     options.captured_point = &point;
-    options.only = std::pair<std::int64_t, int>{stored.key.cell, stored.key.limit};
+    options.only = std::tuple<std::int64_t, int, int>{stored.key.cell, stored.key.limit, stored.key.repetition};
     (void)risk::RunRisk(plan, spec, options);
     if (point.empty()) {
       throw InputError(flags.input, "", "",
@@ -262,6 +299,7 @@ int Replay(const RiskFlags& flags) {
     j["row"] = *flags.replay;
     j["cell"] = stored.key.cell;
     j["limit"] = stored.key.limit;
+    j["repetition"] = stored.key.repetition;
     j["level"] = stored.key.level;
     j["chain"] = stored.key.chain;
     j["step"] = stored.key.step;
@@ -278,7 +316,7 @@ int Replay(const RiskFlags& flags) {
       std::cout << j.dump(2) << "\n";
     } else {
       std::cout << "row " << *flags.replay << " (cell " << stored.key.cell << ", limit " << stored.key.limit
-                << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step "
+                << ", repetition " << stored.key.repetition << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step "
                 << stored.key.step
                 << "): " << (identical ? "identical to the archive, bit for bit" : "DIFFERS from the archive")
                 << "\n";
@@ -432,6 +470,18 @@ void PrintRiskTable(const std::string& result_json) {
               << " failed)";
     if (l["status"] == "level_cap") std::cout << "  below the level cap: P < " << number(l["upper_bound"]);
     if (l["status"] == "too_many_failed_runs") std::cout << "  too many failed runs for a threshold";
+    const long long count = l.contains("repetitions") ? l["repetitions"]["count"].get<long long>() : 1;
+    if (count > 1) {
+      // K runs: the CoV and the interval are measured from their spread (docs/dispersion.md).
+      const auto& reps = l["repetitions"];
+      std::cout << "  measured over " << count << " repetitions: one run's CoV "
+                << number(reps["measured_coefficient_of_variation_one_run"]) << " (its stated CoV "
+                << number(reps["mean_stated_coefficient_of_variation"]) << ")";
+      if (l["collapsed_runs"].get<long long>() > 0)
+        std::cout << ", " << l["collapsed_runs"].get<long long>() << " collapsed";
+      std::cout << "\n";
+      continue;
+    }
     // The collapse diagnostic (docs/dispersion.md): a last level that descends from fewer than a tenth
     // of the chains' worth of first-level landings is one family, and its CoV is no error bar.
     const long long chains = std::llround(j["method"]["samples_per_level"].get<double>() *
@@ -439,7 +489,7 @@ void PrintRiskTable(const std::string& result_json) {
     const long long ancestors = l.value("last_level_ancestors", chains);
     if (l["levels"].size() > 2 && ancestors * 10 < chains) {
       std::cout << "  COLLAPSED: the last level descends from " << ancestors
-                << " first-level landing(s); the CoV understates the error, check with other seeds";
+                << " first-level landing(s); the CoV understates the error: measure it with [subset] repetitions";
     }
     std::cout << "\n";
   }

@@ -26,6 +26,7 @@ constexpr long long kMaxSeed = 9007199254740992LL;  // 2^53, as a sweep's seeds
 /// The fewest chains a study's level may have (N * p0): below it the chains' correlation, and so the
 /// coefficient of variation, rests on too few chains to report.
 constexpr int kMinChains = 10;
+constexpr long long kMaxRepetitions = 1000;
 
 /// Thrown by the limit state once the cancellation flag is seen after a batch; RunRisk catches it.
 struct Cancelled {};
@@ -192,9 +193,12 @@ std::string CellLabel(const SweepPlan& plan, std::int64_t cell) {
   return label;
 }
 
-std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit) {
-  return Mix(Mix(SplitMix64Mix(seed ^ 0x6c616e64696e6721ULL), static_cast<std::uint64_t>(cell)),
-             static_cast<std::uint64_t>(limit));
+std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit,
+                             std::int64_t repetition) {
+  const std::uint64_t first =
+      Mix(Mix(SplitMix64Mix(seed ^ 0x6c616e64696e6721ULL), static_cast<std::uint64_t>(cell)),
+          static_cast<std::uint64_t>(limit));
+  return repetition == 0 ? first : Mix(first ^ 0x7265706561746564ULL, static_cast<std::uint64_t>(repetition));
 }
 
 RiskSpec ReadRiskSpec(const SweepPlan& plan) {
@@ -208,9 +212,18 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   if (table == nullptr) throw InputError(study.path, "subset", "", "a table [subset]", study.subset_line);
   const TomlSection section(*table, study.path, "subset");
   section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed",
-                             "sampler", "initial_scale", "target_acceptance", "adaptation_groups"});
+                             "sampler", "initial_scale", "target_acceptance", "adaptation_groups",
+                             "repetitions"});
   RiskSpec spec;
   spec.subset = ReadSubsetOptions(section);
+  if (const auto repetitions = section.OptionalInteger("repetitions")) {
+    if (*repetitions < 1 || *repetitions > kMaxRepetitions) {
+      section.Fail("repetitions", std::to_string(*repetitions),
+                   "an integer from 1 to " + std::to_string(kMaxRepetitions) +
+                       " (independent subset simulations per cell and limit)");
+    }
+    spec.repetitions = static_cast<int>(*repetitions);
+  }
 
   const bool has_landing = std::any_of(study.analyses.begin(), study.analyses.end(),
                                        [](const auto& a) { return a->name() == "landing"; });
@@ -264,6 +277,8 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
     hash = Mix(hash, v);
   }
   for (const auto& limit : spec.limits) hash = MixText(hash, limit.text);
+  // Only when asked for: a study without repetitions keeps the fingerprint it had before they existed.
+  if (spec.repetitions != 1) hash = Mix(hash ^ 0x7265706561747321ULL, static_cast<std::uint64_t>(spec.repetitions));
   spec.fingerprint = hash;
   return spec;
 }
@@ -316,9 +331,21 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
     for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
       const std::uint64_t dimension = CellDimension(plan, cell);
       for (int limit = 0; limit < static_cast<int>(spec.limits.size()); ++limit) {
-        if (options.only && *options.only != std::pair<std::int64_t, int>{cell, limit}) continue;
+       LimitRisk risk;
+       risk.cell = cell;
+       risk.limit = limit;
+       risk.dimension = dimension;
+       std::vector<rare::SubsetResult> runs;
+       for (int repetition = 0; repetition < spec.repetitions; ++repetition) {
+        if (options.only && *options.only != std::tuple<std::int64_t, int, int>{cell, limit, repetition})
+          continue;
         rare::SubsetOptions subset = spec.subset;
-        subset.seed = SimulationSeed(spec.subset.seed, cell, limit);
+        subset.seed = SimulationSeed(spec.subset.seed, cell, limit, repetition);
+        const std::string what = "cell " + std::to_string(cell) + ", " +
+                                 spec.limits[static_cast<std::size_t>(limit)].text +
+                                 (spec.repetitions > 1 ? ", repetition " + std::to_string(repetition + 1) +
+                                                             " of " + std::to_string(spec.repetitions)
+                                                       : std::string());
         int last_level = 0;
         const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
           std::vector<Evaluation> made(batch.size());
@@ -326,7 +353,8 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
           std::atomic<bool> captured{false};
           tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
             const rare::EvaluationTag& tag = batch.tags[i];
-            const EvaluationKey key{static_cast<std::int32_t>(cell), limit, tag.level, tag.chain, tag.step};
+            const EvaluationKey key{static_cast<std::int32_t>(cell), limit, repetition, tag.level, tag.chain,
+                                    tag.step};
             if (options.capture && key == *options.capture && options.captured_point != nullptr) {
               const std::lock_guard lock(capture_mutex);
               options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
@@ -364,27 +392,26 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
           for (auto& e : made) run.evaluations.push_back(std::move(e));
           if (!batch.tags.empty() && batch.tags[0].level != last_level) {
             if (options.progress && last_level > 0) {
-              options.progress("cell " + std::to_string(cell) + ", " +
-                               spec.limits[static_cast<std::size_t>(limit)].text + ": level " +
-                               std::to_string(last_level) + " done, " + std::to_string(before) +
-                               " landings so far");
+              options.progress(what + ": level " + std::to_string(last_level) + " done, " +
+                               std::to_string(before) + " landings so far");
             }
             last_level = batch.tags[0].level;
           }
         };
-        LimitRisk risk;
-        risk.cell = cell;
-        risk.limit = limit;
-        risk.dimension = dimension;
-        risk.subset = rare::RunSubsetSimulation(g, static_cast<int>(dimension), subset);
-        if (risk.subset.failure_count > 0) {
-          const auto& t = risk.subset.most_likely_failure_tag;
-          const EvaluationKey key{static_cast<std::int32_t>(cell), limit, t.level, t.chain, t.step};
+        runs.push_back(rare::RunSubsetSimulation(g, static_cast<int>(dimension), subset));
+        if (repetition == 0 && runs.back().failure_count > 0) {
+          const auto& t = runs.back().most_likely_failure_tag;
+          const EvaluationKey key{static_cast<std::int32_t>(cell), limit, 0, t.level, t.chain, t.step};
           for (std::size_t r = 0; r < run.evaluations.size(); ++r) {
             if (run.evaluations[r].key == key) risk.most_likely_row = static_cast<std::int64_t>(r);
           }
         }
-        run.results.push_back(std::move(risk));
+       }
+       if (runs.empty()) continue;
+       risk.pooled = rare::PoolRepetitions(runs);
+       risk.subset = std::move(runs.front());
+       for (std::size_t r = 1; r < runs.size(); ++r) risk.other_repetitions.push_back(std::move(runs[r]));
+       run.results.push_back(std::move(risk));
       }
     }
   } catch (const Cancelled&) {

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "engine/archive/subset_archive.h"
+#include "engine/rare/repetitions.h"
 #include "engine/rare/subset_simulation.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -44,6 +45,9 @@ struct RiskLimit {
 struct RiskSpec {
   rare::SubsetOptions subset;  ///< p0, N, the level cap, the seed, the sampler
   std::vector<RiskLimit> limits;
+  /// K: independent subset simulations per (cell, limit), each with its own seed, pooled
+  /// (engine/rare/repetitions.h): the spread of the K estimates is their measured error.
+  int repetitions = 1;
   /// A hash of everything that decides the evaluations (the study's fingerprint, the options and
   /// the limits): a resume refuses a journal of another spec.
   std::uint64_t fingerprint = 0;
@@ -69,8 +73,11 @@ double CellSampleInterval(const SweepPlan& plan, std::int64_t cell);
 /// "h_derivatives = 0, wind_20ft_mps = -15.43" (empty for a design of one run).
 std::string CellLabel(const SweepPlan& plan, std::int64_t cell);
 
-/// The seed of one (cell, limit) subset simulation: SplitMix64 of the study's seed and the pair.
-std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit);
+/// The seed of one (cell, limit, repetition) subset simulation: SplitMix64 of the study's seed and
+/// the pair, and of the repetition for repetitions after the first (so that repetition 0 is the
+/// simulation of a study without repetitions).
+std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t limit,
+                             std::int64_t repetition = 0);
 
 /// Flies the landing of `cell` with noise `point` and evaluates limit `limit` on it (g is NaN when
 /// `limit` is negative). Never throws for a failed run.
@@ -81,10 +88,16 @@ Evaluation FlyPoint(const SweepPlan& plan, std::int64_t cell, int limit, const R
 struct LimitRisk {
   std::int64_t cell = 0;
   int limit = 0;
+  /// The first repetition's run: its levels, thresholds, exceedance curve and design point are the
+  /// ones reported and drawn.
   rare::SubsetResult subset;
+  /// Repetitions 1 .. K-1 (empty for K = 1).
+  std::vector<rare::SubsetResult> other_repetitions;
+  /// All K pooled: the estimate reported (for K = 1, the first run's own).
+  rare::PooledEstimate pooled;
   std::uint64_t dimension = 0;
-  /// The failing landings of the last level: the row (in RiskRun::evaluations) of the most likely one
-  /// (the failing point nearest the origin), -1 when none failed.
+  /// The failing landings of the first repetition's last level: the row (in RiskRun::evaluations) of
+  /// the most likely one (the failing point nearest the origin), -1 when none failed.
   std::int64_t most_likely_row = -1;
 };
 
@@ -107,8 +120,8 @@ struct RiskRunOptions {
   /// The run stops once it has been captured.
   std::optional<EvaluationKey> capture;
   std::vector<double>* captured_point = nullptr;
-  /// Only this (cell, limit) simulation (a replay); all when empty.
-  std::optional<std::pair<std::int64_t, int>> only;
+  /// Only this (cell, limit, repetition) simulation (a replay); all when empty.
+  std::optional<std::tuple<std::int64_t, int, int>> only;
 };
 
 /// Runs every (cell, limit) subset simulation of the plan's design. The threads are the calling

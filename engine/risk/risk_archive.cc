@@ -15,7 +15,7 @@
 namespace gesweep::risk {
 namespace {
 
-constexpr char kJournalMagic[] = "GESWEEP-RISK-JOURNAL-1\n";
+constexpr char kJournalMagic[] = "GESWEEP-RISK-JOURNAL-2\n";
 constexpr std::size_t kMagicLength = sizeof(kJournalMagic) - 1;
 constexpr std::size_t kHeaderLength = kMagicLength + 8 + 4;
 constexpr std::uint32_t kMaxRecord = 1u << 26;  // 64 MiB: far above any record
@@ -61,7 +61,7 @@ void WriteAll(int fd, const unsigned char* data, std::size_t size, const std::fi
 
 std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
   std::vector<unsigned char> payload;
-  for (const std::int32_t v : {e.key.cell, e.key.limit, e.key.level, e.key.chain, e.key.step})
+  for (const std::int32_t v : {e.key.cell, e.key.limit, e.key.repetition, e.key.level, e.key.chain, e.key.step})
     Put(payload, v);
   Put(payload, e.status);
   Put(payload, e.g);
@@ -78,7 +78,8 @@ std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
 
 bool DecodeRecord(const unsigned char* p, const unsigned char* end, std::uint32_t value_count,
                   Evaluation& e) {
-  std::int32_t* keys[] = {&e.key.cell, &e.key.limit, &e.key.level, &e.key.chain, &e.key.step};
+  std::int32_t* keys[] = {&e.key.cell, &e.key.limit, &e.key.repetition, &e.key.level, &e.key.chain,
+                           &e.key.step};
   for (std::int32_t* k : keys) {
     if (!Get(p, end, *k)) return false;
   }

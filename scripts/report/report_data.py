@@ -301,7 +301,8 @@ class Archive:
         return out
 
 
-RISK_KIND, RISK_VERSION = "subset_simulation", 1
+# Version 2 tags each landing with its repetition (a study's independent runs); 1 had none.
+RISK_KIND, RISK_VERSIONS = "subset_simulation", (1, 2)
 
 
 class RiskArchive:
@@ -318,8 +319,9 @@ class RiskArchive:
         self.path = path
         self.file = h5py.File(path, "r")
         self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
-        if self.attrs.get("gesweep_archive_kind") != RISK_KIND or int(self.attrs.get("format_version", -1)) != RISK_VERSION:
-            raise ValueError(f"{path}: not a subset-simulation archive of this version ({RISK_KIND} {RISK_VERSION})")
+        if self.attrs.get("gesweep_archive_kind") != RISK_KIND or int(self.attrs.get("format_version", -1)) not in RISK_VERSIONS:
+            raise ValueError(f"{path}: not a subset-simulation archive of a version this report reads ({RISK_KIND} "
+                             f"{' or '.join(map(str, RISK_VERSIONS))})")
         self.result = json.loads(self.attrs["result_json"])
         e = self.file["subset/evaluations"]
         self.columns = [str(c) for c in _text(e.attrs["columns"])]

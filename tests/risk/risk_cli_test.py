@@ -20,7 +20,11 @@ produced): what is checked is that the estimate does not depend on how it was re
 5. A limit no landing reaches within the level cap is a clearly reported result: status level_cap
    and an upper bound p0^max_levels. `gesweep report` of the archive draws the exceedance curve and the
    firm limit's design point (and none for the unreachable limit).
-6. Bad input: one line naming file, key, value and expectation, exit 2, nothing written."""
+6. Bad input: one line naming file, key, value and expectation, exit 2, nothing written.
+7. Repetitions: K = 3 runs; the first is the run without repetitions (same seed, same estimate); the
+   pooled P is their mean and its CoV their spread over sqrt(K), recomputed here; a landing of the last
+   repetition replays bit for bit; repetitions = 0 is refused.
+8. The table's COLLAPSED line follows its rule (ancestors x 10 < chains) on an archive edited by hand."""
 import json
 import os
 import pathlib
@@ -240,6 +244,62 @@ def main():
         # A replay row out of range.
         r = risk(one, "--replay", 10 ** 9)
         check(r.returncode == 2 and "--replay" in r.stderr, f"--replay past the rows: exit 2: {r.stderr}")
+
+        # 7. Independent repetitions: K runs, their first the run without repetitions (the same seed),
+        # pooled as the mean with the spread measured (recomputed here from the runs' estimates).
+        reps = write_study(tmp, "reps.toml", limits='"touchdown_sink_rate_mps > 1.83"',
+                           subset=SUBSET.format(n=200, levels=3) + "\nrepetitions = 3")
+        pooled_archive = tmp / "reps.h5"
+        r = risk(reps, "-o", pooled_archive, "--threads", 2)
+        check(r.returncode == 0, f"risk with repetitions exits 0: {r.returncode} {r.stderr}")
+        check("measured over 3 repetitions" in r.stdout, f"the table says the CoV is measured: {r.stdout}")
+        if r.returncode == 0:
+            d = subprocess.run([GESWEEP, "dispersion", str(pooled_archive), "--format", "json"],
+                               capture_output=True, text=True)
+            limit = json.loads(d.stdout)["limits"][0]
+            estimates = limit["repetitions"]["estimates"]
+            check(limit["repetitions"]["count"] == 3 and len(estimates) == 3, f"three repetitions: {limit['repetitions']}")
+            check(estimates[0]["probability"] == firm["probability"],
+                  f"repetition 0 is the run without repetitions: {estimates[0]['probability']} vs {firm['probability']}")
+            check(len({e["seed"] for e in estimates}) == 3, "each repetition has its own seed")
+            ps = np.array([e["probability"] for e in estimates])
+            check(abs(limit["probability"] / ps.mean() - 1) < 1e-14, f"P is the mean of the runs: {limit['probability']} vs {ps}")
+            measured = ps.std(ddof=1) / ps.mean()
+            check(abs(limit["coefficient_of_variation"] / (measured / np.sqrt(3)) - 1) < 1e-12,
+                  f"the CoV is the measured spread over sqrt(K): {limit['coefficient_of_variation']} vs {measured / np.sqrt(3)}")
+            check(abs(limit["repetitions"]["measured_coefficient_of_variation_one_run"] / measured - 1) < 1e-12,
+                  "one run's measured CoV is the spread of the runs")
+            check(limit["interval_95"][0] < limit["probability"] < limit["interval_95"][1], f"interval around P: {limit['interval_95']}")
+            stored = contents(pooled_archive)[1]
+            check(sorted(set(stored["repetition"].tolist())) == [0, 1, 2], "the archive tags each landing's repetition")
+            check(limit["runs"] == len(stored["g"]) == sum(e["runs"] for e in estimates),
+                  f"runs: all the repetitions' landings: {limit['runs']} vs {len(stored['g'])}")
+            rows = np.flatnonzero(stored["repetition"] == 2)
+            row = rows[stored["level"][rows] == stored["level"][rows].max()][0]
+            rp = risk(pooled_archive, "--replay", row, "--format", "json")
+            check(rp.returncode == 0 and json.loads(rp.stdout)["identical"] is True and json.loads(rp.stdout)["repetition"] == 2,
+                  f"a last-level landing of repetition 2 replays bit for bit: {rp.returncode} {rp.stderr}")
+        bad_reps = write_study(tmp, "bad_reps.toml", subset=SUBSET.format(n=200, levels=3) + "\nrepetitions = 0")
+        r = risk(bad_reps, "-o", tmp / "bad_reps.h5")
+        lines = r.stderr.strip().splitlines()
+        check(r.returncode == 2 and len(lines) == 1 and "bad_reps.toml" in lines[0] and "repetitions" in lines[0]
+              and "0" in lines[0], f"repetitions = 0: one line, exit 2: {r.returncode} {lines}")
+        check(not (tmp / "bad_reps.h5").exists(), "repetitions = 0: nothing written")
+
+        # 8. The collapse line: the table prints COLLAPSED when a run of more than two levels ends in a
+        # level that descends from fewer than a tenth of its chains (here N p0 = 20: 1 ancestor is, 2 is
+        # not). The rule is checked on a copy of the archive with the diagnostic set by hand.
+        for ancestors, expected in ((1, True), (2, False)):
+            copy = tmp / f"collapsed_{ancestors}.h5"
+            copy.write_bytes(one.read_bytes())
+            with h5py.File(copy, "r+") as f:
+                j = json.loads(f.attrs["result_json"])
+                j["limits"][1]["last_level_ancestors"] = ancestors
+                f.attrs["result_json"] = json.dumps(j)
+            d = subprocess.run([GESWEEP, "dispersion", str(copy)], capture_output=True, text=True)
+            line = next((l for l in d.stdout.splitlines() if "> 30" in l), "")
+            check(("COLLAPSED" in line) == expected, f"{ancestors} ancestor(s) of 20 chains: COLLAPSED {expected}: {line}")
+        check(all("COLLAPSED" not in l for l in r1.stdout.splitlines()), "the test's own runs did not collapse")
 
     if failures:
         print(f"{len(failures)} failures")
