@@ -81,7 +81,7 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   const auto status_name = [](rare::SubsetResult::Status status) {
     return status == rare::SubsetResult::Status::kConverged  ? "converged"
            : status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
-                                                              : "too_many_failed_runs";
+                                                             : "too_many_failed_runs";
   };
   const long long chains = std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
   const auto collapsed = [&](const rare::SubsetResult& run) {
@@ -103,8 +103,8 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   j["coefficient_of_variation_correlated_levels"] =
       pooled.repetitions == 1 ? Num(s.coefficient_of_variation_upper) : ordered_json(nullptr);
   j["interval_95"] = {Num(pooled.interval_95_low), Num(pooled.interval_95_high)};
-  j["upper_bound"] =
-      pooled.status == rare::SubsetResult::Status::kLevelCap ? Num(pooled.upper_bound) : ordered_json(nullptr);
+  j["upper_bound"] = pooled.status == rare::SubsetResult::Status::kLevelCap ? Num(pooled.upper_bound)
+                                                                            : ordered_json(nullptr);
   j["runs"] = pooled.evaluations;
   j["failed_runs"] = pooled.failed_evaluations;
   j["dimension"] = r.dimension;
@@ -113,7 +113,8 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   j["collapsed_runs"] = collapsed_runs;
   ordered_json repetitions;
   repetitions["count"] = pooled.repetitions;
-  repetitions["measured_coefficient_of_variation_one_run"] = Num(pooled.measured_coefficient_of_variation_one_run);
+  repetitions["measured_coefficient_of_variation_one_run"] =
+      Num(pooled.measured_coefficient_of_variation_one_run);
   repetitions["mean_stated_coefficient_of_variation"] = Num(pooled.mean_stated_coefficient_of_variation);
   ordered_json estimates = ordered_json::array();
   const auto estimate = [&](int repetition, const rare::SubsetResult& run) {
@@ -280,7 +281,8 @@ int Replay(const RiskFlags& flags) {
     options.cache = &cache;
     options.capture = stored.key;
     options.captured_point = &point;
-    options.only = std::tuple<std::int64_t, int, int>{stored.key.cell, stored.key.limit, stored.key.repetition};
+    options.only =
+        std::tuple<std::int64_t, int, int>{stored.key.cell, stored.key.limit, stored.key.repetition};
     (void)risk::RunRisk(plan, spec, options);
     if (point.empty()) {
       throw InputError(flags.input, "", "",
@@ -316,8 +318,8 @@ int Replay(const RiskFlags& flags) {
       std::cout << j.dump(2) << "\n";
     } else {
       std::cout << "row " << *flags.replay << " (cell " << stored.key.cell << ", limit " << stored.key.limit
-                << ", repetition " << stored.key.repetition << ", level " << stored.key.level << ", chain " << stored.key.chain << ", step "
-                << stored.key.step
+                << ", repetition " << stored.key.repetition << ", level " << stored.key.level << ", chain "
+                << stored.key.chain << ", step " << stored.key.step
                 << "): " << (identical ? "identical to the archive, bit for bit" : "DIFFERS from the archive")
                 << "\n";
     }
@@ -488,8 +490,9 @@ void PrintRiskTable(const std::string& result_json) {
                                           j["method"]["level_probability"].get<double>());
     const long long ancestors = l.value("last_level_ancestors", chains);
     if (l["levels"].size() > 2 && ancestors * 10 < chains) {
-      std::cout << "  COLLAPSED: the last level descends from " << ancestors
-                << " first-level landing(s); the CoV understates the error: measure it with [subset] repetitions";
+      std::cout
+          << "  COLLAPSED: the last level descends from " << ancestors
+          << " first-level landing(s); the CoV understates the error: measure it with [subset] repetitions";
     }
     std::cout << "\n";
   }

@@ -1,7 +1,7 @@
 #include "engine/rare/repetitions.h"
 
-#include <boost/math/distributions/students_t.hpp>
 #include <algorithm>
+#include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <limits>
 
@@ -45,7 +45,8 @@ PooledEstimate PoolRepetitions(std::span<const SubsetResult> runs) {
   for (const SubsetResult& run : runs) squares += (run.probability - mean) * (run.probability - mean);
   const double sd = std::sqrt(squares / (k - 1));
   pooled.probability = mean;
-  pooled.measured_coefficient_of_variation_one_run = mean > 0 ? sd / mean : std::numeric_limits<double>::quiet_NaN();
+  pooled.measured_coefficient_of_variation_one_run =
+      mean > 0 ? sd / mean : std::numeric_limits<double>::quiet_NaN();
   pooled.coefficient_of_variation = pooled.measured_coefficient_of_variation_one_run / std::sqrt(k);
   if (!(mean > 0) || !std::isfinite(pooled.coefficient_of_variation)) {
     pooled.interval_95_low = 0;

@@ -278,7 +278,8 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   }
   for (const auto& limit : spec.limits) hash = MixText(hash, limit.text);
   // Only when asked for: a study without repetitions keeps the fingerprint it had before they existed.
-  if (spec.repetitions != 1) hash = Mix(hash ^ 0x7265706561747321ULL, static_cast<std::uint64_t>(spec.repetitions));
+  if (spec.repetitions != 1)
+    hash = Mix(hash ^ 0x7265706561747321ULL, static_cast<std::uint64_t>(spec.repetitions));
   spec.fingerprint = hash;
   return spec;
 }
@@ -331,87 +332,87 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
     for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
       const std::uint64_t dimension = CellDimension(plan, cell);
       for (int limit = 0; limit < static_cast<int>(spec.limits.size()); ++limit) {
-       LimitRisk risk;
-       risk.cell = cell;
-       risk.limit = limit;
-       risk.dimension = dimension;
-       std::vector<rare::SubsetResult> runs;
-       for (int repetition = 0; repetition < spec.repetitions; ++repetition) {
-        if (options.only && *options.only != std::tuple<std::int64_t, int, int>{cell, limit, repetition})
-          continue;
-        rare::SubsetOptions subset = spec.subset;
-        subset.seed = SimulationSeed(spec.subset.seed, cell, limit, repetition);
-        const std::string what = "cell " + std::to_string(cell) + ", " +
-                                 spec.limits[static_cast<std::size_t>(limit)].text +
-                                 (spec.repetitions > 1 ? ", repetition " + std::to_string(repetition + 1) +
-                                                             " of " + std::to_string(spec.repetitions)
-                                                       : std::string());
-        int last_level = 0;
-        const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
-          std::vector<Evaluation> made(batch.size());
-          std::vector<char> fresh(batch.size(), 0);
-          std::atomic<bool> captured{false};
-          tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
-            const rare::EvaluationTag& tag = batch.tags[i];
-            const EvaluationKey key{static_cast<std::int32_t>(cell), limit, repetition, tag.level, tag.chain,
-                                    tag.step};
-            if (options.capture && key == *options.capture && options.captured_point != nullptr) {
-              const std::lock_guard lock(capture_mutex);
-              options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
-              captured = true;
+        LimitRisk risk;
+        risk.cell = cell;
+        risk.limit = limit;
+        risk.dimension = dimension;
+        std::vector<rare::SubsetResult> runs;
+        for (int repetition = 0; repetition < spec.repetitions; ++repetition) {
+          if (options.only && *options.only != std::tuple<std::int64_t, int, int>{cell, limit, repetition})
+            continue;
+          rare::SubsetOptions subset = spec.subset;
+          subset.seed = SimulationSeed(spec.subset.seed, cell, limit, repetition);
+          const std::string what = "cell " + std::to_string(cell) + ", " +
+                                   spec.limits[static_cast<std::size_t>(limit)].text +
+                                   (spec.repetitions > 1 ? ", repetition " + std::to_string(repetition + 1) +
+                                                               " of " + std::to_string(spec.repetitions)
+                                                         : std::string());
+          int last_level = 0;
+          const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
+            std::vector<Evaluation> made(batch.size());
+            std::vector<char> fresh(batch.size(), 0);
+            std::atomic<bool> captured{false};
+            tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
+              const rare::EvaluationTag& tag = batch.tags[i];
+              const EvaluationKey key{
+                  static_cast<std::int32_t>(cell), limit, repetition, tag.level, tag.chain, tag.step};
+              if (options.capture && key == *options.capture && options.captured_point != nullptr) {
+                const std::lock_guard lock(capture_mutex);
+                options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
+                captured = true;
+              }
+              const Evaluation* cached = nullptr;
+              if (options.cache != nullptr) {
+                const auto found = options.cache->find(key);
+                if (found != options.cache->end()) cached = &found->second;
+              }
+              if (cached != nullptr) {
+                made[i] = *cached;
+              } else {
+                made[i] = Fly(plan, workspaces.local(), cell, limit, spec, batch.point(i), options.cancel);
+                made[i].key = key;
+                fresh[i] = 1;
+              }
+              values[i] = made[i].g;
+            });
+            // A run the flag stopped is no evaluation: it is neither kept nor journaled, and the
+            // simulation stops after the complete ones are.
+            bool stopped = false;
+            std::vector<Evaluation> journal;
+            for (std::size_t i = 0; i < made.size(); ++i) {
+              if (made[i].status == static_cast<std::int8_t>(RunStatus::kPending)) {
+                stopped = true;
+                continue;
+              }
+              if (fresh[i]) journal.push_back(made[i]);
             }
-            const Evaluation* cached = nullptr;
-            if (options.cache != nullptr) {
-              const auto found = options.cache->find(key);
-              if (found != options.cache->end()) cached = &found->second;
+            if (options.on_batch && !journal.empty()) options.on_batch(journal);
+            if (stopped || (options.cancel != nullptr && options.cancel->load())) throw Cancelled{};
+            if (captured) throw Captured{};
+            const std::size_t before = run.evaluations.size();
+            for (auto& e : made) run.evaluations.push_back(std::move(e));
+            if (!batch.tags.empty() && batch.tags[0].level != last_level) {
+              if (options.progress && last_level > 0) {
+                options.progress(what + ": level " + std::to_string(last_level) + " done, " +
+                                 std::to_string(before) + " landings so far");
+              }
+              last_level = batch.tags[0].level;
             }
-            if (cached != nullptr) {
-              made[i] = *cached;
-            } else {
-              made[i] = Fly(plan, workspaces.local(), cell, limit, spec, batch.point(i), options.cancel);
-              made[i].key = key;
-              fresh[i] = 1;
+          };
+          runs.push_back(rare::RunSubsetSimulation(g, static_cast<int>(dimension), subset));
+          if (repetition == 0 && runs.back().failure_count > 0) {
+            const auto& t = runs.back().most_likely_failure_tag;
+            const EvaluationKey key{static_cast<std::int32_t>(cell), limit, 0, t.level, t.chain, t.step};
+            for (std::size_t r = 0; r < run.evaluations.size(); ++r) {
+              if (run.evaluations[r].key == key) risk.most_likely_row = static_cast<std::int64_t>(r);
             }
-            values[i] = made[i].g;
-          });
-          // A run the flag stopped is no evaluation: it is neither kept nor journaled, and the
-          // simulation stops after the complete ones are.
-          bool stopped = false;
-          std::vector<Evaluation> journal;
-          for (std::size_t i = 0; i < made.size(); ++i) {
-            if (made[i].status == static_cast<std::int8_t>(RunStatus::kPending)) {
-              stopped = true;
-              continue;
-            }
-            if (fresh[i]) journal.push_back(made[i]);
-          }
-          if (options.on_batch && !journal.empty()) options.on_batch(journal);
-          if (stopped || (options.cancel != nullptr && options.cancel->load())) throw Cancelled{};
-          if (captured) throw Captured{};
-          const std::size_t before = run.evaluations.size();
-          for (auto& e : made) run.evaluations.push_back(std::move(e));
-          if (!batch.tags.empty() && batch.tags[0].level != last_level) {
-            if (options.progress && last_level > 0) {
-              options.progress(what + ": level " + std::to_string(last_level) + " done, " +
-                               std::to_string(before) + " landings so far");
-            }
-            last_level = batch.tags[0].level;
-          }
-        };
-        runs.push_back(rare::RunSubsetSimulation(g, static_cast<int>(dimension), subset));
-        if (repetition == 0 && runs.back().failure_count > 0) {
-          const auto& t = runs.back().most_likely_failure_tag;
-          const EvaluationKey key{static_cast<std::int32_t>(cell), limit, 0, t.level, t.chain, t.step};
-          for (std::size_t r = 0; r < run.evaluations.size(); ++r) {
-            if (run.evaluations[r].key == key) risk.most_likely_row = static_cast<std::int64_t>(r);
           }
         }
-       }
-       if (runs.empty()) continue;
-       risk.pooled = rare::PoolRepetitions(runs);
-       risk.subset = std::move(runs.front());
-       for (std::size_t r = 1; r < runs.size(); ++r) risk.other_repetitions.push_back(std::move(runs[r]));
-       run.results.push_back(std::move(risk));
+        if (runs.empty()) continue;
+        risk.pooled = rare::PoolRepetitions(runs);
+        risk.subset = std::move(runs.front());
+        for (std::size_t r = 1; r < runs.size(); ++r) risk.other_repetitions.push_back(std::move(runs[r]));
+        run.results.push_back(std::move(risk));
       }
     }
   } catch (const Cancelled&) {

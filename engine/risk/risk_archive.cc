@@ -61,7 +61,8 @@ void WriteAll(int fd, const unsigned char* data, std::size_t size, const std::fi
 
 std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
   std::vector<unsigned char> payload;
-  for (const std::int32_t v : {e.key.cell, e.key.limit, e.key.repetition, e.key.level, e.key.chain, e.key.step})
+  for (const std::int32_t v :
+       {e.key.cell, e.key.limit, e.key.repetition, e.key.level, e.key.chain, e.key.step})
     Put(payload, v);
   Put(payload, e.status);
   Put(payload, e.g);
@@ -78,8 +79,8 @@ std::vector<unsigned char> EncodeRecord(const Evaluation& e) {
 
 bool DecodeRecord(const unsigned char* p, const unsigned char* end, std::uint32_t value_count,
                   Evaluation& e) {
-  std::int32_t* keys[] = {&e.key.cell, &e.key.limit, &e.key.repetition, &e.key.level, &e.key.chain,
-                           &e.key.step};
+  std::int32_t* keys[] = {&e.key.cell,  &e.key.limit, &e.key.repetition,
+                          &e.key.level, &e.key.chain, &e.key.step};
   for (std::int32_t* k : keys) {
     if (!Get(p, end, *k)) return false;
   }

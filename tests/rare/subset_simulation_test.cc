@@ -1,5 +1,4 @@
 #include "engine/rare/subset_simulation.h"
-#include "engine/rare/repetitions.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -15,6 +14,7 @@
 #include <tuple>
 
 #include "engine/common/errors.h"
+#include "engine/rare/repetitions.h"
 #include "tests/rare/analytic_limit_states.h"
 
 namespace gesweep::rare {
@@ -412,7 +412,6 @@ TEST(SubsetSimulation, MostLikelyFailureIsTheTaggedEvaluation) {
   EXPECT_LT(std::sqrt(norm2), 3.0 + 1.5);
 }
 
-
 // Independent repetitions pooled (engine/rare/repetitions.h), against the formulas worked by hand.
 TEST(SubsetRepetitions, PooledMeanSpreadAndIntervalByHand) {
   std::vector<SubsetResult> runs(3);
@@ -468,7 +467,8 @@ TEST(SubsetRepetitions, StudentQuantilesAreTheTables) {
 // recover it within three of their measured CoVs, and the pooled 95 % interval holds the truth.
 TEST(SubsetRepetitions, TwoModesPooledOverTwentyRuns) {
   constexpr double kBeta = 3.5;
-  const auto g = ParallelLimitState([](std::span<const double> u) { return std::min(kBeta - u[0], kBeta - u[1]); });
+  const auto g =
+      ParallelLimitState([](std::span<const double> u) { return std::min(kBeta - u[0], kBeta - u[1]); });
   std::vector<SubsetResult> runs;
   for (int r = 0; r < 20; ++r) runs.push_back(RunSubsetSimulation(g, 10, Options(500, 5000 + r)));
   const double one = LinearTruth(kBeta), truth = 1 - (1 - one) * (1 - one);
