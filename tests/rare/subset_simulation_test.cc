@@ -425,20 +425,26 @@ TEST(SubsetRepetitions, PooledMeanSpreadAndIntervalByHand) {
   runs[2].status = SubsetResult::Status::kLevelCap;
   runs[2].upper_bound = 1e-3;
   const PooledEstimate pooled = PoolRepetitions(runs);
+  // The pooled figures are a handful of operations on doubles of order 1e-4 or 1: relative
+  // round-off of a few ulps. The interval's t is a six-place table value, so it holds to 1e-6
+  // relative, which on a bound of order 1e-4 is well inside 1e-9 absolute.
+  constexpr double kProbabilityRoundOff = 1e-18;  // absolute, on P = 2e-4
+  constexpr double kRatioRoundOff = 1e-12;        // absolute, on CoVs of order 0.3
+  constexpr double kSixPlaceTable = 1e-9;         // absolute, on bounds of order 1e-4
   EXPECT_EQ(pooled.repetitions, 3);
   EXPECT_EQ(pooled.status, SubsetResult::Status::kLevelCap);  // the worst run's
   EXPECT_DOUBLE_EQ(pooled.upper_bound, 1e-3);
   EXPECT_EQ(pooled.evaluations, 3003);
   EXPECT_EQ(pooled.failed_evaluations, 3);
-  EXPECT_NEAR(pooled.probability, 2e-4, 1e-18);
+  EXPECT_NEAR(pooled.probability, 2e-4, kProbabilityRoundOff);
   // s = sqrt(((1e-4)^2 + 0 + (1e-4)^2) / 2) = 1e-4: one run's CoV 0.5, the mean's 0.5 / sqrt(3).
-  EXPECT_NEAR(pooled.measured_coefficient_of_variation_one_run, 0.5, 1e-12);
-  EXPECT_NEAR(pooled.coefficient_of_variation, 0.5 / std::sqrt(3.0), 1e-12);
-  EXPECT_NEAR(pooled.mean_stated_coefficient_of_variation, 0.2, 1e-12);
+  EXPECT_NEAR(pooled.measured_coefficient_of_variation_one_run, 0.5, kRatioRoundOff);
+  EXPECT_NEAR(pooled.coefficient_of_variation, 0.5 / std::sqrt(3.0), kRatioRoundOff);
+  EXPECT_NEAR(pooled.mean_stated_coefficient_of_variation, 0.2, kRatioRoundOff);
   // Student's t, 2 degrees of freedom, 97.5 %: 4.303 (any table; 4.302653 to six places).
   const double c = 0.5 / std::sqrt(3.0), s = std::sqrt(std::log(1 + c * c)), t = 4.302653;
-  EXPECT_NEAR(pooled.interval_95_low, std::exp(std::log(2e-4) - s * s / 2 - t * s), 1e-9);
-  EXPECT_NEAR(pooled.interval_95_high, std::exp(std::log(2e-4) - s * s / 2 + t * s), 1e-9);
+  EXPECT_NEAR(pooled.interval_95_low, std::exp(std::log(2e-4) - s * s / 2 - t * s), kSixPlaceTable);
+  EXPECT_NEAR(pooled.interval_95_high, std::exp(std::log(2e-4) - s * s / 2 + t * s), kSixPlaceTable);
 }
 
 TEST(SubsetRepetitions, OneRunIsItsOwnEstimate) {
@@ -457,9 +463,10 @@ TEST(SubsetRepetitions, OneRunIsItsOwnEstimate) {
 
 TEST(SubsetRepetitions, StudentQuantilesAreTheTables) {
   // Two-sided 95 % points of Student's t (Abramowitz & Stegun table 26.10): 12.706, 2.776, 2.042.
-  EXPECT_NEAR(StudentT975(1), 12.706, 5e-4);
-  EXPECT_NEAR(StudentT975(4), 2.776, 5e-4);
-  EXPECT_NEAR(StudentT975(30), 2.042, 5e-4);
+  constexpr double kThreePlaceTable = 5e-4;  // the table's last place, rounded
+  EXPECT_NEAR(StudentT975(1), 12.706, kThreePlaceTable);
+  EXPECT_NEAR(StudentT975(4), 2.776, kThreePlaceTable);
+  EXPECT_NEAR(StudentT975(30), 2.042, kThreePlaceTable);
 }
 
 // Two failure modes in orthogonal directions (g = min(beta - u_0, beta - u_1)): the union has
