@@ -32,13 +32,15 @@ enum class RunStatus : std::int8_t {
 /// The status names, in code order: the levels of /runs/status and the manifest's `run_status`
 /// (the one place the Python readers take the codes from).
 GESWEEP_ENUM_NAMES(RunStatus, {kPending, "pending"}, {kOk, "ok"}, {kFailed, "failed"});
-static_assert([] {
-  std::int8_t code = 0;
-  for (const auto& entry : EnumNames<RunStatus>::kTable) {
-    if (static_cast<std::int8_t>(entry.value) != code++) return false;
-  }
-  return true;
-}(), "RunStatus's names are in code order: level i of /runs/status is code i");
+static_assert(
+    [] {
+      std::int8_t code = 0;
+      for (const auto& entry : EnumNames<RunStatus>::kTable) {
+        if (static_cast<std::int8_t>(entry.value) != code++) return false;
+      }
+      return true;
+    }(),
+    "RunStatus's names are in code order: level i of /runs/status is code i");
 
 /// The names of RunStatus in code order (level i is code i): the `levels` of /runs/status.
 inline std::vector<std::string> RunStatusLevels() {
