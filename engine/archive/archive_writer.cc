@@ -256,7 +256,7 @@ void DescribeStored(hid_t d, const archive::StoredDataset& stored, const SweepPl
       Describe(d, "1",
                "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's "
                "results, so a nonzero status marks a complete run");
-      hdf5::WriteAttribute(d, "levels", std::vector<std::string>{"pending", "ok", "failed"});
+      hdf5::WriteAttribute(d, "levels", RunStatusLevels());
       break;
     case archive::ValueSource::kMessage:
       Describe(d, "1",

@@ -18,6 +18,7 @@
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
 #include "engine/common/toml_reader.h"
+#include "engine/sweep/runner.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep::cli {
@@ -200,7 +201,7 @@ Json RunsJson() {
         "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's results, so "
         "a nonzero status marks a complete run"},
        {"type", "int8"},
-       {"levels", {"pending", "ok", "failed"}}});
+       {"levels", RunStatusLevels()}});
   runs.push_back(
       {{"path", archive::kRunMessage},
        {"units", "1"},
@@ -212,6 +213,16 @@ Json RunsJson() {
        {"type", "string" + std::to_string(kMessageLength)},
        {"levels", Json::array()}});
   return runs;
+}
+
+// The run-status levels with their codes, from RunStatus's names table (engine/sweep/runner.h):
+// the codes the Python readers compare /runs/status with.
+Json RunStatusJson() {
+  Json levels = Json::array();
+  for (const auto& entry : EnumNames<RunStatus>::kTable) {
+    levels.push_back({{"name", entry.name}, {"code", static_cast<int>(entry.value)}});
+  }
+  return levels;
 }
 
 // Every parameter a design can sweep: design/<name> when swept (float64; a boolean 0/1, a choice the
@@ -271,6 +282,7 @@ Json Manifest(const Aircraft& aircraft) {
            "column whose levels begin 'level 1', 'overall_rating' for the one named 'level'."},
           {"storage", {{"time_series", storage.time_series}, {"output_dt_s", storage.output_dt_s}}},
           {"runs", RunsJson()},
+          {"run_status", RunStatusJson()},
           {"design", DesignJson()},
           {"analyses", analyses}};
 }

@@ -1000,6 +1000,13 @@ PYBIND11_MODULE(_gesweep, m) {
   m.doc() = "The native part of the gesweep module (docs/python.md); use `import gesweep`.";
   m.attr("__version__") = GESWEEP_VERSION;
   m.attr("git_commit") = GESWEEP_GIT_COMMIT;
+  // The run-status codes by name, from RunStatus's names table (the manifest's `run_status`), for
+  // the archive reader's comparisons with /runs/status (gesweep/_archive.py).
+  py::dict run_status;
+  for (const auto& entry : EnumNames<RunStatus>::kTable) {
+    run_status[py::str(std::string(entry.name))] = static_cast<int>(entry.value);
+  }
+  m.attr("_run_status") = run_status;
 
   // A ValueError, and a TypeError too: an argument of the wrong type is an InputError as well, and
   // code that catches the TypeError Python itself would raise keeps working (docs/python.md).

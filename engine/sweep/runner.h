@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/enum_names.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep {
@@ -28,6 +29,25 @@ enum class RunStatus : std::int8_t {
   kOk = 1,
   kFailed = 2,  ///< a numerical failure or an exception; the message says why
 };
+/// The status names, in code order: the levels of /runs/status and the manifest's `run_status`
+/// (the one place the Python readers take the codes from).
+GESWEEP_ENUM_NAMES(RunStatus, {kPending, "pending"}, {kOk, "ok"}, {kFailed, "failed"});
+static_assert(
+    [] {
+      std::int8_t code = 0;
+      for (const auto& entry : EnumNames<RunStatus>::kTable) {
+        if (static_cast<std::int8_t>(entry.value) != code++) return false;
+      }
+      return true;
+    }(),
+    "RunStatus's names are in code order: level i of /runs/status is code i");
+
+/// The names of RunStatus in code order (level i is code i): the `levels` of /runs/status.
+inline std::vector<std::string> RunStatusLevels() {
+  std::vector<std::string> levels;
+  for (const auto& entry : EnumNames<RunStatus>::kTable) levels.emplace_back(entry.name);
+  return levels;
+}
 
 /// One stored chunk of a batch, filtered by the worker that computed it (opaque to the runner: the
 /// sink's Encode makes them, its Write stores them).

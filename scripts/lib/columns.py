@@ -190,6 +190,15 @@ def runs_paths():
     return tuple(entry["path"] for entry in manifest()["runs"])
 
 
+def status_code(name):
+    """The /runs/status code of the run status `name` ("pending", "ok", "failed"): the manifest's
+    `run_status`, which the engine writes from RunStatus's names table (engine/sweep/runner.h)."""
+    for entry in manifest()["run_status"]:
+        if entry["name"] == name:
+            return entry["code"]
+    raise UnknownColumn(f"{where()}: no run status '{name}'")
+
+
 def ratings():
     """Every analysis with rated columns, as (analysis entry, overall column or None, [part columns]),
     in manifest order. A part's name is that of its column without the suffix "_level"."""

@@ -20,7 +20,7 @@ if _LIB not in sys.path:
 import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from `gesweep columns --json`)
 import report_labels  # noqa: E402  (the one labeller of parameter values)
 
-STATUS_PENDING, STATUS_OK, STATUS_FAILED = 0, 1, 2
+STATUS_PENDING, STATUS_OK, STATUS_FAILED = (columns.status_code(name) for name in ("pending", "ok", "failed"))
 # The /analysis products the report reads (schemas/archive.md, "/analysis").
 BOUNDARY, BOUNDARY_CURVE = "analysis/boundary", "analysis/boundary_curve"
 SENSITIVITY, DISPERSION = "analysis/sensitivity", "analysis/dispersion"

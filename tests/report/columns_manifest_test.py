@@ -163,6 +163,23 @@ class ColumnsManifest(unittest.TestCase):
                     self.assertEqual(text(d.attrs.get("levels", [])), design[path]["levels"], path)
         self.assertEqual(seen, set(analyses), "the test studies run every analysis of the manifest")
 
+    def test_run_status_levels_are_the_archives(self):
+        # The manifest's run_status (name, code) against what a real archive stores: /runs/status's
+        # levels name code i at position i, and the root counters the writer keeps (runs_ok,
+        # runs_failed, runs_pending) count the statuses with those codes.
+        levels = self.manifest["run_status"]
+        self.assertEqual(sorted(e["name"] for e in levels), ["failed", "ok", "pending"])
+        code = {e["name"]: e["code"] for e in levels}
+        for archive in self.archives:
+            with h5py.File(archive, "r") as f:
+                stored = text(f["runs/status"].attrs["levels"])
+                self.assertEqual({name: stored.index(name) for name in stored}, code, archive)
+                status = f["runs/status"][...]
+                for name in ("ok", "failed", "pending"):
+                    self.assertEqual(int((status == code[name]).sum()), int(f.attrs["runs_" + name]),
+                                     f"{archive}: runs_{name}")
+                self.assertGreater(int((status == code["ok"]).sum()), 0, archive)
+
     def test_roles_follow_the_rule(self):
         # A rating is an int8 column whose levels begin "level 1"; the one named "level" is overall.
         for analysis in self.manifest["analyses"]:

@@ -18,7 +18,13 @@ from xarray.core import indexing
 
 import h5py
 
-_OK = 1  # runs/status: 0 pending, 1 ok, 2 failed
+
+
+def _status_code(name):
+    """The /runs/status code of the status `name` ("ok"), from the engine's RunStatus names table
+    (the manifest's `run_status`), never typed here."""
+    from ._gesweep import _run_status
+    return _run_status[name]
 
 
 class ArchiveNote(UserWarning):
@@ -235,7 +241,7 @@ def open_archive(path, product=None):
     variable named <name> ('/' as '_'; <analysis>_<name> where analyses share a name), every
     series/<analysis>/<name> too, over the time axis time_s; eigenvalues over `eigenvalue` (5). attrs
     of each: units, description, levels, path (its HDF5 path). Runs that are pending or failed are
-    NaN; `status` (0 pending, 1 ok, 2 failed) says which. ds.attrs: the archive's root attributes.
+    NaN; `status` (its `levels` attribute names the codes: pending, ok, failed) says which. ds.attrs: the archive's root attributes.
     Virtual archives of `gesweep merge` read their shards in place (keep them beside it).
 
     Before h5py reads anything, the archive is checked as every gesweep command checks it: a file
@@ -250,7 +256,7 @@ def open_archive(path, product=None):
     if product is not None:
         return _open_product(f, product)
     status = f["runs/status"][:]
-    ok = status == _OK
+    ok = status == _status_code("ok")
     mask = None if ok.all() else ok
     n = status.shape[0]
     design_attrs, parameters, design = _design(f)
