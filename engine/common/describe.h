@@ -36,11 +36,9 @@
 
 #include "engine/common/enum_names.h"
 #include "engine/common/errors.h"
+#include "engine/common/units.h"  // kRadiansPerDegree, the Scale of a key in degrees
 
 namespace gesweep {
-
-/// Struct value per degree of a key in degrees.
-inline constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 
 /// Where a setting can be given.
 enum class FieldScope : unsigned char {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <sstream>
 
 #include "engine/common/errors.h"
+#include "engine/common/units.h"
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
@@ -16,8 +16,6 @@
 namespace gesweep {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Extremes are monitored at this interval when no series is requested: fine enough to catch the peak of
 /// a 20 rad/s closed-loop short-period oscillation to a few per cent.
@@ -73,8 +71,8 @@ class LandingProblem {
         result_(result),
         store_series_(store_series),
         u0_(config.start_speed_mps),
-        gamma_r_rad_(-config.glide_slope_deg * kRadPerDeg),
-        gamma_rad_(config.glide_slope_deg * kRadPerDeg),
+        gamma_r_rad_(-config.glide_slope_deg * kRadiansPerDegree),
+        gamma_rad_(config.glide_slope_deg * kRadiansPerDegree),
         path_start_m_(config.start_height_m - config.start_glide_path_offset_m),
         flare_height_m_(config.flare_height_m),
         flare_asymptote_m_(config.flare_asymptote_m),
@@ -82,9 +80,9 @@ class LandingProblem {
         tau_s_(FlareTimeConstant(config)),
         touchdown_height_m_(plant.aircraft().wheel_contact_height_m),
         stall_speed_mps_(plant.aircraft().stall_speed_mps),
-        divergence_rad_(config.divergence_pitch_deg * kRadPerDeg),
-        elevator_min_rad_(config.elevator_min_deg * kRadPerDeg),
-        elevator_max_rad_(config.elevator_max_deg * kRadPerDeg),
+        divergence_rad_(config.divergence_pitch_deg * kRadiansPerDegree),
+        elevator_min_rad_(config.elevator_min_deg * kRadiansPerDegree),
+        elevator_max_rad_(config.elevator_max_deg * kRadiansPerDegree),
         actuator_pole_(config.actuator_pole_per_s),
         compensator_pole_(config.compensator_pole_per_s),
         fixed_reference_(config.plant_height_reference == PlantHeightReference::kFixedHeight),
@@ -319,19 +317,19 @@ class LandingProblem {
 
   void Monitor(double t, const State& x, int segment) {
     result_.max_abs_elevator_deg =
-        std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
+        std::max(result_.max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegreesPerRadian);
     result_.max_abs_elevator_command_deg =
-        std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x, segment)) * kDegPerRad);
+        std::max(result_.max_abs_elevator_command_deg, std::abs(Command(t, x, segment)) * kDegreesPerRadian);
     result_.max_abs_pitch_rate_degps =
-        std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
+        std::max(result_.max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegreesPerRadian);
     const double speed = u0_ + x[kSimDu];
     result_.min_speed_mps = std::min(result_.min_speed_mps, speed);
     result_.max_speed_mps = std::max(result_.max_speed_mps, speed);
     if (phase_ == LandingPhase::kFlare) {
       result_.flare_max_abs_elevator_deg =
-          std::max(result_.flare_max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegPerRad);
+          std::max(result_.flare_max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegreesPerRadian);
       result_.flare_max_abs_pitch_rate_degps =
-          std::max(result_.flare_max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegPerRad);
+          std::max(result_.flare_max_abs_pitch_rate_degps, std::abs(x[kSimQ]) * kDegreesPerRadian);
     }
   }
 
@@ -390,7 +388,7 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
   }
   LandingProblem<kAir> problem(plant, config, result.design, result, store_series, field, &field_segments);
   typename LandingProblem<kAir>::State x0{};
-  x0[kSimTheta] = config.start_pitch_deg * kRadPerDeg;
+  x0[kSimTheta] = config.start_pitch_deg * kRadiansPerDegree;
   x0[kSimH] = config.start_height_m;
   if constexpr (kAir) {
     // At airspeed start_speed_mps in the mean wind (docs/model.md §9).
@@ -448,7 +446,7 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
         result.outcome = LandingOutcome::kLanded;
         result.message = "touchdown" + at + " in the " + std::string(ToString(problem.phase())) + " phase";
         result.touchdown_time_s = run.end_time_s;
-        const double gamma_rad = config.glide_slope_deg * kRadPerDeg;
+        const double gamma_rad = config.glide_slope_deg * kRadiansPerDegree;
         if constexpr (kAir) {
           // The glide path meets H = 0 at x_g = (H0 − d0)/γ; the ground position is a state.
           result.touchdown_distance_past_transmitter_m =
@@ -462,7 +460,7 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
           result.touchdown_airspeed_mps = config.start_speed_mps + xf[kSimDu];
         }
         result.touchdown_sink_rate_mps = problem.SinkRate(xf);
-        result.touchdown_pitch_deg = xf[kSimTheta] * kDegPerRad;
+        result.touchdown_pitch_deg = xf[kSimTheta] * kDegreesPerRadian;
         result.touchdown_speed_mps = config.start_speed_mps + xf[kSimDu];
       } else if (run.stopping_event == kStallEvent) {
         result.outcome = LandingOutcome::kStall;
@@ -478,7 +476,6 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
 }  // namespace
 
 std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config) {
-  constexpr double kDegPerRad = 180.0 / std::numbers::pi;
   static constexpr LandingSeriesColumn kColumns[] = {
       {"time_s", [](const LandingSample& s) { return s.time_s; }},
       {"height_m", [](const LandingSample& s) { return s.height_m; }},
@@ -486,11 +483,12 @@ std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& confi
       {"tracking_error_m", [](const LandingSample& s) { return s.tracking_error_m; }},
       {"speed_mps", [](const LandingSample& s) { return s.speed_mps; }},
       {"delta_w_mps", [](const LandingSample& s) { return s.delta_w_mps; }},
-      {"pitch_rate_degps", [](const LandingSample& s) { return s.pitch_rate_radps * kDegPerRad; }},
-      {"pitch_deg", [](const LandingSample& s) { return s.pitch_rad * kDegPerRad; }},
+      {"pitch_rate_degps", [](const LandingSample& s) { return s.pitch_rate_radps * kDegreesPerRadian; }},
+      {"pitch_deg", [](const LandingSample& s) { return s.pitch_rad * kDegreesPerRadian; }},
       {"sink_rate_mps", [](const LandingSample& s) { return s.sink_rate_mps; }},
-      {"elevator_deg", [](const LandingSample& s) { return s.elevator_rad * kDegPerRad; }},
-      {"elevator_command_deg", [](const LandingSample& s) { return s.elevator_command_rad * kDegPerRad; }},
+      {"elevator_deg", [](const LandingSample& s) { return s.elevator_rad * kDegreesPerRadian; }},
+      {"elevator_command_deg",
+       [](const LandingSample& s) { return s.elevator_command_rad * kDegreesPerRadian; }},
       {"compensator_m_s", [](const LandingSample& s) { return s.compensator; }},
       {"error_integral_m_s", [](const LandingSample& s) { return s.error_integral; }},
       // The air motion the airplane met (docs/model.md §9).

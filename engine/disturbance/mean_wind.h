@@ -3,10 +3,10 @@
 /// (docs/model.md §9). Lengths in metres at the interface; only ratios of lengths enter the profile.
 
 #include "engine/common/enum_names.h"
+#include "engine/common/units.h"
 
 namespace gesweep {
 
-inline constexpr double kMetresPerFoot = 0.3048;  ///< international foot
 /// Height at which the mean wind W20 is given: 20 ft.
 inline constexpr double kWindReferenceHeight_m = 20.0 * kMetresPerFoot;
 /// Roughness length z0 of the profile for Category C (terminal flight phases): 0.15 ft.
