@@ -446,6 +446,493 @@ void FinalizeMpi() {
   std::exit(code);
 }
 
+namespace {
+
+// Stage 1: every rank must have built the same plan (a study file that differs between nodes would
+// otherwise mix two studies in one archive).
+bool RanksBuiltTheSamePlan(const SweepPlan& plan) {
+  const std::vector<std::int64_t> mine = PlanSignature(plan);
+  std::vector<std::int64_t> lowest(mine.size()), highest(mine.size());
+  const int n = static_cast<int>(mine.size());
+  CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD),
+           "MPI_Allreduce");
+  CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD),
+           "MPI_Allreduce");
+  return lowest == highest;
+}
+
+// Stage 2, rank 0: the output is a file this run may write, and no node shards of a run on another
+// number of nodes lie beside it (with kForce they are removed). Throws InputError (or RequestError).
+void CheckOutputForNodes(const MpiRunOptions& options, int nodes) {
+  const std::string out = options.output.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(options.output, ec)) {
+    throw InputError("command line", "output", out,
+                     "is a directory; expected an archive file name such as out.h5");
+  }
+  if (options.mode == ArchiveOpenMode::kCreate && std::filesystem::exists(options.output, ec)) {
+    throw RequestError("command line", "output", out, "already exists", "resume_or_force");
+  }
+  // Node shards of another node count: they cannot be resumed by this layout.
+  std::filesystem::path directory = options.output.parent_path();
+  if (directory.empty()) directory = ".";
+  std::filesystem::path stem = options.output.filename();
+  if (stem.extension() == ".h5") stem.replace_extension();
+  const std::regex pattern(std::regex_replace(stem.string(), std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
+                           R"(\.node\d+-of-(\d+)\.h5)");
+  if (!std::filesystem::is_directory(directory, ec)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
+    std::smatch match;
+    const std::string name = entry.path().filename().string();
+    if (!std::regex_match(name, match, pattern) || std::stoi(match[1].str()) == nodes) continue;
+    if (options.mode == ArchiveOpenMode::kForce) {
+      std::filesystem::remove(entry.path(), ec);
+    } else {
+      const bool resuming = options.mode == ArchiveOpenMode::kResume;
+      throw RequestError(
+          "command line", "output", out,
+          "has node shards of a run on " + match[1].str() + " nodes (" + entry.path().string() +
+              "), this run has " + std::to_string(nodes) +
+              (resuming ? "; resume with as many nodes (GESWEEP_RANKS_PER_NODE or the same allocation)" : ""),
+          resuming ? "" : "force_or_resume_nodes");
+    }
+  }
+}
+
+// A writer's shard of its node's batches: the ordinary ArchiveWriter (crash safety, --resume).
+struct NodeShard {
+  std::unique_ptr<SweepPlan> plan;  // the study restricted to the node's batches
+  std::unique_ptr<ArchiveWriter> writer;
+  ArchiveOpenReport opened;
+  std::vector<std::int64_t> pending;  // the node's batches still to run, as indices of the whole plan
+};
+
+// Stage 2, writers: opens the node's shard into `shard` (filled as far as it got when it throws).
+void OpenNodeShard(const SweepPlan& plan, const MpiRunOptions& options, const Topology& t,
+                   const BatchRange& range, int threads, NodeShard& shard) {
+  shard.plan = std::make_unique<SweepPlan>(LoadStudy(plan.study().path), plan.shard());
+  if (shard.plan->chunk_runs() != plan.chunk_runs() || shard.plan->block_count() != plan.block_count()) {
+    throw InputError(plan.study().path, "", "", "the study file changed while the MPI job started");
+  }
+  shard.plan->RestrictToBatches(range.first, range.count);
+  RunProvenance provenance{options.command_line + " (" + std::to_string(t.ranks) + " MPI ranks)",
+                           threads * t.ranks, t.node, t.nodes, t.ranks};
+  shard.writer = ArchiveWriter::Open(NodeArchivePath(options.output, t.node, t.nodes), *shard.plan,
+                                     provenance, options.mode, &shard.opened);
+  if (shard.plan->chunk_runs() != plan.chunk_runs()) {
+    throw InputError("command line", "output", NodeArchivePath(options.output, t.node, t.nodes).string(),
+                     "cannot resume: it has batches of " + std::to_string(shard.plan->chunk_runs()) +
+                         " runs, this run " + std::to_string(plan.chunk_runs()));
+  }
+  shard.writer->set_block_row_offset(range.first * plan.chunk_runs());
+  for (const std::int64_t local : shard.opened.pending_blocks) shard.pending.push_back(range.first + local);
+}
+
+// Stage 3: rank 0 learns every node's pending batches (returned by node; empty on the other ranks),
+// every rank the runs complete at the start (`all_complete`).
+std::vector<std::deque<std::int64_t>> GatherPendingBatches(const std::vector<std::int64_t>& pending_mine,
+                                                           std::int64_t complete_runs, const Topology& t,
+                                                           std::int64_t& all_complete) {
+  const int mine = static_cast<int>(pending_mine.size());
+  std::vector<int> counts(static_cast<std::size_t>(t.ranks)), offsets(static_cast<std::size_t>(t.ranks));
+  CheckMpi(MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  int total = 0;
+  for (int r = 0; r < t.ranks; ++r) {
+    offsets[static_cast<std::size_t>(r)] = total;
+    total += counts[static_cast<std::size_t>(r)];
+  }
+  std::vector<std::int64_t> all(static_cast<std::size_t>(std::max(total, 1)));
+  CheckMpi(MPI_Gatherv(pending_mine.data(), mine, MPI_INT64_T, all.data(), counts.data(), offsets.data(),
+                       MPI_INT64_T, 0, MPI_COMM_WORLD),
+           "MPI_Gatherv");
+  all_complete = 0;
+  CheckMpi(MPI_Allreduce(&complete_runs, &all_complete, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD),
+           "MPI_Allreduce");
+  std::vector<std::deque<std::int64_t>> pending(static_cast<std::size_t>(t.nodes));
+  if (t.rank == 0) {
+    for (int r = 0; r < t.ranks; ++r) {
+      const auto from = all.begin() + offsets[static_cast<std::size_t>(r)];
+      auto& node_pending = pending[static_cast<std::size_t>(t.node_of[static_cast<std::size_t>(r)])];
+      node_pending.insert(node_pending.end(), from, from + counts[static_cast<std::size_t>(r)]);
+    }
+  }
+  return pending;
+}
+
+// Stage 4: the one pipeline (RunSweep) on its own thread, fed and drained by this thread's MPI
+// traffic. Each turn of Run's loop: a fatal error stops the handing out of batches; this rank's
+// pipeline gets batches (rank 0 from the Dispatcher, the others by request); rank 0 serves the others'
+// requests and hears their errors; rows for other nodes go to their writers; a writer writes what it
+// receives. The loop ends when every rank has had its last grant and every writer has every row.
+class Exchange {
+ public:
+  Exchange(const SweepPlan& plan, const MpiRunOptions& options, const Topology& t,
+           const std::vector<BatchRange>& ranges, bool writes, ArchiveWriter* writer, std::int64_t target,
+           std::vector<std::deque<std::int64_t>> pending, SweepProgress& shown, MpiSweepReport& report)
+      : plan_(plan),
+        options_(options),
+        t_(t),
+        ranges_(ranges),
+        writes_(writes),
+        writer_(writer),
+        target_(target),
+        shown_(shown),
+        report_(report),
+        dispatcher_(std::move(pending), t.ranks),
+        sink_(plan, ranges, t.node, writes ? writer : nullptr, &write_mutex_),
+        sent_to_(static_cast<std::size_t>(t.nodes), 0),
+        received_from_(static_cast<std::size_t>(t.ranks), 0),
+        expected_from_(static_cast<std::size_t>(t.ranks), -1),
+        done_of_(static_cast<std::size_t>(t.ranks), 0),
+        failed_of_(static_cast<std::size_t>(t.ranks), 0),
+        my_range_(ranges[static_cast<std::size_t>(t.node)]) {}
+
+  // Computes this rank's share with `threads` threads and serves the traffic until every rank is done.
+  void Run(int threads) {
+    RunnerOptions runner_options;
+    runner_options.threads = threads;
+    runner_options.cancel = options_.cancel;
+    start_ = std::chrono::steady_clock::now();
+    std::thread compute([&] {
+      try {
+        outcome_ = RunSweep(plan_, source_, sink_, runner_options, &computed_);
+      } catch (...) {
+        compute_error_ = std::current_exception();
+      }
+      compute_done_.store(true);
+    });
+    for (;;) {
+      if (compute_done_.load() && compute_error_ && fatal_.empty()) Fail(ErrorText(compute_error_));
+      ReportFatal();
+      if (t_.rank == 0 && Cancelled(options_) && !dispatcher_.stopped()) {
+        report_.cancelled = dispatcher_.remaining() > 0;
+        dispatcher_.Stop();
+      }
+      bool progressed = FeedPipeline();
+      progressed = ReceiveGrant() || progressed;
+      if (t_.rank == 0) progressed = ServeOtherRanks() || progressed;
+      progressed = SendRows() || progressed;
+      progressed = SendFinished() || progressed;
+      progressed = ReceiveRows() || progressed;
+      const bool rank0_done = t_.rank != 0 || ranks_ended_ == t_.ranks - 1;
+      if (compute_done_.load() && ended_ && finished_sent_ && WriterComplete() && rank0_done) break;
+      if (!progressed) std::this_thread::sleep_for(kIdlePoll);
+    }
+    compute.join();
+  }
+
+  // Keeps the first reason to stop of this rank (an I/O error of its writer, a bug).
+  void Fail(const std::string& why) {
+    if (fatal_.empty()) fatal_ = why;
+  }
+  const std::string& fatal() const { return fatal_; }
+  const SweepOutcome& outcome() const { return outcome_; }
+  std::int64_t runs_computed() const { return computed_.runs_done.load(); }
+  std::chrono::steady_clock::time_point start() const { return start_; }
+
+ private:
+  // A fatal error stops the handing out of batches everywhere (rank 0 hears of it).
+  void ReportFatal() {
+    if (fatal_.empty() || fatal_reported_) return;
+    fatal_reported_ = true;
+    if (t_.rank == 0) {
+      dispatcher_.Stop();
+    } else {
+      CheckMpi(
+          MPI_Send(fatal_.data(), static_cast<int>(fatal_.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD),
+          "MPI_Send error");
+    }
+  }
+
+  void CloseSource() {
+    if (!source_closed_) source_.Push(-1);
+    source_closed_ = true;
+  }
+
+  // Batches for this rank's pipeline: rank 0 grants its own, the others ask rank 0.
+  bool FeedPipeline() {
+    const std::int64_t outstanding = granted_ - sink_.delivered();
+    if (t_.rank == 0) {
+      if (ended_) return false;
+      bool progressed = false;
+      if (compute_done_.load()) {
+        ended_ = true;
+      } else if (outstanding < target_) {
+        const std::vector<std::int64_t> grant = dispatcher_.Grant(t_.node, target_ - outstanding);
+        for (const std::int64_t batch : grant) source_.Push(batch);
+        granted_ += static_cast<std::int64_t>(grant.size());
+        if (grant.empty()) ended_ = true;
+        progressed = !grant.empty() || ended_;
+      }
+      if (ended_) CloseSource();
+      return progressed;
+    }
+    if (ended_ || request_pending_ || !(outstanding < target_ || compute_done_.load())) return false;
+    const std::int64_t request[3] = {compute_done_.load() ? 0 : target_ - outstanding,
+                                     computed_.runs_done.load(), computed_.runs_failed.load()};
+    CheckMpi(MPI_Send(request, 3, MPI_INT64_T, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send request");
+    request_pending_ = true;
+    return true;
+  }
+
+  // Ranks > 0: rank 0's answer to the request; an empty grant is the last.
+  bool ReceiveGrant() {
+    if (!request_pending_) return false;
+    int ready = 0;
+    MPI_Status status;
+    CheckMpi(MPI_Iprobe(0, kTagGrant, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe grant");
+    if (!ready) return false;
+    int count = 0;
+    MPI_Get_count(&status, MPI_INT64_T, &count);
+    std::vector<std::int64_t> grant(static_cast<std::size_t>(count));
+    CheckMpi(MPI_Recv(grant.data(), count, MPI_INT64_T, 0, kTagGrant, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+             "MPI_Recv grant");
+    request_pending_ = false;
+    for (const std::int64_t batch : grant) source_.Push(batch);
+    granted_ += count;
+    if (count == 0) {
+      ended_ = true;
+      CloseSource();
+    }
+    return true;
+  }
+
+  // Rank 0: requests of the others (with their progress, summed into `shown`), and their errors.
+  bool ServeOtherRanks() {
+    bool progressed = false;
+    int ready = 0;
+    MPI_Status status;
+    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe request");
+    if (ready) {
+      std::int64_t request[3] = {0, 0, 0};
+      const int from = status.MPI_SOURCE;
+      CheckMpi(MPI_Recv(request, 3, MPI_INT64_T, from, kTagRequest, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+               "MPI_Recv request");
+      done_of_[static_cast<std::size_t>(from)] = request[1];
+      failed_of_[static_cast<std::size_t>(from)] = request[2];
+      const std::vector<std::int64_t> grant =
+          dispatcher_.Grant(t_.node_of[static_cast<std::size_t>(from)], request[0]);
+      CheckMpi(MPI_Send(grant.data(), static_cast<int>(grant.size()), MPI_INT64_T, from, kTagGrant,
+                        MPI_COMM_WORLD),
+               "MPI_Send grant");
+      if (grant.empty()) ++ranks_ended_;
+      progressed = true;
+    }
+    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagError, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe error");
+    if (ready) {
+      int length = 0;
+      MPI_Get_count(&status, MPI_CHAR, &length);
+      std::string text(static_cast<std::size_t>(length), '\0');
+      CheckMpi(MPI_Recv(text.data(), length, MPI_CHAR, status.MPI_SOURCE, kTagError, MPI_COMM_WORLD,
+                        MPI_STATUS_IGNORE),
+               "MPI_Recv error");
+      dispatcher_.Stop();
+      if (report_.error.empty()) report_.error = text;
+      progressed = true;
+    }
+    std::int64_t done = computed_.runs_done.load(), failed = computed_.runs_failed.load();
+    for (int r = 1; r < t_.ranks; ++r) {
+      done += done_of_[static_cast<std::size_t>(r)];
+      failed += failed_of_[static_cast<std::size_t>(r)];
+    }
+    shown_.runs_done.store(done);
+    shown_.runs_failed.store(failed);
+    return progressed;
+  }
+
+  // Filtered batches for other nodes' writers, sent without waiting; the sends that completed dropped.
+  bool SendRows() {
+    bool progressed = false;
+    std::unique_ptr<TransportSink::Outgoing> message;
+    while (sink_.TryTake(message)) {
+      const int to = t_.writer_rank[static_cast<std::size_t>(message->node)];
+      CheckMpi(MPI_Isend(message->bytes.data(), static_cast<int>(message->bytes.size()), MPI_BYTE, to,
+                         kTagResult, MPI_COMM_WORLD, &message->request),
+               "MPI_Isend result");
+      ++sent_to_[static_cast<std::size_t>(message->node)];
+      in_flight_.push_back(std::move(message));
+      progressed = true;
+    }
+    for (auto it = in_flight_.begin(); it != in_flight_.end();) {
+      int complete = 0;
+      CheckMpi(MPI_Test(&(*it)->request, &complete, MPI_STATUS_IGNORE), "MPI_Test");
+      if (complete) {
+        it = in_flight_.erase(it);
+        progressed = true;
+      } else {
+        ++it;
+      }
+    }
+    return progressed;
+  }
+
+  // Once this rank has computed and sent everything: each other writer learns how many batches to expect.
+  bool SendFinished() {
+    if (finished_sent_ || !compute_done_.load() || !ended_ || !sink_.outgoing_empty() ||
+        !in_flight_.empty()) {
+      return false;
+    }
+    for (int k = 0; k < t_.nodes; ++k) {
+      const int to = t_.writer_rank[static_cast<std::size_t>(k)];
+      if (ranges_[static_cast<std::size_t>(k)].count == 0 || to == t_.rank) continue;
+      CheckMpi(
+          MPI_Send(&sent_to_[static_cast<std::size_t>(k)], 1, MPI_INT64_T, to, kTagFinished, MPI_COMM_WORLD),
+          "MPI_Send finished");
+    }
+    finished_sent_ = true;
+    return true;
+  }
+
+  // The node's writer: batches from the other ranks, and how many each will send.
+  bool ReceiveRows() {
+    if (!writes_) return false;
+    bool progressed = false;
+    int ready = 0;
+    MPI_Status status;
+    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe result");
+    if (ready) {
+      int bytes = 0;
+      MPI_Get_count(&status, MPI_BYTE, &bytes);
+      buffer_.resize(static_cast<std::size_t>(bytes));
+      const int from = status.MPI_SOURCE;
+      CheckMpi(MPI_Recv(buffer_.data(), bytes, MPI_BYTE, from, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+               "MPI_Recv result");
+      ++received_from_[static_cast<std::size_t>(from)];
+      if (fatal_.empty()) {
+        try {
+          UnpackBlock(plan_, sink_.layout(), my_range_, buffer_, received_);
+          std::lock_guard<std::mutex> lock(write_mutex_);
+          writer_->Write(received_);
+        } catch (const std::exception& e) {
+          Fail(std::string("the writer of node ") + std::to_string(t_.node) + ": " + e.what());
+        }
+      }
+      progressed = true;
+    }
+    CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagFinished, MPI_COMM_WORLD, &ready, &status),
+             "MPI_Iprobe finished");
+    if (ready) {
+      std::int64_t count = 0;
+      CheckMpi(MPI_Recv(&count, 1, MPI_INT64_T, status.MPI_SOURCE, kTagFinished, MPI_COMM_WORLD,
+                        MPI_STATUS_IGNORE),
+               "MPI_Recv finished");
+      expected_from_[static_cast<std::size_t>(status.MPI_SOURCE)] = count;
+      progressed = true;
+    }
+    return progressed;
+  }
+
+  // A rank that writes no shard is complete; a writer once every other rank's batches have arrived.
+  bool WriterComplete() const {
+    if (!writes_) return true;
+    for (int r = 0; r < t_.ranks; ++r) {
+      if (r == t_.rank) continue;
+      const auto i = static_cast<std::size_t>(r);
+      if (expected_from_[i] < 0 || received_from_[i] != expected_from_[i]) return false;
+    }
+    return true;
+  }
+
+  const SweepPlan& plan_;
+  const MpiRunOptions& options_;
+  const Topology& t_;
+  const std::vector<BatchRange>& ranges_;
+  const bool writes_;
+  ArchiveWriter* writer_;
+  const std::int64_t target_;  // batches a rank holds: the pipeline's tokens + prefetch
+  SweepProgress& shown_;
+  MpiSweepReport& report_;
+  Dispatcher dispatcher_;
+  std::mutex write_mutex_;
+  QueueSource source_;
+  TransportSink sink_;
+  SweepProgress computed_;
+  std::atomic<bool> compute_done_{false};
+  std::exception_ptr compute_error_;
+  SweepOutcome outcome_;
+  std::chrono::steady_clock::time_point start_;
+
+  std::int64_t granted_ = 0;      // batches this rank was given
+  bool request_pending_ = false;  // a request to rank 0 awaits its grant (ranks > 0)
+  bool ended_ = false;            // this rank got its last (empty) grant
+  bool source_closed_ = false;    // -1 pushed to the pipeline
+  int ranks_ended_ = 0;           // rank 0: other ranks that got their last grant
+  std::vector<std::int64_t> sent_to_;
+  bool finished_sent_ = false;
+  std::vector<std::int64_t> received_from_;
+  std::vector<std::int64_t> expected_from_;
+  std::vector<std::int64_t> done_of_, failed_of_;
+  std::list<std::unique_ptr<TransportSink::Outgoing>> in_flight_;
+  std::vector<char> buffer_;
+  ResultBlock received_;
+  std::string fatal_;
+  bool fatal_reported_ = false;
+  const BatchRange my_range_;
+};
+
+// Stage 5: the node shards are closed; every rank learns the counts (ok, failed, pending, computed by
+// rank) and whether a rank was cancelled. Returns false, with report.error_code set, on an error.
+bool CloseNodeShards(std::unique_ptr<ArchiveWriter>& writer, bool writes, const Topology& t,
+                     Exchange& exchange, MpiSweepReport& report) {
+  std::int64_t counts_mine[3] = {0, 0, 0};
+  if (writes && exchange.fatal().empty()) {
+    try {
+      writer->Finish();
+      counts_mine[0] = writer->runs_ok();
+      counts_mine[1] = writer->runs_failed();
+      counts_mine[2] = writer->runs_pending();
+    } catch (const ArchiveError& e) {
+      exchange.Fail(std::string("the writer of node ") + std::to_string(t.node) + ": " + e.what());
+    }
+  }
+  writer.reset();
+  std::int64_t counts_all[3] = {0, 0, 0};
+  CheckMpi(MPI_Allreduce(counts_mine, counts_all, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+  report.runs_ok = counts_all[0];
+  report.runs_failed = counts_all[1];
+  report.runs_pending = counts_all[2];
+  std::int64_t computed_mine = report.runs_computed;
+  CheckMpi(MPI_Gather(&computed_mine, 1, MPI_INT64_T, report.runs_per_rank.data(), 1, MPI_INT64_T, 0,
+                      MPI_COMM_WORLD),
+           "MPI_Gather");
+  int cancelled = report.cancelled ? 1 : 0, any_cancelled = 0;
+  CheckMpi(MPI_Allreduce(&cancelled, &any_cancelled, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  report.cancelled = any_cancelled != 0 && report.runs_pending > 0;
+  const std::string rank0_error = report.error;  // an error another rank reported during the sweep
+  const std::string& fatal = exchange.fatal();
+  if ((report.error_code = AgreeOnError(fatal.empty() ? 0 : 1, fatal, t, &report.error)) != 0) {
+    if (report.error.empty()) report.error = rank0_error;
+    return false;
+  }
+  return true;
+}
+
+// Rank 0 maps the node shards into the output once no run is pending; every rank learns whether it did.
+void MergeNodeShards(const SweepPlan& plan, const MpiRunOptions& options, const Topology& t,
+                     std::chrono::steady_clock::time_point start, MpiSweepReport& report) {
+  int merged = 0;
+  int code = 0;
+  std::string error;
+  if (t.rank == 0 && report.runs_pending == 0) {
+    try {
+      std::vector<std::filesystem::path> shards(report.node_archives.begin(), report.node_archives.end());
+      MergeScope scope{plan.first_run(), plan.run_count(), plan.shard().index, plan.shard().count};
+      report.merge =
+          MergeArchives(shards, options.output, /*force=*/true,
+                        options.command_line + " (merge of the node shards)", options.merge, scope);
+      merged = 1;
+    } catch (...) {
+      code = ErrorOfThisRank(options, error);
+    }
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  CheckMpi(MPI_Bcast(&merged, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  report.merged = merged != 0;
+  report.error_code = AgreeOnError(code, error, t, &report.error);
+}
+
+}  // namespace
+
 MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, SweepProgress* progress,
                            const MpiStartCallback& on_started) {
   EnsureMpi();
@@ -461,24 +948,12 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
   const std::int64_t target =
       2 * threads + prefetch;  // batches a rank holds: the pipeline's tokens + prefetch
 
-  // 1. Every rank must have built the same plan (a study file that differs between nodes would
-  //    otherwise mix two studies in one archive).
-  {
-    const std::vector<std::int64_t> mine = PlanSignature(plan);
-    std::vector<std::int64_t> lowest(mine.size()), highest(mine.size());
-    const int n = static_cast<int>(mine.size());
-    CheckMpi(MPI_Allreduce(mine.data(), lowest.data(), n, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD),
-             "MPI_Allreduce");
-    CheckMpi(MPI_Allreduce(mine.data(), highest.data(), n, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD),
-             "MPI_Allreduce");
-    if (lowest != highest) {
-      report.error_code = 2;
-      report.error =
-          "the " + std::to_string(t.ranks) +
-          " MPI ranks did not build the same sweep (study fingerprint, design, shard or batch size "
-          "differ): every node must see the same study and aircraft files";
-      return report;
-    }
+  if (!RanksBuiltTheSamePlan(plan)) {
+    report.error_code = 2;
+    report.error = "the " + std::to_string(t.ranks) +
+                   " MPI ranks did not build the same sweep (study fingerprint, design, shard or batch size "
+                   "differ): every node must see the same study and aircraft files";
+    return report;
   }
 
   // 2. The nodes' parts of the plan and their shard archives.
@@ -494,42 +969,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
   int code = 0;
   if (t.rank == 0) {
     try {
-      const std::string out = options.output.string();
-      std::error_code ec;
-      if (std::filesystem::is_directory(options.output, ec)) {
-        throw InputError("command line", "output", out,
-                         "is a directory; expected an archive file name such as out.h5");
-      }
-      if (options.mode == ArchiveOpenMode::kCreate && std::filesystem::exists(options.output, ec)) {
-        throw RequestError("command line", "output", out, "already exists", "resume_or_force");
-      }
-      // Node shards of another node count: they cannot be resumed by this layout.
-      std::filesystem::path directory = options.output.parent_path();
-      if (directory.empty()) directory = ".";
-      std::filesystem::path stem = options.output.filename();
-      if (stem.extension() == ".h5") stem.replace_extension();
-      const std::regex pattern(
-          std::regex_replace(stem.string(), std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") +
-          R"(\.node\d+-of-(\d+)\.h5)");
-      if (std::filesystem::is_directory(directory, ec)) {
-        for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
-          std::smatch match;
-          const std::string name = entry.path().filename().string();
-          if (!std::regex_match(name, match, pattern) || std::stoi(match[1].str()) == t.nodes) continue;
-          if (options.mode == ArchiveOpenMode::kForce) {
-            std::filesystem::remove(entry.path(), ec);
-          } else {
-            const bool resuming = options.mode == ArchiveOpenMode::kResume;
-            throw RequestError(
-                "command line", "output", out,
-                "has node shards of a run on " + match[1].str() + " nodes (" + entry.path().string() +
-                    "), this run has " + std::to_string(t.nodes) +
-                    (resuming ? "; resume with as many nodes (GESWEEP_RANKS_PER_NODE or the same allocation)"
-                              : ""),
-                resuming ? "" : "force_or_resume_nodes");
-          }
-        }
-      }
+      CheckOutputForNodes(options, t.nodes);
     } catch (const InputError& e) {
       code = 2;
       error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
@@ -537,354 +977,35 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
   }
   if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
 
-  // Writers open their node's shard (the ordinary ArchiveWriter: crash safety, --resume).
-  std::unique_ptr<SweepPlan> node_plan;
-  std::unique_ptr<ArchiveWriter> writer;
-  ArchiveOpenReport opened;
-  std::vector<std::int64_t> pending_mine;
+  NodeShard shard;
   if (writes) {
     try {
-      const BatchRange& range = ranges[static_cast<std::size_t>(t.node)];
-      node_plan = std::make_unique<SweepPlan>(LoadStudy(plan.study().path), plan.shard());
-      if (node_plan->chunk_runs() != plan.chunk_runs() || node_plan->block_count() != plan.block_count()) {
-        throw InputError(plan.study().path, "", "", "the study file changed while the MPI job started");
-      }
-      node_plan->RestrictToBatches(range.first, range.count);
-      RunProvenance provenance{options.command_line + " (" + std::to_string(t.ranks) + " MPI ranks)",
-                               threads * t.ranks, t.node, t.nodes, t.ranks};
-      writer = ArchiveWriter::Open(NodeArchivePath(options.output, t.node, t.nodes), *node_plan, provenance,
-                                   options.mode, &opened);
-      if (node_plan->chunk_runs() != plan.chunk_runs()) {
-        throw InputError("command line", "output", NodeArchivePath(options.output, t.node, t.nodes).string(),
-                         "cannot resume: it has batches of " + std::to_string(node_plan->chunk_runs()) +
-                             " runs, this run " + std::to_string(plan.chunk_runs()));
-      }
-      writer->set_block_row_offset(range.first * plan.chunk_runs());
-      for (const std::int64_t local : opened.pending_blocks) pending_mine.push_back(range.first + local);
+      OpenNodeShard(plan, options, t, ranges[static_cast<std::size_t>(t.node)], threads, shard);
     } catch (...) {
       code = ErrorOfThisRank(options, error);
     }
   }
   if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
 
-  // 3. Rank 0 learns every node's pending batches.
-  {
-    const int mine = static_cast<int>(pending_mine.size());
-    std::vector<int> counts(static_cast<std::size_t>(t.ranks)), offsets(static_cast<std::size_t>(t.ranks));
-    CheckMpi(MPI_Gather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
-    int total = 0;
-    for (int r = 0; r < t.ranks; ++r) {
-      offsets[static_cast<std::size_t>(r)] = total;
-      total += counts[static_cast<std::size_t>(r)];
-    }
-    std::vector<std::int64_t> all(static_cast<std::size_t>(std::max(total, 1)));
-    CheckMpi(MPI_Gatherv(pending_mine.data(), mine, MPI_INT64_T, all.data(), counts.data(), offsets.data(),
-                         MPI_INT64_T, 0, MPI_COMM_WORLD),
-             "MPI_Gatherv");
-    std::int64_t complete_runs = writes ? opened.runs_complete : 0, all_complete = 0;
-    CheckMpi(MPI_Allreduce(&complete_runs, &all_complete, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD),
-             "MPI_Allreduce");
-    report.runs_complete_at_start = all_complete;
-    report.runs_to_do = plan.run_count() - all_complete;
-    shown.runs_skipped.store(all_complete);
-    shown.runs_to_do.store(report.runs_to_do);
-    std::vector<std::deque<std::int64_t>> pending(static_cast<std::size_t>(t.nodes));
-    if (t.rank == 0) {
-      for (int r = 0; r < t.ranks; ++r) {
-        const auto from = all.begin() + offsets[static_cast<std::size_t>(r)];
-        auto& node_pending = pending[static_cast<std::size_t>(t.node_of[static_cast<std::size_t>(r)])];
-        node_pending.insert(node_pending.end(), from, from + counts[static_cast<std::size_t>(r)]);
-      }
-    }
-    report.runs_per_rank.assign(static_cast<std::size_t>(t.ranks), 0);
-    if (on_started) on_started(report);
-    // 4. Compute: the one pipeline (RunSweep), fed and drained by this thread's MPI traffic.
-    Dispatcher dispatcher(std::move(pending), t.ranks);
-    std::mutex write_mutex;
-    QueueSource source;
-    TransportSink sink(plan, ranges, t.node, writes ? writer.get() : nullptr, &write_mutex);
-    SweepProgress computed;
-    std::atomic<bool> compute_done{false};
-    std::exception_ptr compute_error;
-    SweepOutcome outcome;
-    RunnerOptions runner_options;
-    runner_options.threads = threads;
-    runner_options.cancel = options.cancel;
-    const auto start = std::chrono::steady_clock::now();
-    std::thread compute([&] {
-      try {
-        outcome = RunSweep(plan, source, sink, runner_options, &computed);
-      } catch (...) {
-        compute_error = std::current_exception();
-      }
-      compute_done.store(true);
-    });
+  std::int64_t all_complete = 0;
+  std::vector<std::deque<std::int64_t>> pending =
+      GatherPendingBatches(shard.pending, writes ? shard.opened.runs_complete : 0, t, all_complete);
+  report.runs_complete_at_start = all_complete;
+  report.runs_to_do = plan.run_count() - all_complete;
+  shown.runs_skipped.store(all_complete);
+  shown.runs_to_do.store(report.runs_to_do);
+  report.runs_per_rank.assign(static_cast<std::size_t>(t.ranks), 0);
+  if (on_started) on_started(report);
 
-    std::int64_t granted = 0;      // batches this rank was given
-    bool request_pending = false;  // a request to rank 0 awaits its grant (ranks > 0)
-    bool ended = false;            // this rank got its last (empty) grant
-    bool source_closed = false;    // -1 pushed to the pipeline
-    int ranks_ended = 0;           // rank 0: other ranks that got their last grant
-    std::vector<std::int64_t> sent_to(static_cast<std::size_t>(t.nodes), 0);
-    bool finished_sent = false;
-    std::vector<std::int64_t> received_from(static_cast<std::size_t>(t.ranks), 0);
-    std::vector<std::int64_t> expected_from(static_cast<std::size_t>(t.ranks), -1);
-    std::vector<std::int64_t> done_of(static_cast<std::size_t>(t.ranks), 0),
-        failed_of(static_cast<std::size_t>(t.ranks), 0);
-    std::list<std::unique_ptr<TransportSink::Outgoing>> in_flight;
-    std::vector<char> buffer;
-    ResultBlock received;
-    std::string fatal;  // this rank's reason to stop (an I/O error of its writer, a bug)
-    bool fatal_reported = false;
-    const BatchRange my_range = ranges[static_cast<std::size_t>(t.node)];
-    auto fail = [&](const std::string& why) {
-      if (fatal.empty()) fatal = why;
-    };
-    auto close_source = [&] {
-      if (!source_closed) source.Push(-1);
-      source_closed = true;
-    };
+  Exchange exchange(plan, options, t, ranges, writes, shard.writer.get(), target, std::move(pending), shown,
+                    report);
+  exchange.Run(threads);
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - exchange.start()).count();
+  if (exchange.outcome().cancelled && t.rank != 0) report.cancelled = true;
+  report.runs_computed = exchange.runs_computed();
 
-    for (;;) {
-      bool progressed = false;
-      if (compute_done.load() && compute_error && fatal.empty()) fail(ErrorText(compute_error));
-      // A fatal error stops the handing out of batches everywhere (rank 0 hears of it).
-      if (!fatal.empty() && !fatal_reported) {
-        fatal_reported = true;
-        if (t.rank == 0) {
-          dispatcher.Stop();
-        } else {
-          CheckMpi(
-              MPI_Send(fatal.data(), static_cast<int>(fatal.size()), MPI_CHAR, 0, kTagError, MPI_COMM_WORLD),
-              "MPI_Send error");
-        }
-      }
-      if (t.rank == 0 && Cancelled(options) && !dispatcher.stopped()) {
-        report.cancelled = dispatcher.remaining() > 0;
-        dispatcher.Stop();
-      }
-
-      // Batches for this rank's pipeline.
-      const std::int64_t outstanding = granted - sink.delivered();
-      if (t.rank == 0) {
-        if (!ended) {
-          if (compute_done.load()) {
-            ended = true;
-          } else if (outstanding < target) {
-            const std::vector<std::int64_t> grant = dispatcher.Grant(t.node, target - outstanding);
-            for (const std::int64_t batch : grant) source.Push(batch);
-            granted += static_cast<std::int64_t>(grant.size());
-            if (grant.empty()) ended = true;
-            progressed = !grant.empty() || ended;
-          }
-          if (ended) close_source();
-        }
-      } else if (!ended && !request_pending && (outstanding < target || compute_done.load())) {
-        const std::int64_t request[3] = {compute_done.load() ? 0 : target - outstanding,
-                                         computed.runs_done.load(), computed.runs_failed.load()};
-        CheckMpi(MPI_Send(request, 3, MPI_INT64_T, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send request");
-        request_pending = true;
-        progressed = true;
-      }
-      int ready = 0;
-      MPI_Status status;
-      if (request_pending) {
-        CheckMpi(MPI_Iprobe(0, kTagGrant, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe grant");
-        if (ready) {
-          int count = 0;
-          MPI_Get_count(&status, MPI_INT64_T, &count);
-          std::vector<std::int64_t> grant(static_cast<std::size_t>(count));
-          CheckMpi(
-              MPI_Recv(grant.data(), count, MPI_INT64_T, 0, kTagGrant, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-              "MPI_Recv grant");
-          request_pending = false;
-          for (const std::int64_t batch : grant) source.Push(batch);
-          granted += count;
-          if (count == 0) {
-            ended = true;
-            close_source();
-          }
-          progressed = true;
-        }
-      }
-
-      // Rank 0: requests of the others, and their errors.
-      if (t.rank == 0) {
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagRequest, MPI_COMM_WORLD, &ready, &status),
-                 "MPI_Iprobe request");
-        if (ready) {
-          std::int64_t request[3] = {0, 0, 0};
-          const int from = status.MPI_SOURCE;
-          CheckMpi(MPI_Recv(request, 3, MPI_INT64_T, from, kTagRequest, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-                   "MPI_Recv request");
-          done_of[static_cast<std::size_t>(from)] = request[1];
-          failed_of[static_cast<std::size_t>(from)] = request[2];
-          const std::vector<std::int64_t> grant =
-              dispatcher.Grant(t.node_of[static_cast<std::size_t>(from)], request[0]);
-          CheckMpi(MPI_Send(grant.data(), static_cast<int>(grant.size()), MPI_INT64_T, from, kTagGrant,
-                            MPI_COMM_WORLD),
-                   "MPI_Send grant");
-          if (grant.empty()) ++ranks_ended;
-          progressed = true;
-        }
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagError, MPI_COMM_WORLD, &ready, &status), "MPI_Iprobe error");
-        if (ready) {
-          int length = 0;
-          MPI_Get_count(&status, MPI_CHAR, &length);
-          std::string text(static_cast<std::size_t>(length), '\0');
-          CheckMpi(MPI_Recv(text.data(), length, MPI_CHAR, status.MPI_SOURCE, kTagError, MPI_COMM_WORLD,
-                            MPI_STATUS_IGNORE),
-                   "MPI_Recv error");
-          dispatcher.Stop();
-          if (report.error.empty()) report.error = text;
-          progressed = true;
-        }
-        std::int64_t done = computed.runs_done.load(), failed = computed.runs_failed.load();
-        for (int r = 1; r < t.ranks; ++r) {
-          done += done_of[static_cast<std::size_t>(r)];
-          failed += failed_of[static_cast<std::size_t>(r)];
-        }
-        shown.runs_done.store(done);
-        shown.runs_failed.store(failed);
-      }
-
-      // Filtered batches for other nodes' writers.
-      std::unique_ptr<TransportSink::Outgoing> message;
-      while (sink.TryTake(message)) {
-        const int to = t.writer_rank[static_cast<std::size_t>(message->node)];
-        CheckMpi(MPI_Isend(message->bytes.data(), static_cast<int>(message->bytes.size()), MPI_BYTE, to,
-                           kTagResult, MPI_COMM_WORLD, &message->request),
-                 "MPI_Isend result");
-        ++sent_to[static_cast<std::size_t>(message->node)];
-        in_flight.push_back(std::move(message));
-        progressed = true;
-      }
-      for (auto it = in_flight.begin(); it != in_flight.end();) {
-        int complete = 0;
-        CheckMpi(MPI_Test(&(*it)->request, &complete, MPI_STATUS_IGNORE), "MPI_Test");
-        if (complete) {
-          it = in_flight.erase(it);
-          progressed = true;
-        } else {
-          ++it;
-        }
-      }
-      if (!finished_sent && compute_done.load() && ended && sink.outgoing_empty() && in_flight.empty()) {
-        for (int k = 0; k < t.nodes; ++k) {
-          const int to = t.writer_rank[static_cast<std::size_t>(k)];
-          if (ranges[static_cast<std::size_t>(k)].count == 0 || to == t.rank) continue;
-          CheckMpi(MPI_Send(&sent_to[static_cast<std::size_t>(k)], 1, MPI_INT64_T, to, kTagFinished,
-                            MPI_COMM_WORLD),
-                   "MPI_Send finished");
-        }
-        finished_sent = true;
-        progressed = true;
-      }
-
-      // The node's writer: batches from the other ranks.
-      bool writer_complete = !writes;
-      if (writes) {
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &ready, &status),
-                 "MPI_Iprobe result");
-        if (ready) {
-          int bytes = 0;
-          MPI_Get_count(&status, MPI_BYTE, &bytes);
-          buffer.resize(static_cast<std::size_t>(bytes));
-          const int from = status.MPI_SOURCE;
-          CheckMpi(
-              MPI_Recv(buffer.data(), bytes, MPI_BYTE, from, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE),
-              "MPI_Recv result");
-          ++received_from[static_cast<std::size_t>(from)];
-          if (fatal.empty()) {
-            try {
-              UnpackBlock(plan, sink.layout(), my_range, buffer, received);
-              std::lock_guard<std::mutex> lock(write_mutex);
-              writer->Write(received);
-            } catch (const std::exception& e) {
-              fail(std::string("the writer of node ") + std::to_string(t.node) + ": " + e.what());
-            }
-          }
-          progressed = true;
-        }
-        CheckMpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagFinished, MPI_COMM_WORLD, &ready, &status),
-                 "MPI_Iprobe finished");
-        if (ready) {
-          std::int64_t count = 0;
-          CheckMpi(MPI_Recv(&count, 1, MPI_INT64_T, status.MPI_SOURCE, kTagFinished, MPI_COMM_WORLD,
-                            MPI_STATUS_IGNORE),
-                   "MPI_Recv finished");
-          expected_from[static_cast<std::size_t>(status.MPI_SOURCE)] = count;
-          progressed = true;
-        }
-        writer_complete = true;
-        for (int r = 0; r < t.ranks; ++r) {
-          if (r == t.rank) continue;
-          const auto i = static_cast<std::size_t>(r);
-          if (expected_from[i] < 0 || received_from[i] != expected_from[i]) writer_complete = false;
-        }
-      }
-
-      const bool rank0_done = t.rank != 0 || ranks_ended == t.ranks - 1;
-      if (compute_done.load() && ended && finished_sent && writer_complete && rank0_done) break;
-      if (!progressed) std::this_thread::sleep_for(kIdlePoll);
-    }
-    compute.join();
-    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (outcome.cancelled && t.rank != 0) report.cancelled = true;
-    report.runs_computed = computed.runs_done.load();
-
-    // 5. The node shards are closed; rank 0 learns the counts and merges.
-    std::int64_t counts_mine[3] = {0, 0, 0};
-    if (writes && fatal.empty()) {
-      try {
-        writer->Finish();
-        counts_mine[0] = writer->runs_ok();
-        counts_mine[1] = writer->runs_failed();
-        counts_mine[2] = writer->runs_pending();
-      } catch (const ArchiveError& e) {
-        fail(std::string("the writer of node ") + std::to_string(t.node) + ": " + e.what());
-      }
-    }
-    writer.reset();
-    std::int64_t counts_all[3] = {0, 0, 0};
-    CheckMpi(MPI_Allreduce(counts_mine, counts_all, 3, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD),
-             "MPI_Allreduce");
-    report.runs_ok = counts_all[0];
-    report.runs_failed = counts_all[1];
-    report.runs_pending = counts_all[2];
-    std::int64_t computed_mine = report.runs_computed;
-    CheckMpi(MPI_Gather(&computed_mine, 1, MPI_INT64_T, report.runs_per_rank.data(), 1, MPI_INT64_T, 0,
-                        MPI_COMM_WORLD),
-             "MPI_Gather");
-    int cancelled = report.cancelled ? 1 : 0, any_cancelled = 0;
-    CheckMpi(MPI_Allreduce(&cancelled, &any_cancelled, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
-    report.cancelled = any_cancelled != 0 && report.runs_pending > 0;
-    std::string rank0_error = report.error;  // an error another rank reported during the sweep
-    if ((report.error_code = AgreeOnError(fatal.empty() ? 0 : 1, fatal, t, &report.error)) != 0) {
-      if (report.error.empty()) report.error = rank0_error;
-      return report;
-    }
-
-    int merged = 0;
-    code = 0;
-    error.clear();
-    if (t.rank == 0 && report.runs_pending == 0) {
-      try {
-        std::vector<std::filesystem::path> shards(report.node_archives.begin(), report.node_archives.end());
-        MergeScope scope{plan.first_run(), plan.run_count(), plan.shard().index, plan.shard().count};
-        report.merge =
-            MergeArchives(shards, options.output, /*force=*/true,
-                          options.command_line + " (merge of the node shards)", options.merge, scope);
-        merged = 1;
-      } catch (...) {
-        code = ErrorOfThisRank(options, error);
-      }
-      report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-    CheckMpi(MPI_Bcast(&merged, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
-    report.merged = merged != 0;
-    report.error_code = AgreeOnError(code, error, t, &report.error);
-  }
+  if (!CloseNodeShards(shard.writer, writes, t, exchange, report)) return report;
+  MergeNodeShards(plan, options, t, exchange.start(), report);
   return report;
 }
 
