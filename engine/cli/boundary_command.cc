@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 
+#include "engine/analyses/records.h"
 #include "engine/archive/archive_error.h"
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/archive_reader.h"
@@ -18,6 +19,7 @@
 #include "engine/cli/described_flags.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/record_json.h"
 #include "engine/common/errors.h"
 #include "engine/estimators/boundary_curve.h"
 #include "engine/estimators/local_sensitivity.h"
@@ -58,23 +60,6 @@ BoundaryOptions SearchOptions(const BoundaryFlags& flags, const Aircraft& aircra
   return flags.search;
 }
 
-nlohmann::json CrossingJson(const BoundaryCrossing& c) {
-  nlohmann::json row = {{"height_m", JsonNumber(c.height_m)},
-                        {"height_over_span", JsonNumber(c.height_over_span)},
-                        {"kind", std::string(ToString(c.kind))},
-                        {"stable_below", c.stable_below},
-                        {"stable_above", c.stable_above}};
-  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
-    row["mode"] = c.mode;
-    row["eigenvalue"] = {JsonNumber(c.eigenvalue.real()), JsonNumber(c.eigenvalue.imag())};
-    row["eigenvalue_height_derivative_per_s_per_m"] = {JsonNumber(c.eigenvalue_height_derivative.real()),
-                                                       JsonNumber(c.eigenvalue_height_derivative.imag())};
-    row["mode_stable_above"] = c.mode_stable_above;
-    row["bracket_width_m"] = JsonNumber(c.bracket_width_m);
-  }
-  return row;
-}
-
 std::string CrossingText(const BoundaryCrossing& c) {
   std::string text = FormatNumber(c.height_m, 6);
   if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
@@ -91,35 +76,6 @@ std::string Scientific(double value, int digits = 4) {
   std::ostringstream out;
   out << std::scientific << std::setprecision(digits - 1) << value;
   return out.str();
-}
-
-/// The "sensitivities" fields of one boundary object (docs/sensitivity.md, "gesweep boundary").
-void AddSensitivitiesJson(const BoundarySensitivities& s, nlohmann::json& row) {
-  nlohmann::json list = nlohmann::json::array();
-  if (!s.valid) {
-    row["sensitivities"] = list;
-    row["sensitivities_reason"] = s.reason;
-    return;
-  }
-  for (const auto& p : RankByRelativeEffect(s)) {
-    list.push_back({{"parameter", p.parameter.Name()},
-                    {"value", JsonNumber(p.value)},
-                    {"value_unit", std::string(p.parameter.Unit())},
-                    {"dH_dp", JsonNumber(p.height_derivative)},
-                    {"dH_dp_unit", HeightDerivativeUnit(p.parameter)},
-                    {"dH_dp_implicit", JsonNumber(p.implicit_height_derivative)},
-                    {"p_dH_dp_m", JsonNumber(p.relative_height_derivative_m)},
-                    {"dsigma_dp_per_s", JsonNumber(p.margin_derivative)},
-                    {"method", p.method == DerivativeMethod::kExact ? "exact" : "central_difference"}});
-  }
-  nlohmann::json no_effect = nlohmann::json::array();
-  for (const auto& p : s.parameters) {
-    if (!p.enters_state_matrix) no_effect.push_back(p.parameter.Name());
-  }
-  row["sensitivities"] = list;
-  row["sensitivity_mode"] = s.mode;
-  row["dsigma_dH_per_s_per_m"] = JsonNumber(s.margin_height_derivative_per_s_per_m);
-  row["no_effect_parameters"] = no_effect;
 }
 
 /// The ranked table of one boundary's sensitivities.
@@ -193,7 +149,10 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
       row["grid_crossings"] = p.grid_crossings;
       row["heights"] = p.heights;
       if (!p.reason.empty()) row["reason"] = p.reason;
-      if (sensitivities[i]) AddSensitivitiesJson(*sensitivities[i], row);
+      if (sensitivities[i]) {
+        JsonRecordSink<nlohmann::json> sink{&row};
+        SensitivitiesRecord(*sensitivities[i], sink);
+      }
       points.push_back(row);
     }
     nlohmann::json out = boundary;
@@ -375,26 +334,6 @@ int RunArchiveBoundary(const BoundaryFlags& flags) {
   });
 }
 
-// One speed's boundary object of --format json; `others` are the crossings other than H*.
-nlohmann::json BoundaryJson(double speed, const BoundaryResult& result, double span,
-                            const std::vector<double>& others) {
-  nlohmann::json crossings = nlohmann::json::array();
-  for (const auto& crossing : result.crossings) crossings.push_back(CrossingJson(crossing));
-  nlohmann::json row = {
-      {"speed_mps", speed},
-      {"height_m", result.height_m ? nlohmann::json(*result.height_m) : nlohmann::json(nullptr)},
-      {"height_over_span",
-       result.height_m ? nlohmann::json(*result.height_m / span) : nlohmann::json(nullptr)},
-      {"other_crossings_m", others},
-      {"crossings", crossings},
-      {"method", std::string(ToString(result.method))},
-      {"certified", result.certified},
-      {"certificate", result.certificate},
-      {"scanned_range_m", {result.lower_height_m, result.upper_height_m}}};
-  if (!result.height_m) row["reason"] = result.reason;
-  return row;
-}
-
 // The speeds to print and, for a:b and a:b:n, the curve H*(u0) traced over them.
 struct SpeedPlan {
   std::vector<double> speeds;
@@ -478,9 +417,10 @@ int RunBoundary(const BoundaryFlags& flags) {
       }
     }
     if (flags.format == "json") {
-      nlohmann::json row = BoundaryJson(speed, result, span, others);
-      if (flags.sensitivities) AddSensitivitiesJson(sensitivities.back(), row);
-      boundaries.push_back(row);
+      const std::optional<BoundarySensitivities> asked =
+          flags.sensitivities ? std::optional(sensitivities.back()) : std::nullopt;
+      boundaries.push_back(
+          RecordJson<nlohmann::json>([&](auto& sink) { BoundaryRecord(speed, result, span, asked, sink); }));
     } else {
       const std::string h_text = result.height_m ? FormatNumber(*result.height_m, 7) : "none";
       const std::string ratio_text = result.height_m ? FormatNumber(*result.height_m / span, 5) : "none";

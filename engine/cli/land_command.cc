@@ -11,10 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "engine/analyses/records.h"
 #include "engine/cli/command.h"
 #include "engine/cli/described_flags.h"
 #include "engine/cli/described_output.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/record_json.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/control/landing_simulation.h"
@@ -96,47 +98,11 @@ LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model
   return config;
 }
 
-Json DesignJson(const LandingDesign& design) {
-  Json gain = Json::object();
-  for (int i = 0; i < kLandingStateCount; ++i)
-    gain[std::string(LandingStateNames()[i])] = JsonNumber(design.gain[i]);
-  Json eigenvalues = Json::array();
-  for (Eigen::Index i = 0; i < design.closed_loop_eigenvalues.size(); ++i) {
-    eigenvalues.push_back(
-        {design.closed_loop_eigenvalues(i).real(), design.closed_loop_eigenvalues(i).imag()});
-  }
-  return {{"status", std::string(ToString(design.status))}, {"message", design.message},
-          {"design_height_m", design.design_height_m},      {"design_speed_mps", design.design_speed_mps},
-          {"h_derivatives", design.design_h_derivatives},   {"gain", design.ok() ? gain : Json(nullptr)},
-          {"closed_loop_eigenvalues_per_s", eigenvalues}};
-}
-
 // The summary's fields (LandingResult::Describe) in their order, and the design.
 Json SummaryJson(const LandingResult& r) {
   Json summary = FieldsJson<LandingResult, Json>(r);
-  summary["design"] = DesignJson(r.design);
+  summary["design"] = RecordJson<Json>([&](auto& sink) { DesignRecord(r.design, sink); });
   return summary;
-}
-
-// The settings flown (LandingConfig::Describe, the automatic ones as used), the model, and the
-// names earlier versions wrote (rtol, atol, integrator, plant_reference_height_m) and σ_w in force.
-Json RunJson(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model) {
-  Json run = {{"aircraft", model.aircraft().name},
-              {"h_derivatives", model.options().h_derivatives},
-              {"cdh", std::string(ToString(model.options().cdh))},
-              {"interpolation", std::string(ToString(model.options().interpolation))}};
-  run.update(FieldsJson<LandingConfig, Json>(SettingsUsed(c, r)));
-  Json weights = Json::object();
-  for (int i = 0; i < kLandingStateCount; ++i) weights[std::string(LandingStateNames()[i])] = c.q_weights[i];
-  run["q_weights"] = weights;
-  run["turbulence_sigma_w_mps"] = EffectiveSigmaW(c.disturbance);
-  run["integrator"] = "dopri5";
-  run["rtol"] = c.relative_tolerance;
-  run["atol"] = c.absolute_tolerance;
-  if (c.plant_height_reference == PlantHeightReference::kFixedHeight) {
-    run["plant_reference_height_m"] = r.plant_fixed_reference_height_m;
-  }
-  return run;
 }
 
 int RunLand(const LandFlags& flags) {
@@ -167,7 +133,8 @@ int RunLand(const LandFlags& flags) {
       }
       series["phase"] = std::move(phase);
     }
-    std::cout << Json{{"run", RunJson(config, result, model)},
+    std::cout << Json{{"run",
+                       RecordJson<Json>([&](auto& sink) { LandingRunRecord(config, result, model, sink); })},
                       {"summary", SummaryJson(result)},
                       {"series", series}}
                      .dump(1)

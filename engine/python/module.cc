@@ -25,10 +25,12 @@
 #include <numbers>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "engine/analyses/records.h"
 #include "engine/archive/archive_error.h"
 #include "engine/archive/archive_reader.h"
 #include "engine/archive/archive_writer.h"
@@ -427,24 +429,67 @@ py::dict Modes(const PyAircraft& aircraft,
   return output.Arrays();
 }
 
-// ---------------------------------------------------------------- boundary
+// ---------------------------------------------------------------- records
 
-py::dict CrossingDict(const BoundaryCrossing& c) {
-  py::dict row;
-  row["height_m"] = c.height_m;
-  row["height_over_span"] = c.height_over_span;
-  row["kind"] = std::string(ToString(c.kind));
-  row["stable_below"] = c.stable_below;
-  row["stable_above"] = c.stable_above;
-  if (c.kind == CrossingKind::kHopf || c.kind == CrossingKind::kReal) {
-    row["mode"] = c.mode;
-    row["eigenvalue"] = c.eigenvalue;
-    row["eigenvalue_height_derivative_per_s_per_m"] = c.eigenvalue_height_derivative;
-    row["mode_stable_above"] = c.mode_stable_above;
-    row["bracket_width_m"] = c.bracket_width_m;
+/// The module's sink of the records of engine/analyses/records.h (and of VisitOutputs): a dict, NaN
+/// as nan, a missing part as None, a complex number as complex, a range as a tuple. The command
+/// line renders the same records as JSON (engine/cli/record_json.h).
+struct DictRecordSink {
+  py::dict* out;
+  template <class X>
+  void Plain(const std::string& key, const X& value) {
+    (*out)[py::str(key)] = value;
   }
-  return row;
+  void Number(const std::string& key, double value) { Plain(key, value); }
+  void Array(const std::string& key, const std::vector<double>& values,
+             const std::vector<std::string>& names) {
+    Plain(key, values);
+    Plain(key + "_names", names);
+  }
+  void Null(const std::string& key) { (*out)[py::str(key)] = py::none(); }
+  void Complex(const std::string& key, std::complex<double> z) { Plain(key, z); }
+  void Complexes(const std::string& key, const std::vector<std::complex<double>>& values) {
+    py::list list;
+    for (const auto z : values) list.append(z);
+    (*out)[py::str(key)] = list;
+  }
+  void Numbers(const std::string& key, std::span<const double> values) {
+    py::list list;
+    for (const double v : values) list.append(v);
+    (*out)[py::str(key)] = list;
+  }
+  void Texts(const std::string& key, const std::vector<std::string>& values) { Plain(key, values); }
+  void Range(const std::string& key, double low, double high) {
+    (*out)[py::str(key)] = py::make_tuple(low, high);
+  }
+  template <class Names, class Values>
+  void NamedNumbers(const std::string& key, const Names& names, const Values& values) {
+    py::dict object;
+    for (std::size_t i = 0; i < names.size(); ++i) object[py::str(std::string(names[i]))] = values[i];
+    (*out)[py::str(key)] = object;
+  }
+  template <class Fill>
+  void Records(const std::string& key, std::size_t count, const Fill& fill) {
+    py::list list;
+    for (std::size_t i = 0; i < count; ++i) {
+      py::dict record;
+      DictRecordSink sink{&record};
+      fill(i, sink);
+      list.append(record);
+    }
+    (*out)[py::str(key)] = list;
+  }
+};
+
+template <class Describe>
+py::dict RecordDict(const Describe& describe) {
+  py::dict out;
+  DictRecordSink sink{&out};
+  describe(sink);
+  return out;
 }
+
+// ---------------------------------------------------------------- boundary
 
 py::dict Boundary(const PyAircraft& aircraft, const py::object& speed_arg, const py::object& method_arg,
                   const py::object& sensitivities_arg, const py::kwargs& kwargs) {
@@ -468,53 +513,8 @@ py::dict Boundary(const PyAircraft& aircraft, const py::object& speed_arg, const
     result = FindBoundary(*model, speed_mps, options);
     if (sensitivities) s = ComputeBoundarySensitivities(*model, result);
   }
-  const double nan = std::nan("");
-  py::list crossings, others;
-  for (const auto& crossing : result.crossings) {
-    crossings.append(CrossingDict(crossing));
-    if (!result.height_m || std::abs(crossing.height_m - *result.height_m) > 1e-9)
-      others.append(crossing.height_m);
-  }
-  py::dict row;
-  row["speed_mps"] = speed_mps;
-  row["height_m"] = result.height_m ? *result.height_m : nan;
-  row["height_over_span"] = result.height_m ? *result.height_m / model->aircraft().wingspan_m : nan;
-  row["other_crossings_m"] = others;
-  row["crossings"] = crossings;
-  row["method"] = method;
-  row["certified"] = result.certified;
-  row["certificate"] = result.certificate;
-  row["scanned_range_m"] = py::make_tuple(result.lower_height_m, result.upper_height_m);
-  row["reason"] = result.reason;
-  if (s) {
-    py::list list;
-    if (s->valid) {
-      for (const auto& p : RankByRelativeEffect(*s)) {
-        py::dict entry;
-        entry["parameter"] = p.parameter.Name();
-        entry["value"] = p.value;
-        entry["value_unit"] = std::string(p.parameter.Unit());
-        entry["dH_dp"] = p.height_derivative;
-        entry["dH_dp_unit"] = HeightDerivativeUnit(p.parameter);
-        entry["dH_dp_implicit"] = p.implicit_height_derivative;
-        entry["p_dH_dp_m"] = p.relative_height_derivative_m;
-        entry["dsigma_dp_per_s"] = p.margin_derivative;
-        entry["method"] = p.method == DerivativeMethod::kExact ? "exact" : "central_difference";
-        list.append(entry);
-      }
-      py::list no_effect;
-      for (const auto& p : s->parameters) {
-        if (!p.enters_state_matrix) no_effect.append(p.parameter.Name());
-      }
-      row["sensitivity_mode"] = s->mode;
-      row["dsigma_dH_per_s_per_m"] = s->margin_height_derivative_per_s_per_m;
-      row["no_effect_parameters"] = no_effect;
-    } else {
-      row["sensitivities_reason"] = s->reason;
-    }
-    row["sensitivities"] = list;
-  }
-  return row;
+  return RecordDict(
+      [&](auto& sink) { BoundaryRecord(speed_mps, result, model->aircraft().wingspan_m, s, sink); });
 }
 
 // ---------------------------------------------------------------- described options and results
@@ -562,26 +562,10 @@ struct KwargsReader {
   }
 };
 
-/// A described result as a dict, each field under its key, numbers in the key's unit (as FieldsJson,
-/// with NaN where the JSON has null): VisitOutputs' sink. Array fields give a list and "<key>_names".
-struct DictSink {
-  py::dict* out;
-  template <class X>
-  void Plain(const std::string& key, const X& value) {
-    (*out)[py::str(key)] = value;
-  }
-  void Number(const std::string& key, double value) { Plain(key, value); }
-  void Array(const std::string& key, const std::vector<double>& values,
-             const std::vector<std::string>& names) {
-    Plain(key, values);
-    Plain(key + "_names", names);
-  }
-};
-
 template <class T>
 py::dict FieldsDict(const T& object) {
   py::dict out;
-  DictSink sink{&out};
+  DictRecordSink sink{&out};
   VisitOutputs(object, sink);
   return out;
 }
@@ -730,48 +714,6 @@ void TakeQWeights(py::dict& options, LandingConfig& config) {
         ToNumber(weights[static_cast<std::size_t>(i)], "q_weights." + std::string(LandingStateNames()[i]));
 }
 
-py::dict DesignDict(const LandingDesign& d) {
-  py::dict design;
-  design["status"] = std::string(ToString(d.status));
-  design["message"] = d.message;
-  design["design_height_m"] = d.design_height_m;
-  design["design_speed_mps"] = d.design_speed_mps;
-  design["h_derivatives"] = d.design_h_derivatives;
-  if (d.ok()) {
-    py::dict gain;
-    for (int i = 0; i < kLandingStateCount; ++i)
-      gain[py::str(std::string(LandingStateNames()[i]))] = d.gain[static_cast<std::size_t>(i)];
-    design["gain"] = gain;
-  } else {
-    design["gain"] = py::none();
-  }
-  py::list eigenvalues;
-  for (Eigen::Index i = 0; i < d.closed_loop_eigenvalues.size(); ++i)
-    eigenvalues.append(std::complex<double>(d.closed_loop_eigenvalues(i)));
-  design["closed_loop_eigenvalues_per_s"] = eigenvalues;
-  return design;
-}
-
-/// The settings flown, with the keys of `gesweep land --format json`'s run (land_command.cc, RunJson).
-py::dict LandingRunDict(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model) {
-  py::dict run = FieldsDict(SettingsUsed(c, r));
-  run["aircraft"] = model.aircraft().name;
-  run["h_derivatives"] = model.options().h_derivatives;
-  run["cdh"] = std::string(ToString(model.options().cdh));
-  run["interpolation"] = std::string(ToString(model.options().interpolation));
-  py::dict weights;
-  for (int i = 0; i < kLandingStateCount; ++i)
-    weights[py::str(std::string(LandingStateNames()[i]))] = c.q_weights[static_cast<std::size_t>(i)];
-  run["q_weights"] = weights;
-  run["turbulence_sigma_w_mps"] = EffectiveSigmaW(c.disturbance);
-  run["integrator"] = "dopri5";
-  run["rtol"] = c.relative_tolerance;
-  run["atol"] = c.absolute_tolerance;
-  if (c.plant_height_reference == PlantHeightReference::kFixedHeight)
-    run["plant_reference_height_m"] = r.plant_fixed_reference_height_m;
-  return run;
-}
-
 /// The series' columns of `gesweep land`'s CSV and JSON (LandingSeriesColumns), and phase.
 py::dict LandingSeriesDict(const LandingConfig& config, const std::vector<LandingSample>& samples) {
   const auto n = static_cast<py::ssize_t>(samples.size());
@@ -810,10 +752,11 @@ py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, c
   LandingResult r;
   RunInterruptible([&](const std::atomic<bool>* cancel) { r = SimulateLanding(*model, config, cancel); });
   py::dict summary = FieldsDict(r);
-  summary["design"] = DesignDict(r.design);
+  summary["design"] = RecordDict([&](auto& sink) { DesignRecord(r.design, sink); });
   py::object series = py::none();
   if (!summary_only) series = LandingSeriesDict(config, r.series);
-  return py::make_tuple(LandingRunDict(config, r, *model), summary, series);
+  return py::make_tuple(RecordDict([&](auto& sink) { LandingRunRecord(config, r, *model, sink); }), summary,
+                        series);
 }
 
 // ---------------------------------------------------------------- run

@@ -1,0 +1,76 @@
+"""The records the command prints as JSON and the module returns as dicts are one description
+(engine/analyses/records.h, issue 29): for each record, the command's JSON and the module's dict have
+the same keys, at every depth, and the same values, exactly. The renderings differ only where the two
+languages do: JSON's null is the module's nan (a number) or None (a missing part), a JSON pair
+[re, im] is a complex, and a JSON pair [low, high] of scanned_range_m is a tuple."""
+import math
+
+import pytest
+
+from conftest import ANCE, cli_json
+
+SPEED = 32.0208  # the paper's speed, m/s
+
+
+def as_json(value):
+    """A module value as the command's JSON would write it."""
+    if isinstance(value, dict):
+        return {key: as_json(v) for key, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [as_json(v) for v in value]
+    if isinstance(value, complex):
+        return [as_json(value.real), as_json(value.imag)]
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return value
+
+
+def assert_same_record(mine, theirs, path="record"):
+    """Key sets equal at every depth and values equal exactly (not close): the same engine, two
+    renderings. Says where the first difference is."""
+    if isinstance(theirs, dict):
+        assert isinstance(mine, dict), f"{path}: {mine!r} against an object"
+        assert set(mine) == set(theirs), (f"{path}: keys only in the module {sorted(set(mine) - set(theirs))}, "
+                                          f"only in the command {sorted(set(theirs) - set(mine))}")
+        for key in theirs:
+            assert_same_record(mine[key], theirs[key], f"{path}.{key}")
+    elif isinstance(theirs, list):
+        assert isinstance(mine, list) and len(mine) == len(theirs), f"{path}: {mine!r} against {theirs!r}"
+        for i, (a, b) in enumerate(zip(mine, theirs)):
+            assert_same_record(a, b, f"{path}[{i}]")
+    else:
+        assert type(mine) is type(theirs) or {type(mine), type(theirs)} <= {int, float}, \
+            f"{path}: {mine!r} ({type(mine).__name__}) against {theirs!r} ({type(theirs).__name__})"
+        assert mine == theirs, f"{path}: {mine!r} against {theirs!r}"
+
+
+@pytest.mark.parametrize("flags,kwargs", [
+    ((), {}),
+    (("--no-h-derivatives",), {"h_derivatives": False}),   # no boundary: the reason, no sensitivities
+    (("--method", "sampled"), {"method": "sampled"}),      # sign changes of sigma: crossings without a mode
+])
+def test_boundary_with_sensitivities_is_one_record(gesweep, ance, flags, kwargs):
+    theirs = cli_json("boundary", "--aircraft", ANCE, "--speed-mps", SPEED, "--sensitivities", *flags)
+    mine = gesweep.boundary(ance, SPEED, sensitivities=True, **kwargs)
+    assert_same_record(as_json(mine), theirs["boundaries"][0], "boundary")
+    assert isinstance(mine["scanned_range_m"], tuple)
+
+
+def test_boundary_without_sensitivities_is_one_record(gesweep, ance):
+    theirs = cli_json("boundary", "--aircraft", ANCE, "--speed-mps", 40.0)["boundaries"][0]
+    mine = gesweep.boundary(ance, 40.0)
+    assert "sensitivities" not in theirs
+    assert_same_record(as_json(mine), theirs, "boundary")
+
+
+@pytest.mark.parametrize("flags,kwargs", [
+    (("--glide-slope-deg", 3), {"glide_slope_deg": 3}),
+    (("--plant-height-reference", "fixed", "--rtol", 1e-4, "--seed", 7),
+     {"plant_height_reference": "fixed", "relative_tolerance": 1e-4, "seed": 7}),
+])
+def test_landing_design_and_run_are_one_record(gesweep, ance, flags, kwargs):
+    theirs = cli_json("land", "--aircraft", ANCE, "--summary-only", *flags)
+    mine = gesweep.land(ance, summary_only=True, **kwargs)
+    assert_same_record(as_json(mine.run), theirs["run"], "run")
+    assert_same_record(as_json(mine.summary["design"]), theirs["summary"]["design"], "design")
+    assert all(isinstance(z, complex) for z in mine.summary["design"]["closed_loop_eigenvalues_per_s"])
