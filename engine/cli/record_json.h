@@ -1,7 +1,7 @@
 #pragma once
 /// The command line's sink of the records of engine/analyses/records.h: a JSON object (nlohmann's
 /// json or ordered_json), NaN as null, a complex number as [re, im], a range as [low, high]. The
-/// Python module renders the same records as dicts (engine/python/module.cc, DictRecordSink).
+/// Python module renders the same records as dicts (engine/python/support.h, DictRecordSink).
 
 #include <complex>
 #include <cstddef>
