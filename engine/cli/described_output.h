@@ -10,30 +10,13 @@
 #include <vector>
 
 #include "engine/cli/json_util.h"
+#include "engine/cli/record_json.h"
 #include "engine/common/describe.h"
 #include "engine/common/described_values.h"
 
 namespace gesweep::cli {
 
 namespace describe_detail {
-
-// FieldsJson's sink of VisitOutputs.
-template <class Json>
-struct JsonSink {
-  Json* out;
-  template <class X>
-  void Plain(const std::string& key, const X& value) {
-    (*out)[key] = value;
-  }
-  void Number(const std::string& key, double value) { (*out)[key] = JsonNumber(value); }
-  void Array(const std::string& key, const std::vector<double>& values,
-             const std::vector<std::string>& names) {
-    Json list = Json::array();
-    for (double v : values) list.push_back(Json(JsonNumber(v)));
-    (*out)[key] = std::move(list);
-    (*out)[key + "_names"] = names;
-  }
-};
 
 struct CsvHeaderWriter {
   std::string out;
@@ -85,7 +68,7 @@ struct CsvRowWriter {
 template <class T, class Json = nlohmann::json>
 Json FieldsJson(const T& object) {
   Json out = Json::object();
-  describe_detail::JsonSink<Json> sink{&out};
+  JsonRecordSink<Json> sink{&out};  // engine/cli/record_json.h: VisitOutputs' sink too
   VisitOutputs(object, sink);
   return out;
 }
