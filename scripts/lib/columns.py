@@ -60,13 +60,17 @@ def launching_gesweep():
     return executable if os.path.basename(executable) == "gesweep" else None
 
 
+def gesweep_binary():
+    """The gesweep binary a script asks (the manifest, `gesweep check`): GESWEEP_BINARY, else the
+    gesweep that started this script, else build/gesweep of this repository."""
+    return os.environ.get(BINARY_ENV) or launching_gesweep() or DEFAULT_BINARY
+
+
 def manifest_source():
     """(kind, path) of where the manifest comes from: ("file", FILE) or ("binary", GESWEEP)."""
     if os.environ.get(MANIFEST_ENV):
         return "file", os.environ[MANIFEST_ENV]
-    if os.environ.get(BINARY_ENV):
-        return "binary", os.environ[BINARY_ENV]
-    return "binary", launching_gesweep() or DEFAULT_BINARY
+    return "binary", gesweep_binary()
 
 
 def read_manifest(gesweep):

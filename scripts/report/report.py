@@ -153,8 +153,12 @@ def status_section(archives):
     for archive in archives:
         ok, failed, pending = archive.counts()
         rows.append([os.path.basename(archive.path), archive.study_name, archive.run_count, ok, failed, pending,
-                     "yes (being written, or its writer died)" if archive.snapshot else "no"])
-    return table(["archive", "study", "runs", "ok", "failed", "pending", "snapshot"], rows, numeric={2, 3, 4, 5})
+                     "yes (being written, or its writer died)" if archive.snapshot else "no",
+                     "; ".join(archive.notes)])
+    # notes: what the engine's check could not check (gesweep check; an archive merged before shard
+    # identities, say), as every gesweep command prints it.
+    return table(["archive", "study", "runs", "ok", "failed", "pending", "snapshot", "notes"], rows,
+                 numeric={2, 3, 4, 5})
 
 
 def risk_status_section(risks):

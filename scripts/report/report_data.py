@@ -1,17 +1,21 @@
-"""Reading gesweep archives for the report (layout: schemas/archive.md, docs/report.md).
+"""Reading gesweep archives for the report (layout: schemas/archive.md, docs/report.md, "One reader").
 
-An archive is opened read-only; one that a sweep is writing (or whose writer was killed) is opened
+Every archive is first checked by the engine (`gesweep check --format json`: ArchiveReader::Open, or
+`gesweep risk`'s reader for a subset-simulation archive), the one validator; it says what the file is and
+whether it is a snapshot. It is then opened by the module that gesweep.open_archive opens archives with
+(engine/python/gesweep/_hdf5.py), read-only; a snapshot (a sweep is writing it, or its writer was killed)
 in SWMR-read mode, and only complete runs (status ok or failed) are used: a nonzero status is written
 after the run's values (docs/sweep.md, "Crash safety"), and statuses are read before values.
 """
 
+import importlib.util
 import json
 import math
 import os
+import subprocess
 import sys
 import tomllib
 
-import h5py
 import numpy as np
 
 _LIB = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lib")
@@ -19,6 +23,24 @@ if _LIB not in sys.path:
     sys.path.insert(0, _LIB)
 import columns  # noqa: E402  (scripts/lib/columns.py: archive paths from `gesweep columns --json`)
 import report_labels  # noqa: E402  (the one labeller of parameter values)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# The Python package's reader of archive files, loaded as a file: the report runs beside a gesweep
+# binary, not always beside a built module (the sanitized build has none), and the file imports
+# nothing of the module's native part.
+SHARED_READER = os.path.join(ROOT, "engine", "python", "gesweep", "_hdf5.py")
+
+
+def load_shared(path=SHARED_READER):
+    spec = importlib.util.spec_from_file_location("gesweep_hdf5", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+hdf5 = load_shared()
+# `gesweep check` runs in a few milliseconds per archive; a damaged one is given GESWEEP_ARCHIVE_CHECK_S.
+CHECK_TIMEOUT_S = 600
 
 STATUS_PENDING, STATUS_OK, STATUS_FAILED = (columns.status_code(name) for name in ("pending", "ok", "failed"))
 # The /analysis products the report reads (schemas/archive.md, "/analysis").
@@ -56,9 +78,6 @@ class Aircraft:
                       if name != "height_m" and isinstance(values, list) and len(values) == len(self.table_heights_m)}
 
 
-REQUIRED_ATTRIBUTES = ("run_count", "design_runs", "first_run", "chunk_runs")
-REQUIRED_DATASETS = columns.runs_paths()
-PER_RUN_GROUPS = columns.groups()
 RUN_STATUS = columns.runs_path("status")
 
 
@@ -67,39 +86,24 @@ def design_path(name):
     return f"{columns.DESIGN_GROUP}/{name}"
 
 
-def validate_layout(file, path):
-    """The checks of the engine's ArchiveReader::Open (engine/archive/archive_reader.cc), so that the
-    report refuses what `gesweep query` and `gesweep boundary` refuse, with the same one line: the
-    root attributes the readers use, runs/ and design/, and every per-run dataset (the series' time
-    axes excepted) with one row per run. Raises ValueError."""
-    for name in REQUIRED_ATTRIBUTES:
-        if name not in file.attrs:
-            raise ValueError(f"{path}: {name}: missing root attribute (a damaged archive, or one not written "
-                             f"by gesweep)")
-    runs = int(file.attrs["run_count"])
-    for group in (columns.RUNS_GROUP, columns.DESIGN_GROUP):
-        if not isinstance(file.get(group), h5py.Group):
-            raise ValueError(f"{path}: {group}: missing group /{group} (a damaged archive, or one not written "
-                             f"by gesweep)")
-    for name in REQUIRED_DATASETS:
-        if not isinstance(file.get(name), h5py.Dataset):
-            raise ValueError(f"{path}: {name}: missing dataset /{name} (a damaged archive, or one not written "
-                             f"by gesweep)")
-    problems = []
-
-    def visit(name, obj):
-        if not isinstance(obj, h5py.Dataset) or not name.startswith(PER_RUN_GROUPS):
-            return
-        if name.startswith(columns.SERIES_GROUP + "/") and "time_axis" not in obj.attrs:
-            return  # a shared time axis
-        if obj.ndim not in (1, 2) or obj.shape[0] != runs:
-            problems.append(f"{path}: {name} = {obj.shape[0] if obj.ndim else 0} rows: expected one row per run: "
-                            f"run_count = {runs} (runs/status has {runs}) (a damaged archive, or one not "
-                            f"written by gesweep)")
-
-    file.visititems(visit)
-    if problems:
-        raise ValueError(problems[0])
+def check(paths):
+    """What the engine's check says of each archive (`gesweep check --format json`: a list of {path,
+    kind, snapshot, virtual, notes}, in the order given), or ValueError with its one line (the first
+    archive it refuses)."""
+    gesweep = columns.gesweep_binary()
+    try:
+        out = subprocess.run([gesweep, "check", "--format", "json", "--", *paths], capture_output=True,
+                             text=True, timeout=CHECK_TIMEOUT_S)
+    except (OSError, subprocess.SubprocessError) as error:
+        raise ValueError(f"{gesweep}: cannot run `gesweep check` on the archives ({error}); build it "
+                         f"(cmake --build build) or set {columns.BINARY_ENV} to a gesweep binary") from None
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or [f"gesweep check failed (exit {out.returncode})"])[-1]
+        raise ValueError(last.removeprefix("gesweep: error: "))
+    checked = json.loads(out.stdout)
+    if [c["path"] for c in checked] != list(paths):
+        raise ValueError(f"{gesweep}: `gesweep check` answered for other archives than were asked")
+    return checked
 
 
 class Archive:
@@ -107,19 +111,12 @@ class Archive:
 
     is_risk = False
 
-    def __init__(self, path):
+    def __init__(self, path, checked):
         self.path = path
-        self.snapshot = False
-        try:
-            self.file = h5py.File(path, "r")
-        except OSError:
-            # Being written by a sweep, or left open by a writer that died.
-            self.file = h5py.File(path, "r", swmr=True)
-            self.snapshot = True
+        self.snapshot = bool(checked["snapshot"])  # being written by a sweep, or its writer died
+        self.notes = list(checked["notes"])
+        self.file = hdf5.open_checked(path, checked)
         self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
-        if self.attrs.get("format") != "gesweep-archive":
-            raise ValueError(f"{path}: not a gesweep archive")
-        validate_layout(self.file, path)
         self.run_count = int(self.attrs.get("run_count", 0))
         self.status = self.file[RUN_STATUS][...]  # before any value (snapshot safety)
         self.complete = self.status != STATUS_PENDING
@@ -241,9 +238,9 @@ class Archive:
         for path in self.analysis_groups(SENSITIVITY):
             group = self.file[path]
             products.append({"path": path, "attrs": {k: _text(v) for k, v in group.attrs.items()},
-                             "datasets": {n: d[...] for n, d in group.items() if isinstance(d, h5py.Dataset)},
+                             "datasets": {n: d[...] for n, d in group.items() if hdf5.is_dataset(d)},
                              "units": {n: _text(d.attrs.get("units", "")) for n, d in group.items()
-                                       if isinstance(d, h5py.Dataset)}})
+                                       if hdf5.is_dataset(d)}})
         return products
 
     def dispersion(self):
@@ -260,7 +257,7 @@ class Archive:
         limits = None
         if "limits" in product and "probability" in product["limits"]:
             limits = {name: (_text(d[...]) if d.dtype.kind in "OS" else d[...])
-                      for name, d in product["limits"].items() if isinstance(d, h5py.Dataset)}
+                      for name, d in product["limits"].items() if hdf5.is_dataset(d)}
 
         def members(index):
             if grouping is None:
@@ -279,7 +276,7 @@ class Archive:
             return found
 
         def visit(name, obj):
-            if isinstance(obj, h5py.Group) and "method" in obj.attrs and not name.split("/")[-1].startswith("."):
+            if hdf5.is_group(obj) and "method" in obj.attrs and not name.split("/")[-1].startswith("."):
                 found.append(prefix + "/" + name)
 
         self.file[prefix].visititems(visit)
@@ -301,37 +298,28 @@ class Archive:
         return out
 
 
-# Version 2 tags each landing with its repetition (a study's independent runs); 1 had none.
-RISK_KIND, RISK_VERSIONS = "subset_simulation", (1, 2)
-
-
 class RiskArchive:
     """A subset-simulation archive of `gesweep risk` (docs/dispersion.md, "Landing risk by subset
     simulation"; schemas/archive.md, "Subset-simulation archives"): its estimates (result_json), the
-    evaluations and the design points' series. Checked as read: the kind and version, equal lengths of
-    the evaluation columns, the value matrix's width, each estimate's cell and limit among the
-    evaluations' and its runs equal to the count of its rows."""
+    evaluations and the design points' series. The engine's check (its kind, version, equal lengths of
+    the evaluation columns, the value matrix's width, tags and statuses in range) has passed before it
+    is opened; what is checked here is the report's own reading: each estimate's runs equal to the
+    count of the rows it takes for the estimate's cell and limit."""
 
     is_risk = True
     snapshot = False
 
-    def __init__(self, path):
+    def __init__(self, path, checked):
         self.path = path
-        self.file = h5py.File(path, "r")
+        self.notes = list(checked["notes"])
+        self.file = hdf5.open_checked(path, checked)
         self.attrs = {k: _text(v) for k, v in self.file.attrs.items()}
-        if self.attrs.get("gesweep_archive_kind") != RISK_KIND or int(self.attrs.get("format_version", -1)) not in RISK_VERSIONS:
-            raise ValueError(f"{path}: not a subset-simulation archive of a version this report reads ({RISK_KIND} "
-                             f"{' or '.join(map(str, RISK_VERSIONS))})")
         self.result = json.loads(self.attrs["result_json"])
         e = self.file["subset/evaluations"]
         self.columns = [str(c) for c in _text(e.attrs["columns"])]
         self.evaluations = {k: e[k][...] for k in ("cell", "limit", "level", "chain", "step", "status", "g")}
         n = len(self.evaluations["g"])
-        if any(len(v) != n for v in self.evaluations.values()):
-            raise ValueError(f"{path}: evaluation columns of unequal lengths")
         self.values = e["values"][...]
-        if self.values.shape != (n, len(self.columns)) and n:
-            raise ValueError(f"{path}: a values matrix of {self.values.shape}, not ({n}, {len(self.columns)})")
         # A limit's index among its cell's limits: its order in result_json within the cell.
         self._index, seen = {}, {}
         for limit in self.result["limits"]:
@@ -370,24 +358,26 @@ class RiskArchive:
         if name not in self.file:
             return {}
         group = self.file[name]
-        return {k: {c: d[...] for c, d in group[k].items()} for k in group if isinstance(group[k], h5py.Group)}
+        return {k: {c: d[...] for c, d in group[k].items()} for k in group if hdf5.is_group(group[k])}
 
     def close(self):
         self.file.close()
 
 
 def open_archives(paths):
-    """Opens and validates every archive before anything is drawn; ValueError (one line) for a bad one."""
+    """Checks every archive (the engine's check, `check`) and opens them all before anything is drawn;
+    ValueError (one line) for a bad one."""
     archives = []
     try:
-        for path in paths:
-            with h5py.File(path, "r") as probe:
-                kind = _text(probe.attrs.get("gesweep_archive_kind", ""))
-            archives.append(RiskArchive(path) if kind == RISK_KIND else Archive(path))
-    except (KeyError, TypeError) as error:  # a layout h5py cannot read as the report expects
+        for checked in check(list(paths)):
+            kind = checked["kind"]
+            if kind not in (hdf5.KIND_RUNS, hdf5.KIND_SUBSET):
+                raise ValueError(f"{checked['path']}: an archive of a kind this report does not read ({kind})")
+            archives.append((RiskArchive if kind == hdf5.KIND_SUBSET else Archive)(checked["path"], checked))
+    except (KeyError, TypeError) as error:  # a layout the report cannot read as it expects
         for archive in archives:
             archive.close()
-        raise ValueError(f"{path}: cannot read it as a gesweep archive ({error})") from None
+        raise ValueError(f"{checked['path']}: cannot read it as a gesweep archive ({error})") from None
     except (OSError, ValueError):
         for archive in archives:
             archive.close()

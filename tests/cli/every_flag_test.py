@@ -32,6 +32,7 @@ ANCE = os.path.join(REPO, "studies", "aircraft", "ance.toml")
 # command checking them after parsing would still reach the flag's own check first.
 BASE = {
     "boundary": ["--aircraft", ANCE, "--speed-mps", "32"],
+    "check": ["{archive}"],
     "columns": [],
     "dispersion": ["{archive}"],
     "land": ["--aircraft", ANCE, "--summary-only"],
@@ -53,6 +54,7 @@ BASE_OF = {("boundary", "--speeds-mps"): ["--aircraft", ANCE]}
 NOT_NUMERIC = {
     ("boundary", "--aircraft"): "path", ("boundary", "--archive"): "path", ("boundary", "--by"): "column name",
     ("boundary", "--format"): "format name, checked by RequireFormat",
+    ("check", "archives"): "positional paths", ("check", "--format"): "format name",
     ("columns", "--aircraft"): "path",
     ("dispersion", "archive"): "positional path", ("dispersion", "--columns"): "column names",
     ("dispersion", "--limit"): "a column's bound 'name<value' (its number parsed and checked with it)",

@@ -76,6 +76,16 @@ def lookups(path):
     return out
 
 
+def imports_h5py(source):
+    """Whether Python `source` imports h5py (or a submodule of it)."""
+    for node in ast.walk(ast.parse(source)):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                 else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+        if any(n.split(".")[0] == "h5py" for n in names):
+            return True
+    return False
+
+
 class NoLiteralColumnPaths(unittest.TestCase):
     def test_scripts_spell_out_no_column_path(self):
         self.assertGreaterEqual(len(SCRIPTS), 5, SCRIPTS)
@@ -90,6 +100,20 @@ class NoLiteralColumnPaths(unittest.TestCase):
         # Prose is not a path: a docstring, and a path of an analysis the manifest does not have.
         self.assertEqual(literal_paths_in(ast.parse('"""Reads results/modes/stability_margin_per_s."""\n'
                                                     'x = "see results/other/thing"\n')), [])
+
+    def test_one_reader_of_archive_files(self):
+        # scripts/report opens archives only through the module gesweep.open_archive uses
+        # (engine/python/gesweep/_hdf5.py), after the engine's check: none of its files imports h5py.
+        report = [p for p in SCRIPTS if os.sep + "report" + os.sep in p]
+        self.assertGreaterEqual(len(report), 5, report)
+        importers = [os.path.relpath(p, ROOT) for p in report
+                     if imports_h5py(open(p, encoding="utf-8").read())]
+        self.assertEqual(importers, [], "read archives through report_data (gesweep's _hdf5), not h5py")
+        # The check sees an import written in any of these ways, and not a mention in prose.
+        for source in ("import h5py\n", "import numpy, h5py as h\n", "from h5py import File\n",
+                       "def f():\n    import h5py.h5f\n"):
+            self.assertTrue(imports_h5py(source), source)
+        self.assertFalse(imports_h5py('"""Not h5py: import h5py is prose here."""\n'))
 
     def test_every_name_the_scripts_ask_for_is_in_the_manifest(self):
         asked, problems = [], []

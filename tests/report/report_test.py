@@ -585,6 +585,28 @@ class Report(unittest.TestCase):
                 self.assertIn(says, result.stderr)
                 self.assertEqual(len(result.stderr.strip().splitlines()), 1, result.stderr)
 
+    def test_the_report_run_by_hand_is_checked_by_the_engine(self):
+        # report.py started by hand (not by `gesweep report`) still refuses what every command refuses,
+        # with the engine's own line: `gesweep check` is its one validator (docs/report.md, "One reader").
+        foreign = os.path.join(WORK, "foreign.h5")
+        with h5py.File(foreign, "w") as f:
+            f.attrs["format"] = "gesweep-archive"  # the format's name, but none of its layout
+            f.create_dataset("runs/status", data=np.zeros(3, dtype=np.int8))
+        engine = run("query", foreign)
+        self.assertNotEqual(engine.returncode, 0, engine.stdout + engine.stderr)
+        with self.assertRaises(ValueError) as refused:
+            report_data.open_archives([LANDING, foreign])
+        self.assertEqual("gesweep: error: " + str(refused.exception), engine.stderr.strip())
+        # What the engine says of a good archive is what the report then reads.
+        archives = report_data.open_archives([LANDING])
+        try:
+            self.assertFalse(archives[0].snapshot)
+            self.assertEqual(archives[0].notes, [])
+            self.assertEqual(archives[0].run_count, int(h5py.File(LANDING, "r").attrs["run_count"]))
+        finally:
+            for archive in archives:
+                archive.close()
+
     def test_chromium_loads_and_paints_every_image(self):
         self.assertEqual(self.result.returncode, 0, self.result.stderr)
         browser = shutil.which("chromium")

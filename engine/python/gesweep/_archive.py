@@ -16,7 +16,7 @@ import xarray as xr
 from xarray.backends import BackendArray
 from xarray.core import indexing
 
-import h5py
+from . import _hdf5  # the one reader of archive files, shared with scripts/report
 
 
 
@@ -42,7 +42,7 @@ def _input_error(source, key, value, expected):
 
 
 def _open_checked(path):
-    """The archive at `path` opened with h5py, after the checks every gesweep command makes before it
+    """The archive at `path` opened (_hdf5, the one reader), after the checks every gesweep command makes before it
     reads a value (the engine's ArchiveReader::Open, the one checker: the file, its layout, and a
     virtual archive's shard files -- missing, replaced, moved, foreign, itself, cyclic): those refuse
     with gesweep.InputError in the command's words; a note on what could not be checked is an
@@ -58,30 +58,17 @@ def _open_checked(path):
     for note in checked["notes"]:
         warnings.warn(note, ArchiveNote, stacklevel=3)
     try:
-        return h5py.File(name, "r", swmr=bool(checked["snapshot"]))
+        return _hdf5.open_checked(name, checked)
     except OSError as error:  # changed between the check and the open
         raise _input_error(name, "", "", f"cannot open the archive: {error}") from None
 
 
-def _text(value):
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.ndarray):
-        return [_text(v) for v in value.tolist()]
-    if isinstance(value, (list, tuple)):
-        return [_text(v) for v in value]
-    return value
+_text = _hdf5.text
 
 
 def _attrs(dataset):
-    out = {}
-    for key, value in dataset.attrs.items():
-        if key in ("DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME", "_Netcdf4Dimid", "_Netcdf4Coordinates"):
-            continue  # HDF5 dimension-scale bookkeeping
-        value = _text(value)
-        if isinstance(value, np.ndarray) and value.size == 1:
-            value = value.item()
-        out[key] = value
+    """A dataset's attributes (_hdf5.attrs) and its HDF5 path."""
+    out = _hdf5.attrs(dataset)
     out["path"] = dataset.name.lstrip("/")
     return out
 
@@ -177,7 +164,7 @@ def _design_link(f, obj, name):
     """Whether `obj` at results|series/<analysis>/`name` is the netCDF view's link to design/`name`
     (schemas/archive.md, "netCDF view"), not a column of its own."""
     other = f.get("design/" + name) if "/" not in name else None
-    return isinstance(other, h5py.Dataset) and other == obj
+    return _hdf5.is_dataset(other) and other == obj
 
 
 def _names(f):
@@ -189,7 +176,7 @@ def _names(f):
             continue
         for analysis in f[group]:
             def visit(name, obj, group=group, analysis=analysis):
-                if isinstance(obj, h5py.Dataset) and not _design_link(f, obj, name):
+                if _hdf5.is_dataset(obj) and not _design_link(f, obj, name):
                     entries.append((group, analysis, name))
             f[group][analysis].visititems(visit)
     taken = set(f["design"]) if "design" in f else set()
@@ -340,7 +327,7 @@ def _open_product(f, product):
     lengths = {}
 
     def visit(name, obj):
-        if isinstance(obj, h5py.Dataset):
+        if _hdf5.is_dataset(obj):
             dims = []
             for axis, size in enumerate(obj.shape):
                 if axis == 0:
