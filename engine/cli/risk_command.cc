@@ -171,6 +171,27 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
     for (const double v : s.most_likely_failure) norm2 += v * v;
     design["most_likely_distance"] = std::sqrt(norm2);
   }
+  // A random parameter's values at the design point: at the most likely failing landing and at the
+  // failing landings' mean point (their coordinates come after the noise's), beside its median.
+  const auto random = risk::CellRandomParameters(plan);
+  if (!random.empty()) {
+    const auto at = [&](const std::vector<double>& point) -> std::vector<double> {
+      if (point.size() < random.size()) return {};
+      return risk::RandomParameterValues(plan, std::span(point).last(random.size()));
+    };
+    const std::vector<double> origin(random.size(), 0.0);
+    const std::vector<double> medians = risk::RandomParameterValues(plan, origin);
+    const std::vector<double> likely = at(s.most_likely_failure), mean = at(s.failure_mean);
+    ordered_json parameters = ordered_json::array();
+    for (std::size_t k = 0; k < random.size(); ++k) {
+      parameters.push_back({{"name", ParameterCatalog()[static_cast<std::size_t>(random[k].id)].name},
+                            {"distribution", DescribeDistribution(random[k])},
+                            {"median", Num(medians[k])},
+                            {"most_likely", likely.empty() ? ordered_json(nullptr) : Num(likely[k])},
+                            {"mean_failure", mean.empty() ? ordered_json(nullptr) : Num(mean[k])}});
+    }
+    design["random_parameters"] = parameters;
+  }
   j["design_point"] = design;
   return j;
 }
@@ -203,7 +224,7 @@ risk::PointSeries FlySeries(const SweepPlan& series_plan, std::int64_t cell, con
   ResultBlock block;
   block.Allocate(series_plan);
   block.Reset(series_plan, 0);
-  ExecuteRun(series_plan, cell, workspace, block, 0, nullptr, point);
+  risk::ExecuteCellRun(series_plan, cell, workspace, block, point);
   (void)spec;
   risk::PointSeries series;
   series.name = name;

@@ -145,24 +145,78 @@ std::vector<int> RiskColumns(const SweepPlan& plan) {
   return columns;
 }
 
-RunParameters CellParameters(const SweepPlan& plan, std::int64_t cell) {
+std::int64_t CellCount(const SweepPlan& plan) {
+  return plan.design().spec().kind == DesignKind::kMonteCarlo ? 1 : plan.design_runs();
+}
+
+std::span<const DesignParameter> CellRandomParameters(const SweepPlan& plan) {
+  if (plan.design().spec().kind != DesignKind::kMonteCarlo) return {};
+  return plan.design().spec().parameters;
+}
+
+std::vector<double> RandomParameterValues(const SweepPlan& plan, std::span<const double> coordinates) {
+  const auto random = CellRandomParameters(plan);
+  GESWEEP_DEMAND(coordinates.size() == random.size());
+  std::vector<double> values(random.size());
+  for (std::size_t k = 0; k < random.size(); ++k)
+    values[k] = MonteCarloValueAtNormal(random[k], coordinates[k]);
+  return values;
+}
+
+namespace {
+
+// The base parameters with the design's columns at `values` (design column order).
+RunParameters WithDesignValues(const SweepPlan& plan, std::span<const double> values) {
   RunParameters parameters = plan.base_parameters();
-  std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
-  plan.design().Row(cell, row.data());
   for (int c = 0; c < plan.design().column_count(); ++c) {
     parameters[static_cast<std::size_t>(plan.design().spec().parameters[static_cast<std::size_t>(c)].id)] =
-        row[static_cast<std::size_t>(c)];
+        values[static_cast<std::size_t>(c)];
   }
   return parameters;
 }
 
-std::uint64_t CellDimension(const SweepPlan& plan, std::int64_t cell) {
-  const RunParameters parameters = CellParameters(plan, cell);
+// The noise dimension a landing of `parameters` needs: the largest of the analyses'.
+std::uint64_t NoiseDimensionOf(const SweepPlan& plan, const RunParameters& parameters) {
   std::uint64_t dimension = 0;
   for (const auto& analysis : plan.study().analyses) {
     dimension = std::max(dimension, analysis->NoiseDimension(parameters, *plan.study().aircraft));
   }
   return dimension;
+}
+
+}  // namespace
+
+RunParameters CellParameters(const SweepPlan& plan, std::int64_t cell) {
+  const auto random = CellRandomParameters(plan);
+  if (!random.empty()) {
+    // A random design's one cell: its parameters at their medians (the origin of their coordinates).
+    const std::vector<double> origin(random.size(), 0.0);
+    return WithDesignValues(plan, RandomParameterValues(plan, origin));
+  }
+  std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
+  plan.design().Row(cell, row.data());
+  return WithDesignValues(plan, row);
+}
+
+std::uint64_t CellNoiseDimension(const SweepPlan& plan, std::int64_t cell) {
+  return NoiseDimensionOf(plan, CellParameters(plan, cell));
+}
+
+std::uint64_t CellDimension(const SweepPlan& plan, std::int64_t cell) {
+  return CellNoiseDimension(plan, cell) + CellRandomParameters(plan).size();
+}
+
+void ExecuteCellRun(const SweepPlan& plan, std::int64_t cell, RunWorkspace& workspace, ResultBlock& block,
+                    std::span<const double> point, const std::atomic<bool>* cancel) {
+  const auto random = CellRandomParameters(plan);
+  if (random.empty()) {
+    ExecuteRun(plan, cell, workspace, block, 0, cancel, point);
+    return;
+  }
+  GESWEEP_DEMAND(point.size() >= random.size());
+  const std::size_t noise = point.size() - random.size();
+  const std::vector<double> values = RandomParameterValues(plan, point.subspan(noise));
+  ExecuteRun(plan, cell, workspace, block, 0, cancel, point.first(noise), values);
 }
 
 double CellSampleInterval(const SweepPlan& plan, std::int64_t cell) {
@@ -175,6 +229,15 @@ double CellSampleInterval(const SweepPlan& plan, std::int64_t cell) {
 }
 
 std::string CellLabel(const SweepPlan& plan, std::int64_t cell) {
+  const auto random = CellRandomParameters(plan);
+  if (!random.empty()) {
+    std::string label;
+    for (const DesignParameter& p : random) {
+      if (!label.empty()) label += ", ";
+      label += ParameterCatalog()[static_cast<std::size_t>(p.id)].name + " ~ " + DescribeDistribution(p);
+    }
+    return label;
+  }
   std::vector<double> row(static_cast<std::size_t>(plan.design().column_count()));
   plan.design().Row(cell, row.data());
   std::string label;
@@ -200,6 +263,43 @@ std::uint64_t SimulationSeed(std::uint64_t seed, std::int64_t cell, std::int64_t
           static_cast<std::uint64_t>(limit));
   return repetition == 0 ? first : Mix(first ^ 0x7265706561746564ULL, static_cast<std::uint64_t>(repetition));
 }
+
+namespace {
+
+// A random parameter may not lengthen the noise a landing needs (a longer time limit: a random start
+// height, say): every point of the space has the dimension of the parameters' medians. Checked at
+// each parameter's extreme values (the others at their medians); an extreme the landing refuses is
+// a failed landing there, not a longer one.
+void CheckRandomParametersKeepTheNoise(const SweepPlan& plan) {
+  const auto random = CellRandomParameters(plan);
+  if (random.empty()) return;
+  const std::vector<double> origin(random.size(), 0.0);
+  const std::vector<double> medians = RandomParameterValues(plan, origin);
+  const std::uint64_t median_dimension = NoiseDimensionOf(plan, WithDesignValues(plan, medians));
+  for (std::size_t k = 0; k < random.size(); ++k) {
+    for (const double extreme : {random[k].lower, random[k].upper}) {
+      std::vector<double> values = medians;
+      values[k] = extreme;
+      std::uint64_t needed = 0;
+      try {
+        needed = NoiseDimensionOf(plan, WithDesignValues(plan, values));
+      } catch (const InputError&) {
+        continue;
+      }
+      if (needed > median_dimension) {
+        const std::string& name = ParameterCatalog()[static_cast<std::size_t>(random[k].id)].name;
+        throw InputError(plan.study().path, "parameters." + name, ShortNumber(extreme),
+                         "a random parameter that does not lengthen the landing's noise (at " +
+                             ShortNumber(extreme) + " it needs " + std::to_string(needed) +
+                             " coordinates, at its median " + std::to_string(median_dimension) +
+                             "): make it a grid or list parameter, one cell per value",
+                         plan.study().design_line);
+      }
+    }
+  }
+}
+
+}  // namespace
 
 RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   const Study& study = plan.study();
@@ -232,27 +332,29 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
                      "[analyses.landing]: a subset simulation estimates a landing's risk", study.subset_line);
   }
   const DesignKind kind = study.design.kind;
-  if (kind != DesignKind::kSingle && kind != DesignKind::kGrid && kind != DesignKind::kList) {
-    throw InputError(study.path, "design.kind", "",
-                     "single, grid or list with a [subset] table: each design row is a cell with its own "
-                     "estimates (random parameters do not join the subset simulation's space yet)",
+  if (kind != DesignKind::kSingle && kind != DesignKind::kGrid && kind != DesignKind::kList &&
+      kind != DesignKind::kMonteCarlo) {
+    throw InputError(study.path, "design.kind", std::string(ToString(kind)),
+                     "single, grid or list (each design row a cell with its own estimates), or monte_carlo "
+                     "(its parameters random inputs of every landing) with a [subset] table",
                      study.design_line);
   }
-  if (plan.design_runs() > kMaxCells) {
+  if (CellCount(plan) > kMaxCells) {
     throw InputError(study.path, "design", std::to_string(plan.design_runs()) + " rows",
                      "at most " + std::to_string(kMaxCells) + " cells with a [subset] table (each runs " +
                          "a subset simulation per limit)",
                      study.design_line);
   }
-  for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
+  for (std::int64_t cell = 0; cell < CellCount(plan); ++cell) {
     if (CellDimension(plan, cell) == 0) {
       throw InputError(
           study.path, "parameters.turbulence", CellLabel(plan, cell),
-          "turbulence = \"dryden\" in every cell: without turbulence a landing draws no noise, and "
-          "a subset simulation has no random input to sample",
+          "turbulence = \"dryden\" in every cell, or random parameters (design.kind = \"monte_carlo\"): "
+          "without either a landing has no random input for a subset simulation to sample",
           study.subset_line);
     }
   }
+  CheckRandomParametersKeepTheNoise(plan);
 
   const toml::node* limits = table->get("limits");
   const toml::array* array = limits != nullptr ? limits->as_array() : nullptr;
@@ -302,7 +404,7 @@ Evaluation Fly(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int
     std::fill(block.results[c].begin(), block.results[c].begin() + static_cast<std::ptrdiff_t>(width), kNaN);
   }
   block.status[0] = static_cast<std::int8_t>(RunStatus::kPending);
-  ExecuteRun(plan, cell, w.workspace, block, 0, cancel, point);
+  ExecuteCellRun(plan, cell, w.workspace, block, point, cancel);
   Evaluation e;
   e.status = block.status[0];
   e.message = block.message[0];
@@ -329,7 +431,7 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
   tbb::enumerable_thread_specific<FlightWorkspace> workspaces([&] { return FlightWorkspace(plan); });
   std::mutex capture_mutex;
   try {
-    for (std::int64_t cell = 0; cell < plan.design_runs(); ++cell) {
+    for (std::int64_t cell = 0; cell < CellCount(plan); ++cell) {
       const std::uint64_t dimension = CellDimension(plan, cell);
       for (int limit = 0; limit < static_cast<int>(spec.limits.size()); ++limit) {
         LimitRisk risk;

@@ -26,6 +26,7 @@
 #include "engine/archive/subset_archive.h"
 #include "engine/rare/repetitions.h"
 #include "engine/rare/subset_simulation.h"
+#include "engine/sweep/runner.h"
 #include "engine/sweep/sweep_plan.h"
 
 namespace gesweep::risk {
@@ -61,11 +62,35 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan);
 /// The columns an evaluation keeps: every float64 scalar column of the plan's schema, schema order.
 std::vector<int> RiskColumns(const SweepPlan& plan);
 
-/// The parameters of one cell (a design row over the study's fixed parameters).
+/// The cells of the plan's design, each with its own estimates: its rows (single, grid, list), or one
+/// for a monte_carlo design, whose parameters are random inputs of every landing instead.
+std::int64_t CellCount(const SweepPlan& plan);
+
+/// The random parameters of the landings (docs/dispersion.md, "Random parameters"): a monte_carlo
+/// design's parameters, in its column order, each one coordinate of the standard-normal space after
+/// the noise's, mapped to its value through its inverse CDF (MonteCarloValueAtNormal); empty for
+/// every other design.
+std::span<const DesignParameter> CellRandomParameters(const SweepPlan& plan);
+
+/// The random parameters' values at their coordinates (`coordinates`: one per random parameter).
+std::vector<double> RandomParameterValues(const SweepPlan& plan, std::span<const double> coordinates);
+
+/// The parameters of one cell (a design row over the study's fixed parameters; a monte_carlo
+/// design's one cell: its parameters at their medians).
 RunParameters CellParameters(const SweepPlan& plan, std::int64_t cell);
 
-/// The standard-normal dimension of a cell's landings (the landing's LandingNoiseDimension).
+/// The noise's part of a cell's dimension (the landing's LandingNoiseDimension).
+std::uint64_t CellNoiseDimension(const SweepPlan& plan, std::int64_t cell);
+
+/// The standard-normal dimension of a cell's landings: the noise's coordinates (RunNoise's point
+/// layout), then one per random parameter.
 std::uint64_t CellDimension(const SweepPlan& plan, std::int64_t cell);
+
+/// Flies the landing of `cell` at `point` (CellDimension coordinates) into row 0 of `block`:
+/// ExecuteRun with the point's noise part and the random parameters' values at its last coordinates.
+/// What every evaluation, replay and design-point series flies.
+void ExecuteCellRun(const SweepPlan& plan, std::int64_t cell, RunWorkspace& workspace, ResultBlock& block,
+                    std::span<const double> point, const std::atomic<bool>* cancel = nullptr);
 
 /// The interval, s, at which a cell's noise streams are held (the sample interval of its turbulence).
 double CellSampleInterval(const SweepPlan& plan, std::int64_t cell);

@@ -1,5 +1,6 @@
 #include "engine/sweep/design.h"
 
+#include <algorithm>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/random/sobol.hpp>
 #include <cmath>
@@ -276,6 +277,19 @@ double MonteCarloValue(const DesignParameter& parameter, double u) {
     }
   }
   GESWEEP_UNREACHABLE();
+}
+
+double MonteCarloValueAtNormal(const DesignParameter& parameter, double z) {
+  GESWEEP_DEMAND(std::isfinite(z));
+  switch (parameter.distribution) {
+    case Distribution::kNormal:
+      return parameter.mean + parameter.sigma * z;
+    case Distribution::kLogNormal:
+      return std::exp(parameter.mean + parameter.sigma * z);
+    default:
+      return MonteCarloValue(parameter,
+                             std::clamp(StandardNormalCdf(z), kMonteCarloUnitLow, kMonteCarloUnitHigh));
+  }
 }
 
 double TruncatedNormalMass(const DesignParameter& parameter) {

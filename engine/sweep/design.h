@@ -134,6 +134,14 @@ inline constexpr double kMonteCarloUnitHigh = 1.0 - 0x1.0p-53;
 /// parameter takes the first value whose cumulative weight exceeds u·Σ weights).
 double MonteCarloValue(const DesignParameter& parameter, double u);
 
+/// Maps a standard-normal coordinate z through a monte_carlo parameter's distribution: the value
+/// whose cumulative probability is Φ(z), as a subset simulation's random parameters join its
+/// standard-normal space (engine/risk). Normal and lognormal take z itself (mean + σz and
+/// exp(mean + σz)), exact in both tails however far; the other kinds are MonteCarloValue at
+/// u = Φ(z) held within [kMonteCarloUnitLow, kMonteCarloUnitHigh], so they reach the extreme values
+/// of a monte_carlo design and no further. z is finite.
+double MonteCarloValueAtNormal(const DesignParameter& parameter, double z);
+
 /// The probability a truncated normal parameter's interval holds under the untruncated normal
 /// (the study parser refuses an interval whose probability underflows).
 double TruncatedNormalMass(const DesignParameter& parameter);

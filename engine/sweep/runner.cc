@@ -127,10 +127,16 @@ const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
 }
 
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row, const std::atomic<bool>* cancel, std::span<const double> noise_point) {
+                int row, const std::atomic<bool>* cancel, std::span<const double> noise_point,
+                std::span<const double> design_values) {
   const auto r = static_cast<std::size_t>(row);
   const Design& design = plan.design();
-  design.Row(design_index, workspace.design_row.data());
+  if (design_values.empty()) {
+    design.Row(design_index, workspace.design_row.data());
+  } else {
+    GESWEEP_DEMAND(design_values.size() == workspace.design_row.size());
+    std::copy(design_values.begin(), design_values.end(), workspace.design_row.begin());
+  }
   workspace.parameters = plan.base_parameters();
   for (int c = 0; c < design.column_count(); ++c) {
     const double value = workspace.design_row[static_cast<std::size_t>(c)];

@@ -140,8 +140,11 @@ void TruncateMessage(std::string& message);
 /// responses check it between integration steps): a run it stops keeps status kPending.
 /// `noise_point` (empty in a sweep): the run's noise as a point of the standard-normal space
 /// (RunContext::noise_point), as a subset simulation flies it (engine/risk).
+/// `design_values` (empty in a sweep): the values of the design's columns, taken instead of row
+/// `design_index` (a subset simulation's random parameters, drawn from its point; engine/risk).
 void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row, const std::atomic<bool>* cancel = nullptr, std::span<const double> noise_point = {});
+                int row, const std::atomic<bool>* cancel = nullptr, std::span<const double> noise_point = {},
+                std::span<const double> design_values = {});
 
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {

@@ -24,7 +24,13 @@ produced): what is checked is that the estimate does not depend on how it was re
 7. Repetitions: K = 3 runs; the first is the run without repetitions (same seed, same estimate); the
    pooled P is their mean and its CoV their spread over sqrt(K), recomputed here; a landing of the last
    repetition replays bit for bit; repetitions = 0 is refused.
-8. The table's COLLAPSED line follows its rule (ancestors x 10 < chains) on an archive edited by hand."""
+8. The table's COLLAPSED line follows its rule (ancestors x 10 < chains) on an archive edited by hand.
+9. Random parameters (a monte_carlo design's, through their inverse CDFs): analytic oracles on the
+   verification model linear = x1 beside a still-air landing, x1 ~ normal(0, 1) with P(x1 > 3) = Phi(-3)
+   (the design point at beta = 3) and x1 ~ uniform(0, 1) with P(x1 > 0.999) = 1e-3, each over 10
+   repetitions; a random headwind in turbulence: one coordinate after the noise's, 1 and 2 threads
+   alike and last-level landings replayed bit for bit; a random start height (a longer noise) and an
+   lhs design refused with one line."""
 import json
 import os
 import pathlib
@@ -62,6 +68,34 @@ limits = [{limits}]
 {subset}
 '''
 LIMITS = '"touchdown_sink_rate_mps > 1.83", "touchdown_sink_rate_mps > 30"'
+
+# A monte_carlo design's parameters as random inputs (section 9): {analyses} beside the landing, the
+# parameter {name} drawn as {distribution}.
+RANDOM_STUDY = '''format_version = 1
+name = "risk_random"
+aircraft = "{aircraft}"
+[analyses.landing]
+{analyses}
+[parameters]
+{parameters}
+[design]
+kind = "{kind}"
+samples = 1
+seed = 1
+[[design.parameter]]
+name = "{name}"
+{distribution}
+[subset]
+limits = [{limits}]
+{subset}
+'''
+# Phi(-3), the standard normal's upper tail at 3 (Abramowitz & Stegun, Table 26.1: 1.349898e-3).
+PHI_MINUS_3 = 1.3498980316301e-3
+# A pooled estimate of 10 repetitions is within this many of its coefficients of variation of the truth
+# (a deterministic run: the seed is fixed; 3 is a 0.3 % two-sided tail for a normal error).
+ORACLE_SIGMAS = 3.0
+# The most likely failing point of x1 > 3 is the last level's smallest failing x1: within this of 3.
+DESIGN_POINT_SLACK = 0.1
 
 failures = []
 
@@ -301,10 +335,96 @@ def main():
             check(("COLLAPSED" in line) == expected, f"{ancestors} ancestor(s) of 20 chains: COLLAPSED {expected}: {line}")
         check(all("COLLAPSED" not in l for l in r1.stdout.splitlines()), "the test's own runs did not collapse")
 
+        random_parameters(tmp)
+
     if failures:
         print(f"{len(failures)} failures")
         sys.exit(1)
     print("risk CLI: threads, kill + resume, replay, dispersion JSON, level cap and bad inputs hold")
+
+
+def write_random(directory, filename, **fields):
+    defaults = dict(aircraft=ANCE, analyses="", kind="monte_carlo",
+                    parameters="height_m = 30.0\nspeed_mps = 52.21", subset=SUBSET.format(n=300, levels=6))
+    defaults.update(fields)
+    path = pathlib.Path(directory) / filename
+    path.write_text(RANDOM_STUDY.format(**defaults))
+    return path
+
+
+def dispersion_json(archive):
+    d = subprocess.run([GESWEEP, "dispersion", str(archive), "--format", "json"], capture_output=True, text=True)
+    return json.loads(d.stdout)["limits"] if d.returncode == 0 else []
+
+
+def random_parameters(tmp):
+    """Section 9: a monte_carlo design's parameters join the standard-normal space."""
+    linear = "[analyses.linear]\ncoefficients = [1.0]"
+    for label, distribution, limit, truth in (("normal", "normal = [0.0, 1.0]", "linear > 3.0", PHI_MINUS_3),
+                                              ("uniform", "uniform = [0.0, 1.0]", "linear > 0.999", 1e-3)):
+        study = write_random(tmp, f"random_{label}.toml", analyses=linear, name="x1", distribution=distribution,
+                             limits=f'"{limit}"', subset=SUBSET.format(n=300, levels=6) + "\nrepetitions = 10")
+        archive = tmp / f"random_{label}.h5"
+        r = risk(study, "-o", archive, "--threads", 2)
+        check(r.returncode == 0, f"{label}: risk exits 0: {r.returncode} {r.stderr}")
+        limits = dispersion_json(archive)
+        if not limits:
+            check(False, f"{label}: dispersion JSON of the archive")
+            continue
+        l = limits[0]
+        p, cov = l["probability"], l["coefficient_of_variation"]
+        check(l["dimension"] == 1, f"{label}: a still-air landing and one random parameter: dimension 1, not {l['dimension']}")
+        check(abs(p - truth) < ORACLE_SIGMAS * cov * p,
+              f"{label}: P(x1 ~ {distribution}: {limit}) = {p:.4g} (CoV {cov:.3g}) within {ORACLE_SIGMAS} CoV of {truth:.6g}")
+        check("x1 ~ " in l["cell_label"], f"{label}: the cell is labelled by the distribution: {l['cell_label']}")
+        point = l["design_point"]["random_parameters"][0]
+        check(point["name"] == "x1" and point["median"] == (0.0 if label == "normal" else 0.5),
+              f"{label}: the random parameter's median: {point}")
+        if label == "normal":
+            # A linear limit state's design point is at beta = 3 along x1 (x1 is its own coordinate).
+            check(3.0 < point["most_likely"] < 3.0 + DESIGN_POINT_SLACK,
+                  f"normal: the most likely failing x1 just above beta = 3: {point['most_likely']}")
+            check(point["most_likely"] == l["design_point"]["most_likely_distance"],
+                  "normal: x1 = z, so the most likely value is its distance from the origin")
+
+    # A random headwind in turbulence: the wind's coordinate comes after the noise's.
+    wind = dict(parameters="height_m = 30.0\nspeed_mps = 52.21\nwind_shear = \"logarithmic\"\nturbulence = \"dryden\"",
+                name="wind_20ft_mps", distribution="normal = [-15.433333, 2.0]",
+                limits='"touchdown_sink_rate_mps > 1.83"', subset=SUBSET.format(n=100, levels=3))
+    study = write_random(tmp, "random_wind.toml", **wind)
+    fixed = write_study(tmp, "fixed_wind.toml", limits='"touchdown_sink_rate_mps > 1.83"',
+                        subset=SUBSET.format(n=100, levels=1))
+    one, two, fixed_out = tmp / "random_wind_1.h5", tmp / "random_wind_2.h5", tmp / "fixed_wind.h5"
+    r1, r2 = risk(study, "-o", one, "--threads", 1), risk(study, "-o", two, "--threads", 2)
+    rf = risk(fixed, "-o", fixed_out)
+    check(r1.returncode == 0 and r2.returncode == 0 and rf.returncode == 0,
+          f"random wind: risk exits 0: {r1.stderr} {r2.stderr} {rf.stderr}")
+    if r1.returncode == 0 and r2.returncode == 0 and rf.returncode == 0:
+        check(same(contents(one), contents(two)), "random wind: 1 and 2 threads, the same estimate and evaluations")
+        l, lf = dispersion_json(one)[0], dispersion_json(fixed_out)[0]
+        check(l["dimension"] == lf["dimension"] + 1,
+              f"random wind: the noise's coordinates and one more: {l['dimension']} vs {lf['dimension']} + 1")
+        stored = contents(one)[1]
+        last = np.flatnonzero(stored["level"] == stored["level"].max())
+        for row in last[:: max(1, len(last) // 6)]:
+            rp = risk(one, "--replay", row, "--format", "json")
+            check(rp.returncode == 0 and json.loads(rp.stdout)["identical"] is True,
+                  f"random wind: last-level row {row} replays bit for bit: {rp.returncode} {rp.stderr}")
+
+    # Refused with one line, nothing written: a random start height (it lengthens the landing's noise),
+    # and a design whose rows are not random draws (lhs).
+    height = dict(wind, name="height_m", distribution="uniform = [20.0, 40.0]",
+                  parameters="wind_20ft_mps = -15.433333\nspeed_mps = 52.21\nturbulence = \"dryden\"")
+    lhs = dict(wind, kind="lhs", distribution="uniform = [-20.0, -10.0]")
+    for name, fields, key, value in (("random_height", height, "parameters.height_m", "40"),
+                                     ("random_lhs", lhs, "design.kind", "lhs")):
+        path = write_random(tmp, f"{name}.toml", **fields)
+        out = tmp / f"{name}.h5"
+        r = risk(path, "-o", out)
+        lines = r.stderr.strip().splitlines()
+        check(r.returncode == 2 and len(lines) == 1 and path.name in lines[0] and key in lines[0] and value in lines[0],
+              f"{name}: one line naming the file, {key} and {value}, exit 2: {r.returncode} {lines}")
+        check(not out.exists(), f"{name}: nothing written")
 
 
 if __name__ == "__main__":

@@ -450,5 +450,32 @@ TEST(MonteCarloDesign, UnitCoordinatesStayStrictlyInsideTheUnitInterval) {
   }
 }
 
+// MonteCarloValueAtNormal (a subset simulation's random parameters): the value whose CDF is Φ(z).
+// Oracles: the normal kinds in closed form; the others at Φ(z) = erfc(−z/√2)/2 (std::erfc, not the
+// engine's Boost.Math), through the distributions' own closed-form quantiles.
+TEST(MonteCarloValueAtNormal, IsTheValueWhoseCumulativeProbabilityIsPhiOfZ) {
+  const DesignSpec spec = MonteCarloSpec();
+  const DesignParameter& normal = spec.parameters[0];     // normal(32, 0.8)
+  const DesignParameter& lognormal = spec.parameters[2];  // lognormal(log 30, 0.1)
+  const DesignParameter& uniform = spec.parameters[3];    // uniform(-1, 3)
+  const DesignParameter& discrete = spec.parameters[4];   // {0, 1, 5} weights {1, 2, 7}
+  const auto phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  for (const double z : {-12.0, -5.2, -1.0, 0.0, 0.3, 2.0, 5.2, 12.0}) {
+    // The normal kinds take z itself, however far into the tail: exact.
+    EXPECT_EQ(MonteCarloValueAtNormal(normal, z), 32 + 0.8 * z);
+    EXPECT_EQ(MonteCarloValueAtNormal(lognormal, z), std::exp(std::log(30.0) + 0.1 * z));
+    const double u = std::clamp(phi(z), kMonteCarloUnitLow, kMonteCarloUnitHigh);
+    EXPECT_NEAR(MonteCarloValueAtNormal(uniform, z), -1 + 4 * u, kUnitMapTolerance) << z;
+    const double expected_discrete = u * 10 < 1 ? 0 : (u * 10 < 3 ? 1 : 5);
+    EXPECT_EQ(MonteCarloValueAtNormal(discrete, z), expected_discrete) << z;
+  }
+  // Beyond the monte_carlo design's extreme unit coordinates, the bounded kinds stop at its reach.
+  EXPECT_EQ(MonteCarloValueAtNormal(uniform, 40.0), MonteCarloValue(uniform, kMonteCarloUnitHigh));
+  EXPECT_EQ(MonteCarloValueAtNormal(uniform, -40.0), MonteCarloValue(uniform, kMonteCarloUnitLow));
+  const DesignParameter& truncated = spec.parameters[1];  // normal(2, 1) on [2.5, 4]
+  EXPECT_GE(MonteCarloValueAtNormal(truncated, -40.0), 2.5);
+  EXPECT_LE(MonteCarloValueAtNormal(truncated, 40.0), 4.0);
+}
+
 }  // namespace
 }  // namespace gesweep
