@@ -8,6 +8,7 @@
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
 #include "engine/disturbance/disturbance_options.h"
+#include "engine/dynamics/model_options.h"
 
 namespace gesweep {
 namespace {
@@ -61,9 +62,9 @@ std::vector<ParameterInfo> BuildCatalog() {
   c.push_back(Levels("h_derivatives", "Whether Xh, Zh and Mh are in the model (docs/model.md §4)",
                      ParameterKind::kBoolean, 1.0, {"false", "true"}));
   c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)",
-                     ParameterKind::kChoice, 0.0, {"polar", "zero"}));
+                     ParameterKind::kChoice, 0.0, EnumLevels<CdhMode>()));
   c.push_back(Levels("interpolation", "Table interpolation in height: linear or pchip (docs/model.md §2)",
-                     ParameterKind::kChoice, 0.0, {"linear", "pchip"}));
+                     ParameterKind::kChoice, 0.0, EnumLevels<Interpolation>()));
 
   // Multiplicative scale factors on every coefficient column and on CDo.
   for (std::string_view name : kCoefficientNames) {

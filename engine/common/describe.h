@@ -200,20 +200,6 @@ std::string_view KeyOf(const T& object, const void* member) {
   return finder.key;
 }
 
-/// The names of an enum's codes 0, 1, ... (the levels attribute of its column): every value in the
-/// table, ordered by its underlying value, which must run 0..n-1.
-template <NamedEnum E>
-std::vector<std::string> EnumLevels() {
-  const auto& table = EnumNames<E>::kTable;
-  std::vector<std::string> levels(std::size(table));
-  for (const auto& entry : table) {
-    const auto code = static_cast<std::size_t>(entry.value);
-    GESWEEP_DEMAND(code < levels.size() && levels[code].empty());
-    levels[code] = std::string(entry.name);
-  }
-  return levels;
-}
-
 /// The names of an enum's values in table order.
 template <NamedEnum E>
 std::vector<std::string> EnumChoiceList() {

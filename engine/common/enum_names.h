@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "engine/common/errors.h"
 
@@ -76,6 +77,31 @@ std::string EnumChoices() {
     out += table[i].name;
   }
   return out;
+}
+
+/// The names of an enum's codes 0, 1, ... (the levels of its archive column, of a choice parameter
+/// in the catalogue): every value in the table, ordered by its underlying value, which must run
+/// 0..n-1.
+template <NamedEnum E>
+std::vector<std::string> EnumLevels() {
+  const auto& table = EnumNames<E>::kTable;
+  std::vector<std::string> levels(std::size(table));
+  for (const auto& entry : table) {
+    const auto code = static_cast<std::size_t>(entry.value);
+    GESWEEP_DEMAND(code < levels.size() && levels[code].empty());
+    levels[code] = std::string(entry.name);
+  }
+  return levels;
+}
+
+/// The value whose code (underlying value, the index in EnumLevels) is `code`: a choice parameter's
+/// level code as the enum. `code` is one of the levels' (GESWEEP_DEMAND otherwise: the study parser
+/// checks codes against the levels).
+template <NamedEnum E>
+E EnumAt(double code) {
+  GESWEEP_DEMAND(code >= 0 && code < static_cast<double>(std::size(EnumNames<E>::kTable)) &&
+                 code == static_cast<double>(static_cast<std::size_t>(code)));
+  return static_cast<E>(static_cast<std::size_t>(code));
 }
 
 }  // namespace gesweep

@@ -48,8 +48,9 @@ ModelOptions OptionsFrom(const RunParameters& p) {
   auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
   ModelOptions options;
   options.h_derivatives = at(ids.h_derivatives) != 0.0;
-  options.cdh = at(ids.cdh) == 0.0 ? CdhMode::kPolar : CdhMode::kZero;
-  options.interpolation = at(ids.interpolation) == 0.0 ? Interpolation::kLinear : Interpolation::kPchip;
+  // A choice's level code is its index in the enum's names table, whence the catalogue's levels.
+  options.cdh = EnumAt<CdhMode>(at(ids.cdh));
+  options.interpolation = EnumAt<Interpolation>(at(ids.interpolation));
   for (int i = 0; i < kCoefficientCount; ++i) {
     options.coefficient_scale[static_cast<std::size_t>(i)] = at(ids.scale[static_cast<std::size_t>(i)]);
   }
