@@ -150,6 +150,8 @@ ArchiveLayout::ArchiveLayout(const SweepPlan& plan) : chunk_runs_(plan.chunk_run
   }
   datasets_.push_back(PerRunDataset(kRunStatus, ElementKind::kInt8, ValueSource::kStatus, std::int8_t{0},
                                     chunk_runs_, level));
+  // Which library writes the deflate streams: the values read back are the same with either.
+  for (StoredDataset& d : datasets_) d.filters.encoder = plan.study().deflate_encoder;
 }
 
 void ArchiveLayout::RawRows(const ResultBlock& block, int index, std::int64_t first, std::int64_t count,

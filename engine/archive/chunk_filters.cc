@@ -1,5 +1,6 @@
 #include "engine/archive/chunk_filters.h"
 
+#include <libdeflate.h>
 #include <zlib.h>
 
 #include <cmath>
@@ -29,6 +30,20 @@ struct ChunkFilter::Zlib {
     return buffer.data();
   }
   static void Release(voidpf, voidpf) {}
+};
+
+// libdeflate's compressors, one per level, made on first use and kept (a compressor holds its
+// tables: about half a megabyte at level 1).
+struct ChunkFilter::Libdeflate {
+  libdeflate_compressor* by_level[10] = {};
+  ~Libdeflate() {
+    for (auto* c : by_level) libdeflate_free_compressor(c);  // null is allowed
+  }
+  libdeflate_compressor* At(int level) {
+    auto*& c = by_level[level];
+    if (c == nullptr) c = libdeflate_alloc_compressor(level);
+    return c;  // null only when out of memory: the chunk is then stored without deflate
+  }
 };
 
 namespace {
@@ -97,8 +112,11 @@ std::uint32_t Fletcher32(const unsigned char* data, std::size_t size) {
   return (sum2 << 16) | sum1;
 }
 
-ChunkFilter::ChunkFilter() : zlib_(new Zlib) {}
-ChunkFilter::~ChunkFilter() { delete zlib_; }
+ChunkFilter::ChunkFilter() : zlib_(new Zlib), libdeflate_(new Libdeflate) {}
+ChunkFilter::~ChunkFilter() {
+  delete zlib_;
+  delete libdeflate_;
+}
 
 std::uint32_t ChunkFilter::Apply(const FilterPipeline& pipeline, const unsigned char* data, std::size_t size,
                                  std::vector<unsigned char>& out) {
@@ -112,7 +130,23 @@ std::uint32_t ChunkFilter::Apply(const FilterPipeline& pipeline, const unsigned 
     current = scratch_.data();
     ++filter;
   }
-  if (pipeline.deflate_level > 0) {
+  if (pipeline.deflate_level > 0 && pipeline.encoder == DeflateEncoder::kLibdeflate) {
+    // The same rule as zlib's: a stream that does not fit HDF5's buffer skips the filter.
+    out.resize(DeflateCapacity(current_size) + 4);
+    libdeflate_compressor* compressor = libdeflate_->At(pipeline.deflate_level);
+    const std::size_t written = compressor == nullptr
+                                    ? 0
+                                    : libdeflate_zlib_compress(compressor, current, current_size, out.data(),
+                                                               DeflateCapacity(current_size));
+    if (written > 0) {
+      current_size = written;
+      out.resize(current_size);
+    } else {
+      mask |= 1u << filter;
+      out.assign(current, current + current_size);
+    }
+    ++filter;
+  } else if (pipeline.deflate_level > 0) {
     out.resize(DeflateCapacity(current_size) + 4);  // + room for the checksum
     zlib_->next = 0;
     z_stream stream{};

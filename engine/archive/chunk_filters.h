@@ -3,7 +3,8 @@
 /// chunks (docs/sweep.md, "Workers compress their own chunks"). The output is byte for byte what
 /// HDF5's own pipeline writes for the same chunk and filter list (tests/archive/chunk_filters_test.cc
 /// compares the two through H5Dread_chunk): the shuffle of H5Zshuffle.c, zlib's compress2 at the
-/// dataset's level as in H5Zdeflate.c (the same Debian zlib HDF5 links), and the Fletcher-32
+/// dataset's level as in H5Zdeflate.c (the same Debian zlib HDF5 links; or libdeflate's stream of the
+/// same format, DeflateEncoder, which HDF5's filter reads back to the same bytes), and the Fletcher-32
 /// checksum of H5checksum.c appended little-endian as in H5Zfletcher32.c. The writer then stores the
 /// bytes with H5Dwrite_chunk. No HDF5 call here: this runs on any thread, in any process (MPI ranks).
 
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "engine/common/copy_rules.h"
+#include "engine/common/deflate_encoder.h"
 
 namespace gesweep::archive {
 
@@ -20,6 +22,7 @@ struct FilterPipeline {
   std::size_t element_size = 1;  ///< bytes per element (the shuffle's parameter: the datatype size)
   bool shuffle = false;
   int deflate_level = 0;  ///< 0: no deflate filter; 1..9 zlib level
+  DeflateEncoder encoder = DeflateEncoder::kZlib;
   bool fletcher32 = true;
 
   /// Number of filters in the pipeline (the bit positions of the filter mask).
@@ -58,6 +61,8 @@ class ChunkFilter {
  private:
   struct Zlib;
   Zlib* zlib_ = nullptr;
+  struct Libdeflate;
+  Libdeflate* libdeflate_ = nullptr;
   int zlib_level_ = -1;
   std::vector<unsigned char> scratch_;
 };

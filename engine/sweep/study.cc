@@ -138,8 +138,8 @@ class StudyParser {
   void ParseOutput(const TomlSection& root) {
     const auto output = root.OptionalSection("output");
     if (!output) return;
-    output->RejectUnknownKeys(
-        {"time_series", "output_dt_s", "chunk_runs", "compression_level", "max_archive_gb"});
+    output->RejectUnknownKeys({"time_series", "output_dt_s", "chunk_runs", "compression_level",
+                               "deflate_encoder", "max_archive_gb"});
     study_.storage.time_series = output->OptionalBool("time_series").value_or(false);
     if (const auto dt = output->OptionalLimitedNumber("output_dt_s", "output_dt_s"))
       study_.storage.output_dt_s = *dt;
@@ -154,6 +154,15 @@ class StudyParser {
       if (*level < 0 || *level > 9)
         output->Fail("compression_level", std::to_string(*level), "expected 0 to 9");
       study_.compression_level = static_cast<int>(*level);
+    }
+    if (const auto encoder = output->OptionalString("deflate_encoder")) {
+      const auto parsed = ParseEnum<DeflateEncoder>(*encoder);
+      if (!parsed) {
+        output->Fail("deflate_encoder", "\"" + *encoder + "\"",
+                     "expected " + EnumChoices<DeflateEncoder>() +
+                         " (the same zlib format, read by every reader; libdeflate is faster)");
+      }
+      study_.deflate_encoder = *parsed;
     }
     if (output->Has("max_archive_gb")) study_.max_archive_gb = output->PositiveNumber("max_archive_gb");
   }

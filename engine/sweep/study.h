@@ -16,6 +16,7 @@
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/analyses/analysis.h"
+#include "engine/common/deflate_encoder.h"
 #include "engine/common/output_guard.h"
 #include "engine/sweep/design.h"
 
@@ -44,8 +45,10 @@ struct Study {
   std::vector<std::unique_ptr<Analysis>> analyses;
 
   StorageOptions storage;
-  int chunk_runs = 0;              ///< runs per HDF5 chunk and write batch; 0: chosen by the plan
-  int compression_level = 1;       ///< deflate level 0..9 (1: nearly the size of 9 at a fraction of the CPU)
+  int chunk_runs = 0;         ///< runs per HDF5 chunk and write batch; 0: chosen by the plan
+  int compression_level = 1;  ///< deflate level 0..9 (1: nearly the size of 9 at a fraction of the CPU)
+  /// [output] deflate_encoder: zlib (HDF5's own bytes) or libdeflate (the same format, faster).
+  DeflateEncoder deflate_encoder = DeflateEncoder::kZlib;
   double max_archive_gb = 1000.0;  ///< refuse designs whose storage estimate exceeds this
 
   std::vector<FixedParameter> fixed;  ///< from [parameters], catalogue order

@@ -11,6 +11,7 @@
 #include <hdf5.h>
 #include <zlib.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -257,6 +258,62 @@ TEST(ChunkFilters, IncompressibleDataEqualsHdf5) {
     const Case c{"random", H5T_STD_U64LE, 8, 1, true};
     ExpectSameChunks(c, 9, data, rows, rows, {});
   }
+}
+
+// libdeflate's streams ([output] deflate_encoder = "libdeflate") are not zlib's bytes, so the oracle is
+// HDF5's own filter reading them back: each chunk is stored with H5Dwrite_chunk (and its mask) in a
+// dataset of the same pipeline, and H5Dread must give the raw values, for smooth, few-valued and random
+// (incompressible) data at levels 1, 4 and 9.
+TEST(ChunkFilters, LibdeflateStreamsReadBackThroughHdf5sOwnFilter) {
+  std::mt19937_64 random(20261204);
+  const auto dir = TempDir("libdeflate");
+  Handle file(H5Fcreate((dir / "ld.h5").c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), "create");
+  constexpr hsize_t kRows = 4096, kChunkRows = 1024;
+  int skipped = 0, deflated = 0;
+  for (int kind = 0; kind < 3; ++kind) {
+    std::vector<double> values(kRows);
+    for (hsize_t i = 0; i < kRows; ++i) {
+      const double smooth = std::sin(0.001 * static_cast<double>(i));
+      values[i] = kind == 0   ? smooth
+                  : kind == 1 ? static_cast<double>(i % 3)
+                              : std::bit_cast<double>(random());
+    }
+    for (const int level : {1, 4, 9}) {
+      SCOPED_TRACE("kind " + std::to_string(kind) + " level " + std::to_string(level));
+      FilterPipeline pipeline;
+      pipeline.element_size = 8;
+      pipeline.shuffle = true;
+      pipeline.deflate_level = level;
+      pipeline.encoder = DeflateEncoder::kLibdeflate;
+      const std::string name = "d" + std::to_string(kind) + "_" + std::to_string(level);
+      hsize_t dims[1] = {kRows};
+      Handle space(H5Screate_simple(1, dims, nullptr), "space");
+      Handle dcpl = Creation(pipeline, kChunkRows, 1, H5T_IEEE_F64LE, nullptr);
+      Handle dataset(H5Dcreate2(file.get(), name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT,
+                                dcpl.get(), H5P_DEFAULT),
+                     "dset");
+      ChunkFilter filter;
+      for (hsize_t first = 0; first < kRows; first += kChunkRows) {
+        const auto* raw = reinterpret_cast<const unsigned char*>(values.data() + first);
+        std::vector<unsigned char> stored;
+        const std::uint32_t mask = filter.Apply(pipeline, raw, kChunkRows * 8, stored);
+        (mask & 2u ? skipped : deflated) += 1;
+        std::vector<unsigned char> back;
+        ASSERT_TRUE(filter.Reverse(pipeline, mask, stored.data(), stored.size(), kChunkRows * 8, back));
+        ASSERT_EQ(std::memcmp(back.data(), raw, kChunkRows * 8), 0);
+        const hsize_t offset[1] = {first};
+        ASSERT_GE(H5Dwrite_chunk(dataset.get(), H5P_DEFAULT, mask, offset, stored.size(), stored.data()), 0);
+      }
+      std::vector<double> read(kRows);
+      ASSERT_GE(H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, read.data()), 0);
+      EXPECT_EQ(std::memcmp(read.data(), values.data(), kRows * 8), 0);
+    }
+  }
+  // Every chunk went through deflate: random bytes become stored blocks, which fit HDF5's buffer
+  // (1.001 n + 12 bytes) as zlib's do, so the filter is never skipped here.
+  EXPECT_EQ(deflated, 3 * 3 * static_cast<int>(kRows / kChunkRows));
+  EXPECT_EQ(skipped, 0);
+  std::filesystem::remove_all(dir);
 }
 
 // A whole sweep: each chunk the workers stored equals what HDF5 stores for the same values.
