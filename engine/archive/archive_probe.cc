@@ -134,6 +134,98 @@ bool Complete(const std::string& report) {
   ::_exit(0);
 }
 
+// How a child's wait ended.
+struct ChildWait {
+  std::string report;
+  int status = 0;  // waitpid's, when reaped
+  bool timed_out = false;
+  bool reaped = false;
+};
+
+// Reads the child's report from `report_fd` until it is complete, or the child has gone: not until
+// end of file alone, since a fork made meanwhile by another thread (a second check) holds a copy of
+// the pipe's write end. Gives up at `deadline` (timed_out).
+ChildWait ReadReport(int report_fd, pid_t child, std::chrono::steady_clock::time_point deadline) {
+  ChildWait wait;
+  for (;;) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      wait.timed_out = true;
+      break;
+    }
+    struct pollfd wait_for {
+      report_fd, POLLIN, 0
+    };
+    const int ready = ::poll(&wait_for, 1, static_cast<int>(std::min<long long>(left.count() + 1, 20)));
+    if (ready < 0 && errno != EINTR) break;
+    if (ready > 0) {
+      char buffer[4096];
+      const ssize_t got = ::read(report_fd, buffer, sizeof buffer);
+      if (got > 0) {
+        wait.report.append(buffer, static_cast<std::size_t>(got));
+        if (Complete(wait.report)) break;
+        continue;
+      }
+      if (got == 0) break;  // end of file: every write end closed
+      if (errno != EINTR) break;
+    }
+    if (::waitpid(child, &wait.status, WNOHANG) == child) {
+      wait.reaped = true;
+      ::fcntl(report_fd, F_SETFL, O_NONBLOCK);  // what it wrote before it went
+      char buffer[4096];
+      for (ssize_t got; (got = ::read(report_fd, buffer, sizeof buffer)) > 0;) {
+        wait.report.append(buffer, static_cast<std::size_t>(got));
+      }
+      break;
+    }
+  }
+  return wait;
+}
+
+// The error a child reported (kind R, I, A or O), rebuilt in this process: into outcome.error (and
+// outcome.remedy for a RequestError).
+void RebuildError(const std::string& report, ProbeOutcome& outcome) {
+  const std::vector<std::string> f = Decode(report);
+  const auto field = [&f](std::size_t i) { return i < f.size() ? f[i] : std::string(); };
+  const int line = std::atoi(field(4).c_str());
+  outcome.kind = ProbeOutcome::Kind::kThrew;
+  if (report[0] == 'R') {
+    outcome.error =
+        std::make_exception_ptr(RequestError(field(0), field(1), field(2), field(3), field(5), field(6)));
+    outcome.remedy = field(5);
+  } else if (report[0] == 'I') {
+    outcome.error = std::make_exception_ptr(InputError(field(0), field(1), field(2), field(3), line));
+  } else if (report[0] == 'A') {
+    outcome.error = std::make_exception_ptr(ArchiveError(field(0), field(1)));
+  } else {
+    outcome.error = std::make_exception_ptr(ArchiveError(field(0)));
+  }
+}
+
+// The outcome of a child reaped after `wait`: timed out, killed by a signal, exited without a whole
+// report, finished, or threw.
+ProbeOutcome OutcomeOf(const ChildWait& wait) {
+  ProbeOutcome outcome;
+  const int status = wait.status;
+  std::string report = wait.report;
+  if (!Complete(report)) report.clear();
+  if (wait.timed_out) {
+    outcome.kind = ProbeOutcome::Kind::kTimedOut;
+  } else if (WIFSIGNALED(status)) {
+    outcome.kind = ProbeOutcome::Kind::kSignal;
+    outcome.signal = WTERMSIG(status);
+  } else if (report.empty() || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    outcome.kind = ProbeOutcome::Kind::kExited;
+    outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  } else if (report[0] == kFinished) {
+    outcome.kind = ProbeOutcome::Kind::kFinished;
+  } else {
+    RebuildError(report, outcome);
+  }
+  return outcome;
+}
+
 }  // namespace
 
 bool InProbeChild() { return in_child; }
@@ -161,77 +253,12 @@ ProbeOutcome RunInChild(const std::function<void()>& probe, double deadline_s) {
   const auto deadline =
       std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                              std::chrono::duration<double>(deadline_s));
-  // Until the report is complete, or the child has gone: not until end of file alone, since a fork
-  // made meanwhile by another thread (a second check) holds a copy of the pipe's write end.
-  bool timed_out = false, reaped = false;
-  int status = 0;
-  std::string report;
-  for (;;) {
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) {
-      timed_out = true;
-      break;
-    }
-    struct pollfd wait_for {
-      pipe_fds[0], POLLIN, 0
-    };
-    const int ready = ::poll(&wait_for, 1, static_cast<int>(std::min<long long>(left.count() + 1, 20)));
-    if (ready < 0 && errno != EINTR) break;
-    if (ready > 0) {
-      char buffer[4096];
-      const ssize_t got = ::read(pipe_fds[0], buffer, sizeof buffer);
-      if (got > 0) {
-        report.append(buffer, static_cast<std::size_t>(got));
-        if (Complete(report)) break;
-        continue;
-      }
-      if (got == 0) break;  // end of file: every write end closed
-      if (errno != EINTR) break;
-    }
-    if (::waitpid(child, &status, WNOHANG) == child) {
-      reaped = true;
-      ::fcntl(pipe_fds[0], F_SETFL, O_NONBLOCK);  // what it wrote before it went
-      char buffer[4096];
-      for (ssize_t got; (got = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) {
-        report.append(buffer, static_cast<std::size_t>(got));
-      }
-      break;
-    }
-  }
+  ChildWait wait = ReadReport(pipe_fds[0], child, deadline);
   ::close(pipe_fds[0]);
-  if (timed_out) ::kill(child, SIGKILL);
-  while (!reaped && ::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  if (wait.timed_out) ::kill(child, SIGKILL);
+  while (!wait.reaped && ::waitpid(child, &wait.status, 0) < 0 && errno == EINTR) {
   }
-  if (!Complete(report)) report.clear();
-  if (timed_out) {
-    outcome.kind = ProbeOutcome::Kind::kTimedOut;
-  } else if (WIFSIGNALED(status)) {
-    outcome.kind = ProbeOutcome::Kind::kSignal;
-    outcome.signal = WTERMSIG(status);
-  } else if (report.empty() || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    outcome.kind = ProbeOutcome::Kind::kExited;
-    outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  } else if (report[0] == kFinished) {
-    outcome.kind = ProbeOutcome::Kind::kFinished;
-  } else {
-    const std::vector<std::string> f = Decode(report);
-    const auto field = [&f](std::size_t i) { return i < f.size() ? f[i] : std::string(); };
-    const int line = std::atoi(field(4).c_str());
-    outcome.kind = ProbeOutcome::Kind::kThrew;
-    if (report[0] == 'R') {
-      outcome.error =
-          std::make_exception_ptr(RequestError(field(0), field(1), field(2), field(3), field(5), field(6)));
-      outcome.remedy = field(5);
-    } else if (report[0] == 'I') {
-      outcome.error = std::make_exception_ptr(InputError(field(0), field(1), field(2), field(3), line));
-    } else if (report[0] == 'A') {
-      outcome.error = std::make_exception_ptr(ArchiveError(field(0), field(1)));
-    } else {
-      outcome.error = std::make_exception_ptr(ArchiveError(field(0)));
-    }
-  }
-  return outcome;
+  return OutcomeOf(wait);
 }
 
 double ArchiveCheckDeadline() {

@@ -44,108 +44,130 @@ bool StartsWith(const std::string& text, const std::string& prefix) {
   return text.size() >= prefix.size() && text.compare(0, prefix.size(), prefix) == 0;
 }
 
-// The layout every reader relies on (schemas/archive.md), checked from metadata alone when an archive
-// is opened, so that a damaged or foreign file is refused with one line (exit 2) instead of failing
-// later in a reader: the root attributes the readers use, runs/ and design/ present, and every
-// per-run dataset one row per run, of a type its readers can convert.
-void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_count) {
-  auto refuse = [&shown](const std::string& key, const std::string& value, const std::string& why) {
-    throw InputError(shown, key, value, why + " (a damaged archive, or one not written by gesweep)");
-  };
+// Refuses an archive whose layout is not gesweep's: InputError naming the key and why.
+[[noreturn]] void RefuseLayout(const std::string& shown, const std::string& key, const std::string& value,
+                               const std::string& why) {
+  throw InputError(shown, key, value, why + " (a damaged archive, or one not written by gesweep)");
+}
+
+// The root attributes of the run counts, consistent with each other; returns run_count.
+std::int64_t ReadLayoutCounts(hid_t file, const std::string& shown) {
   auto integer = [&](const char* name) {
     std::optional<std::int64_t> value;
     try {
       value = hdf5::ReadIntegerAttribute(file, name);
     } catch (const ArchiveError&) {
-      refuse(name, "", "expected an integer root attribute");
+      RefuseLayout(shown, name, "", "expected an integer root attribute");
     }
-    if (!value) refuse(name, "", "missing root attribute");
+    if (!value) RefuseLayout(shown, name, "", "missing root attribute");
     return *value;
   };
   const std::int64_t runs = integer("run_count");
   const std::int64_t design_runs = integer("design_runs");
   const std::int64_t first_run = integer("first_run");
   const std::int64_t chunk_runs = integer("chunk_runs");
-  if (runs < 0) refuse("run_count", std::to_string(runs), "expected a run count >= 0");
-  if (chunk_runs < 1) refuse("chunk_runs", std::to_string(chunk_runs), "expected a batch size >= 1");
+  if (runs < 0) RefuseLayout(shown, "run_count", std::to_string(runs), "expected a run count >= 0");
+  if (chunk_runs < 1)
+    RefuseLayout(shown, "chunk_runs", std::to_string(chunk_runs), "expected a batch size >= 1");
   if (first_run < 0 || design_runs < 0 || first_run > design_runs || runs > design_runs - first_run) {
-    refuse("first_run", std::to_string(first_run),
-           "expected first_run + run_count <= design_runs = " + std::to_string(design_runs));
+    RefuseLayout(shown, "first_run", std::to_string(first_run),
+                 "expected first_run + run_count <= design_runs = " + std::to_string(design_runs));
   }
+  return runs;
+}
+
+// The groups runs/ and design/ are present, and groups.
+void CheckLayoutGroups(hid_t file, const std::string& shown) {
   for (const char* group : {archive::kRunsGroup, archive::kDesignGroup}) {
     H5O_info_t info{};
     if (!hdf5::Exists(file, group) ||
         H5Oget_info_by_name2(file, group, &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0 ||
         info.type != H5O_TYPE_GROUP) {
       H5Eclear2(H5E_DEFAULT);
-      refuse(group, "", "missing group /" + std::string(group));
+      RefuseLayout(shown, group, "", "missing group /" + std::string(group));
     }
   }
+}
+
+// Checks the dataset `path` if it is a per-run one (under runs/, design/, results/, or a series'
+// values): one row per run, of a type its readers convert. Returns whether it was one.
+bool CheckRunDataset(hid_t file, const std::string& path, std::int64_t runs, const std::string& shown) {
+  const bool runs_group = StartsWith(path, std::string(archive::kRunsGroup) + "/");
+  const bool design_group = StartsWith(path, std::string(archive::kDesignGroup) + "/");
+  const bool results_group = StartsWith(path, std::string(archive::kResultsGroup) + "/");
+  const bool series_group = StartsWith(path, std::string(archive::kSeriesGroup) + "/");
+  if (!runs_group && !design_group && !results_group && !series_group) return false;
+  const hid_t raw = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (raw < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    RefuseLayout(shown, path, "", "cannot open the dataset");
+  }
+  Handle dataset(raw);
+  // A series group holds the shared time axes too (one value per sample, not per run).
+  if (series_group && H5Aexists(dataset.get(), "time_axis") <= 0) {
+    H5Eclear2(H5E_DEFAULT);
+    return false;
+  }
+  const hid_t space_id = H5Dget_space(dataset.get());
+  const hid_t type_id = H5Dget_type(dataset.get());
+  Handle space(space_id), type(type_id);
+  if (space_id < 0 || type_id < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    RefuseLayout(shown, path, "", "cannot read the dataset's shape or type");
+  }
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  hsize_t dims[2] = {0, 0};
+  if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    RefuseLayout(shown, path, "",
+                 "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
+  }
+  if (static_cast<std::int64_t>(dims[0]) != runs) {
+    RefuseLayout(shown, path, std::to_string(dims[0]) + " rows",
+                 "expected one row per run: run_count = " + std::to_string(runs) + " (runs/status has " +
+                     (runs >= 0 ? std::to_string(runs) : std::string("?")) + ")");
+  }
+  const H5T_class_t type_class = H5Tget_class(type.get());
+  const bool number = type_class == H5T_INTEGER || type_class == H5T_FLOAT;
+  bool ok = true;
+  std::string wanted;
+  if (path == archive::kRunMessage) {
+    ok = type_class == H5T_STRING && rank == 1;
+    wanted = "one string per run";
+  } else if (runs_group) {
+    ok = type_class == H5T_INTEGER && rank == 1;
+    wanted = "one integer per run";
+  } else if (design_group) {
+    ok = number && rank == 1;
+    wanted = "one number per run";
+  } else {
+    ok = number || (type_class == H5T_COMPOUND && results_group);
+    wanted = "numbers";
+  }
+  if (!ok) RefuseLayout(shown, path, "", "expected " + wanted + ", found another type or shape");
+  return true;
+}
+
+// The layout every reader relies on (schemas/archive.md), checked from metadata alone when an archive
+// is opened, so that a damaged or foreign file is refused with one line (exit 2) instead of failing
+// later in a reader: the root attributes the readers use, runs/ and design/ present, and every
+// per-run dataset one row per run, of a type its readers can convert.
+void ValidateLayout(hid_t file, const std::string& shown, std::int64_t* run_count) {
+  const std::int64_t runs = ReadLayoutCounts(file, shown);
+  CheckLayoutGroups(file, shown);
   std::vector<std::string> datasets;
   if (H5Ovisit2(file, H5_INDEX_NAME, H5_ITER_INC, CollectDataset, &datasets, H5O_INFO_BASIC) < 0) {
     H5Eclear2(H5E_DEFAULT);
-    refuse("", "", "cannot list its datasets");
+    RefuseLayout(shown, "", "", "cannot list its datasets");
   }
   bool seen[4] = {false, false, false, false};
   const char* required[4] = {archive::kRunIndex, archive::kRunId, archive::kRunStatus, archive::kRunMessage};
   for (const std::string& path : datasets) {
-    const bool runs_group = StartsWith(path, std::string(archive::kRunsGroup) + "/");
-    const bool design_group = StartsWith(path, std::string(archive::kDesignGroup) + "/");
-    const bool results_group = StartsWith(path, std::string(archive::kResultsGroup) + "/");
-    const bool series_group = StartsWith(path, std::string(archive::kSeriesGroup) + "/");
-    if (!runs_group && !design_group && !results_group && !series_group) continue;
-    const hid_t raw = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
-    if (raw < 0) {
-      H5Eclear2(H5E_DEFAULT);
-      refuse(path, "", "cannot open the dataset");
-    }
-    Handle dataset(raw);
-    // A series group holds the shared time axes too (one value per sample, not per run).
-    if (series_group && H5Aexists(dataset.get(), "time_axis") <= 0) {
-      H5Eclear2(H5E_DEFAULT);
-      continue;
-    }
-    const hid_t space_id = H5Dget_space(dataset.get());
-    const hid_t type_id = H5Dget_type(dataset.get());
-    Handle space(space_id), type(type_id);
-    if (space_id < 0 || type_id < 0) {
-      H5Eclear2(H5E_DEFAULT);
-      refuse(path, "", "cannot read the dataset's shape or type");
-    }
-    const int rank = H5Sget_simple_extent_ndims(space.get());
-    hsize_t dims[2] = {0, 0};
-    if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) {
-      H5Eclear2(H5E_DEFAULT);
-      refuse(path, "",
-             "expected one row per run (a dataset of rank 1 or 2), found rank " + std::to_string(rank));
-    }
-    if (static_cast<std::int64_t>(dims[0]) != runs) {
-      refuse(path, std::to_string(dims[0]) + " rows",
-             "expected one row per run: run_count = " + std::to_string(runs) + " (runs/status has " +
-                 (runs >= 0 ? std::to_string(runs) : std::string("?")) + ")");
-    }
-    const H5T_class_t type_class = H5Tget_class(type.get());
-    const bool number = type_class == H5T_INTEGER || type_class == H5T_FLOAT;
-    bool ok = true;
-    std::string wanted;
-    if (path == archive::kRunMessage) {
-      ok = type_class == H5T_STRING && rank == 1;
-      wanted = "one string per run";
-    } else if (runs_group) {
-      ok = type_class == H5T_INTEGER && rank == 1;
-      wanted = "one integer per run";
-    } else if (design_group) {
-      ok = number && rank == 1;
-      wanted = "one number per run";
-    } else {
-      ok = number || (type_class == H5T_COMPOUND && results_group);
-      wanted = "numbers";
-    }
-    if (!ok) refuse(path, "", "expected " + wanted + ", found another type or shape");
+    if (!CheckRunDataset(file, path, runs, shown)) continue;
     for (int k = 0; k < 4; ++k) seen[k] = seen[k] || path == required[k];
   }
   for (int k = 0; k < 4; ++k) {
-    if (!seen[k]) refuse(required[k], "", "missing dataset /" + std::string(required[k]));
+    if (!seen[k]) RefuseLayout(shown, required[k], "", "missing dataset /" + std::string(required[k]));
   }
   *run_count = runs;
 }
@@ -218,6 +240,107 @@ void DecodeMetadata(hid_t file) {
   H5Eclear2(H5E_DEFAULT);
 }
 
+// Opens the archive read-only, or else as a snapshot (SWMR read, `snapshot` set): the file, or a
+// negative id with HDF5's error of the first attempt in `first_error`.
+hid_t OpenReadOnly(const std::filesystem::path& path, hid_t fapl, bool& snapshot, std::string& first_error) {
+  hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  if (id < 0) {
+    first_error = hdf5::LastError();
+    H5Eclear2(H5E_DEFAULT);
+    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot. An SWMR
+    // reader re-reads a metadata block whose checksum fails (a writer may be rewriting it), sleeping
+    // 1 ns, 2 ns, 4 ns, ... between attempts; HDF5's default of 100 attempts sleeps for hours on a
+    // damaged file (fuzz_archive: opens that never returned). 24 attempts sleep 17 ms in all, far
+    // longer than a writer takes to flush one block.
+    Check(H5Pset_metadata_read_attempts(fapl, kSnapshotReadAttempts), "metadata read attempts");
+    id = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+    snapshot = id >= 0;
+    H5Eclear2(H5E_DEFAULT);
+  }
+  return id;
+}
+
+// A truncated archive opened through a copy extended to its recorded size (`owner` then owns the
+// copy, removed with its last owner), or nullopt when the file is not the size HDF5's error gave.
+// Throws InputError when the copy cannot be made, or does not open.
+std::optional<ArchiveReader> OpenExtendedCopy(const std::filesystem::path& path,
+                                              const std::pair<std::uintmax_t, std::uintmax_t>& truncated,
+                                              std::shared_ptr<const std::filesystem::path>& owner) {
+  const std::string shown = path.string();
+  std::error_code ec;
+  const std::filesystem::path copy = path.string() + ".repair";
+  if (!(std::filesystem::file_size(path, ec) == truncated.first && !ec)) return std::nullopt;
+  std::filesystem::remove(copy, ec);
+  std::filesystem::copy_file(path, copy, ec);
+  if (!ec) std::filesystem::resize_file(copy, truncated.second, ec);
+  if (!ec) {
+    std::shared_ptr<const std::filesystem::path> made(new std::filesystem::path(copy),
+                                                      [](const std::filesystem::path* p) {
+                                                        std::error_code ignored;
+                                                        std::filesystem::remove(*p, ignored);
+                                                        delete p;
+                                                      });
+    ArchiveReader repaired = [&] {
+      try {
+        return ArchiveReader::Open(copy, /*repair_truncated=*/false);
+      } catch (const InputError& e) {
+        throw InputError(shown, e.key(), e.value(),
+                         e.expected() + " (in a copy extended to the size HDF5 recorded, " +
+                             std::to_string(truncated.second) + " bytes)");
+      }
+    }();
+    owner = std::move(made);
+    return repaired;
+  }
+  const std::string why = ec.message();
+  std::filesystem::remove(copy, ec);
+  throw InputError(shown, "", "",
+                   "the file is " + std::to_string(truncated.second - truncated.first) +
+                       " bytes shorter than HDF5 recorded (a write failed half-way); resuming it reads a "
+                       "copy extended to " +
+                       std::to_string(truncated.second) + " bytes, " + copy.string() +
+                       ", which could not be made: " + why + "; the file is unchanged, free the space");
+}
+
+// Refuses an archive HDF5 did not open: RequestError for a truncated one (resume repairs it),
+// InputError otherwise.
+[[noreturn]] void RefuseUnopened(const std::string& shown,
+                                 const std::optional<std::pair<std::uintmax_t, std::uintmax_t>>& truncated,
+                                 const std::string& first_error) {
+  if (truncated) {
+    throw RequestError(
+        shown, "", "",
+        "the file is " + std::to_string(truncated->second - truncated->first) +
+            " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
+            "batches are kept",
+        "resume_repairs", shown);
+  }
+  throw InputError(shown, "", "",
+                   "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
+                       "); if no gesweep is writing it, it may be damaged");
+}
+
+// The root names gesweep's format, of a version this engine reads. Throws InputError.
+void CheckFormat(hid_t id, const std::string& shown) {
+  std::optional<std::string> format;
+  std::optional<std::int64_t> version;
+  try {
+    format = hdf5::ReadStringAttribute(id, "format");
+    version = hdf5::ReadIntegerAttribute(id, "format_version");
+  } catch (const ArchiveError&) {
+    H5Eclear2(H5E_DEFAULT);
+  }
+  if (!format || *format != archive::kFormatName) {
+    throw InputError(shown, "format", format.value_or(""),
+                     "not a gesweep archive (no format = \"gesweep-archive\")");
+  }
+  if (!version || *version > archive::kFormatVersion) {
+    throw InputError(shown, "format_version", version ? std::to_string(*version) : "",
+                     "expected format version <= " + std::to_string(archive::kFormatVersion) +
+                         " (this engine is older than the archive)");
+  }
+}
+
 }  // namespace
 
 ArchiveReader::ArchiveReader(std::filesystem::path path, Handle file, bool snapshot)
@@ -246,21 +369,8 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
   }
   Handle fapl = hdf5::FileAccess();
   bool snapshot = false;
-  hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
   std::string first_error;
-  if (id < 0) {
-    first_error = hdf5::LastError();
-    H5Eclear2(H5E_DEFAULT);
-    // Being written by a sweep (SWMR mode), or left open by a writer that died: a snapshot. An SWMR
-    // reader re-reads a metadata block whose checksum fails (a writer may be rewriting it), sleeping
-    // 1 ns, 2 ns, 4 ns, ... between attempts; HDF5's default of 100 attempts sleeps for hours on a
-    // damaged file (fuzz_archive: opens that never returned). 24 attempts sleep 17 ms in all, far
-    // longer than a writer takes to flush one block.
-    Check(H5Pset_metadata_read_attempts(fapl.get(), kSnapshotReadAttempts), "metadata read attempts");
-    id = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.get());
-    snapshot = id >= 0;
-    H5Eclear2(H5E_DEFAULT);
-  }
+  const hid_t id = OpenReadOnly(path, fapl.get(), snapshot, first_error);
   if (id < 0) {
     // A write that failed half-way (disk full, a file-size limit) leaves the file shorter than the
     // size HDF5 recorded for it: "truncated file: eof = A, ..., stored_eof = B".
@@ -270,73 +380,18 @@ ArchiveReader ArchiveReader::Open(const std::filesystem::path& path, bool repair
       // into a fresh file that replaces it; the missing tail, zeros, belongs to the batch that failed.
       // Extended is a copy: until the resume has found it a resumable archive of its study, the file
       // keeps its bytes (a refused resume leaves it as it was).
-      std::error_code ec;
-      const std::filesystem::path copy = path.string() + ".repair";
-      if (std::filesystem::file_size(path, ec) == truncated->first && !ec) {
-        std::filesystem::remove(copy, ec);
-        std::filesystem::copy_file(path, copy, ec);
-        if (!ec) std::filesystem::resize_file(copy, truncated->second, ec);
-        if (!ec) {
-          std::shared_ptr<const std::filesystem::path> owner(new std::filesystem::path(copy),
-                                                             [](const std::filesystem::path* p) {
-                                                               std::error_code ignored;
-                                                               std::filesystem::remove(*p, ignored);
-                                                               delete p;
-                                                             });
-          ArchiveReader repaired = [&] {
-            try {
-              return Open(copy, /*repair_truncated=*/false);
-            } catch (const InputError& e) {
-              throw InputError(shown, e.key(), e.value(),
-                               e.expected() + " (in a copy extended to the size HDF5 recorded, " +
-                                   std::to_string(truncated->second) + " bytes)");
-            }
-          }();
-          repaired.path_ = path;
-          repaired.repair_copy_ = std::move(owner);
-          return repaired;
-        }
-        const std::string why = ec.message();
-        std::filesystem::remove(copy, ec);
-        throw InputError(
-            shown, "", "",
-            "the file is " + std::to_string(truncated->second - truncated->first) +
-                " bytes shorter than HDF5 recorded (a write failed half-way); resuming it reads a "
-                "copy extended to " +
-                std::to_string(truncated->second) + " bytes, " + copy.string() +
-                ", which could not be made: " + why + "; the file is unchanged, free the space");
+      std::shared_ptr<const std::filesystem::path> owner;
+      std::optional<ArchiveReader> repaired = OpenExtendedCopy(path, *truncated, owner);
+      if (repaired) {
+        repaired->path_ = path;
+        repaired->repair_copy_ = std::move(owner);
+        return std::move(*repaired);
       }
     }
-    if (truncated) {
-      throw RequestError(
-          shown, "", "",
-          "the file is " + std::to_string(truncated->second - truncated->first) +
-              " bytes shorter than HDF5 recorded: a write failed half-way (disk full?); its complete "
-              "batches are kept",
-          "resume_repairs", shown);
-    }
-    throw InputError(shown, "", "",
-                     "archive in use or unreadable: cannot open it now (HDF5: " + first_error +
-                         "); if no gesweep is writing it, it may be damaged");
+    RefuseUnopened(shown, truncated, first_error);
   }
   ArchiveReader reader(path, Handle(id), snapshot);
-  std::optional<std::string> format;
-  std::optional<std::int64_t> version;
-  try {
-    format = hdf5::ReadStringAttribute(id, "format");
-    version = hdf5::ReadIntegerAttribute(id, "format_version");
-  } catch (const ArchiveError&) {
-    H5Eclear2(H5E_DEFAULT);
-  }
-  if (!format || *format != archive::kFormatName) {
-    throw InputError(shown, "format", format.value_or(""),
-                     "not a gesweep archive (no format = \"gesweep-archive\")");
-  }
-  if (!version || *version > archive::kFormatVersion) {
-    throw InputError(shown, "format_version", version ? std::to_string(*version) : "",
-                     "expected format version <= " + std::to_string(archive::kFormatVersion) +
-                         " (this engine is older than the archive)");
-  }
+  CheckFormat(id, shown);
   ValidateLayout(id, shown, &reader.run_count_);
   reader.is_virtual_ = reader.StringAttribute("merge_kind") == "virtual" || archive::HasVirtualDatasets(id);
   if (reader.is_virtual_) reader.CheckVirtualSources();

@@ -425,10 +425,12 @@ void ArchiveWriter::Finish() {
   finished_ = true;
 }
 
-std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& path, SweepPlan& plan,
-                                                   const RunProvenance& provenance, ArchiveOpenMode mode,
-                                                   ArchiveOpenReport* report) {
-  hdf5::Quiet();
+namespace {
+
+// The output may be written in `mode`: not a directory, not an existing file unless resumed or
+// forced, in a directory this user can write in. Returns whether it exists. Throws InputError (or
+// RequestError).
+bool CheckOutputPath(const std::filesystem::path& path, ArchiveOpenMode mode) {
   const std::string shown = path.string();
   const std::filesystem::path directory = RequireOutputDirectory(path, "output");
   std::error_code ec;
@@ -450,17 +452,117 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     throw InputError("command line", "output", shown,
                      "cannot write in the directory " + directory.string() + why);
   }
+  return exists;
+}
+
+// Takes the flock on ARCHIVE.lock, its descriptor into `lock_fd`. Throws ArchiveError when the lock
+// file cannot be made, InputError when another process holds the lock.
+void LockArchive(const std::filesystem::path& path, int& lock_fd) {
+  const std::string lock_path = path.string() + ".lock";
+  lock_fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd < 0) throw ArchiveError("cannot create the lock file " + lock_path);
+  if (flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    throw InputError("command line", "output", path.string(),
+                     "archive in use: another gesweep process is writing it (" + lock_path + " is locked)");
+  }
+}
+
+// What a resume takes from the existing archive.
+struct ResumePoint {
+  std::vector<std::int64_t> complete_blocks;
+  std::optional<ArchiveReader> crashed;  // the archive to copy the complete batches from
+  std::string original_start;
+  std::string original_id;  // a resume keeps the archive's identity
+  std::string resumed_at;
+};
+
+// Checks that `existing` is a shard of this sweep and reads what a resume keeps of it; the plan
+// takes its chunk_runs.
+void ReadResumePoint(ArchiveReader& existing, SweepPlan& plan, const std::string& shown,
+                     ResumePoint& resume) {
+  if (!existing.StringListAttribute("merged_from").empty()) {
+    throw InputError("command line", "output", shown,
+                     "is a merged archive (gesweep merge), not a shard a sweep writes; resume the shards, "
+                     "then merge again");
+  }
+  existing.CheckSameSweep(plan, shown);
+  plan.set_chunk_runs(static_cast<int>(existing.IntegerAttribute("chunk_runs")));
+  resume.complete_blocks = existing.CompleteBlocks(plan.chunk_runs());
+  existing.VerifyRunIds(plan, resume.complete_blocks, shown);
+  resume.original_start = existing.StringAttribute("start_time");
+  resume.original_id = existing.StringAttribute("archive_id");
+  resume.resumed_at = existing.StringAttribute("resumed_at");
+  resume.resumed_at += (resume.resumed_at.empty() ? "" : ", ") + UtcTimestamp();
+}
+
+// Opens the existing archive for a resume: continued in place (the file returned, its attributes
+// marked resumed), or else an empty handle and resume.crashed the archive to copy from.
+Handle OpenForResume(const std::filesystem::path& path, SweepPlan& plan, const RunProvenance& provenance,
+                     hid_t fapl, ResumePoint& resume, ArchiveOpenReport& out) {
+  const std::string shown = path.string();
+  ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
+  ReadResumePoint(existing, plan, shown, resume);
+  if (!existing.snapshot() && !existing.repaired()) {
+    // Closed cleanly: continue in place, opened straight into SWMR mode. When that is impossible
+    // (a reader holds the file's lock, e.g. h5py or gesweep query), resume as after a crash:
+    // copy the complete batches into a fresh file and rename it over (the reader keeps its view).
+    existing.Close();
+    const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDWR | H5F_ACC_SWMR_WRITE, fapl);
+    H5Eclear2(H5E_DEFAULT);
+    if (id < 0) {
+      resume.crashed.emplace(ArchiveReader::Open(path));
+      out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
+      out.note = "another process holds it open";
+      return Handle();
+    }
+    Handle file(id);
+    hdf5::UpdateAttribute(file.get(), "resumed_at", resume.resumed_at);
+    hdf5::UpdateAttribute(file.get(), "end_time", std::string());
+    hdf5::UpdateAttribute(file.get(), "complete", std::int64_t{0});
+    hdf5::UpdateAttribute(file.get(), "threads", static_cast<std::int64_t>(provenance.threads));
+    hdf5::UpdateAttribute(file.get(), "host", HostName());
+    hdf5::UpdateAttribute(file.get(), "command_line", provenance.command_line);
+    Check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "flush " + shown);
+    return file;
+  }
+  // (A truncated file was read through a repaired copy: its complete batches go into a fresh file,
+  // renamed over it only now that it is known to be a resumable archive of this study.)
+  const bool repaired = existing.repaired();
+  resume.crashed.emplace(std::move(existing));
+  out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
+  out.note =
+      repaired ? "it is shorter than HDF5 recorded (a write failed half-way)" : "it was not closed cleanly";
+  return Handle();
+}
+
+// The runs of the complete batches into out.runs_complete; the other batches into out.pending_blocks.
+void TallyBlocks(const SweepPlan& plan, const std::vector<std::int64_t>& complete_blocks,
+                 ArchiveOpenReport& out) {
+  std::size_t next_complete = 0;
+  for (std::int64_t block = 0; block < plan.block_count(); ++block) {
+    if (next_complete < complete_blocks.size() && complete_blocks[next_complete] == block) {
+      ++next_complete;
+      const std::int64_t first = block * plan.chunk_runs();
+      out.runs_complete += std::min<std::int64_t>(plan.chunk_runs(), plan.run_count() - first);
+    } else {
+      out.pending_blocks.push_back(block);
+    }
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& path, SweepPlan& plan,
+                                                   const RunProvenance& provenance, ArchiveOpenMode mode,
+                                                   ArchiveOpenReport* report) {
+  hdf5::Quiet();
+  const std::string shown = path.string();
+  const bool exists = CheckOutputPath(path, mode);
 
   std::unique_ptr<ArchiveWriter> writer(new ArchiveWriter(path, plan));
   // One writer per archive: a second `gesweep run` on the same -o (e.g. a requeued cluster task
   // while the first still runs) must not take it over.
-  const std::string lock_path = path.string() + ".lock";
-  writer->lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (writer->lock_fd_ < 0) throw ArchiveError("cannot create the lock file " + lock_path);
-  if (flock(writer->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    throw InputError("command line", "output", shown,
-                     "archive in use: another gesweep process is writing it (" + lock_path + " is locked)");
-  }
+  LockArchive(path, writer->lock_fd_);
   writer->lock_held_ = true;
   const std::filesystem::path temporary = path.string() + ".partial";
   Handle fapl = hdf5::FileAccess();
@@ -468,85 +570,40 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
   ArchiveOpenReport& out = report ? *report : local;
   out = ArchiveOpenReport{};
 
-  std::vector<std::int64_t> complete_blocks;
-  std::optional<ArchiveReader> crashed;
-  std::string original_start;
-  std::string original_id;  // a resume keeps the archive's identity
-  std::string resumed_at;
+  ResumePoint resume;
   if (exists && mode == ArchiveOpenMode::kResume) {
-    ArchiveReader existing = ArchiveReader::Open(path, /*repair_truncated=*/true);
-    if (!existing.StringListAttribute("merged_from").empty()) {
-      throw InputError("command line", "output", shown,
-                       "is a merged archive (gesweep merge), not a shard a sweep writes; resume the shards, "
-                       "then merge again");
-    }
-    existing.CheckSameSweep(plan, shown);
-    plan.set_chunk_runs(static_cast<int>(existing.IntegerAttribute("chunk_runs")));
-    complete_blocks = existing.CompleteBlocks(plan.chunk_runs());
-    existing.VerifyRunIds(plan, complete_blocks, shown);
-    original_start = existing.StringAttribute("start_time");
-    original_id = existing.StringAttribute("archive_id");
-    resumed_at = existing.StringAttribute("resumed_at");
-    resumed_at += (resumed_at.empty() ? "" : ", ") + UtcTimestamp();
-    if (!existing.snapshot() && !existing.repaired()) {
-      // Closed cleanly: continue in place, opened straight into SWMR mode. When that is impossible
-      // (a reader holds the file's lock, e.g. h5py or gesweep query), resume as after a crash:
-      // copy the complete batches into a fresh file and rename it over (the reader keeps its view).
-      existing.Close();
-      const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDWR | H5F_ACC_SWMR_WRITE, fapl.get());
-      H5Eclear2(H5E_DEFAULT);
-      if (id < 0) {
-        crashed.emplace(ArchiveReader::Open(path));
-        out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
-        out.note = "another process holds it open";
-      }
-      if (id >= 0) {
-        writer->file_ = Handle(id);
-        hdf5::UpdateAttribute(writer->file_.get(), "resumed_at", resumed_at);
-        hdf5::UpdateAttribute(writer->file_.get(), "end_time", std::string());
-        hdf5::UpdateAttribute(writer->file_.get(), "complete", std::int64_t{0});
-        hdf5::UpdateAttribute(writer->file_.get(), "threads", static_cast<std::int64_t>(provenance.threads));
-        hdf5::UpdateAttribute(writer->file_.get(), "host", HostName());
-        hdf5::UpdateAttribute(writer->file_.get(), "command_line", provenance.command_line);
-        Check(H5Fflush(writer->file_.get(), H5F_SCOPE_LOCAL), "flush " + shown);
-        writer->OpenDatasets();
-        out.kind = ArchiveOpenReport::Kind::kResumedClean;
-      }
-    } else {
-      // (A truncated file was read through a repaired copy: its complete batches go into a fresh file,
-      // renamed over it only now that it is known to be a resumable archive of this study.)
-      const bool repaired = existing.repaired();
-      crashed.emplace(std::move(existing));
-      out.kind = ArchiveOpenReport::Kind::kResumedAfterCrash;
-      out.note = repaired ? "it is shorter than HDF5 recorded (a write failed half-way)"
-                          : "it was not closed cleanly";
+    writer->file_ = OpenForResume(path, plan, provenance, fapl.get(), resume, out);
+    if (writer->file_) {
+      writer->OpenDatasets();
+      out.kind = ArchiveOpenReport::Kind::kResumedClean;
     }
   }
 
   if (!writer->file_) {
     // A new file, set up completely under a temporary name, then renamed into place: a person's
     // mistake or a crash before this point leaves no half-made archive under the requested name.
+    std::error_code ec;
     std::filesystem::remove(temporary, ec);
     {
       Handle file(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()),
                   "create " + temporary.string());
       writer->CreateSkeleton(file.get(), provenance);
-      if (crashed) {
-        hdf5::WriteAttribute(file.get(), "start_time", original_start);
-        hdf5::WriteAttribute(file.get(), "resumed_at", resumed_at);
+      if (resume.crashed) {
+        hdf5::WriteAttribute(file.get(), "start_time", resume.original_start);
+        hdf5::WriteAttribute(file.get(), "resumed_at", resume.resumed_at);
         // The same archive continued (an archive from before identities gets its first one).
-        if (!original_id.empty()) hdf5::WriteAttribute(file.get(), "archive_id", original_id);
+        if (!resume.original_id.empty()) hdf5::WriteAttribute(file.get(), "archive_id", resume.original_id);
         // Copy the complete batches of the crashed file, each chunk once.
         writer->file_ = std::move(file);
         writer->OpenDatasets();
-        crashed->CopyBlocks(*writer, complete_blocks, plan.chunk_runs());
+        resume.crashed->CopyBlocks(*writer, resume.complete_blocks, plan.chunk_runs());
         Check(H5Fflush(writer->file_.get(), H5F_SCOPE_LOCAL), "flush " + temporary.string());
         writer->CloseDatasets();
         file = std::move(writer->file_);
       }
       file.Close("close " + temporary.string());
     }
-    if (crashed) crashed->Close();
+    if (resume.crashed) resume.crashed->Close();
     // Reopened straight into SWMR mode, then renamed into place while open: under the requested name
     // the file is only ever absent, or consistent on disk (a kill at any moment leaves it readable).
     writer->file_ = Handle(H5Fopen(temporary.c_str(), H5F_ACC_RDWR | H5F_ACC_SWMR_WRITE, fapl.get()),
@@ -561,16 +618,7 @@ std::unique_ptr<ArchiveWriter> ArchiveWriter::Open(const std::filesystem::path& 
     }
   }
 
-  std::size_t next_complete = 0;
-  for (std::int64_t block = 0; block < plan.block_count(); ++block) {
-    if (next_complete < complete_blocks.size() && complete_blocks[next_complete] == block) {
-      ++next_complete;
-      const std::int64_t first = block * plan.chunk_runs();
-      out.runs_complete += std::min<std::int64_t>(plan.chunk_runs(), plan.run_count() - first);
-    } else {
-      out.pending_blocks.push_back(block);
-    }
-  }
+  TallyBlocks(plan, resume.complete_blocks, out);
   return writer;
 }
 

@@ -128,58 +128,67 @@ std::string CommandLine(const BoundaryFlags& flags) {
   return line;
 }
 
-void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& flags,
-                          const std::vector<std::optional<BoundarySensitivities>>& sensitivities,
-                          bool written) {
-  const auto nan_or = [](const std::optional<double>& v) { return v ? *v : std::nan(""); };
-  if (flags.format == "json") {
-    nlohmann::json points = nlohmann::json::array();
-    for (std::size_t i = 0; i < boundary.points.size(); ++i) {
-      const ArchiveBoundaryPoint& p = boundary.points[i];
-      nlohmann::json row;
-      for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
-        row[boundary.key_names[k]] = boundary.key_levels[k].empty()
-                                         ? JsonNumber(p.key_values[k])
-                                         : nlohmann::json(KeyText(boundary, k, p.key_values[k]));
-      }
-      row["height_m"] = JsonNumber(nan_or(p.height_m));
-      row["height_over_span"] = JsonNumber(nan_or(p.height_over_span));
-      row["grid_bracket_m"] = {JsonNumber(p.grid_lower_height_m), JsonNumber(p.grid_upper_height_m)};
-      row["bracket_width_m"] = JsonNumber(p.bracket_width_m);
-      row["grid_crossings"] = p.grid_crossings;
-      row["heights"] = p.heights;
-      if (!p.reason.empty()) row["reason"] = p.reason;
-      if (sensitivities[i]) {
-        JsonRecordSink<nlohmann::json> sink{&row};
-        SensitivitiesRecord(*sensitivities[i], sink);
-      }
-      points.push_back(row);
+// The value, or NaN when there is none.
+double NanOr(const std::optional<double>& v) { return v ? *v : std::nan(""); }
+
+// The boundary as JSON: the product's fields, and one object per boundary point (with its
+// sensitivities when computed).
+void PrintArchiveBoundaryJson(const ArchiveBoundary& boundary,
+                              const std::vector<std::optional<BoundarySensitivities>>& sensitivities,
+                              bool written) {
+  nlohmann::json points = nlohmann::json::array();
+  for (std::size_t i = 0; i < boundary.points.size(); ++i) {
+    const ArchiveBoundaryPoint& p = boundary.points[i];
+    nlohmann::json row;
+    for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
+      row[boundary.key_names[k]] = boundary.key_levels[k].empty()
+                                       ? JsonNumber(p.key_values[k])
+                                       : nlohmann::json(KeyText(boundary, k, p.key_values[k]));
     }
-    nlohmann::json out = boundary;
-    out["study"] = boundary.study_name;
-    out["aircraft"] = boundary.aircraft_name;
-    out["keys"] = boundary.key_names;
-    out["written"] = written;
-    out["boundaries"] = points;
-    std::cout << out.dump(2) << "\n";
-    return;
-  }
-  if (flags.format == "csv") {
-    for (const auto& name : boundary.key_names) std::cout << name << ",";
-    std::cout
-        << "height_m,height_over_span,grid_lower_height_m,grid_upper_height_m,bracket_width_m,grid_crossings,"
-           "heights,reason\n";
-    for (const auto& p : boundary.points) {
-      for (std::size_t k = 0; k < boundary.key_names.size(); ++k)
-        std::cout << KeyText(boundary, k, p.key_values[k]) << ",";
-      auto number = [](double v) { return std::isnan(v) ? std::string() : FormatNumber(v); };
-      std::cout << number(nan_or(p.height_m)) << "," << number(nan_or(p.height_over_span)) << ","
-                << number(p.grid_lower_height_m) << "," << number(p.grid_upper_height_m) << ","
-                << number(p.bracket_width_m) << "," << p.grid_crossings << "," << p.heights << ",\""
-                << p.reason << "\"\n";
+    row["height_m"] = JsonNumber(NanOr(p.height_m));
+    row["height_over_span"] = JsonNumber(NanOr(p.height_over_span));
+    row["grid_bracket_m"] = {JsonNumber(p.grid_lower_height_m), JsonNumber(p.grid_upper_height_m)};
+    row["bracket_width_m"] = JsonNumber(p.bracket_width_m);
+    row["grid_crossings"] = p.grid_crossings;
+    row["heights"] = p.heights;
+    if (!p.reason.empty()) row["reason"] = p.reason;
+    if (sensitivities[i]) {
+      JsonRecordSink<nlohmann::json> sink{&row};
+      SensitivitiesRecord(*sensitivities[i], sink);
     }
-    return;
+    points.push_back(row);
   }
+  nlohmann::json out = boundary;
+  out["study"] = boundary.study_name;
+  out["aircraft"] = boundary.aircraft_name;
+  out["keys"] = boundary.key_names;
+  out["written"] = written;
+  out["boundaries"] = points;
+  std::cout << out.dump(2) << "\n";
+}
+
+// The boundary as CSV: one row per boundary point (empty cells for NaN).
+void PrintArchiveBoundaryCsv(const ArchiveBoundary& boundary) {
+  for (const auto& name : boundary.key_names) std::cout << name << ",";
+  std::cout
+      << "height_m,height_over_span,grid_lower_height_m,grid_upper_height_m,bracket_width_m,grid_crossings,"
+         "heights,reason\n";
+  for (const auto& p : boundary.points) {
+    for (std::size_t k = 0; k < boundary.key_names.size(); ++k)
+      std::cout << KeyText(boundary, k, p.key_values[k]) << ",";
+    auto number = [](double v) { return std::isnan(v) ? std::string() : FormatNumber(v); };
+    std::cout << number(NanOr(p.height_m)) << "," << number(NanOr(p.height_over_span)) << ","
+              << number(p.grid_lower_height_m) << "," << number(p.grid_upper_height_m) << ","
+              << number(p.bracket_width_m) << "," << p.grid_crossings << "," << p.heights << ",\"" << p.reason
+              << "\"\n";
+  }
+}
+
+// The boundary as a table: a heading, one line per boundary point, the run counts, then each
+// point's sensitivities.
+void PrintArchiveBoundaryTable(const ArchiveBoundary& boundary,
+                               const std::vector<std::optional<BoundarySensitivities>>& sensitivities,
+                               bool written) {
   std::cout << "# " << boundary.aircraft_name
             << ": stability boundary H* (unstable below, stable above) from "
             << "results/modes/stability_margin_per_s of " << boundary.archive << " (study "
@@ -214,6 +223,18 @@ void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& 
             << (written ? "; written to " + boundary.archive + ":/" + kBoundaryGroup : "") << "\n";
   for (const auto& s : sensitivities) {
     if (s) PrintSensitivitiesTable(*s);
+  }
+}
+
+void PrintArchiveBoundary(const ArchiveBoundary& boundary, const BoundaryFlags& flags,
+                          const std::vector<std::optional<BoundarySensitivities>>& sensitivities,
+                          bool written) {
+  if (flags.format == "json") {
+    PrintArchiveBoundaryJson(boundary, sensitivities, written);
+  } else if (flags.format == "csv") {
+    PrintArchiveBoundaryCsv(boundary);
+  } else {
+    PrintArchiveBoundaryTable(boundary, sensitivities, written);
   }
 }
 

@@ -564,10 +564,9 @@ int ReportSweepEnd(const RunFlags& flags, const ArchiveWriter& writer, bool canc
   return 0;
 }
 
-int Run(const RunFlags& flags) {
-  CheckRunFlags(flags);
-  ShardSpec shard;
-  if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
+// The study to run: loaded, not a subset simulation, its archive path (when given) one it may write.
+// Throws InputError.
+Study LoadRunStudy(const RunFlags& flags) {
   Study study = LoadStudy(flags.study);
   if (study.subset_line != 0) {
     throw InputError(study.path, "subset", "",
@@ -576,7 +575,31 @@ int Run(const RunFlags& flags) {
                      study.subset_line);
   }
   if (!flags.output.empty()) CheckArchivePath(flags, study);
-  SweepPlan plan(std::move(study), shard);
+  return study;
+}
+
+// Opens the archive (created, forced or resumed), what it holds into `opened`; nullptr, the error
+// said on stderr, when it cannot be set up.
+std::unique_ptr<ArchiveWriter> OpenRunArchive(const RunFlags& flags, SweepPlan& plan, int threads,
+                                              ArchiveOpenReport& opened) {
+  try {
+    return ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
+                               flags.resume
+                                   ? ArchiveOpenMode::kResume
+                                   : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
+                               &opened);
+  } catch (const ArchiveError& e) {
+    std::cerr << "gesweep: error: cannot set up the archive " << EscapeForMessage(flags.output) << ": "
+              << EscapeForMessage(e.cause()) << "\n";
+    return nullptr;
+  }
+}
+
+int Run(const RunFlags& flags) {
+  CheckRunFlags(flags);
+  ShardSpec shard;
+  if (!flags.shard.empty()) shard = ParseShard(flags.shard, "--shard");
+  SweepPlan plan(LoadRunStudy(flags), shard);
   const int threads = flags.threads.value_or(tbb::info::default_concurrency());
   if (flags.dry_run) return DryRun(plan, threads, flags);
   if (flags.output.empty())
@@ -601,17 +624,8 @@ int Run(const RunFlags& flags) {
   // The sweep's time ("N runs in T") runs from here, the archive's set-up, to its close: the
   // interval the dry run estimates (docs/sweep.md, "Dry run").
   const auto start = std::chrono::steady_clock::now();
-  try {
-    writer =
-        ArchiveWriter::Open(flags.output, plan, RunProvenance{CommandLine(flags), threads},
-                            flags.resume ? ArchiveOpenMode::kResume
-                                         : (flags.force ? ArchiveOpenMode::kForce : ArchiveOpenMode::kCreate),
-                            &opened);
-  } catch (const ArchiveError& e) {
-    std::cerr << "gesweep: error: cannot set up the archive " << EscapeForMessage(flags.output) << ": "
-              << EscapeForMessage(e.cause()) << "\n";
-    return 1;
-  }
+  writer = OpenRunArchive(flags, plan, threads, opened);
+  if (!writer) return 1;
 
   SweepProgress progress;
   progress.runs_skipped = opened.runs_complete;

@@ -19,14 +19,10 @@ struct Effect {
   double value = 0;
 };
 
-}  // namespace
-
-MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const double> outputs,
-                            const std::vector<bool>& succeeded, const std::vector<ParameterRange>& ranges,
-                            const MorrisOptions& options) {
-  ValidateRanges(ranges, options.source);
-  ValidateBootstrapOptions(options.bootstrap, options.source);
-  const int D = static_cast<int>(ranges.size());
+// The design, outputs and flags agree with D parameters: D columns, whole trajectories of D + 1 rows,
+// one output (and one flag, if any) per row. Throws InputError.
+void CheckMorrisShapes(const Eigen::MatrixXd& design, std::span<const double> outputs,
+                       const std::vector<bool>& succeeded, int D, const MorrisOptions& options) {
   if (design.cols() != D) {
     throw InputError(options.source, "design", std::to_string(design.cols()) + " columns",
                      "expected one column per parameter (" + std::to_string(D) + ")");
@@ -44,21 +40,16 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
     throw InputError(options.source, "succeeded", std::to_string(succeeded.size()) + " flags",
                      "expected one flag per output row (" + std::to_string(outputs.size()) + ")");
   }
+}
 
-  MorrisIndices result;
-  result.parameter_count = D;
-  result.trajectories = static_cast<int>(design.rows() / (D + 1));
-  result.bootstrap = options.bootstrap;
-  result.mu.assign(D, kNaN);
-  result.mu_star.assign(D, kNaN);
-  result.sigma.assign(D, kNaN);
-  result.effects.assign(D, 0);
-  result.mu_star_ci.assign(D, {kNaN, kNaN});
-
-  // The steps come from the design whatever the outputs, so a malformed design is reported even
-  // when every run failed.
-  std::vector<std::vector<Effect>> steps(result.trajectories);
-  for (int t = 0; t < result.trajectories; ++t) {
+// Each trajectory's steps: the parameter that moves between consecutive rows and its step in unit
+// coordinates. Throws InputError when a step moves other than exactly one parameter.
+std::vector<std::vector<Effect>> MorrisSteps(const Eigen::MatrixXd& design,
+                                             const std::vector<ParameterRange>& ranges, int trajectories,
+                                             const MorrisOptions& options) {
+  const int D = static_cast<int>(ranges.size());
+  std::vector<std::vector<Effect>> steps(trajectories);
+  for (int t = 0; t < trajectories; ++t) {
     for (int k = 0; k < D; ++k) {
       const Eigen::Index row = static_cast<Eigen::Index>(t) * (D + 1) + k;
       int changed = -1, changed_count = 0;
@@ -80,10 +71,14 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
       steps[t].push_back({changed, unit_step});
     }
   }
+  return steps;
+}
 
-  const std::vector<bool> failed = FailedRows(outputs, succeeded);
+// The trajectories without a failed run; counts the failed rows in result.failed_rows and sets
+// `first_failed` to the first (outputs.size() when none).
+std::vector<int> CompleteTrajectories(const std::vector<bool>& failed, int D, MorrisIndices& result,
+                                      std::size_t& first_failed) {
   std::vector<int> used;
-  std::size_t first_failed = outputs.size();
   for (int t = 0; t < result.trajectories; ++t) {
     bool ok = true;
     for (int k = 0; k <= D; ++k) {
@@ -95,6 +90,90 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
     }
     if (ok) used.push_back(t);
   }
+  return used;
+}
+
+// The mean, mean absolute value, standard deviation and count of each parameter's elementary effects.
+struct Moments {
+  std::vector<double> mu, mu_star, sigma;
+  std::vector<int> count;
+};
+
+// The moments of the effects of `trajectories` (a trajectory may repeat).
+Moments MorrisMoments(const std::vector<std::vector<Effect>>& effects, const std::vector<int>& trajectories,
+                      int D) {
+  Moments m{std::vector<double>(D, 0.0), std::vector<double>(D, 0.0), std::vector<double>(D, kNaN),
+            std::vector<int>(D, 0)};
+  for (int t : trajectories) {
+    for (const Effect& e : effects[t]) {
+      m.mu[e.parameter] += e.value;
+      m.mu_star[e.parameter] += std::abs(e.value);
+      ++m.count[e.parameter];
+    }
+  }
+  for (int i = 0; i < D; ++i) {
+    if (m.count[i] == 0) {
+      m.mu[i] = m.mu_star[i] = kNaN;
+      continue;
+    }
+    m.mu[i] /= m.count[i];
+    m.mu_star[i] /= m.count[i];
+  }
+  std::vector<double> squares(D, 0.0);
+  for (int t : trajectories) {
+    for (const Effect& e : effects[t])
+      squares[e.parameter] += (e.value - m.mu[e.parameter]) * (e.value - m.mu[e.parameter]);
+  }
+  for (int i = 0; i < D; ++i) {
+    if (m.count[i] >= 2) m.sigma[i] = std::sqrt(squares[i] / (m.count[i] - 1));
+  }
+  return m;
+}
+
+// The bootstrap interval of each μ*: `used` resampled with replacement, options.bootstrap.resamples times.
+void BootstrapMuStar(const std::vector<std::vector<Effect>>& effects, const std::vector<int>& used, int D,
+                     const MorrisOptions& options, MorrisIndices& result) {
+  boost::random::mt19937_64 engine(options.bootstrap.seed);
+  boost::random::uniform_int_distribution<std::size_t> draw(0, used.size() - 1);
+  std::vector<std::vector<double>> mu_star(D);
+  std::vector<int> sample(used.size());
+  for (int s = 0; s < options.bootstrap.resamples; ++s) {
+    for (int& t : sample) t = used[draw(engine)];
+    const Moments m = MorrisMoments(effects, sample, D);
+    for (int i = 0; i < D; ++i) mu_star[i].push_back(m.mu_star[i]);
+  }
+  for (int i = 0; i < D; ++i) {
+    result.mu_star_ci[i] = PercentileInterval(std::move(mu_star[i]), options.bootstrap.confidence_level);
+  }
+}
+
+}  // namespace
+
+MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const double> outputs,
+                            const std::vector<bool>& succeeded, const std::vector<ParameterRange>& ranges,
+                            const MorrisOptions& options) {
+  ValidateRanges(ranges, options.source);
+  ValidateBootstrapOptions(options.bootstrap, options.source);
+  const int D = static_cast<int>(ranges.size());
+  CheckMorrisShapes(design, outputs, succeeded, D, options);
+
+  MorrisIndices result;
+  result.parameter_count = D;
+  result.trajectories = static_cast<int>(design.rows() / (D + 1));
+  result.bootstrap = options.bootstrap;
+  result.mu.assign(D, kNaN);
+  result.mu_star.assign(D, kNaN);
+  result.sigma.assign(D, kNaN);
+  result.effects.assign(D, 0);
+  result.mu_star_ci.assign(D, {kNaN, kNaN});
+
+  // The steps come from the design whatever the outputs, so a malformed design is reported even
+  // when every run failed.
+  const std::vector<std::vector<Effect>> steps = MorrisSteps(design, ranges, result.trajectories, options);
+
+  const std::vector<bool> failed = FailedRows(outputs, succeeded);
+  std::size_t first_failed = outputs.size();
+  const std::vector<int> used = CompleteTrajectories(failed, D, result, first_failed);
   if (result.failed_rows > 0 && options.failed_runs == FailedRunPolicy::kError) {
     result.status = SensitivityStatus::kStoppedOnFailedRuns;
     result.message = std::to_string(result.failed_rows) + " of " + std::to_string(outputs.size()) +
@@ -123,59 +202,14 @@ MorrisIndices AnalyzeMorris(const Eigen::MatrixXd& design, std::span<const doubl
     }
   }
 
-  struct Moments {
-    std::vector<double> mu, mu_star, sigma;
-    std::vector<int> count;
-  };
-  auto moments = [&](const std::vector<int>& trajectories) {
-    Moments m{std::vector<double>(D, 0.0), std::vector<double>(D, 0.0), std::vector<double>(D, kNaN),
-              std::vector<int>(D, 0)};
-    for (int t : trajectories) {
-      for (const Effect& e : effects[t]) {
-        m.mu[e.parameter] += e.value;
-        m.mu_star[e.parameter] += std::abs(e.value);
-        ++m.count[e.parameter];
-      }
-    }
-    for (int i = 0; i < D; ++i) {
-      if (m.count[i] == 0) {
-        m.mu[i] = m.mu_star[i] = kNaN;
-        continue;
-      }
-      m.mu[i] /= m.count[i];
-      m.mu_star[i] /= m.count[i];
-    }
-    std::vector<double> squares(D, 0.0);
-    for (int t : trajectories) {
-      for (const Effect& e : effects[t])
-        squares[e.parameter] += (e.value - m.mu[e.parameter]) * (e.value - m.mu[e.parameter]);
-    }
-    for (int i = 0; i < D; ++i) {
-      if (m.count[i] >= 2) m.sigma[i] = std::sqrt(squares[i] / (m.count[i] - 1));
-    }
-    return m;
-  };
-
-  const Moments point = moments(used);
+  const Moments point = MorrisMoments(effects, used, D);
   result.mu = point.mu;
   result.mu_star = point.mu_star;
   result.sigma = point.sigma;
   result.effects = point.count;
 
-  const int resamples = options.bootstrap.resamples;
-  if (resamples == 0) return result;
-  boost::random::mt19937_64 engine(options.bootstrap.seed);
-  boost::random::uniform_int_distribution<std::size_t> draw(0, used.size() - 1);
-  std::vector<std::vector<double>> mu_star(D);
-  std::vector<int> sample(used.size());
-  for (int s = 0; s < resamples; ++s) {
-    for (int& t : sample) t = used[draw(engine)];
-    const Moments m = moments(sample);
-    for (int i = 0; i < D; ++i) mu_star[i].push_back(m.mu_star[i]);
-  }
-  for (int i = 0; i < D; ++i) {
-    result.mu_star_ci[i] = PercentileInterval(std::move(mu_star[i]), options.bootstrap.confidence_level);
-  }
+  if (options.bootstrap.resamples == 0) return result;
+  BootstrapMuStar(effects, used, D, options, result);
   return result;
 }
 

@@ -83,10 +83,10 @@ void FillNaN(SobolIndices& result) {
   result.second_order_ci_upper = result.second_order;
 }
 
-}  // namespace
-
-SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<bool>& succeeded,
-                          const SaltelliLayout& layout, const SobolOptions& options) {
+// The layout is a Saltelli design's and the outputs and flags have one entry per its row. Throws
+// InputError.
+void CheckSobolShapes(std::span<const double> outputs, const std::vector<bool>& succeeded,
+                      const SaltelliLayout& layout, const SobolOptions& options) {
   if (layout.parameter_count < 1 || layout.base_samples < 1) {
     throw InputError(
         options.source, "design",
@@ -105,19 +105,14 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
     throw InputError(options.source, "succeeded", std::to_string(succeeded.size()) + " flags",
                      "expected one flag per output row (" + std::to_string(outputs.size()) + ")");
   }
-  ValidateBootstrapOptions(options.bootstrap, options.source);
+}
 
-  SobolIndices result;
-  result.layout = layout;
-  result.bootstrap = options.bootstrap;
-  FillNaN(result);
-  const int D = layout.parameter_count;
-  const int N = layout.base_samples;
-
-  const std::vector<bool> failed = FailedRows(outputs, succeeded);
+// The blocks without a failed run; counts the failed rows in result.failed_rows and sets
+// `first_failed` to the first (outputs.size() when none).
+std::vector<int> CompleteBlocks(const std::vector<bool>& failed, const SaltelliLayout& layout,
+                                SobolIndices& result, std::size_t& first_failed) {
   std::vector<int> used_blocks;
-  std::size_t first_failed = outputs.size();
-  for (int j = 0; j < N; ++j) {
+  for (int j = 0; j < layout.base_samples; ++j) {
     bool block_ok = true;
     for (std::size_t r = layout.RowA(j); r <= layout.RowB(j); ++r) {
       if (!failed[r]) continue;
@@ -127,6 +122,79 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
     }
     if (block_ok) used_blocks.push_back(j);
   }
+  return used_blocks;
+}
+
+// The outputs of the used blocks, as given (not yet standardised).
+BlockOutputs GatherBlocks(std::span<const double> outputs, const SaltelliLayout& layout,
+                          const std::vector<int>& used_blocks) {
+  const int D = layout.parameter_count;
+  const int n = static_cast<int>(used_blocks.size());
+  BlockOutputs data;
+  data.parameter_count = D;
+  data.second_order = layout.second_order;
+  data.a.resize(n);
+  data.b.resize(n);
+  data.ab.resize(n, D);
+  if (layout.second_order) data.ba.resize(n, D);
+  for (int k = 0; k < n; ++k) {
+    const int j = used_blocks[k];
+    data.a[k] = outputs[layout.RowA(j)];
+    data.b[k] = outputs[layout.RowB(j)];
+    for (int i = 0; i < D; ++i) {
+      data.ab(k, i) = outputs[layout.RowAB(j, i)];
+      if (layout.second_order) data.ba(k, i) = outputs[layout.RowBA(j, i)];
+    }
+  }
+  return data;
+}
+
+// The bootstrap intervals of the indices: the n blocks resampled with replacement,
+// options.bootstrap.resamples times.
+void BootstrapIntervals(const BlockOutputs& data, int n, const SobolOptions& options, SobolIndices& result) {
+  const int D = data.parameter_count;
+  std::vector<std::vector<double>> first(D), total(D);
+  std::vector<std::vector<std::vector<double>>> second(D, std::vector<std::vector<double>>(D));
+  boost::random::mt19937_64 engine(options.bootstrap.seed);
+  boost::random::uniform_int_distribution<int> draw(0, n - 1);
+  std::vector<int> sample(n);
+  for (int s = 0; s < options.bootstrap.resamples; ++s) {
+    for (int& k : sample) k = draw(engine);
+    const Estimates e = Estimate(data, n, [&sample](int k) { return sample[k]; });
+    for (int i = 0; i < D; ++i) {
+      first[i].push_back(e.first_order[i]);
+      total[i].push_back(e.total[i]);
+      for (int m = i + 1; m < D && data.second_order; ++m) second[i][m].push_back(e.second_order(i, m));
+    }
+  }
+  const double level = options.bootstrap.confidence_level;
+  for (int i = 0; i < D; ++i) {
+    result.first_order_ci[i] = PercentileInterval(std::move(first[i]), level);
+    result.total_ci[i] = PercentileInterval(std::move(total[i]), level);
+    for (int m = i + 1; m < D && data.second_order; ++m) {
+      const ConfidenceInterval ci = PercentileInterval(std::move(second[i][m]), level);
+      result.second_order_ci_lower(i, m) = ci.lower;
+      result.second_order_ci_upper(i, m) = ci.upper;
+    }
+  }
+}
+
+}  // namespace
+
+SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<bool>& succeeded,
+                          const SaltelliLayout& layout, const SobolOptions& options) {
+  CheckSobolShapes(outputs, succeeded, layout, options);
+  ValidateBootstrapOptions(options.bootstrap, options.source);
+
+  SobolIndices result;
+  result.layout = layout;
+  result.bootstrap = options.bootstrap;
+  FillNaN(result);
+  const int N = layout.base_samples;
+
+  const std::vector<bool> failed = FailedRows(outputs, succeeded);
+  std::size_t first_failed = outputs.size();
+  const std::vector<int> used_blocks = CompleteBlocks(failed, layout, result, first_failed);
   result.blocks_used = static_cast<int>(used_blocks.size());
   result.blocks_dropped = N - result.blocks_used;
 
@@ -150,22 +218,7 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
   }
 
   const int n = result.blocks_used;
-  BlockOutputs data;
-  data.parameter_count = D;
-  data.second_order = layout.second_order;
-  data.a.resize(n);
-  data.b.resize(n);
-  data.ab.resize(n, D);
-  if (layout.second_order) data.ba.resize(n, D);
-  for (int k = 0; k < n; ++k) {
-    const int j = used_blocks[k];
-    data.a[k] = outputs[layout.RowA(j)];
-    data.b[k] = outputs[layout.RowB(j)];
-    for (int i = 0; i < D; ++i) {
-      data.ab(k, i) = outputs[layout.RowAB(j, i)];
-      if (layout.second_order) data.ba(k, i) = outputs[layout.RowBA(j, i)];
-    }
-  }
+  BlockOutputs data = GatherBlocks(outputs, layout, used_blocks);
   // Standardise (as SALib does): the estimators are ratios, invariant to the scale, but the first-
   // and second-order numerators are not invariant to a shift in a finite sample, and centring keeps
   // their variance small.
@@ -190,32 +243,8 @@ SobolIndices AnalyzeSobol(std::span<const double> outputs, const std::vector<boo
   result.total = point.total;
   result.second_order = point.second_order;
 
-  const int resamples = options.bootstrap.resamples;
-  if (resamples == 0) return result;
-  std::vector<std::vector<double>> first(D), total(D);
-  std::vector<std::vector<std::vector<double>>> second(D, std::vector<std::vector<double>>(D));
-  boost::random::mt19937_64 engine(options.bootstrap.seed);
-  boost::random::uniform_int_distribution<int> draw(0, n - 1);
-  std::vector<int> sample(n);
-  for (int s = 0; s < resamples; ++s) {
-    for (int& k : sample) k = draw(engine);
-    const Estimates e = Estimate(data, n, [&sample](int k) { return sample[k]; });
-    for (int i = 0; i < D; ++i) {
-      first[i].push_back(e.first_order[i]);
-      total[i].push_back(e.total[i]);
-      for (int m = i + 1; m < D && layout.second_order; ++m) second[i][m].push_back(e.second_order(i, m));
-    }
-  }
-  const double level = options.bootstrap.confidence_level;
-  for (int i = 0; i < D; ++i) {
-    result.first_order_ci[i] = PercentileInterval(std::move(first[i]), level);
-    result.total_ci[i] = PercentileInterval(std::move(total[i]), level);
-    for (int m = i + 1; m < D && layout.second_order; ++m) {
-      const ConfidenceInterval ci = PercentileInterval(std::move(second[i][m]), level);
-      result.second_order_ci_lower(i, m) = ci.lower;
-      result.second_order_ci_upper(i, m) = ci.upper;
-    }
-  }
+  if (options.bootstrap.resamples == 0) return result;
+  BootstrapIntervals(data, n, options, result);
   return result;
 }
 

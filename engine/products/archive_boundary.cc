@@ -169,6 +169,68 @@ std::vector<Sample> ReadSamples(const ArchiveReader& archive, const ColumnCatalo
   return samples;
 }
 
+// Where each key axis, and height_m, sits in the design's columns (to rebuild a run's design values).
+struct DesignSlots {
+  std::vector<int> of_key;  // -1: not a design column
+  int height = -1;
+};
+
+// The slots of the key axes `key_names` and of height_m among the design's parameters.
+DesignSlots FindDesignSlots(const std::vector<ParameterId>& design_ids,
+                            const std::vector<std::string>& key_names) {
+  DesignSlots slots;
+  slots.of_key.assign(key_names.size(), -1);
+  for (std::size_t d = 0; d < design_ids.size(); ++d) {
+    const std::string& name = ParameterCatalog()[static_cast<std::size_t>(design_ids[d])].name;
+    if (name == "height_m") slots.height = static_cast<int>(d);
+    for (std::size_t k = 0; k < key_names.size(); ++k) {
+      if (key_names[k] == name) slots.of_key[k] = static_cast<int>(d);
+    }
+  }
+  return slots;
+}
+
+// One group's boundary from its samples [begin, end) (sorted by height): its grid bracket, the
+// highest with unstable below and stable above, refined on the group's model (or the reason why not).
+void LocateGroupBoundary(const std::vector<Sample>& samples, std::size_t begin, std::size_t end,
+                         const std::vector<double>& key_values, const DesignSlots& slots,
+                         ArchiveRunModels& models, ParameterId speed_id,
+                         const BoundaryExtractionOptions& options, double wingspan_m,
+                         ArchiveBoundaryPoint& point) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // One σ per height (a repeated height keeps its first run).
+  std::vector<double> h, s;
+  for (std::size_t i = begin; i < end; ++i) {
+    if (!h.empty() && samples[i].height_m == h.back()) continue;
+    h.push_back(samples[i].height_m);
+    s.push_back(samples[i].margin_per_s);
+  }
+  point.key_values = key_values;
+  point.heights = static_cast<std::int64_t>(h.size());
+  point.grid_lower_height_m = point.grid_upper_height_m = point.bracket_width_m = nan;
+  std::optional<std::size_t> bracket;  // index of the lower end
+  for (std::size_t i = 0; i + 1 < h.size(); ++i) {
+    if ((s[i] < 0) != (s[i + 1] < 0)) ++point.grid_crossings;
+    if (s[i] >= 0 && s[i + 1] < 0) bracket = i;  // ascending: the last one found is the highest
+  }
+  std::vector<double> design_values(models.design_parameters().size());
+  for (std::size_t k = 0; k < slots.of_key.size(); ++k) {
+    if (slots.of_key[k] >= 0) design_values[static_cast<std::size_t>(slots.of_key[k])] = point.key_values[k];
+  }
+  design_values[static_cast<std::size_t>(slots.height)] = h.front();
+  point.parameters = models.Parameters(design_values);
+  if (!bracket) {
+    point.reason = NoBracketReason(h, s, point.grid_crossings);
+    return;
+  }
+  const double lower = h[*bracket], upper = h[*bracket + 1];
+  point.grid_lower_height_m = lower;
+  point.grid_upper_height_m = upper;
+  const double speed_mps = point.parameters[static_cast<std::size_t>(speed_id)];
+  RefineBracket(models.Model(point.parameters), speed_mps, {s[*bracket], s[*bracket + 1]},
+                options.tolerance_m, wingspan_m, point);
+}
+
 }  // namespace
 
 ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalog& catalog,
@@ -210,58 +272,16 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
       ReadSamples(archive, catalog, *height_column, *margin_column, key_columns, group_keys, boundary);
 
   // Where each key axis sits in the design's columns (to rebuild a run's design values).
-  const std::vector<ParameterId>& design_ids = models.design_parameters();
-  std::vector<int> design_slot_of_key(key_columns.size(), -1);
-  int height_slot = -1;
-  for (std::size_t d = 0; d < design_ids.size(); ++d) {
-    const std::string& name = ParameterCatalog()[static_cast<std::size_t>(design_ids[d])].name;
-    if (name == "height_m") height_slot = static_cast<int>(d);
-    for (std::size_t k = 0; k < key_columns.size(); ++k) {
-      if (boundary.key_names[k] == name) design_slot_of_key[k] = static_cast<int>(d);
-    }
-  }
-  GESWEEP_DEMAND(height_slot >= 0);
+  const DesignSlots slots = FindDesignSlots(models.design_parameters(), boundary.key_names);
+  GESWEEP_DEMAND(slots.height >= 0);
 
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   std::size_t begin = 0;
   std::vector<ArchiveBoundaryPoint> points(group_keys.size());
   while (begin < samples.size()) {
     std::size_t end = begin;
     while (end < samples.size() && samples[end].group == samples[begin].group) ++end;
-    // One σ per height (a repeated height keeps its first run).
-    std::vector<double> h, s;
-    for (std::size_t i = begin; i < end; ++i) {
-      if (!h.empty() && samples[i].height_m == h.back()) continue;
-      h.push_back(samples[i].height_m);
-      s.push_back(samples[i].margin_per_s);
-    }
-    ArchiveBoundaryPoint& point = points[samples[begin].group];
-    point.key_values = group_keys[samples[begin].group];
-    point.heights = static_cast<std::int64_t>(h.size());
-    point.grid_lower_height_m = point.grid_upper_height_m = point.bracket_width_m = nan;
-    std::optional<std::size_t> bracket;  // index of the lower end
-    for (std::size_t i = 0; i + 1 < h.size(); ++i) {
-      if ((s[i] < 0) != (s[i + 1] < 0)) ++point.grid_crossings;
-      if (s[i] >= 0 && s[i + 1] < 0) bracket = i;  // ascending: the last one found is the highest
-    }
-    std::vector<double> design_values(design_ids.size());
-    for (std::size_t k = 0; k < key_columns.size(); ++k) {
-      if (design_slot_of_key[k] >= 0)
-        design_values[static_cast<std::size_t>(design_slot_of_key[k])] = point.key_values[k];
-    }
-    design_values[static_cast<std::size_t>(height_slot)] = h.front();
-    point.parameters = models.Parameters(design_values);
-    if (!bracket) {
-      point.reason = NoBracketReason(h, s, point.grid_crossings);
-      begin = end;
-      continue;
-    }
-    const double lower = h[*bracket], upper = h[*bracket + 1];
-    point.grid_lower_height_m = lower;
-    point.grid_upper_height_m = upper;
-    const double speed_mps = point.parameters[static_cast<std::size_t>(*speed_id)];
-    RefineBracket(models.Model(point.parameters), speed_mps, {s[*bracket], s[*bracket + 1]},
-                  options.tolerance_m, boundary.wingspan_m, point);
+    LocateGroupBoundary(samples, begin, end, group_keys[samples[begin].group], slots, models, *speed_id,
+                        options, boundary.wingspan_m, points[samples[begin].group]);
     begin = end;
   }
   std::sort(points.begin(), points.end(), [](const ArchiveBoundaryPoint& a, const ArchiveBoundaryPoint& b) {

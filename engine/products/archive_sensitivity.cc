@@ -304,18 +304,13 @@ ArchiveOutput ResolveOutput(const ArchiveReader& archive, const std::string& nam
                        "expected a scalar result column: " + Join(listed));
 }
 
-ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std::string& output_name,
-                                        const ArchiveSensitivityOptions& options) {
-  const std::string source = archive.path().string();
-  ArchiveSensitivity result;
-  result.archive_path = source;
-  result.study_name = archive.StringAttribute("study_name");
-  result.failed_runs = options.failed_runs;
-  ValidateBootstrapOptions(options.bootstrap, source);
+namespace {
 
-  result.output = ResolveOutput(archive, output_name);
-
-  // The design: its kind decides which estimator applies.
+// The estimator the archive's design kind calls for, into result.method (with its parameters and
+// design kind). Throws RequestError when options.method asks for another, InputError when the
+// design has none or lists no parameter.
+void ChooseMethod(const ArchiveReader& archive, const ArchiveSensitivityOptions& options,
+                  const std::string& source, ArchiveSensitivity& result) {
   result.design_kind = archive.StringAttributeOf(archive::kDesignGroup, "kind").value_or("");
   result.parameters = archive.StringListAttributeOf(archive::kDesignGroup, "parameters");
   const auto design_method = ParseSensitivityMethod(result.design_kind);
@@ -335,13 +330,12 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
   if (result.parameters.empty()) {
     throw InputError(source, "design/parameters", "", "the design lists no swept parameter");
   }
+}
 
-  const std::vector<std::int8_t> status = archive.ReadStatus(0, archive.run_count());
-  RequireCompleteDesign(archive, status, source);
-  result.run_count = archive.run_count();
-  ReadRanges(archive, result, source);
-
-  const std::vector<double> outputs = ReadOutput(archive, result.output);
+// Each run's flag "succeeded" (status ok); the runs without a value (failed, or ok with a value
+// not finite) counted in `result`, with the first one's row and message.
+std::vector<bool> MarkMissingRuns(const ArchiveReader& archive, const std::vector<std::int8_t>& status,
+                                  const std::vector<double>& outputs, ArchiveSensitivity& result) {
   std::vector<bool> succeeded(status.size());
   for (std::size_t r = 0; r < status.size(); ++r) {
     succeeded[r] = status[r] == kStatusOk;
@@ -357,43 +351,84 @@ ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std:
   if (result.first_missing_row >= 0) {
     result.first_missing_message = archive.ReadMessages(result.first_missing_row, 1).front();
   }
+  return succeeded;
+}
+
+// Sobol' indices of the output over the archive's Saltelli design. Returns the rows of a block.
+std::int64_t AnalyzeSobolDesign(const ArchiveReader& archive, const std::vector<double>& outputs,
+                                const std::vector<bool>& succeeded, const ArchiveSensitivityOptions& options,
+                                const std::string& source, ArchiveSensitivity& result) {
+  const SaltelliLayout layout = ReadSaltelliLayout(archive, result, source);
+  SobolOptions sobol_options;
+  sobol_options.failed_runs = options.failed_runs;
+  sobol_options.bootstrap = options.bootstrap;
+  sobol_options.source = source;
+  result.sobol = AnalyzeSobol(outputs, succeeded, layout, sobol_options);
+  result.status = result.sobol.status;
+  result.message = result.sobol.message;
+  return layout.BlockSize();
+}
+
+// Morris elementary effects of the output over the archive's trajectories. Returns the rows of a
+// trajectory. Throws InputError when the layout does not match the parameters and runs.
+std::int64_t AnalyzeMorrisDesign(const ArchiveReader& archive, const std::vector<double>& outputs,
+                                 const std::vector<bool>& succeeded, const ArchiveSensitivityOptions& options,
+                                 const std::string& source, ArchiveSensitivity& result) {
+  const std::int64_t trajectories = RequireInteger(archive, archive::kDesignGroup, "trajectories", source);
+  const std::int64_t trajectory_rows =
+      RequireInteger(archive, archive::kDesignGroup, "trajectory_rows", source);
+  result.morris_levels = static_cast<int>(RequireInteger(archive, archive::kDesignGroup, "levels", source));
+  result.morris_delta = archive.DoubleAttributeOf(archive::kDesignGroup, "delta").value_or(std::nan(""));
+  const auto D = static_cast<std::int64_t>(result.parameters.size());
+  if (trajectory_rows != D + 1 || trajectories * trajectory_rows != archive.run_count()) {
+    throw InputError(source, "design", std::to_string(trajectories) + " trajectories",
+                     "a Morris layout of " + std::to_string(trajectory_rows) +
+                         " rows per trajectory that matches neither its " + std::to_string(D) +
+                         " parameters nor its " + std::to_string(archive.run_count()) + " runs");
+  }
+  MorrisOptions morris_options;
+  morris_options.failed_runs = options.failed_runs;
+  morris_options.bootstrap = options.bootstrap;
+  morris_options.source = source;
+  result.morris =
+      AnalyzeMorris(ReadDesignMatrix(archive, result), outputs, succeeded, result.ranges, morris_options);
+  result.status = result.morris.status;
+  result.message = result.morris.message;
+  return trajectory_rows;
+}
+
+}  // namespace
+
+ArchiveSensitivity AnalyzeArchiveOutput(const ArchiveReader& archive, const std::string& output_name,
+                                        const ArchiveSensitivityOptions& options) {
+  const std::string source = archive.path().string();
+  ArchiveSensitivity result;
+  result.archive_path = source;
+  result.study_name = archive.StringAttribute("study_name");
+  result.failed_runs = options.failed_runs;
+  ValidateBootstrapOptions(options.bootstrap, source);
+
+  result.output = ResolveOutput(archive, output_name);
+
+  // The design: its kind decides which estimator applies.
+  ChooseMethod(archive, options, source, result);
+
+  const std::vector<std::int8_t> status = archive.ReadStatus(0, archive.run_count());
+  RequireCompleteDesign(archive, status, source);
+  result.run_count = archive.run_count();
+  ReadRanges(archive, result, source);
+
+  const std::vector<double> outputs = ReadOutput(archive, result.output);
+  const std::vector<bool> succeeded = MarkMissingRuns(archive, status, outputs, result);
 
   std::int64_t block_rows = 0;
   std::string block_word;
   if (result.method == SensitivityMethod::kSobol) {
-    const SaltelliLayout layout = ReadSaltelliLayout(archive, result, source);
-    block_rows = layout.BlockSize();
+    block_rows = AnalyzeSobolDesign(archive, outputs, succeeded, options, source, result);
     block_word = "Saltelli blocks";
-    SobolOptions sobol_options;
-    sobol_options.failed_runs = options.failed_runs;
-    sobol_options.bootstrap = options.bootstrap;
-    sobol_options.source = source;
-    result.sobol = AnalyzeSobol(outputs, succeeded, layout, sobol_options);
-    result.status = result.sobol.status;
-    result.message = result.sobol.message;
   } else {
-    const std::int64_t trajectories = RequireInteger(archive, archive::kDesignGroup, "trajectories", source);
-    const std::int64_t trajectory_rows =
-        RequireInteger(archive, archive::kDesignGroup, "trajectory_rows", source);
-    result.morris_levels = static_cast<int>(RequireInteger(archive, archive::kDesignGroup, "levels", source));
-    result.morris_delta = archive.DoubleAttributeOf(archive::kDesignGroup, "delta").value_or(std::nan(""));
-    const auto D = static_cast<std::int64_t>(result.parameters.size());
-    if (trajectory_rows != D + 1 || trajectories * trajectory_rows != archive.run_count()) {
-      throw InputError(source, "design", std::to_string(trajectories) + " trajectories",
-                       "a Morris layout of " + std::to_string(trajectory_rows) +
-                           " rows per trajectory that matches neither its " + std::to_string(D) +
-                           " parameters nor its " + std::to_string(archive.run_count()) + " runs");
-    }
-    block_rows = trajectory_rows;
+    block_rows = AnalyzeMorrisDesign(archive, outputs, succeeded, options, source, result);
     block_word = "Morris trajectories";
-    MorrisOptions morris_options;
-    morris_options.failed_runs = options.failed_runs;
-    morris_options.bootstrap = options.bootstrap;
-    morris_options.source = source;
-    result.morris =
-        AnalyzeMorris(ReadDesignMatrix(archive, result), outputs, succeeded, result.ranges, morris_options);
-    result.status = result.morris.status;
-    result.message = result.morris.message;
   }
 
   for (std::int64_t first = 0; first < result.run_count; first += block_rows) {

@@ -209,6 +209,71 @@ double GevNegativeLogLikelihood(const std::vector<double>& values, double locati
   return n * std::log(scale) + (1.0 + 1.0 / shape) * sum_log + sum_power;
 }
 
+namespace {
+
+using GevPoint = std::array<double, 3>;  // (μ, log σ, ξ) of the standardised values
+
+// One Nelder–Mead run (the standard coefficients 1, 2, 1/2, 1/2) of `f` from a fresh simplex about
+// `start`, until the tolerances or the iteration cap: the final simplex and its values.
+template <typename F>
+void RunNelderMead(const F& f, const GevPoint& start, std::array<GevPoint, 4>& simplex,
+                   std::array<double, 4>& value) {
+  simplex[0] = start;
+  for (std::size_t d = 0; d < 3; ++d) {
+    simplex[d + 1] = start;
+    simplex[d + 1][d] += kNelderMeadStep;
+  }
+  for (std::size_t k = 0; k < 4; ++k) value[k] = f(simplex[k]);
+  for (int iteration = 0; iteration < kNelderMeadIterations; ++iteration) {
+    std::array<std::size_t, 4> order = {0, 1, 2, 3};
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return value[a] < value[b]; });
+    const std::size_t lo = order[0], hi = order[3], second = order[2];
+    double spread = 0;
+    for (std::size_t k = 1; k < 4; ++k)
+      for (std::size_t d = 0; d < 3; ++d)
+        spread = std::max(spread, std::abs(simplex[order[k]][d] - simplex[lo][d]));
+    if (value[hi] - value[lo] <= kNelderMeadValueTolerance * (1.0 + std::abs(value[lo])) &&
+        spread <= kNelderMeadPointTolerance)
+      break;
+    GevPoint centroid = {0, 0, 0};
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t d = 0; d < 3; ++d) centroid[d] += simplex[order[k]][d] / 3.0;
+    auto along = [&](double t) {
+      GevPoint p;
+      for (std::size_t d = 0; d < 3; ++d) p[d] = centroid[d] + t * (simplex[hi][d] - centroid[d]);
+      return p;
+    };
+    const GevPoint reflected = along(-1.0);
+    const double fr = f(reflected);
+    if (fr < value[lo]) {
+      const GevPoint expanded = along(-2.0);
+      const double fe = f(expanded);
+      simplex[hi] = fe < fr ? expanded : reflected;
+      value[hi] = std::min(fe, fr);
+    } else if (fr < value[second]) {
+      simplex[hi] = reflected;
+      value[hi] = fr;
+    } else {
+      const bool outside = fr < value[hi];
+      const GevPoint contracted = along(outside ? -0.5 : 0.5);
+      const double fc = f(contracted);
+      if (fc < (outside ? fr : value[hi])) {
+        simplex[hi] = contracted;
+        value[hi] = fc;
+      } else {
+        for (std::size_t k = 0; k < 4; ++k) {
+          if (k == lo) continue;
+          for (std::size_t d = 0; d < 3; ++d)
+            simplex[k][d] = simplex[lo][d] + 0.5 * (simplex[k][d] - simplex[lo][d]);
+          value[k] = f(simplex[k]);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
 GevFit FitGevMax(const std::vector<double>& values) {
   GevFit fit{kNaN, kNaN, kNaN, kNaN};
   if (values.size() < 3) return fit;
@@ -219,72 +284,19 @@ GevFit FitGevMax(const std::vector<double>& values) {
   const double sd = normal.scale;
   std::vector<double> y(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) y[i] = (values[i] - mean) / sd;
-  using Point = std::array<double, 3>;  // (μ, log σ, ξ) of the standardised values
-  auto f = [&](const Point& p) {
+  auto f = [&](const GevPoint& p) {
     if (!(p[2] > kLowestShape)) return kInfinity;
     return GevNegativeLogLikelihood(y, p[0], std::exp(p[1]), p[2]);
   };
   const LocationScale gumbel = FitGumbelMax(y);
-  Point best = {gumbel.location, std::log(gumbel.scale), 0.0};
+  GevPoint best = {gumbel.location, std::log(gumbel.scale), 0.0};
   double best_value = f(best);
-  // Nelder–Mead (the standard coefficients 1, 2, 1/2, 1/2), restarted from its optimum with a fresh
-  // simplex until a restart no longer lowers the minimum.
+  // Nelder–Mead, restarted from its optimum with a fresh simplex until a restart no longer lowers the
+  // minimum.
   for (int restart = 0; restart < kNelderMeadRestarts; ++restart) {
-    std::array<Point, 4> simplex;
+    std::array<GevPoint, 4> simplex;
     std::array<double, 4> value;
-    simplex[0] = best;
-    for (std::size_t d = 0; d < 3; ++d) {
-      simplex[d + 1] = best;
-      simplex[d + 1][d] += kNelderMeadStep;
-    }
-    for (std::size_t k = 0; k < 4; ++k) value[k] = f(simplex[k]);
-    for (int iteration = 0; iteration < kNelderMeadIterations; ++iteration) {
-      std::array<std::size_t, 4> order = {0, 1, 2, 3};
-      std::sort(order.begin(), order.end(),
-                [&](std::size_t a, std::size_t b) { return value[a] < value[b]; });
-      const std::size_t lo = order[0], hi = order[3], second = order[2];
-      double spread = 0;
-      for (std::size_t k = 1; k < 4; ++k)
-        for (std::size_t d = 0; d < 3; ++d)
-          spread = std::max(spread, std::abs(simplex[order[k]][d] - simplex[lo][d]));
-      if (value[hi] - value[lo] <= kNelderMeadValueTolerance * (1.0 + std::abs(value[lo])) &&
-          spread <= kNelderMeadPointTolerance)
-        break;
-      Point centroid = {0, 0, 0};
-      for (std::size_t k = 0; k < 3; ++k)
-        for (std::size_t d = 0; d < 3; ++d) centroid[d] += simplex[order[k]][d] / 3.0;
-      auto along = [&](double t) {
-        Point p;
-        for (std::size_t d = 0; d < 3; ++d) p[d] = centroid[d] + t * (simplex[hi][d] - centroid[d]);
-        return p;
-      };
-      const Point reflected = along(-1.0);
-      const double fr = f(reflected);
-      if (fr < value[lo]) {
-        const Point expanded = along(-2.0);
-        const double fe = f(expanded);
-        simplex[hi] = fe < fr ? expanded : reflected;
-        value[hi] = std::min(fe, fr);
-      } else if (fr < value[second]) {
-        simplex[hi] = reflected;
-        value[hi] = fr;
-      } else {
-        const bool outside = fr < value[hi];
-        const Point contracted = along(outside ? -0.5 : 0.5);
-        const double fc = f(contracted);
-        if (fc < (outside ? fr : value[hi])) {
-          simplex[hi] = contracted;
-          value[hi] = fc;
-        } else {
-          for (std::size_t k = 0; k < 4; ++k) {
-            if (k == lo) continue;
-            for (std::size_t d = 0; d < 3; ++d)
-              simplex[k][d] = simplex[lo][d] + 0.5 * (simplex[k][d] - simplex[lo][d]);
-            value[k] = f(simplex[k]);
-          }
-        }
-      }
-    }
+    RunNelderMead(f, best, simplex, value);
     const auto lo = static_cast<std::size_t>(std::min_element(value.begin(), value.end()) - value.begin());
     const bool improved = value[lo] < best_value - kNelderMeadValueTolerance * (1.0 + std::abs(best_value));
     if (value[lo] < best_value) {
@@ -613,6 +625,88 @@ std::vector<int> GroupRuns(const ArchiveReader& archive, const ColumnCatalog& ca
   return group_of;
 }
 
+// Every run's status, read piece by piece.
+std::vector<std::int8_t> ReadStatuses(const ArchiveReader& archive) {
+  const std::int64_t n = archive.run_count();
+  std::vector<std::int8_t> status;
+  status.reserve(static_cast<std::size_t>(n));
+  for (std::int64_t first = 0; first < n; first += kPieceRows) {
+    const auto piece = archive.ReadStatus(first, std::min(kPieceRows, n - first));
+    status.insert(status.end(), piece.begin(), piece.end());
+  }
+  return status;
+}
+
+// One column's samples per group (the complete runs' finite values), and each group's counts of
+// runs, pending, failed and without a value in `counts`.
+std::vector<std::vector<double>> SampleColumn(const ArchiveReader& archive, const RunColumn& column,
+                                              const std::vector<std::int8_t>& status,
+                                              const std::vector<int>& group_of,
+                                              std::vector<ColumnDispersion>& counts) {
+  const std::int64_t n = archive.run_count();
+  std::vector<std::vector<double>> samples(counts.size());
+  ColumnValues values;
+  for (std::int64_t first = 0; first < n; first += kPieceRows) {
+    const std::int64_t count = std::min(kPieceRows, n - first);
+    ReadColumn(archive, column, first, count, values);
+    for (std::int64_t k = 0; k < count; ++k) {
+      const auto r = static_cast<std::size_t>(first + k);
+      const auto g = static_cast<std::size_t>(group_of[r]);
+      ColumnDispersion& tally = counts[g];
+      ++tally.runs;
+      if (status[r] == kStatusPending) {
+        ++tally.pending;
+      } else if (status[r] == kStatusFailed) {
+        ++tally.failed;
+      } else if (status[r] == kStatusOk && std::isfinite(values.numbers[static_cast<std::size_t>(k)])) {
+        samples[g].push_back(values.numbers[static_cast<std::size_t>(k)]);
+      } else {
+        ++tally.without_value;
+      }
+    }
+  }
+  return samples;
+}
+
+// The empirical counts of group g's limits on `column`, on the unsorted sample (order does not matter).
+void CountExceedances(Dispersion& d, const std::string& column, std::size_t g,
+                      const std::vector<double>& sample, const ColumnDispersion& counts) {
+  for (std::size_t l = 0; l < d.limits.size(); ++l) {
+    if (d.limits[l].column != column) continue;
+    const DispersionLimit& limit = d.limits[l];
+    LimitExceedance& e = d.groups[g].limits[l];
+    e.values = static_cast<std::int64_t>(sample.size());
+    e.failed = counts.failed + counts.without_value;
+    for (double v : sample) e.exceed += limit.above ? v > limit.value : v < limit.value;
+  }
+}
+
+// The probabilities of group g's limits on `column`: empirical with its intervals, and of the fits.
+void EstimateExceedances(Dispersion& d, const std::string& column, std::size_t g,
+                         const ColumnDispersion& described, const DispersionOptions& options) {
+  for (std::size_t l = 0; l < d.limits.size(); ++l) {
+    if (d.limits[l].column != column) continue;
+    const DispersionLimit& limit = d.limits[l];
+    LimitExceedance& e = d.groups[g].limits[l];
+    e.probability = e.values > 0 ? static_cast<double>(e.exceed) / static_cast<double>(e.values) : kNaN;
+    e.wilson = WilsonInterval(e.exceed, e.values, options.confidence_level);
+    e.clopper_pearson = ClopperPearsonInterval(e.exceed, e.values, options.confidence_level);
+    if (limit.above) {
+      e.normal_probability = NormalProbabilityAbove(described.normal.fit, limit.value);
+      e.gumbel_probability = GumbelMaxProbabilityAbove(described.gumbel_max.fit, limit.value);
+      e.gev_probability = GevMaxProbabilityAbove(
+          {described.gev_max.fit.location, described.gev_max.fit.scale, described.gev_max.shape, 0},
+          limit.value);
+    } else {
+      const LocationScale negated{-described.normal.fit.location, described.normal.fit.scale};
+      e.normal_probability = NormalProbabilityAbove(negated, -limit.value);
+      const LocationScale negated_fit{-described.gumbel_min.fit.location, described.gumbel_min.fit.scale};
+      e.gumbel_probability = GumbelMaxProbabilityAbove(negated_fit, -limit.value);
+      e.gev_probability = kNaN;
+    }
+  }
+}
+
 }  // namespace
 
 Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& catalog,
@@ -628,76 +722,23 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
   const std::vector<int> indices = ChooseColumns(catalog, options, source, d);
   const std::vector<int> group_of = GroupRuns(archive, catalog, options, source, d);
   const std::size_t group_count = d.groups.size();
-  const std::int64_t n = archive.run_count();
 
   // Statuses, then each column: its samples per group.
-  std::vector<std::int8_t> status;
-  status.reserve(static_cast<std::size_t>(n));
-  for (std::int64_t first = 0; first < n; first += kPieceRows) {
-    const auto piece = archive.ReadStatus(first, std::min(kPieceRows, n - first));
-    status.insert(status.end(), piece.begin(), piece.end());
-  }
+  const std::vector<std::int8_t> status = ReadStatuses(archive);
   for (auto& group : d.groups) group.limits.resize(d.limits.size());
   for (std::size_t c = 0; c < indices.size(); ++c) {
     const RunColumn& column = catalog.column(indices[c]);
-    std::vector<std::vector<double>> samples(group_count);
     std::vector<ColumnDispersion> counts(group_count);
-    ColumnValues values;
-    for (std::int64_t first = 0; first < n; first += kPieceRows) {
-      const std::int64_t count = std::min(kPieceRows, n - first);
-      ReadColumn(archive, column, first, count, values);
-      for (std::int64_t k = 0; k < count; ++k) {
-        const auto r = static_cast<std::size_t>(first + k);
-        const auto g = static_cast<std::size_t>(group_of[r]);
-        ColumnDispersion& tally = counts[g];
-        ++tally.runs;
-        if (status[r] == kStatusPending) {
-          ++tally.pending;
-        } else if (status[r] == kStatusFailed) {
-          ++tally.failed;
-        } else if (status[r] == kStatusOk && std::isfinite(values.numbers[static_cast<std::size_t>(k)])) {
-          samples[g].push_back(values.numbers[static_cast<std::size_t>(k)]);
-        } else {
-          ++tally.without_value;
-        }
-      }
-    }
+    std::vector<std::vector<double>> samples = SampleColumn(archive, column, status, group_of, counts);
     for (std::size_t g = 0; g < group_count; ++g) {
-      // The limits on this column first, on the unsorted sample (order does not matter).
-      for (std::size_t l = 0; l < d.limits.size(); ++l) {
-        if (d.limits[l].column != column.name) continue;
-        const DispersionLimit& limit = d.limits[l];
-        LimitExceedance& e = d.groups[g].limits[l];
-        e.values = static_cast<std::int64_t>(samples[g].size());
-        e.failed = counts[g].failed + counts[g].without_value;
-        for (double v : samples[g]) e.exceed += limit.above ? v > limit.value : v < limit.value;
-      }
+      // The limits on this column first, on the unsorted sample.
+      CountExceedances(d, column.name, g, samples[g], counts[g]);
       ColumnDispersion described = Describe(samples[g], options);
       described.runs = counts[g].runs;
       described.failed = counts[g].failed;
       described.without_value = counts[g].without_value;
       described.pending = counts[g].pending;
-      for (std::size_t l = 0; l < d.limits.size(); ++l) {
-        if (d.limits[l].column != column.name) continue;
-        const DispersionLimit& limit = d.limits[l];
-        LimitExceedance& e = d.groups[g].limits[l];
-        e.probability = e.values > 0 ? static_cast<double>(e.exceed) / static_cast<double>(e.values) : kNaN;
-        e.wilson = WilsonInterval(e.exceed, e.values, options.confidence_level);
-        e.clopper_pearson = ClopperPearsonInterval(e.exceed, e.values, options.confidence_level);
-        if (limit.above) {
-          e.normal_probability = NormalProbabilityAbove(described.normal.fit, limit.value);
-          e.gumbel_probability = GumbelMaxProbabilityAbove(described.gumbel_max.fit, limit.value);
-          e.gev_probability = GevMaxProbabilityAbove(
-              {described.gev_max.fit.location, described.gev_max.fit.scale, described.gev_max.shape, 0},
-              limit.value);
-        } else {
-          const LocationScale negated{-described.normal.fit.location, described.normal.fit.scale};
-          e.normal_probability = NormalProbabilityAbove(negated, -limit.value);
-          const LocationScale negated_fit{-described.gumbel_min.fit.location, described.gumbel_min.fit.scale};
-          e.gumbel_probability = GumbelMaxProbabilityAbove(negated_fit, -limit.value);
-          e.gev_probability = kNaN;
-        }
-      }
+      EstimateExceedances(d, column.name, g, described, options);
       d.groups[g].columns.push_back(std::move(described));
     }
   }
@@ -706,174 +747,219 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
 
 std::string DispersionGroupPath() { return "analysis/dispersion"; }
 
-void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion& d,
-                          const std::string& command_line) {
-  WriteAnalysisProduct(archive, DispersionGroupPath(), "the dispersion", [&](ProductGroup& group) {
-    group.Attribute("description",
-                    "Dispersion of per-run result columns over the runs of a sweep, per group of a grouping "
-                    "column (docs/dispersion.md): counts, moments, percentiles, normal and Gumbel tail fits "
-                    "with Anderson-Darling statistics, and limit exceedance probabilities with Wilson and "
-                    "Clopper-Pearson intervals");
-    group.Attribute("command_line", command_line);
-    group.Attribute("engine_version", EngineVersion());
-    group.Attribute("git_commit", EngineGitCommit());
-    group.Attribute("created", UtcTimestamp());
-    group.Attribute("study_name", d.study_name);
-    group.Attribute("columns", d.columns);
-    group.Attribute("column_paths", d.column_paths);
-    group.Attribute("column_units", d.column_units);
-    group.Attribute("group_by", d.group_by);
-    group.Attribute("group_path", d.group_path);
-    group.Attribute("group_units", d.group_units);
-    group.Attribute("percentiles", d.options.percentiles);
-    group.Attribute("tail_probabilities", d.options.tail_probabilities);
-    group.Attribute("confidence_level", d.options.confidence_level);
-    group.Attribute("run_count", d.run_count);
+namespace {
 
-    const std::size_t G = d.groups.size(), C = d.columns.size(), P = d.options.percentiles.size(),
-                      T = d.options.tail_probabilities.size(), L = d.limits.size();
-    std::vector<std::string> labels;
-    std::vector<double> keys;
-    for (const auto& g : d.groups) {
-      labels.push_back(g.label);
-      keys.push_back(g.value);
-    }
-    group.Strings("group_label", labels,
-                  "The grouping value as shown, one per group (\"all\" without grouping)");
-    group.Numbers("group_value", keys, d.group_units.empty() ? "1" : d.group_units,
-                  "The grouping value, one per group (NaN without grouping, or for runs without one)");
-    // Per (group, column) tables, shape [G, C] (and [G, C, P] / [G, C, T]).
-    auto per_column = [&](const std::string& name, const std::string& units, const std::string& description,
-                          auto value_of) {
-      std::vector<double> values;
-      for (const auto& g : d.groups)
-        for (const auto& c : g.columns) values.push_back(value_of(c));
-      group.Numbers(name, values, units, description + " [group, column]", {G, C});
-    };
-    auto per_count = [&](const std::string& name, const std::string& description, auto value_of) {
-      std::vector<std::int64_t> values;
-      for (const auto& g : d.groups)
-        for (const auto& c : g.columns) values.push_back(value_of(c));
-      group.Numbers(name, values, "1", description + " [group, column]", {G, C});
-    };
-    const std::string column_units = "see column_units";  // each column has its own units
-    per_count("runs", "Runs of the group", [](const ColumnDispersion& c) { return c.runs; });
-    per_count("values", "Complete runs with a finite value: the sample",
-              [](const ColumnDispersion& c) { return c.values; });
-    per_count("failed", "Failed runs (status failed)", [](const ColumnDispersion& c) { return c.failed; });
-    per_count("without_value", "Complete runs whose value is not finite",
-              [](const ColumnDispersion& c) { return c.without_value; });
-    per_count("pending", "Runs not run yet", [](const ColumnDispersion& c) { return c.pending; });
-    per_column("mean", column_units, "Mean", [](const ColumnDispersion& c) { return c.mean; });
-    per_column("standard_deviation", column_units, "Standard deviation (divisor n - 1)",
-               [](const ColumnDispersion& c) { return c.standard_deviation; });
-    per_count("no_spread",
-              "1: every value of the sample is the same (standard deviation 0, no tail law fitted: the fits' "
-              "parameters and quantiles are NaN); 0 otherwise",
-              [](const ColumnDispersion& c) { return static_cast<std::int64_t>(c.no_spread ? 1 : 0); });
-    per_column("minimum", column_units, "Smallest value",
-               [](const ColumnDispersion& c) { return c.minimum; });
-    per_column("maximum", column_units, "Largest value", [](const ColumnDispersion& c) { return c.maximum; });
-    std::vector<double> percentiles;
-    for (const auto& g : d.groups)
-      for (const auto& c : g.columns)
-        percentiles.insert(percentiles.end(), c.percentiles.begin(), c.percentiles.end());
-    group.Numbers("percentile_values", percentiles, column_units,
-                  "Percentiles (linear interpolation, NumPy's default) at the attribute percentiles "
-                  "[group, column, percentile]",
-                  {G, C, P});
-    auto fit = [&](const std::string& prefix, const std::string& law, auto tail_of, bool upper, bool lower) {
-      per_column(prefix + "_location", column_units, law + " fit: location",
+// The product's attributes: what it is, where it comes from and the options it was computed with.
+void WriteDispersionAttributes(ProductGroup& group, const Dispersion& d, const std::string& command_line) {
+  group.Attribute("description",
+                  "Dispersion of per-run result columns over the runs of a sweep, per group of a grouping "
+                  "column (docs/dispersion.md): counts, moments, percentiles, normal and Gumbel tail fits "
+                  "with Anderson-Darling statistics, and limit exceedance probabilities with Wilson and "
+                  "Clopper-Pearson intervals");
+  group.Attribute("command_line", command_line);
+  group.Attribute("engine_version", EngineVersion());
+  group.Attribute("git_commit", EngineGitCommit());
+  group.Attribute("created", UtcTimestamp());
+  group.Attribute("study_name", d.study_name);
+  group.Attribute("columns", d.columns);
+  group.Attribute("column_paths", d.column_paths);
+  group.Attribute("column_units", d.column_units);
+  group.Attribute("group_by", d.group_by);
+  group.Attribute("group_path", d.group_path);
+  group.Attribute("group_units", d.group_units);
+  group.Attribute("percentiles", d.options.percentiles);
+  group.Attribute("tail_probabilities", d.options.tail_probabilities);
+  group.Attribute("confidence_level", d.options.confidence_level);
+  group.Attribute("run_count", d.run_count);
+}
+
+// The groups' labels and grouping values, one per group.
+void WriteGroupKeys(ProductGroup& group, const Dispersion& d) {
+  std::vector<std::string> labels;
+  std::vector<double> keys;
+  for (const auto& g : d.groups) {
+    labels.push_back(g.label);
+    keys.push_back(g.value);
+  }
+  group.Strings("group_label", labels,
+                "The grouping value as shown, one per group (\"all\" without grouping)");
+  group.Numbers("group_value", keys, d.group_units.empty() ? "1" : d.group_units,
+                "The grouping value, one per group (NaN without grouping, or for runs without one)");
+}
+
+// A per (group, column) table of numbers, shape [G, C].
+template <typename ValueOf>
+void WritePerColumn(ProductGroup& group, const Dispersion& d, const std::string& name,
+                    const std::string& units, const std::string& description, ValueOf value_of) {
+  std::vector<double> values;
+  for (const auto& g : d.groups)
+    for (const auto& c : g.columns) values.push_back(value_of(c));
+  group.Numbers(name, values, units, description + " [group, column]", {d.groups.size(), d.columns.size()});
+}
+
+// A per (group, column) table of counts, shape [G, C].
+template <typename ValueOf>
+void WritePerCount(ProductGroup& group, const Dispersion& d, const std::string& name,
+                   const std::string& description, ValueOf value_of) {
+  std::vector<std::int64_t> values;
+  for (const auto& g : d.groups)
+    for (const auto& c : g.columns) values.push_back(value_of(c));
+  group.Numbers(name, values, "1", description + " [group, column]", {d.groups.size(), d.columns.size()});
+}
+
+// Each column's sample: its counts, moments, extremes and percentiles.
+void WriteSampleTables(ProductGroup& group, const Dispersion& d) {
+  const std::size_t G = d.groups.size(), C = d.columns.size(), P = d.options.percentiles.size();
+  const std::string column_units = "see column_units";  // each column has its own units
+  WritePerCount(group, d, "runs", "Runs of the group", [](const ColumnDispersion& c) { return c.runs; });
+  WritePerCount(group, d, "values", "Complete runs with a finite value: the sample",
+                [](const ColumnDispersion& c) { return c.values; });
+  WritePerCount(group, d, "failed", "Failed runs (status failed)",
+                [](const ColumnDispersion& c) { return c.failed; });
+  WritePerCount(group, d, "without_value", "Complete runs whose value is not finite",
+                [](const ColumnDispersion& c) { return c.without_value; });
+  WritePerCount(group, d, "pending", "Runs not run yet", [](const ColumnDispersion& c) { return c.pending; });
+  WritePerColumn(group, d, "mean", column_units, "Mean", [](const ColumnDispersion& c) { return c.mean; });
+  WritePerColumn(group, d, "standard_deviation", column_units, "Standard deviation (divisor n - 1)",
+                 [](const ColumnDispersion& c) { return c.standard_deviation; });
+  WritePerCount(
+      group, d, "no_spread",
+      "1: every value of the sample is the same (standard deviation 0, no tail law fitted: the fits' "
+      "parameters and quantiles are NaN); 0 otherwise",
+      [](const ColumnDispersion& c) { return static_cast<std::int64_t>(c.no_spread ? 1 : 0); });
+  WritePerColumn(group, d, "minimum", column_units, "Smallest value",
+                 [](const ColumnDispersion& c) { return c.minimum; });
+  WritePerColumn(group, d, "maximum", column_units, "Largest value",
+                 [](const ColumnDispersion& c) { return c.maximum; });
+  std::vector<double> percentiles;
+  for (const auto& g : d.groups)
+    for (const auto& c : g.columns)
+      percentiles.insert(percentiles.end(), c.percentiles.begin(), c.percentiles.end());
+  group.Numbers("percentile_values", percentiles, column_units,
+                "Percentiles (linear interpolation, NumPy's default) at the attribute percentiles "
+                "[group, column, percentile]",
+                {G, C, P});
+}
+
+// One tail law's fits: location, scale, A2 and its rejection level, and the quantiles of the tails
+// asked for (`upper`, `lower`).
+template <typename TailOf>
+void WriteTailFit(ProductGroup& group, const Dispersion& d, const std::string& prefix, const std::string& law,
+                  TailOf tail_of, bool upper, bool lower) {
+  const std::size_t G = d.groups.size(), C = d.columns.size(), T = d.options.tail_probabilities.size();
+  const std::string column_units = "see column_units";
+  WritePerColumn(group, d, prefix + "_location", column_units, law + " fit: location",
                  [&](const ColumnDispersion& c) { return tail_of(c).fit.location; });
-      per_column(prefix + "_scale", column_units, law + " fit: scale",
+  WritePerColumn(group, d, prefix + "_scale", column_units, law + " fit: scale",
                  [&](const ColumnDispersion& c) { return tail_of(c).fit.scale; });
-      per_column(prefix + "_anderson_darling", "1", law + " fit: Anderson-Darling statistic A2",
+  WritePerColumn(group, d, prefix + "_anderson_darling", "1", law + " fit: Anderson-Darling statistic A2",
                  [&](const ColumnDispersion& c) { return tail_of(c).goodness.statistic; });
-      per_column(prefix + "_rejected_at_percent", "%",
+  WritePerColumn(group, d, prefix + "_rejected_at_percent", "%",
                  law +
                      " fit: smallest significance level (of Stephens' table) at which A2 rejects it; 0: not "
                      "rejected at any",
                  [&](const ColumnDispersion& c) { return tail_of(c).goodness.rejected_at_percent(); });
-      for (int side = 0; side < 2; ++side) {
-        if ((side == 0 && !upper) || (side == 1 && !lower)) continue;
-        std::vector<double> values;
-        for (const auto& g : d.groups)
-          for (const auto& c : g.columns) {
-            const auto& q = side == 0 ? tail_of(c).upper_quantiles : tail_of(c).lower_quantiles;
-            values.insert(values.end(), q.begin(), q.end());
-          }
-        group.Numbers(prefix + (side == 0 ? "_upper_quantiles" : "_lower_quantiles"), values, column_units,
-                      law + " fit: the value " + (side == 0 ? "exceeded" : "not reached") +
-                          " with probability p, p the attribute tail_probabilities [group, column, p]",
-                      {G, C, T});
+  for (int side = 0; side < 2; ++side) {
+    if ((side == 0 && !upper) || (side == 1 && !lower)) continue;
+    std::vector<double> values;
+    for (const auto& g : d.groups)
+      for (const auto& c : g.columns) {
+        const auto& q = side == 0 ? tail_of(c).upper_quantiles : tail_of(c).lower_quantiles;
+        values.insert(values.end(), q.begin(), q.end());
       }
-    };
-    fit(
-        "normal", "Normal", [](const ColumnDispersion& c) -> const TailFit& { return c.normal; }, true, true);
-    fit(
-        "gumbel_max", "Gumbel (largest values)",
-        [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_max; }, true, false);
-    fit(
-        "gev_max", "Generalised extreme value (largest values; A2 without a table)",
-        [](const ColumnDispersion& c) -> const TailFit& { return c.gev_max; }, true, false);
-    per_column("gev_max_shape", "1", "Generalised extreme value fit: shape xi (scipy's genextreme c = -xi)",
-               [](const ColumnDispersion& c) { return c.gev_max.shape; });
-    fit(
-        "gumbel_min",
-        "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
-        [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_min; }, false, true);
+    group.Numbers(prefix + (side == 0 ? "_upper_quantiles" : "_lower_quantiles"), values, column_units,
+                  law + " fit: the value " + (side == 0 ? "exceeded" : "not reached") +
+                      " with probability p, p the attribute tail_probabilities [group, column, p]",
+                  {G, C, T});
+  }
+}
 
+// The tail fits: normal, Gumbel and GEV of the largest values, Gumbel of the smallest.
+void WriteTailFits(ProductGroup& group, const Dispersion& d) {
+  WriteTailFit(
+      group, d, "normal", "Normal", [](const ColumnDispersion& c) -> const TailFit& { return c.normal; },
+      true, true);
+  WriteTailFit(
+      group, d, "gumbel_max", "Gumbel (largest values)",
+      [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_max; }, true, false);
+  WriteTailFit(
+      group, d, "gev_max", "Generalised extreme value (largest values; A2 without a table)",
+      [](const ColumnDispersion& c) -> const TailFit& { return c.gev_max; }, true, false);
+  WritePerColumn(group, d, "gev_max_shape", "1",
+                 "Generalised extreme value fit: shape xi (scipy's genextreme c = -xi)",
+                 [](const ColumnDispersion& c) { return c.gev_max.shape; });
+  WriteTailFit(
+      group, d, "gumbel_min",
+      "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
+      [](const ColumnDispersion& c) -> const TailFit& { return c.gumbel_min; }, false, true);
+}
+
+// A per (group, limit) table of type T, shape [G, L].
+template <typename T, typename ValueOf>
+void WritePerLimit(ProductGroup& limits, const Dispersion& d, const std::string& name,
+                   const std::string& description, ValueOf value_of) {
+  std::vector<T> values;
+  for (const auto& g : d.groups)
+    for (const auto& e : g.limits) values.push_back(value_of(e));
+  limits.Numbers(name, values, "1", description + " [group, limit]", {d.groups.size(), d.limits.size()});
+}
+
+// The subgroup limits: each limit as given, and per group its exceedance counts and probabilities.
+void WriteLimitTables(ProductGroup& group, const Dispersion& d) {
+  std::vector<std::string> texts, limit_columns;
+  std::vector<double> limit_values;
+  std::vector<std::int64_t> above;
+  for (const auto& l : d.limits) {
+    texts.push_back(l.text);
+    limit_columns.push_back(l.column);
+    limit_values.push_back(l.value);
+    above.push_back(l.above ? 1 : 0);
+  }
+  ProductGroup limits = group.Group("limits");
+  limits.Attribute(
+      "description",
+      "Probability of exceeding each limit, per group: empirical with Wilson and Clopper-Pearson "
+      "intervals at the parent's confidence_level, and the fitted tails'");
+  limits.Strings("limit", texts, "The limit as given, one per limit");
+  limits.Strings("column", limit_columns, "Its column");
+  limits.Numbers("value", limit_values, "see column", "Its value, in its column's units");
+  limits.Numbers("above", above, "1", "1: P(value > limit); 0: P(value < limit)");
+  using E = const LimitExceedance&;
+  WritePerLimit<std::int64_t>(limits, d, "exceed", "Values beyond the limit", [](E e) { return e.exceed; });
+  WritePerLimit<std::int64_t>(limits, d, "values", "The sample (finite values)",
+                              [](E e) { return e.values; });
+  WritePerLimit<std::int64_t>(limits, d, "failed", "Failed runs and runs without a value: not in the sample",
+                              [](E e) { return e.failed; });
+  WritePerLimit<double>(limits, d, "probability", "exceed / values", [](E e) { return e.probability; });
+  WritePerLimit<double>(limits, d, "wilson_lower", "Wilson interval, lower end",
+                        [](E e) { return e.wilson.lower; });
+  WritePerLimit<double>(limits, d, "wilson_upper", "Wilson interval, upper end",
+                        [](E e) { return e.wilson.upper; });
+  WritePerLimit<double>(limits, d, "clopper_pearson_lower", "Clopper-Pearson interval, lower end",
+                        [](E e) { return e.clopper_pearson.lower; });
+  WritePerLimit<double>(limits, d, "clopper_pearson_upper", "Clopper-Pearson interval, upper end",
+                        [](E e) { return e.clopper_pearson.upper; });
+  WritePerLimit<double>(limits, d, "normal_probability", "Of the normal fit",
+                        [](E e) { return e.normal_probability; });
+  WritePerLimit<double>(limits, d, "gumbel_probability", "Of the Gumbel fit of the same tail",
+                        [](E e) { return e.gumbel_probability; });
+  WritePerLimit<double>(limits, d, "gev_probability",
+                        "Of the generalised extreme value fit of the largest values (NaN for <)",
+                        [](E e) { return e.gev_probability; });
+}
+
+}  // namespace
+
+void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion& d,
+                          const std::string& command_line) {
+  WriteAnalysisProduct(archive, DispersionGroupPath(), "the dispersion", [&](ProductGroup& group) {
+    WriteDispersionAttributes(group, d, command_line);
+    WriteGroupKeys(group, d);
+    // Per (group, column) tables, shape [G, C] (and [G, C, P] / [G, C, T]).
+    WriteSampleTables(group, d);
+    WriteTailFits(group, d);
     // The limits: [group, limit].
-    std::vector<std::string> texts, limit_columns;
-    std::vector<double> limit_values;
-    std::vector<std::int64_t> above;
-    for (const auto& l : d.limits) {
-      texts.push_back(l.text);
-      limit_columns.push_back(l.column);
-      limit_values.push_back(l.value);
-      above.push_back(l.above ? 1 : 0);
-    }
-    ProductGroup limits = group.Group("limits");
-    limits.Attribute(
-        "description",
-        "Probability of exceeding each limit, per group: empirical with Wilson and Clopper-Pearson "
-        "intervals at the parent's confidence_level, and the fitted tails'");
-    limits.Strings("limit", texts, "The limit as given, one per limit");
-    limits.Strings("column", limit_columns, "Its column");
-    limits.Numbers("value", limit_values, "see column", "Its value, in its column's units");
-    limits.Numbers("above", above, "1", "1: P(value > limit); 0: P(value < limit)");
-    auto per_limit = [&](const std::string& name, const std::string& description, auto value_of) {
-      std::vector<double> values;
-      for (const auto& g : d.groups)
-        for (const auto& e : g.limits) values.push_back(value_of(e));
-      limits.Numbers(name, values, "1", description + " [group, limit]", {G, L});
-    };
-    auto per_limit_count = [&](const std::string& name, const std::string& description, auto value_of) {
-      std::vector<std::int64_t> values;
-      for (const auto& g : d.groups)
-        for (const auto& e : g.limits) values.push_back(value_of(e));
-      limits.Numbers(name, values, "1", description + " [group, limit]", {G, L});
-    };
-    per_limit_count("exceed", "Values beyond the limit", [](const LimitExceedance& e) { return e.exceed; });
-    per_limit_count("values", "The sample (finite values)",
-                    [](const LimitExceedance& e) { return e.values; });
-    per_limit_count("failed", "Failed runs and runs without a value: not in the sample",
-                    [](const LimitExceedance& e) { return e.failed; });
-    per_limit("probability", "exceed / values", [](const LimitExceedance& e) { return e.probability; });
-    per_limit("wilson_lower", "Wilson interval, lower end",
-              [](const LimitExceedance& e) { return e.wilson.lower; });
-    per_limit("wilson_upper", "Wilson interval, upper end",
-              [](const LimitExceedance& e) { return e.wilson.upper; });
-    per_limit("clopper_pearson_lower", "Clopper-Pearson interval, lower end",
-              [](const LimitExceedance& e) { return e.clopper_pearson.lower; });
-    per_limit("clopper_pearson_upper", "Clopper-Pearson interval, upper end",
-              [](const LimitExceedance& e) { return e.clopper_pearson.upper; });
-    per_limit("normal_probability", "Of the normal fit",
-              [](const LimitExceedance& e) { return e.normal_probability; });
-    per_limit("gumbel_probability", "Of the Gumbel fit of the same tail",
-              [](const LimitExceedance& e) { return e.gumbel_probability; });
-    per_limit("gev_probability", "Of the generalised extreme value fit of the largest values (NaN for <)",
-              [](const LimitExceedance& e) { return e.gev_probability; });
+    WriteLimitTables(group, d);
   });
 }
 

@@ -629,37 +629,46 @@ class Aggregator {
     }
   }
 
-  // One more pass over the first pass's rows, collecting or counting values for the planned targets.
-  void Pass(const std::vector<std::uint32_t>& collect_units, const std::vector<std::size_t>& collect_targets,
-            const std::vector<std::size_t>& histogram_targets) {
-    ++summary_.passes;
-    // What each unit does in this pass: collect whole, or act for some of its targets.
-    enum class Action : std::uint8_t { kNone, kCollectUnit, kTargets };
-    std::vector<Action> action(unit_begin_.size() - 1, Action::kNone);
-    std::vector<std::int32_t> role(targets_.size(), -1);  // -1 idle; -2 collect; >= 0 histogram index
-    for (std::uint32_t unit : collect_units) action[unit] = Action::kCollectUnit;
+  // What each unit does in a pass: collect whole, or act for some of its targets.
+  enum class Action : std::uint8_t { kNone, kCollectUnit, kTargets };
+
+  // A pass's plan per unit and target, and each histogram's bucket width (a power of two).
+  struct PassRoles {
+    std::vector<Action> action;      // per unit
+    std::vector<std::int32_t> role;  // per target: -1 idle; -2 collect; >= 0 histogram index
+    std::vector<int> shift;          // per histogram: log2 of its bucket width
+  };
+
+  // The roles of the units and targets in a pass that collects `collect_units` whole, the values in
+  // the ranges of `collect_targets`, and histograms of the ranges of `histogram_targets`.
+  PassRoles PlanRoles(const std::vector<std::uint32_t>& collect_units,
+                      const std::vector<std::size_t>& collect_targets,
+                      const std::vector<std::size_t>& histogram_targets) const {
+    PassRoles roles;
+    roles.action.assign(unit_begin_.size() - 1, Action::kNone);
+    roles.role.assign(targets_.size(), -1);
+    for (std::uint32_t unit : collect_units) roles.action[unit] = Action::kCollectUnit;
     for (std::size_t t : collect_targets) {
-      action[targets_[t].unit] = Action::kTargets;
-      role[t] = -2;
+      roles.action[targets_[t].unit] = Action::kTargets;
+      roles.role[t] = -2;
     }
-    std::vector<int> shift(histogram_targets.size());
+    roles.shift.resize(histogram_targets.size());
     for (std::size_t h = 0; h < histogram_targets.size(); ++h) {
       const Target& target = targets_[histogram_targets[h]];
-      action[target.unit] = Action::kTargets;
-      role[histogram_targets[h]] = static_cast<std::int32_t>(h);
+      roles.action[target.unit] = Action::kTargets;
+      roles.role[histogram_targets[h]] = static_cast<std::int32_t>(h);
       const std::uint64_t span = target.high - target.low;
       int s = 0;
       while (s < 64 && (span >> s) >= static_cast<std::uint64_t>(kHistogramBuckets)) ++s;
-      shift[h] = s;
+      roles.shift[h] = s;
     }
-    std::vector<std::int64_t> counts(histogram_targets.size() * kHistogramBuckets, 0);
-    // The planned sizes are known exactly: no reallocation.
-    std::vector<Entry> unit_entries, target_entries;
-    std::int64_t unit_values = 0, target_values = 0;
-    for (std::uint32_t unit : collect_units) unit_values += UnitCount(unit);
-    for (std::size_t t : collect_targets) target_values += targets_[t].inside;
-    unit_entries.reserve(static_cast<std::size_t>(unit_values));
-    target_entries.reserve(static_cast<std::size_t>(target_values));
+    return roles;
+  }
+
+  // Reads the selected rows once more: the values of collected units into `unit_entries`, those in
+  // collected targets' ranges into `target_entries`, and the histograms' bucket counts into `counts`.
+  void ReadPass(const PassRoles& roles, std::vector<Entry>& unit_entries, std::vector<Entry>& target_entries,
+                std::vector<std::int64_t>& counts) {
     for (std::int64_t first = 0; first < summary_.runs; first += request_.chunk_rows) {
       const std::int64_t count = std::min(request_.chunk_rows, summary_.runs - first);
       if (!selected_.Any(first, count)) continue;
@@ -669,29 +678,31 @@ class Aggregator {
         const int g = GroupOf(i, false);
         for (std::size_t j = 0; j < order_columns_.size(); ++j) {
           const std::uint32_t unit = Unit(g, j);
-          if (action[unit] == Action::kNone) continue;
+          if (roles.action[unit] == Action::kNone) continue;
           const double raw = values_[static_cast<std::size_t>(order_columns_[j])].numbers[i];
           if (std::isnan(raw)) continue;
           const double value = Canonical(raw);
-          if (action[unit] == Action::kCollectUnit) {
+          if (roles.action[unit] == Action::kCollectUnit) {
             unit_entries.push_back(Entry{unit, value});
             continue;
           }
           const std::uint64_t key = OrderKey(value);
           for (std::size_t t = unit_begin_[unit]; t < unit_begin_[unit + 1]; ++t) {
-            if (role[t] == -1 || key < targets_[t].low || key > targets_[t].high) continue;
-            if (role[t] == -2) {
+            if (roles.role[t] == -1 || key < targets_[t].low || key > targets_[t].high) continue;
+            if (roles.role[t] == -2) {
               target_entries.push_back(Entry{static_cast<std::uint32_t>(t), value});
             } else {
-              const auto h = static_cast<std::size_t>(role[t]);
-              ++counts[h * kHistogramBuckets + ((key - targets_[t].low) >> shift[h])];
+              const auto h = static_cast<std::size_t>(roles.role[t]);
+              ++counts[h * kHistogramBuckets + ((key - targets_[t].low) >> roles.shift[h])];
             }
           }
         }
       }
     }
-    ResolveFromUnitEntries(unit_entries);
-    // Collected ranges: the value of rank (rank - below) among the values in [low, high].
+  }
+
+  // Collected ranges: the value of rank (rank - below) among the values in [low, high].
+  void ResolveFromTargetEntries(std::vector<Entry>& target_entries) {
     std::sort(target_entries.begin(), target_entries.end(), [](const Entry& a, const Entry& b) {
       return a.owner != b.owner ? a.owner < b.owner : OrderKey(a.value) < OrderKey(b.value);
     });
@@ -704,7 +715,11 @@ class Aggregator {
       target.found = true;
       begin = end;
     }
-    // Histograms: the bucket that holds the rank becomes the target's range.
+  }
+
+  // Histograms: the bucket that holds the rank becomes the target's range.
+  void NarrowFromHistograms(const std::vector<std::size_t>& histogram_targets, const std::vector<int>& shift,
+                            const std::vector<std::int64_t>& counts) {
     for (std::size_t h = 0; h < histogram_targets.size(); ++h) {
       Target& target = targets_[histogram_targets[h]];
       std::int64_t below = target.below;
@@ -730,6 +745,25 @@ class Aggregator {
         below += in_bucket;
       }
     }
+  }
+
+  // One more pass over the first pass's rows, collecting or counting values for the planned targets.
+  void Pass(const std::vector<std::uint32_t>& collect_units, const std::vector<std::size_t>& collect_targets,
+            const std::vector<std::size_t>& histogram_targets) {
+    ++summary_.passes;
+    const PassRoles roles = PlanRoles(collect_units, collect_targets, histogram_targets);
+    std::vector<std::int64_t> counts(histogram_targets.size() * kHistogramBuckets, 0);
+    // The planned sizes are known exactly: no reallocation.
+    std::vector<Entry> unit_entries, target_entries;
+    std::int64_t unit_values = 0, target_values = 0;
+    for (std::uint32_t unit : collect_units) unit_values += UnitCount(unit);
+    for (std::size_t t : collect_targets) target_values += targets_[t].inside;
+    unit_entries.reserve(static_cast<std::size_t>(unit_values));
+    target_entries.reserve(static_cast<std::size_t>(target_values));
+    ReadPass(roles, unit_entries, target_entries, counts);
+    ResolveFromUnitEntries(unit_entries);
+    ResolveFromTargetEntries(target_entries);
+    NarrowFromHistograms(histogram_targets, roles.shift, counts);
   }
 
   double TargetValue(std::uint32_t unit, std::int64_t rank) const {

@@ -107,29 +107,91 @@ bool SelectRuns(const ArchiveReader& archive, const ColumnCatalog& catalog, cons
   return matched > 0;
 }
 
-QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog, const QueryRequest& request,
-                      QueryRowSink& sink) {
-  // Everything a person typed is checked before the first row is read.
+namespace {
+
+// A request checked against the catalog: its output columns, filter and sort column.
+struct CheckedRequest {
   std::vector<int> output;
+  std::optional<RowFilter> filter;
+  std::optional<int> sort_column;
+};
+
+// Checks everything a person typed, before the first row is read: the columns (the default ones,
+// with the filter's and the sort column, when none is named), the filter and the sort column.
+CheckedRequest CheckRequest(const ColumnCatalog& catalog, const QueryRequest& request) {
+  CheckedRequest checked;
+  std::vector<int>& output = checked.output;
   for (const std::string& name : request.columns) {
     for (int c : catalog.Expand(name, "command line", "columns")) {
       if (std::find(output.begin(), output.end(), c) == output.end()) output.push_back(c);
     }
   }
-  std::optional<RowFilter> filter;
-  if (!request.where.empty()) filter.emplace(RowFilter::Parse(request.where, catalog, "where"));
-  std::optional<int> sort_column;
-  if (!request.sort.empty()) sort_column = catalog.Require(request.sort, "command line", "sort");
+  if (!request.where.empty()) checked.filter.emplace(RowFilter::Parse(request.where, catalog, "where"));
+  if (!request.sort.empty()) checked.sort_column = catalog.Require(request.sort, "command line", "sort");
   if (output.empty()) {
     output = DefaultColumns(catalog);
     auto add = [&](int c) {
       if (std::find(output.begin(), output.end(), c) == output.end()) output.push_back(c);
     };
-    if (filter) {
-      for (int c : filter->columns()) add(c);
+    if (checked.filter) {
+      for (int c : checked.filter->columns()) add(c);
     }
-    if (sort_column) add(*sort_column);
+    if (checked.sort_column) add(*checked.sort_column);
   }
+  return checked;
+}
+
+// The matching rows of a sorted query. Top-k: a heap whose top is the worst row kept. Without a
+// limit: every matching row.
+class SortedRows {
+ public:
+  SortedRows(const SortOrder& order, std::int64_t limit) : order_(order), limit_(limit), best_(order) {}
+
+  // Keeps `row` if it is among the best `limit` so far (every row without a limit).
+  void Add(SortedRow row) {
+    if (limit_ < 0) {
+      all_.push_back(std::move(row));
+    } else if (limit_ > 0) {
+      if (static_cast<std::int64_t>(best_.size()) < limit_) {
+        best_.push(std::move(row));
+      } else if (order_(row, best_.top())) {
+        best_.pop();
+        best_.push(std::move(row));
+      }
+    }
+  }
+
+  // Sends the rows kept to `sink` in order, counting them in summary.shown.
+  void Emit(QueryRowSink& sink, QuerySummary& summary) {
+    if (limit_ >= 0) {
+      while (!best_.empty()) {
+        all_.push_back(best_.top());
+        best_.pop();
+      }
+    }
+    std::sort(all_.begin(), all_.end(), order_);
+    for (const auto& row : all_) {
+      sink.Row(row.cells);
+      ++summary.shown;
+    }
+  }
+
+ private:
+  SortOrder order_;
+  std::int64_t limit_;
+  std::priority_queue<SortedRow, std::vector<SortedRow>, SortOrder> best_;
+  std::vector<SortedRow> all_;
+};
+
+}  // namespace
+
+QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog, const QueryRequest& request,
+                      QueryRowSink& sink) {
+  // Everything a person typed is checked before the first row is read.
+  CheckedRequest checked = CheckRequest(catalog, request);
+  const std::vector<int>& output = checked.output;
+  const std::optional<RowFilter>& filter = checked.filter;
+  const std::optional<int>& sort_column = checked.sort_column;
   GESWEEP_DEMAND(request.chunk_rows > 0);
 
   std::vector<const RunColumn*> shown_columns;
@@ -143,9 +205,7 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
   const bool sorting = sort_column.has_value();
   const SortOrder order{request.descending,
                         sorting && catalog.column(*sort_column).kind == ColumnKind::kText};
-  // Top-k: a heap whose top is the worst row kept. Without a limit: every matching row.
-  std::priority_queue<SortedRow, std::vector<SortedRow>, SortOrder> best(order);
-  std::vector<SortedRow> all;
+  SortedRows sorted(order, request.limit);
   const bool bounded = request.limit >= 0;
 
   std::vector<ColumnValues> values(catalog.columns().size());
@@ -185,31 +245,10 @@ QuerySummary RunQuery(const ArchiveReader& archive, const ColumnCatalog& catalog
       row.text_key = key.text;
       row.order = first + static_cast<std::int64_t>(i);
       row.cells = std::move(cells);
-      if (!bounded) {
-        all.push_back(std::move(row));
-      } else if (request.limit > 0) {
-        if (static_cast<std::int64_t>(best.size()) < request.limit) {
-          best.push(std::move(row));
-        } else if (order(row, best.top())) {
-          best.pop();
-          best.push(std::move(row));
-        }
-      }
+      sorted.Add(std::move(row));
     }
   }
-  if (sorting) {
-    if (bounded) {
-      while (!best.empty()) {
-        all.push_back(best.top());
-        best.pop();
-      }
-    }
-    std::sort(all.begin(), all.end(), order);
-    for (const auto& row : all) {
-      sink.Row(row.cells);
-      ++summary.shown;
-    }
-  }
+  if (sorting) sorted.Emit(sink, summary);
   sink.End(summary);
   return summary;
 }

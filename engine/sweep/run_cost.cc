@@ -42,6 +42,105 @@ class NoSink final : public ResultSink {
   void Write(const ResultBlock&) override { GESWEEP_UNREACHABLE(); }
 };
 
+// One thread's sampling: bursts of `burst` runs spread over the shard by the golden-ratio sequence
+// (burst numbers from `next_burst`), the first a warm-up, until `expired` or the shard's runs are
+// timed (`timed_total`, shared by the threads).
+void SampleBursts(const SweepPlan& plan, std::int64_t burst, const std::atomic<bool>& expired,
+                  std::atomic<std::int64_t>& next_burst, std::atomic<std::int64_t>& timed_total,
+                  ThreadResult& out) {
+  const std::int64_t runs = plan.run_count();
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  bool warm = false;
+  while (!expired.load() && timed_total.load() < runs) {
+    const std::int64_t k = next_burst.fetch_add(1);
+    const double where = std::fmod((static_cast<double>(k) + 0.5) * kGoldenRatioFraction, 1.0);
+    const std::int64_t first =
+        std::min<std::int64_t>(runs - burst, static_cast<std::int64_t>(where * static_cast<double>(runs)));
+    const auto burst_start = Clock::now();
+    std::int64_t done = 0;
+    bool cut = false;
+    for (std::int64_t r = 0; r < burst; ++r) {
+      ExecuteRun(plan, plan.first_run() + first + r, workspace, block, static_cast<int>(r), &expired);
+      if (block.status[static_cast<std::size_t>(r)] == static_cast<std::int8_t>(RunStatus::kPending)) {
+        cut = true;
+        break;
+      }
+      ++done;
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - burst_start).count();
+    if (cut) {
+      // Stopped at the deadline: the burst took at least this long.
+      out.cut = out.cut || done == 0;
+      if (done == 0) out.longest_cut_s = std::max(out.longest_cut_s, seconds);
+      if (done > 0 && !warm) out.warmup = {done, seconds};
+      break;
+    }
+    if (!warm) {
+      out.warmup = {done, seconds};
+      warm = true;
+      continue;
+    }
+    out.bursts.push_back({done, seconds});
+    timed_total.fetch_add(done);
+  }
+}
+
+// The threads' bursts summed into the estimate's counts and seconds per run (from the warm-up bursts
+// when no timed one finished; at least a cut run's time when only cut runs are left). Returns each
+// timed burst's seconds per run.
+std::vector<double> SummariseBursts(const std::vector<ThreadResult>& results, RunCostEstimate& estimate) {
+  std::vector<double> per_run;  // each timed burst's seconds per run
+  double seconds = 0;
+  double longest_cut_s = 0;
+  bool cut_alone = false;
+  Burst warmup;
+  for (const ThreadResult& r : results) {
+    for (const Burst& b : r.bursts) {
+      per_run.push_back(b.seconds / static_cast<double>(b.runs));
+      seconds += b.seconds;
+      estimate.timed_runs += b.runs;
+    }
+    warmup.runs += r.warmup.runs;
+    warmup.seconds += r.warmup.seconds;
+    cut_alone = cut_alone || r.cut;
+    longest_cut_s = std::max(longest_cut_s, r.longest_cut_s);
+  }
+  estimate.warmup_runs = warmup.runs;
+  estimate.timed_bursts = static_cast<std::int64_t>(per_run.size());
+  if (estimate.timed_runs > 0) {
+    estimate.seconds_per_run = seconds / static_cast<double>(estimate.timed_runs);
+  } else if (warmup.runs > 0) {
+    // Only warm-up bursts finished within the budget: the best there is (cold, so on the high side).
+    estimate.seconds_per_run = warmup.seconds / static_cast<double>(warmup.runs);
+  }
+  if (cut_alone && estimate.timed_runs == 0) {
+    // A run that did not finish within the budget: runs take at least that long.
+    estimate.seconds_per_run = std::max(estimate.seconds_per_run, longest_cut_s);
+    estimate.lower_bound = true;
+  }
+  return per_run;
+}
+
+// The 95 % interval of the seconds per run, from the spread of three or more timed bursts (else the
+// estimate itself at both ends).
+void SetSecondsPerRunInterval(const std::vector<double>& per_run, RunCostEstimate& estimate) {
+  estimate.seconds_per_run_low = estimate.seconds_per_run_high = estimate.seconds_per_run;
+  if (per_run.size() >= 3) {
+    double mean = 0;
+    for (double y : per_run) mean += y;
+    mean /= static_cast<double>(per_run.size());
+    double variance = 0;
+    for (double y : per_run) variance += (y - mean) * (y - mean);
+    variance /= static_cast<double>(per_run.size() - 1);
+    const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
+    estimate.seconds_per_run_low = std::max(0.0, estimate.seconds_per_run - half_width);
+    estimate.seconds_per_run_high = estimate.seconds_per_run + half_width;
+  }
+}
+
 }  // namespace
 
 RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options,
@@ -77,45 +176,7 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   // take longer than the sweep itself.
   std::atomic<std::int64_t> timed_total{0};
   std::vector<ThreadResult> results(static_cast<std::size_t>(options.threads));
-  auto sample = [&](ThreadResult& out) {
-    ResultBlock block;
-    block.Allocate(plan);
-    block.Reset(plan, 0);
-    RunWorkspace workspace(plan);
-    bool warm = false;
-    while (!expired.load() && timed_total.load() < runs) {
-      const std::int64_t k = next_burst.fetch_add(1);
-      const double where = std::fmod((static_cast<double>(k) + 0.5) * kGoldenRatioFraction, 1.0);
-      const std::int64_t first =
-          std::min<std::int64_t>(runs - burst, static_cast<std::int64_t>(where * static_cast<double>(runs)));
-      const auto burst_start = Clock::now();
-      std::int64_t done = 0;
-      bool cut = false;
-      for (std::int64_t r = 0; r < burst; ++r) {
-        ExecuteRun(plan, plan.first_run() + first + r, workspace, block, static_cast<int>(r), &expired);
-        if (block.status[static_cast<std::size_t>(r)] == static_cast<std::int8_t>(RunStatus::kPending)) {
-          cut = true;
-          break;
-        }
-        ++done;
-      }
-      const double seconds = std::chrono::duration<double>(Clock::now() - burst_start).count();
-      if (cut) {
-        // Stopped at the deadline: the burst took at least this long.
-        out.cut = out.cut || done == 0;
-        if (done == 0) out.longest_cut_s = std::max(out.longest_cut_s, seconds);
-        if (done > 0 && !warm) out.warmup = {done, seconds};
-        break;
-      }
-      if (!warm) {
-        out.warmup = {done, seconds};
-        warm = true;
-        continue;
-      }
-      out.bursts.push_back({done, seconds});
-      timed_total.fetch_add(done);
-    }
-  };
+  auto sample = [&](ThreadResult& out) { SampleBursts(plan, burst, expired, next_burst, timed_total, out); };
   std::vector<std::thread> workers;
   for (int t = 1; t < options.threads; ++t)
     workers.emplace_back(sample, std::ref(results[static_cast<std::size_t>(t)]));
@@ -131,47 +192,8 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   RunCostEstimate estimate;
   estimate.stopped = stopped.load() || (stop != nullptr && stop->load());
   estimate.measured_s = std::chrono::duration<double>(Clock::now() - start).count();
-  std::vector<double> per_run;  // each timed burst's seconds per run
-  double seconds = 0;
-  double longest_cut_s = 0;
-  bool cut_alone = false;
-  Burst warmup;
-  for (const ThreadResult& r : results) {
-    for (const Burst& b : r.bursts) {
-      per_run.push_back(b.seconds / static_cast<double>(b.runs));
-      seconds += b.seconds;
-      estimate.timed_runs += b.runs;
-    }
-    warmup.runs += r.warmup.runs;
-    warmup.seconds += r.warmup.seconds;
-    cut_alone = cut_alone || r.cut;
-    longest_cut_s = std::max(longest_cut_s, r.longest_cut_s);
-  }
-  estimate.warmup_runs = warmup.runs;
-  estimate.timed_bursts = static_cast<std::int64_t>(per_run.size());
-  if (estimate.timed_runs > 0) {
-    estimate.seconds_per_run = seconds / static_cast<double>(estimate.timed_runs);
-  } else if (warmup.runs > 0) {
-    // Only warm-up bursts finished within the budget: the best there is (cold, so on the high side).
-    estimate.seconds_per_run = warmup.seconds / static_cast<double>(warmup.runs);
-  }
-  if (cut_alone && estimate.timed_runs == 0) {
-    // A run that did not finish within the budget: runs take at least that long.
-    estimate.seconds_per_run = std::max(estimate.seconds_per_run, longest_cut_s);
-    estimate.lower_bound = true;
-  }
-  estimate.seconds_per_run_low = estimate.seconds_per_run_high = estimate.seconds_per_run;
-  if (per_run.size() >= 3) {
-    double mean = 0;
-    for (double y : per_run) mean += y;
-    mean /= static_cast<double>(per_run.size());
-    double variance = 0;
-    for (double y : per_run) variance += (y - mean) * (y - mean);
-    variance /= static_cast<double>(per_run.size() - 1);
-    const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
-    estimate.seconds_per_run_low = std::max(0.0, estimate.seconds_per_run - half_width);
-    estimate.seconds_per_run_high = estimate.seconds_per_run + half_width;
-  }
+  const std::vector<double> per_run = SummariseBursts(results, estimate);
+  SetSecondsPerRunInterval(per_run, estimate);
   const double scale = static_cast<double>(runs) / options.threads;
   estimate.estimated_seconds = estimate.seconds_per_run * scale;
   estimate.estimated_seconds_low = estimate.seconds_per_run_low * scale;

@@ -354,71 +354,67 @@ class StudyParser {
     }
   }
 
-  void ParseGridAxis(const TomlSection& entry, DesignParameter& parameter) {
-    const int given = entry.Has("values") + entry.Has("linspace") + entry.Has("logspace");
-    if (given != 1) {
-      entry.Fail("name", "",
-                 "expected exactly one of values = [...], linspace = [start, stop, n] or "
-                 "logspace = [start, stop, n]");
-    }
+  // The entry's `linspace` or `logspace = [start, stop, n]` (a real parameter's), its n values
+  // into the parameter's values: evenly or geometrically spaced, a seed's whole and computed in
+  // integers, the ends checked against the parameter.
+  void ReadSpacedValues(const TomlSection& entry, DesignParameter& parameter) const {
     const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(parameter.id)];
-    if (entry.Has("values")) {
-      ReadValues(entry, parameter);
-    } else {
-      const char* key = entry.Has("linspace") ? "linspace" : "logspace";
-      if (info.kind != ParameterKind::kReal) {
-        entry.Fail(
-            key, "",
-            "expected values = [...] for " + info.name + " (" + DescribeAllowedValues(parameter.id) + ")");
-      }
-      const std::vector<double> spec = entry.NumberArray(key);
-      if (spec.size() != 3 || spec[2] < 1 || spec[2] != std::floor(spec[2]) ||
-          spec[2] > static_cast<double>(kMaximumAxisPoints)) {
-        entry.Fail(
-            key, "[...]",
-            "expected [start, stop, n] with a whole n from 1 to " + std::to_string(kMaximumAxisPoints));
-      }
-      const auto n = static_cast<std::int64_t>(spec[2]);
-      parameter.values.reserve(static_cast<std::size_t>(n));
-      const bool log = std::string(key) == "logspace";
-      if (IsWhole(parameter.id)) {
-        // A seed axis: whole ends and a whole spacing, the values start + k * spacing computed in
-        // integers (start + t * (stop - start) in doubles gives 0.9999999999999999 for 1 of [0, 1999]).
-        for (double end : {spec[0], spec[1]}) {
-          const std::string problem =
-              CheckParameterValue(parameter.id, end, study_.aircraft ? &*study_.aircraft : nullptr);
-          if (!problem.empty()) entry.Fail(key, FormatNumber(end), problem);
-        }
-        const double span = spec[1] - spec[0];
-        if (log || (n > 1 && std::fmod(span, static_cast<double>(n - 1)) != 0.0)) {
-          entry.Fail(
-              key,
-              "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
-              "expected whole values for " + info.name +
-                  ": linspace = [start, stop, n] with stop - start a multiple of n - 1 (or values = [...])");
-        }
-        const auto start = static_cast<std::int64_t>(spec[0]);
-        const std::int64_t spacing = n > 1 ? static_cast<std::int64_t>(span) / (n - 1) : 0;
-        for (std::int64_t k = 0; k < n; ++k)
-          parameter.values.push_back(static_cast<double>(start + k * spacing));
-      }
-      if (log && !(spec[0] > 0 && spec[1] > 0)) {
-        entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", ...]",
-                   "expected start and stop > 0 (logspace spaces values geometrically between them)");
-      }
-      for (std::int64_t k = 0; k < n && !IsWhole(parameter.id); ++k) {
-        const double t = n == 1 ? 0.0 : static_cast<double>(k) / static_cast<double>(n - 1);
-        double value = log ? std::exp(std::log(spec[0]) + t * (std::log(spec[1]) - std::log(spec[0])))
-                           : spec[0] + t * (spec[1] - spec[0]);
-        if (k == n - 1 && n > 1) value = spec[1];  // land exactly on the end point
-        parameter.values.push_back(value);
-      }
-      for (double value : {spec[0], spec[1]}) {
-        const std::string problem =
-            CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
-        if (!problem.empty()) entry.Fail(key, FormatNumber(value), problem);
-      }
+    const char* key = entry.Has("linspace") ? "linspace" : "logspace";
+    if (info.kind != ParameterKind::kReal) {
+      entry.Fail(
+          key, "",
+          "expected values = [...] for " + info.name + " (" + DescribeAllowedValues(parameter.id) + ")");
     }
+    const std::vector<double> spec = entry.NumberArray(key);
+    if (spec.size() != 3 || spec[2] < 1 || spec[2] != std::floor(spec[2]) ||
+        spec[2] > static_cast<double>(kMaximumAxisPoints)) {
+      entry.Fail(key, "[...]",
+                 "expected [start, stop, n] with a whole n from 1 to " + std::to_string(kMaximumAxisPoints));
+    }
+    const auto n = static_cast<std::int64_t>(spec[2]);
+    parameter.values.reserve(static_cast<std::size_t>(n));
+    const bool log = std::string(key) == "logspace";
+    if (IsWhole(parameter.id)) {
+      // A seed axis: whole ends and a whole spacing, the values start + k * spacing computed in
+      // integers (start + t * (stop - start) in doubles gives 0.9999999999999999 for 1 of [0, 1999]).
+      for (double end : {spec[0], spec[1]}) {
+        const std::string problem =
+            CheckParameterValue(parameter.id, end, study_.aircraft ? &*study_.aircraft : nullptr);
+        if (!problem.empty()) entry.Fail(key, FormatNumber(end), problem);
+      }
+      const double span = spec[1] - spec[0];
+      if (log || (n > 1 && std::fmod(span, static_cast<double>(n - 1)) != 0.0)) {
+        entry.Fail(
+            key,
+            "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", " + FormatNumber(spec[2]) + "]",
+            "expected whole values for " + info.name +
+                ": linspace = [start, stop, n] with stop - start a multiple of n - 1 (or values = [...])");
+      }
+      const auto start = static_cast<std::int64_t>(spec[0]);
+      const std::int64_t spacing = n > 1 ? static_cast<std::int64_t>(span) / (n - 1) : 0;
+      for (std::int64_t k = 0; k < n; ++k)
+        parameter.values.push_back(static_cast<double>(start + k * spacing));
+    }
+    if (log && !(spec[0] > 0 && spec[1] > 0)) {
+      entry.Fail(key, "[" + FormatNumber(spec[0]) + ", " + FormatNumber(spec[1]) + ", ...]",
+                 "expected start and stop > 0 (logspace spaces values geometrically between them)");
+    }
+    for (std::int64_t k = 0; k < n && !IsWhole(parameter.id); ++k) {
+      const double t = n == 1 ? 0.0 : static_cast<double>(k) / static_cast<double>(n - 1);
+      double value = log ? std::exp(std::log(spec[0]) + t * (std::log(spec[1]) - std::log(spec[0])))
+                         : spec[0] + t * (spec[1] - spec[0]);
+      if (k == n - 1 && n > 1) value = spec[1];  // land exactly on the end point
+      parameter.values.push_back(value);
+    }
+    for (double value : {spec[0], spec[1]}) {
+      const std::string problem =
+          CheckParameterValue(parameter.id, value, study_.aircraft ? &*study_.aircraft : nullptr);
+      if (!problem.empty()) entry.Fail(key, FormatNumber(value), problem);
+    }
+  }
+
+  // The axis's values are distinct (a repeated value repeats runs).
+  static void CheckDistinct(const TomlSection& entry, const DesignParameter& parameter) {
     // Distinct values: a spaced axis is monotone, so neighbours suffice (no memory per value);
     // explicit values are few, and sorted in a copy.
     bool distinct = true;
@@ -435,6 +431,21 @@ class StudyParser {
       entry.Fail(entry.Has("values") ? "values" : (entry.Has("linspace") ? "linspace" : "logspace"), "[...]",
                  "expected distinct values (a repeated value repeats runs)");
     }
+  }
+
+  void ParseGridAxis(const TomlSection& entry, DesignParameter& parameter) {
+    const int given = entry.Has("values") + entry.Has("linspace") + entry.Has("logspace");
+    if (given != 1) {
+      entry.Fail("name", "",
+                 "expected exactly one of values = [...], linspace = [start, stop, n] or "
+                 "logspace = [start, stop, n]");
+    }
+    if (entry.Has("values")) {
+      ReadValues(entry, parameter);
+    } else {
+      ReadSpacedValues(entry, parameter);
+    }
+    CheckDistinct(entry, parameter);
   }
 
   // [[design.parameter]] entries of a monte_carlo design: name and exactly one distribution.
@@ -675,6 +686,69 @@ class StudyParser {
     return cells;
   }
 
+  // The CSV's header `cells`: a known parameter per column, each once, appended to the design's
+  // parameters. Throws InputError.
+  void ReadCsvHeader(const TomlSection& design, const std::vector<std::string>& cells,
+                     const std::string& csv_source, int line_number) {
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (cells[i].empty())
+        throw InputError(csv_source, "header", "", "expected a parameter name in every column", line_number);
+    }
+    std::vector<std::string> names = cells;
+    std::set<ParameterId> seen;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const auto id = FindParameter(names[i]);
+      if (!id) {
+        const std::string near = NearestName(names[i], ParameterNames());
+        throw InputError(
+            csv_source, "header", Quote(names[i]),
+            near.empty() ? "unknown parameter" : "unknown parameter (did you mean '" + near + "'?)",
+            line_number);
+      }
+      if (!seen.insert(*id).second)
+        throw InputError(csv_source, "header", Quote(names[i]), "duplicate column", line_number);
+      DesignParameter parameter;
+      parameter.id = *id;
+      swept_lines_[*id] = design.LineOf("csv");
+      study_.design.parameters.push_back(parameter);
+    }
+  }
+
+  // A CSV cell's value for parameter `id` of column `column`: a seed's digits exactly, a real number,
+  // or a level, checked against the parameter. Throws InputError.
+  double CsvCellValue(const std::string& cell, ParameterId id, const std::string& column,
+                      const std::string& csv_source, int line_number) const {
+    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
+    double value = 0;
+    bool parsed = false;
+    if (IsWhole(id)) {
+      // A seed: its digits, exactly (strtod would round 9007199254740993 to 2^53).
+      try {
+        value = static_cast<double>(ParseExactInteger(cell, info.limit, csv_source, column));
+      } catch (const InputError& error) {
+        throw InputError(csv_source, column, Quote(cell), error.expected(), line_number);
+      }
+      parsed = true;
+    } else if (info.kind == ParameterKind::kReal) {
+      const std::string magnitude = MagnitudeProblem(cell);
+      if (!magnitude.empty()) {
+        throw InputError(csv_source, column, Quote(cell), "the number " + magnitude, line_number);
+      }
+      char* end = nullptr;
+      value = std::strtod(cell.c_str(), &end);
+      parsed = !cell.empty() && end == cell.c_str() + cell.size();
+    } else {
+      const auto level = ParseParameterLevel(id, cell);
+      parsed = level.has_value();
+      if (parsed) value = *level;
+    }
+    std::string problem = parsed
+                              ? CheckParameterValue(id, value, study_.aircraft ? &*study_.aircraft : nullptr)
+                              : "expected " + DescribeAllowedValues(id);
+    if (!problem.empty()) throw InputError(csv_source, column, Quote(cell), problem, line_number);
+    return value;
+  }
+
   void ReadCsv(const TomlSection& design) {
     const std::string csv = design.String("csv");
     std::filesystem::path csv_path(csv);
@@ -696,29 +770,7 @@ class StudyParser {
       const std::vector<std::string> cells = SplitCsv(trimmed);
       if (header.empty()) {
         header = cells;
-        for (std::size_t i = 0; i < header.size(); ++i) {
-          if (header[i].empty())
-            throw InputError(csv_source, "header", "", "expected a parameter name in every column",
-                             line_number);
-        }
-        std::vector<std::string> names = header;
-        std::set<ParameterId> seen;
-        for (std::size_t i = 0; i < names.size(); ++i) {
-          const auto id = FindParameter(names[i]);
-          if (!id) {
-            const std::string near = NearestName(names[i], ParameterNames());
-            throw InputError(
-                csv_source, "header", Quote(names[i]),
-                near.empty() ? "unknown parameter" : "unknown parameter (did you mean '" + near + "'?)",
-                line_number);
-          }
-          if (!seen.insert(*id).second)
-            throw InputError(csv_source, "header", Quote(names[i]), "duplicate column", line_number);
-          DesignParameter parameter;
-          parameter.id = *id;
-          swept_lines_[*id] = design.LineOf("csv");
-          spec.parameters.push_back(parameter);
-        }
+        ReadCsvHeader(design, header, csv_source, line_number);
         continue;
       }
       if (cells.size() != header.size()) {
@@ -728,36 +780,8 @@ class StudyParser {
             line_number);
       }
       for (std::size_t c = 0; c < cells.size(); ++c) {
-        const ParameterId id = spec.parameters[c].id;
-        const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(id)];
-        double value = 0;
-        bool parsed = false;
-        if (IsWhole(id)) {
-          // A seed: its digits, exactly (strtod would round 9007199254740993 to 2^53).
-          try {
-            value = static_cast<double>(ParseExactInteger(cells[c], info.limit, csv_source, header[c]));
-          } catch (const InputError& error) {
-            throw InputError(csv_source, header[c], Quote(cells[c]), error.expected(), line_number);
-          }
-          parsed = true;
-        } else if (info.kind == ParameterKind::kReal) {
-          const std::string magnitude = MagnitudeProblem(cells[c]);
-          if (!magnitude.empty()) {
-            throw InputError(csv_source, header[c], Quote(cells[c]), "the number " + magnitude, line_number);
-          }
-          char* end = nullptr;
-          value = std::strtod(cells[c].c_str(), &end);
-          parsed = !cells[c].empty() && end == cells[c].c_str() + cells[c].size();
-        } else {
-          const auto level = ParseParameterLevel(id, cells[c]);
-          parsed = level.has_value();
-          if (parsed) value = *level;
-        }
-        std::string problem =
-            parsed ? CheckParameterValue(id, value, study_.aircraft ? &*study_.aircraft : nullptr)
-                   : "expected " + DescribeAllowedValues(id);
-        if (!problem.empty()) throw InputError(csv_source, header[c], Quote(cells[c]), problem, line_number);
-        spec.list_values.push_back(value);
+        spec.list_values.push_back(
+            CsvCellValue(cells[c], spec.parameters[c].id, header[c], csv_source, line_number));
       }
       ++spec.list_rows;
       if (spec.list_rows > kMaximumListRows)
