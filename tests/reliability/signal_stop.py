@@ -150,8 +150,10 @@ with tempfile.TemporaryDirectory() as tmp:
                              signal.SIGINT, 130)
     if out:
         failures.append(f"simulate wrote to stdout after a signal: {out[:200]!r}")
+    # From 10 km: about 2 s of flight on a quiet machine, twice the signal's delay (from 5 km a quiet
+    # machine landed in 1.0 s, before the signal).
     _, _, out, _ = interrupt(["land", "--aircraft", str(ANCE), "--time-limit-s", "100000", "--max-step-s", "0.001",
-                              "--start-height-m", "5000", "--summary-only"], signal.SIGINT, 130)
+                              "--start-height-m", "10000", "--summary-only"], signal.SIGINT, 130)
     if out:
         failures.append(f"land wrote to stdout after a signal: {out[:200]!r}")
 
