@@ -152,8 +152,8 @@ void LandingRunRecord(const LandingConfig& c, const LandingResult& r, const Long
   s.NamedNumbers("q_weights", LandingStateNames(), c.q_weights);
   s.Number("turbulence_sigma_w_mps", EffectiveSigmaW(c.disturbance));
   s.Plain("integrator", std::string("dopri5"));
-  s.Number("rtol", c.relative_tolerance);
-  s.Number("atol", c.absolute_tolerance);
+  s.Number("rtol", c.integrator.relative_tolerance);
+  s.Number("atol", c.integrator.absolute_tolerance);
   if (c.plant_height_reference == PlantHeightReference::kFixedHeight) {
     s.Number("plant_reference_height_m", r.plant_fixed_reference_height_m);
   }

@@ -104,9 +104,9 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
     limit("landing.plant_fixed_reference_height_m", "plant_fixed_reference_height_m",
           c.plant_fixed_reference_height_m);
   }
-  limit("relative_tolerance", "relative_tolerance", c.relative_tolerance);
-  limit("absolute_tolerance", "absolute_tolerance", c.absolute_tolerance);
-  limit("landing.max_step_s", "max_step_s", c.max_step_s);
+  limit("relative_tolerance", "relative_tolerance", c.integrator.relative_tolerance);
+  limit("absolute_tolerance", "absolute_tolerance", c.integrator.absolute_tolerance);
+  limit("landing.max_step_s", "max_step_s", c.integrator.max_step_s);
   if (!std::isnan(c.time_limit_s)) limit("landing.time_limit_s", "time_limit_s", c.time_limit_s);
   require(std::isfinite(c.output_interval_s) && c.output_interval_s >= 0.0, "output_interval_s",
           c.output_interval_s, "expected an interval >= 0 s (0: no series)");
@@ -115,7 +115,7 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   const double time_limit_s = LandingTimeLimit(c, wheel_contact_height_m);
   require(std::isfinite(time_limit_s) && time_limit_s > 0.0, "time_limit_s", time_limit_s,
           "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
-  CheckStepCount(time_limit_s, c.max_step_s, source,
+  CheckStepCount(time_limit_s, c.integrator.max_step_s, source,
                  std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s", "max_step_s");
   // Bounded work (docs/limits.md): the noise table built before the first step, and the series kept.
   const std::string time_limit_key = std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s";

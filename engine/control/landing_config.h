@@ -41,6 +41,16 @@ GESWEEP_ENUM_NAMES(PlantHeightReference, {kReferencePath, "path"}, {kFixedHeight
 /// when set, else `automatic`.
 inline double SetOr(double value, double automatic) { return std::isnan(value) ? automatic : value; }
 
+/// The landing's integrator: dopri5 at ode45's default tolerances, its largest step 1 s.
+inline IntegratorOptions LandingIntegrator() {
+  IntegratorOptions options;
+  options.kind = IntegratorKind::kDopri5;
+  options.relative_tolerance = 1e-3;
+  options.absolute_tolerance = 1e-6;
+  options.max_step_s = 1.0;
+  return options;
+}
+
 /// Everything SimulateLanding needs besides the aircraft model. Angles are in degrees at this
 /// interface (they are written by people); the engine converts once. A setting that is NaN by default
 /// is computed when unset ("automatic", SetOr).
@@ -97,9 +107,10 @@ struct LandingConfig {
   double plant_fixed_reference_height_m = std::numeric_limits<double>::quiet_NaN();
 
   // --- Integration (adaptive Dormand–Prince 5(4), as the paper's ode45) ---
-  double relative_tolerance = 1e-3;  ///< ode45's default, the paper's value
-  double absolute_tolerance = 1e-6;  ///< ode45's default
-  double max_step_s = 1.0;           ///< bounds the step so that no event is stepped over
+  /// dopri5 at ode45's default tolerances (relative 1e-3, the paper's; absolute 1e-6), its largest
+  /// step 1 s so that no event is stepped over. Only the tolerances and the largest step are
+  /// settings (DescribeAdaptive); the method, the first step and the output are set per run.
+  IntegratorOptions integrator = LandingIntegrator();
   /// Outcome no_touchdown when reached in flight, s. NaN: twice NominalLandingTime, so that a sweep over
   /// the glide slope or the start height needs no retuning.
   double time_limit_s = std::numeric_limits<double>::quiet_NaN();
@@ -207,13 +218,12 @@ struct LandingConfig {
           .Doc("Fixed reference height with plant_height_reference fixed, m; default (left out): the top "
                "table "
                "height"));
-    v(Field("relative_tolerance", &relative_tolerance)
-          .Limit("relative_tolerance")
-          .Doc("Dormand-Prince relative tolerance (1e-3: ode45's, the paper's)"));
-    v(Field("absolute_tolerance", &absolute_tolerance)
-          .Limit("absolute_tolerance")
-          .Doc("Dormand-Prince absolute tolerance"));
-    v(Field("max_step_s", &max_step_s).Unit("s").Limit("landing.max_step_s").Doc("Largest step, s"));
+    integrator.DescribeAdaptive(
+        v, {.step_s = "",
+            .max_step_s = "landing.max_step_s",
+            .relative_tolerance_doc = "Dormand-Prince relative tolerance (1e-3: ode45's, the paper's)",
+            .absolute_tolerance_doc = "Dormand-Prince absolute tolerance",
+            .max_step_doc = "Largest step, s"});
     v(Field("time_limit_s", &time_limit_s)
           .Automatic()
           .Unit("s")

@@ -399,12 +399,9 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
   }
   problem.Start(0.0, x0);
 
-  IntegratorOptions options;
+  IntegratorOptions options = config.integrator;
   options.kind = IntegratorKind::kDopri5;
-  options.relative_tolerance = config.relative_tolerance;
-  options.absolute_tolerance = config.absolute_tolerance;
-  options.max_step_s = config.max_step_s;
-  options.step_s = std::min(0.01, config.max_step_s);
+  options.step_s = std::min(0.01, config.integrator.max_step_s);
   options.output_interval_s = store_series ? config.output_interval_s : kMonitorInterval_s;
   options.cancel = cancel;
   if constexpr (kAir) {

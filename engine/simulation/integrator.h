@@ -101,10 +101,14 @@ enum class IntegratorKind {
 /// Names in study files, flags and output: "rk4", "dopri5" (ToString, ParseEnum, EnumChoices).
 GESWEEP_ENUM_NAMES(IntegratorKind, {kRk4, "rk4"}, {kDopri5, "dopri5"});
 
-/// The limits-table entries (input_limits.h) of the integrator's steps for one analysis.
+/// The limits-table entries (input_limits.h) of the integrator's steps for one analysis, and the
+/// one-line docs of its adaptive settings as that analysis words them.
 struct IntegratorLimitNames {
   std::string_view step_s = "open_loop.step_s";
   std::string_view max_step_s = "open_loop.max_step_s";
+  std::string_view relative_tolerance_doc = "dopri5 relative tolerance";
+  std::string_view absolute_tolerance_doc = "dopri5 absolute tolerance";
+  std::string_view max_step_doc = "dopri5 largest step, s; 0: no limit";
 };
 
 /// Options of Integrate. Defaults: the paper's RK4 at 0.015 s with breakpoints honoured.
@@ -134,18 +138,22 @@ struct IntegratorOptions {
     v(Field("integrator", &kind)
           .Doc("Integration method: rk4 (fixed step, the paper's) or dopri5 (adaptive)"));
     v(Field("step_s", &step_s).Unit("s").Limit(limits.step_s).Doc("RK4 step (dopri5: first trial step), s"));
-    v(Field("relative_tolerance", &relative_tolerance)
-          .Limit("relative_tolerance")
-          .Doc("dopri5 relative tolerance"));
-    v(Field("absolute_tolerance", &absolute_tolerance)
-          .Limit("absolute_tolerance")
-          .Doc("dopri5 absolute tolerance"));
-    v(Field("max_step_s", &max_step_s)
-          .Unit("s")
-          .Limit(limits.max_step_s)
-          .Doc("dopri5 largest step, s; 0: no limit"));
+    DescribeAdaptive(v, limits);
     v(Field("honour_breakpoints", &honour_breakpoints)
           .Doc("true: no step straddles an input jump; false: steps may (the paper's plain fixed-step RK4)"));
+  }
+
+  /// The adaptive (dopri5) settings alone: a record that embeds these options and fixes the method
+  /// (the landing: dopri5, its first step derived) describes only these.
+  template <class V>
+  void DescribeAdaptive(V& v, const IntegratorLimitNames& limits = {}) {
+    v(Field("relative_tolerance", &relative_tolerance)
+          .Limit("relative_tolerance")
+          .Doc(limits.relative_tolerance_doc));
+    v(Field("absolute_tolerance", &absolute_tolerance)
+          .Limit("absolute_tolerance")
+          .Doc(limits.absolute_tolerance_doc));
+    v(Field("max_step_s", &max_step_s).Unit("s").Limit(limits.max_step_s).Doc(limits.max_step_doc));
   }
 };
 

@@ -50,8 +50,8 @@ TEST(LandingConfigDescription, KeysAreTheValidationKeys) {
             KeyOf(c, &c.flare_time_constant_s));
   EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.design_height_m = 0.1; }), KeyOf(c, &c.design_height_m));
   EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.r_weight = 0.0; }), KeyOf(c, &c.r_weight));
-  EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.relative_tolerance = 2.0; }),
-            KeyOf(c, &c.relative_tolerance));
+  EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.integrator.relative_tolerance = 2.0; }),
+            KeyOf(c, &c.integrator.relative_tolerance));
   EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.output_interval_s = -1.0; }), KeyOf(c, &c.output_interval_s));
   EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.flare_asymptote_m = 20.0; }), KeyOf(c, &c.flare_asymptote_m));
   EXPECT_EQ(KeyOfError([](LandingConfig& x) { x.disturbance.gust_half_length_m = 0.0; }),
@@ -71,7 +71,7 @@ TEST(LandingConfigDescription, StudyTableIsReadFromTheDescription) {
   EXPECT_EQ(config.plant_height_reference, PlantHeightReference::kFixedHeight);
   EXPECT_EQ(config.turbulent_integrator, IntegratorKind::kDopri5);
   EXPECT_TRUE(config.disturbance.pitch_rate_gust);
-  EXPECT_EQ(config.relative_tolerance, 1e-4);
+  EXPECT_EQ(config.integrator.relative_tolerance, 1e-4);
   EXPECT_TRUE(config.reset_compensator_at_flare);
   EXPECT_TRUE(std::isnan(config.design_speed_mps));  // absent: automatic
 
