@@ -299,32 +299,11 @@ void CheckRandomParametersKeepTheNoise(const SweepPlan& plan) {
   }
 }
 
-}  // namespace
-
-RiskSpec ReadRiskSpec(const SweepPlan& plan) {
+// What a [subset] study's design must be: a landing among its analyses, single, grid, list or
+// monte_carlo, at most kMaxCells cells, each with a random input, no random parameter that lengthens
+// the noise.
+void CheckRiskDesign(const SweepPlan& plan) {
   const Study& study = plan.study();
-  if (study.subset_line == 0) {
-    throw InputError(study.path, "subset", "",
-                     "a [subset] table (the limits and the method, docs/dispersion.md)");
-  }
-  const toml::table root = ParseToml(study.text, study.path);
-  const toml::table* table = root["subset"].as_table();
-  if (table == nullptr) throw InputError(study.path, "subset", "", "a table [subset]", study.subset_line);
-  const TomlSection section(*table, study.path, "subset");
-  section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed",
-                             "sampler", "initial_scale", "target_acceptance", "adaptation_groups",
-                             "repetitions"});
-  RiskSpec spec;
-  spec.subset = ReadSubsetOptions(section);
-  if (const auto repetitions = section.OptionalInteger("repetitions")) {
-    if (*repetitions < 1 || *repetitions > kMaxRepetitions) {
-      section.Fail("repetitions", std::to_string(*repetitions),
-                   "an integer from 1 to " + std::to_string(kMaxRepetitions) +
-                       " (independent subset simulations per cell and limit)");
-    }
-    spec.repetitions = static_cast<int>(*repetitions);
-  }
-
   const bool has_landing = std::any_of(study.analyses.begin(), study.analyses.end(),
                                        [](const auto& a) { return a->name() == "landing"; });
   if (!has_landing) {
@@ -355,8 +334,13 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
     }
   }
   CheckRandomParametersKeepTheNoise(plan);
+}
 
-  const toml::node* limits = table->get("limits");
+// The [subset] table's limits, each parsed against the plan's result columns.
+std::vector<RiskLimit> ReadRiskLimits(const SweepPlan& plan, const toml::table& table,
+                                      const TomlSection& section) {
+  std::vector<RiskLimit> parsed;
+  const toml::node* limits = table.get("limits");
   const toml::array* array = limits != nullptr ? limits->as_array() : nullptr;
   if (array == nullptr || array->empty() || array->size() > kMaxLimits) {
     section.Fail("limits", limits == nullptr ? "" : DescribeNode(*limits),
@@ -366,9 +350,15 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   for (const auto& node : *array) {
     const auto text = node.value<std::string>();
     if (!text) section.Fail("limits", DescribeNode(node), "a string 'COLUMN > VALUE' or 'COLUMN < VALUE'");
-    spec.limits.push_back(ParseRiskLimit(plan, *text, section));
+    parsed.push_back(ParseRiskLimit(plan, *text, section));
   }
 
+  return parsed;
+}
+
+// A hash of everything that decides the evaluations: the study, the options, the limits, and the
+// repetitions when there are several.
+std::uint64_t RiskFingerprint(const Study& study, const RiskSpec& spec) {
   std::uint64_t hash = Mix(0x7269736b2d303031ULL, study.fingerprint);
   const auto& o = spec.subset;
   for (const std::uint64_t v :
@@ -382,7 +372,37 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
   // Only when asked for: a study without repetitions keeps the fingerprint it had before they existed.
   if (spec.repetitions != 1)
     hash = Mix(hash ^ 0x7265706561747321ULL, static_cast<std::uint64_t>(spec.repetitions));
-  spec.fingerprint = hash;
+  return hash;
+}
+}  // namespace
+
+RiskSpec ReadRiskSpec(const SweepPlan& plan) {
+  const Study& study = plan.study();
+  if (study.subset_line == 0) {
+    throw InputError(study.path, "subset", "",
+                     "a [subset] table (the limits and the method, docs/dispersion.md)");
+  }
+  const toml::table root = ParseToml(study.text, study.path);
+  const toml::table* table = root["subset"].as_table();
+  if (table == nullptr) throw InputError(study.path, "subset", "", "a table [subset]", study.subset_line);
+  const TomlSection section(*table, study.path, "subset");
+  section.RejectUnknownKeys({"limits", "level_probability", "samples_per_level", "max_levels", "seed",
+                             "sampler", "initial_scale", "target_acceptance", "adaptation_groups",
+                             "repetitions"});
+  RiskSpec spec;
+  spec.subset = ReadSubsetOptions(section);
+  if (const auto repetitions = section.OptionalInteger("repetitions")) {
+    if (*repetitions < 1 || *repetitions > kMaxRepetitions) {
+      section.Fail("repetitions", std::to_string(*repetitions),
+                   "an integer from 1 to " + std::to_string(kMaxRepetitions) +
+                       " (independent subset simulations per cell and limit)");
+    }
+    spec.repetitions = static_cast<int>(*repetitions);
+  }
+
+  CheckRiskDesign(plan);
+  spec.limits = ReadRiskLimits(plan, *table, section);
+  spec.fingerprint = RiskFingerprint(study, spec);
   return spec;
 }
 
@@ -418,6 +438,61 @@ Evaluation Fly(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int
   return e;
 }
 
+// What one batch of a (cell, limit, repetition) simulation is flown with.
+struct BatchContext {
+  const SweepPlan& plan;
+  const RiskSpec& spec;
+  const RiskRunOptions& options;
+  tbb::enumerable_thread_specific<FlightWorkspace>& workspaces;
+  std::mutex& capture_mutex;
+  std::int64_t cell;
+  int limit;
+  int repetition;
+};
+
+// A batch's landings: each taken from the cache (a resume, a replay) or flown (fresh), and whether
+// the replay's point was among them.
+struct FlownBatch {
+  std::vector<Evaluation> made;
+  std::vector<char> fresh;
+  bool captured = false;
+};
+
+// Flies (or takes from the cache) every point of `batch` in parallel, writing each g into `values`.
+FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::span<double> values) {
+  FlownBatch out;
+  out.made.resize(batch.size());
+  out.fresh.assign(batch.size(), 0);
+  std::atomic<bool> captured{false};
+  const RiskRunOptions& options = c.options;
+  tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
+    const rare::EvaluationTag& tag = batch.tags[i];
+    const EvaluationKey key{
+        static_cast<std::int32_t>(c.cell), c.limit, c.repetition, tag.level, tag.chain, tag.step};
+    if (options.capture && key == *options.capture && options.captured_point != nullptr) {
+      const std::lock_guard lock(c.capture_mutex);
+      options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
+      captured = true;
+    }
+    const Evaluation* cached = nullptr;
+    if (options.cache != nullptr) {
+      const auto found = options.cache->find(key);
+      if (found != options.cache->end()) cached = &found->second;
+    }
+    if (cached != nullptr) {
+      out.made[i] = *cached;
+    } else {
+      out.made[i] =
+          Fly(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, batch.point(i), options.cancel);
+      out.made[i].key = key;
+      out.fresh[i] = 1;
+    }
+    values[i] = out.made[i].g;
+  });
+  out.captured = captured.load();
+  return out;
+}
+
 }  // namespace
 
 Evaluation FlyPoint(const SweepPlan& plan, std::int64_t cell, int limit, const RiskSpec& spec,
@@ -451,32 +526,12 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
                                                          : std::string());
           int last_level = 0;
           const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
-            std::vector<Evaluation> made(batch.size());
-            std::vector<char> fresh(batch.size(), 0);
-            std::atomic<bool> captured{false};
-            tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
-              const rare::EvaluationTag& tag = batch.tags[i];
-              const EvaluationKey key{
-                  static_cast<std::int32_t>(cell), limit, repetition, tag.level, tag.chain, tag.step};
-              if (options.capture && key == *options.capture && options.captured_point != nullptr) {
-                const std::lock_guard lock(capture_mutex);
-                options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
-                captured = true;
-              }
-              const Evaluation* cached = nullptr;
-              if (options.cache != nullptr) {
-                const auto found = options.cache->find(key);
-                if (found != options.cache->end()) cached = &found->second;
-              }
-              if (cached != nullptr) {
-                made[i] = *cached;
-              } else {
-                made[i] = Fly(plan, workspaces.local(), cell, limit, spec, batch.point(i), options.cancel);
-                made[i].key = key;
-                fresh[i] = 1;
-              }
-              values[i] = made[i].g;
-            });
+            const BatchContext context{plan,          spec, options, workspaces,
+                                       capture_mutex, cell, limit,   repetition};
+            FlownBatch flown = FlyBatch(context, batch, values);
+            std::vector<Evaluation>& made = flown.made;
+            const std::vector<char>& fresh = flown.fresh;
+            const bool captured = flown.captured;
             // A run the flag stopped is no evaluation: it is neither kept nor journaled, and the
             // simulation stops after the complete ones are.
             bool stopped = false;
