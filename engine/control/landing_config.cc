@@ -46,6 +46,44 @@ double LandingTimeLimit(const LandingConfig& config, double wheel_contact_height
   return SetOr(config.time_limit_s, 2.0 * NominalLandingTime(config, wheel_contact_height_m));
 }
 
+namespace {
+
+// The work a landing may take (docs/limits.md): the step count of its time limit over the largest
+// step, the noise table built before the first step, and the series kept.
+void CheckLandingWork(const LandingConfig& c, double wheel_contact_height_m, const std::string& source) {
+  // The fewest steps the run can take: its time limit over the largest step.
+  const double time_limit_s = LandingTimeLimit(c, wheel_contact_height_m);
+  if (!(std::isfinite(time_limit_s) && time_limit_s > 0.0)) {
+    throw InputError(
+        source, "time_limit_s", Text(time_limit_s),
+        "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
+  }
+  CheckStepCount(time_limit_s, c.integrator.max_step_s, source,
+                 std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s", "max_step_s");
+  // Bounded work (docs/limits.md): the noise table built before the first step, and the series kept.
+  const std::string time_limit_key = std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s";
+  const bool turbulent = c.disturbance.turbulence == TurbulenceModel::kDryden;
+  const double noise_samples =
+      turbulent ? NoiseSampleCount(time_limit_s, c.disturbance.turbulence_sample_interval_s) : 0.0;
+  CheckNoiseSamples(turbulent ? time_limit_s : 0.0, c.disturbance.turbulence_sample_interval_s, source,
+                    time_limit_key, "turbulence_sample_interval_s");
+  const double series_samples =
+      c.output_interval_s > 0.0 ? std::floor(time_limit_s / c.output_interval_s) + 2 : 0.0;
+  constexpr double kSampleBytes = sizeof(LandingSample);
+  const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSampleBytes;
+  if (bytes > kMaximumRunMemoryBytes) {
+    std::string breakdown = ShortNumber(series_samples) + " series samples (" + time_limit_key + " = " +
+                            ShortNumber(time_limit_s) + " s / output_interval_s) x " +
+                            ShortNumber(kSampleBytes) + " bytes";
+    if (noise_samples > 0)
+      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
+                   ShortNumber(kNoiseBytesPerSample) + " bytes";
+    CheckRunMemory(bytes, breakdown, source, "output_interval_s", ShortNumber(c.output_interval_s));
+  }
+}
+
+}  // namespace
+
 void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, const std::string& source) {
   const double wheel_contact_height_m = aircraft.wheel_contact_height_m;
   auto require = [&source](bool ok, const char* key, double value, const std::string& expected) {
@@ -111,32 +149,7 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   require(std::isfinite(c.output_interval_s) && c.output_interval_s >= 0.0, "output_interval_s",
           c.output_interval_s, "expected an interval >= 0 s (0: no series)");
   if (c.output_interval_s > 0.0) limit("output_dt_s", "output_interval_s", c.output_interval_s);
-  // The fewest steps the run can take: its time limit over the largest step.
-  const double time_limit_s = LandingTimeLimit(c, wheel_contact_height_m);
-  require(std::isfinite(time_limit_s) && time_limit_s > 0.0, "time_limit_s", time_limit_s,
-          "expected a finite time limit > 0 s (the automatic one: twice the reference trajectory's time)");
-  CheckStepCount(time_limit_s, c.integrator.max_step_s, source,
-                 std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s", "max_step_s");
-  // Bounded work (docs/limits.md): the noise table built before the first step, and the series kept.
-  const std::string time_limit_key = std::isnan(c.time_limit_s) ? "time_limit_s (automatic)" : "time_limit_s";
-  const bool turbulent = c.disturbance.turbulence == TurbulenceModel::kDryden;
-  const double noise_samples =
-      turbulent ? NoiseSampleCount(time_limit_s, c.disturbance.turbulence_sample_interval_s) : 0.0;
-  CheckNoiseSamples(turbulent ? time_limit_s : 0.0, c.disturbance.turbulence_sample_interval_s, source,
-                    time_limit_key, "turbulence_sample_interval_s");
-  const double series_samples =
-      c.output_interval_s > 0.0 ? std::floor(time_limit_s / c.output_interval_s) + 2 : 0.0;
-  constexpr double kSampleBytes = sizeof(LandingSample);
-  const double bytes = noise_samples * kNoiseBytesPerSample + series_samples * kSampleBytes;
-  if (bytes > kMaximumRunMemoryBytes) {
-    std::string breakdown = ShortNumber(series_samples) + " series samples (" + time_limit_key + " = " +
-                            ShortNumber(time_limit_s) + " s / output_interval_s) x " +
-                            ShortNumber(kSampleBytes) + " bytes";
-    if (noise_samples > 0)
-      breakdown += " + " + ShortNumber(noise_samples) + " noise samples x " +
-                   ShortNumber(kNoiseBytesPerSample) + " bytes";
-    CheckRunMemory(bytes, breakdown, source, "output_interval_s", ShortNumber(c.output_interval_s));
-  }
+  CheckLandingWork(c, wheel_contact_height_m, source);
 }
 
 }  // namespace gesweep
