@@ -105,34 +105,31 @@ void WriteDesignPoint(hid_t parent, const DesignPoint& point) {
   throw InputError(path.string(), "", "", "a subset-simulation archive of gesweep: " + what);
 }
 
-RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_points) {
-  hdf5::Quiet();
-  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, hdf5::FileAccess().get()), "open " + path.string());
-  const auto kind = hdf5::ReadStringAttribute(file.get(), "gesweep_archive_kind");
-  if (!kind || *kind != kRiskArchiveKind)
-    Refuse(path, "its root has no gesweep_archive_kind = subset_simulation");
-  const auto version = hdf5::ReadIntegerAttribute(file.get(), "format_version");
-  if (!version || (*version != 1 && *version != kRiskArchiveVersion)) {
-    Refuse(path, "format_version 1 or " + std::to_string(kRiskArchiveVersion) + " (this engine's)");
-  }
+// The root's study, command line, estimates and spec fingerprint.
+RiskArchive ReadRootAttributes(hid_t file, const std::filesystem::path& path) {
   RiskArchive a;
-  a.study_path = hdf5::ReadStringAttribute(file.get(), "study_path").value_or("");
-  a.study_text = hdf5::ReadStringAttribute(file.get(), "study_text").value_or("");
-  a.command_line = hdf5::ReadStringAttribute(file.get(), "command_line").value_or("");
-  a.result_json = hdf5::ReadStringAttribute(file.get(), "result_json").value_or("");
-  const std::string fingerprint = hdf5::ReadStringAttribute(file.get(), "spec_fingerprint").value_or("");
+  a.study_path = hdf5::ReadStringAttribute(file, "study_path").value_or("");
+  a.study_text = hdf5::ReadStringAttribute(file, "study_text").value_or("");
+  a.command_line = hdf5::ReadStringAttribute(file, "command_line").value_or("");
+  a.result_json = hdf5::ReadStringAttribute(file, "result_json").value_or("");
+  const std::string fingerprint = hdf5::ReadStringAttribute(file, "spec_fingerprint").value_or("");
   char* end = nullptr;
   a.fingerprint = std::strtoull(fingerprint.c_str(), &end, 16);
   if (fingerprint.size() != 16 || end != fingerprint.c_str() + 16)
     Refuse(path, "a 16-digit spec_fingerprint");
   if (a.study_text.empty() || a.result_json.empty()) Refuse(path, "its study_text and result_json");
 
-  Handle evaluations = OpenGroup(file.get(), "subset/evaluations");
+  return a;
+}
+
+// /subset/evaluations: every landing's tag, status, g, values and message, checked as read.
+void ReadEvaluations(hid_t file, const std::filesystem::path& path, std::int64_t version, RiskArchive& a) {
+  Handle evaluations = OpenGroup(file, "subset/evaluations");
   const auto cell = ReadVector<std::int32_t>(evaluations.get(), "cell");
   const auto limit = ReadVector<std::int32_t>(evaluations.get(), "limit");
   // Version 1 had no repetitions: every landing is repetition 0's.
-  const auto repetition = *version >= 2 ? ReadVector<std::int32_t>(evaluations.get(), "repetition")
-                                        : std::vector<std::int32_t>(cell.size(), 0);
+  const auto repetition = version >= 2 ? ReadVector<std::int32_t>(evaluations.get(), "repetition")
+                                       : std::vector<std::int32_t>(cell.size(), 0);
   const auto level = ReadVector<std::int32_t>(evaluations.get(), "level");
   const auto chain = ReadVector<std::int32_t>(evaluations.get(), "chain");
   const auto step = ReadVector<std::int32_t>(evaluations.get(), "step");
@@ -178,8 +175,13 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
       Refuse(path, "message rows in range");
     a.evaluations[static_cast<std::size_t>(message_rows[m])].message = messages[m];
   }
-  if (with_design_points && hdf5::Exists(file.get(), "subset/design_points")) {
-    Handle points = OpenGroup(file.get(), "subset/design_points");
+}
+
+// /subset/design_points, when the archive has them.
+std::vector<DesignPoint> ReadDesignPoints(hid_t file) {
+  std::vector<DesignPoint> design_points;
+  if (hdf5::Exists(file, "subset/design_points")) {
+    Handle points = OpenGroup(file, "subset/design_points");
     const auto names = hdf5::ReadStringListAttribute(points.get(), "names");
     for (const auto& name : names) {
       Handle group = OpenGroup(points.get(), name);
@@ -189,9 +191,25 @@ RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_po
       point.sample_interval_s = hdf5::ReadDoubleAttribute(group.get(), "sample_interval_s").value_or(0);
       point.mean_noise = ReadVector<double>(group.get(), "mean_noise");
       point.most_likely_noise = ReadVector<double>(group.get(), "most_likely_noise");
-      a.design_points.push_back(std::move(point));
+      design_points.push_back(std::move(point));
     }
   }
+  return design_points;
+}
+
+RiskArchive ReadUnguarded(const std::filesystem::path& path, bool with_design_points) {
+  hdf5::Quiet();
+  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, hdf5::FileAccess().get()), "open " + path.string());
+  const auto kind = hdf5::ReadStringAttribute(file.get(), "gesweep_archive_kind");
+  if (!kind || *kind != kRiskArchiveKind)
+    Refuse(path, "its root has no gesweep_archive_kind = subset_simulation");
+  const auto version = hdf5::ReadIntegerAttribute(file.get(), "format_version");
+  if (!version || (*version != 1 && *version != kRiskArchiveVersion)) {
+    Refuse(path, "format_version 1 or " + std::to_string(kRiskArchiveVersion) + " (this engine's)");
+  }
+  RiskArchive a = ReadRootAttributes(file.get(), path);
+  ReadEvaluations(file.get(), path, *version, a);
+  if (with_design_points) a.design_points = ReadDesignPoints(file.get());
   file.Close("close " + path.string());
   return a;
 }
