@@ -150,6 +150,68 @@ class Parser {
     return node;
   }
 
+  // A number at text_[i] into `token`; the index past it.
+  std::size_t LexNumber(std::size_t i, Token& token) {
+    const std::size_t n = text_.size();
+    const int position = token.position;
+    const char* begin = text_.c_str() + i;
+    char* end = nullptr;
+    token.number = std::strtod(begin, &end);
+    const std::size_t length = static_cast<std::size_t>(end - begin);
+    if (length == 0) Fail(position, "malformed number");
+    i += length;
+    if (i < n && NameStart(text_[i]))
+      Fail(position, "malformed number '" + text_.substr(position - 1, i - position + 2) + "'");
+    token.kind = TokenKind::kNumber;
+    token.text = text_.substr(static_cast<std::size_t>(position - 1), length);
+    return i;
+  }
+
+  // A name at text_[i]: letters, digits, '_', '.', and '/' followed by a name character (dataset
+  // paths); the index past it.
+  std::size_t LexName(std::size_t i, Token& token) {
+    const std::size_t n = text_.size();
+    std::size_t j = i;
+    while (j < n && (NameChar(text_[j]) || (text_[j] == '/' && j + 1 < n && NameStart(text_[j + 1])))) ++j;
+    std::string name = text_.substr(i, j - i);
+    // "a/b" is one column when it names one; else the longest prefix that does, then "/".
+    if (!IsKeyword(name) && !catalog_.Find(name)) {
+      for (std::size_t cut = name.rfind('/'); cut != std::string::npos && cut > 0;
+           cut = name.rfind('/', cut - 1)) {
+        if (catalog_.Find(name.substr(0, cut))) {
+          name = name.substr(0, cut);
+          break;
+        }
+      }
+    }
+    token.kind = TokenKind::kName;
+    token.text = name;
+    return i + name.size();
+  }
+
+  // An operator at text_[i] (or the one line on a character that is none); the index past it.
+  std::size_t LexOperator(std::size_t i, Token& token) {
+    const char c = text_[i];
+    const int position = token.position;
+    static const char* const kOperators[] = {"==", "!=", "<=", ">=", "<", ">", "+",
+                                             "-",  "*",  "/",  "%",  "(", ")", ","};
+    token.kind = TokenKind::kOperator;
+    for (const char* op : kOperators) {
+      const std::size_t length = std::char_traits<char>::length(op);
+      if (text_.compare(i, length, op) == 0) {
+        token.text = op;
+        break;
+      }
+    }
+    if (token.text.empty()) {
+      if (c == '=') Fail(position, "'=' is not an operator; write '==' to compare");
+      if (c == '&' || c == '|') Fail(position, "write 'and' / 'or' instead of '" + std::string(1, c) + "'");
+      if (c == '!') Fail(position, "write 'not' instead of '!'");
+      Fail(position, "unexpected character '" + std::string(1, c) + "'");
+    }
+    return i + token.text.size();
+  }
+
   void Lex() {
     std::size_t i = 0;
     const std::size_t n = text_.size();
@@ -167,16 +229,7 @@ class Parser {
       token.position = position;
       if (std::isdigit(static_cast<unsigned char>(c)) ||
           (c == '.' && i + 1 < n && std::isdigit(static_cast<unsigned char>(text_[i + 1])))) {
-        const char* begin = text_.c_str() + i;
-        char* end = nullptr;
-        token.number = std::strtod(begin, &end);
-        const std::size_t length = static_cast<std::size_t>(end - begin);
-        if (length == 0) Fail(position, "malformed number");
-        i += length;
-        if (i < n && NameStart(text_[i]))
-          Fail(position, "malformed number '" + text_.substr(position - 1, i - position + 2) + "'");
-        token.kind = TokenKind::kNumber;
-        token.text = text_.substr(static_cast<std::size_t>(position - 1), length);
+        i = LexNumber(i, token);
       } else if (c == '"' || c == '\'') {
         const std::size_t close = text_.find(c, i + 1);
         if (close == std::string::npos)
@@ -185,43 +238,9 @@ class Parser {
         token.text = text_.substr(i + 1, close - i - 1);
         i = close + 1;
       } else if (NameStart(c) || (c == '/' && operand_expected && i + 1 < n && NameStart(text_[i + 1]))) {
-        // A name: letters, digits, '_', '.', and '/' followed by a name character (dataset paths).
-        std::size_t j = i;
-        while (j < n && (NameChar(text_[j]) || (text_[j] == '/' && j + 1 < n && NameStart(text_[j + 1]))))
-          ++j;
-        std::string name = text_.substr(i, j - i);
-        // "a/b" is one column when it names one; else the longest prefix that does, then "/".
-        if (!IsKeyword(name) && !catalog_.Find(name)) {
-          for (std::size_t cut = name.rfind('/'); cut != std::string::npos && cut > 0;
-               cut = name.rfind('/', cut - 1)) {
-            if (catalog_.Find(name.substr(0, cut))) {
-              name = name.substr(0, cut);
-              break;
-            }
-          }
-        }
-        token.kind = TokenKind::kName;
-        token.text = name;
-        i += name.size();
+        i = LexName(i, token);
       } else {
-        static const char* const kOperators[] = {"==", "!=", "<=", ">=", "<", ">", "+",
-                                                 "-",  "*",  "/",  "%",  "(", ")", ","};
-        token.kind = TokenKind::kOperator;
-        for (const char* op : kOperators) {
-          const std::size_t length = std::char_traits<char>::length(op);
-          if (text_.compare(i, length, op) == 0) {
-            token.text = op;
-            break;
-          }
-        }
-        if (token.text.empty()) {
-          if (c == '=') Fail(position, "'=' is not an operator; write '==' to compare");
-          if (c == '&' || c == '|')
-            Fail(position, "write 'and' / 'or' instead of '" + std::string(1, c) + "'");
-          if (c == '!') Fail(position, "write 'not' instead of '!'");
-          Fail(position, "unexpected character '" + std::string(1, c) + "'");
-        }
-        i += token.text.size();
+        i = LexOperator(i, token);
       }
       operand_expected = token.kind == TokenKind::kOperator
                              ? token.text != ")"
