@@ -73,44 +73,29 @@ std::string CommandLine(const RiskFlags& flags) {
   return line;
 }
 
-ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run,
-                       const risk::LimitRisk& r) {
-  const auto& limit = spec.limits[static_cast<std::size_t>(r.limit)];
+// A subset result's status in the JSON and the table.
+const char* StatusName(rare::SubsetResult::Status status) {
+  return status == rare::SubsetResult::Status::kConverged  ? "converged"
+         : status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
+                                                           : "too_many_failed_runs";
+}
+
+// The chains of a level: N p0.
+long long Chains(const risk::RiskSpec& spec) {
+  return std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
+}
+
+// A run of more than two levels whose last level descends from fewer than a tenth of the chains.
+bool Collapsed(const rare::SubsetResult& run, long long chains) {
+  return run.levels.size() > 2 && run.levels.back().ancestors * 10 < chains;
+}
+
+// The K repetitions of one estimate: each run's seed, status, estimate and lineage.
+ordered_json RepetitionsJson(const risk::RiskSpec& spec, const risk::LimitRisk& r) {
   const auto& s = r.subset;
   const auto& pooled = r.pooled;
-  const auto status_name = [](rare::SubsetResult::Status status) {
-    return status == rare::SubsetResult::Status::kConverged  ? "converged"
-           : status == rare::SubsetResult::Status::kLevelCap ? "level_cap"
-                                                             : "too_many_failed_runs";
-  };
-  const long long chains = std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
-  const auto collapsed = [&](const rare::SubsetResult& run) {
-    return run.levels.size() > 2 && run.levels.back().ancestors * 10 < chains;
-  };
-  ordered_json j;
-  j["cell"] = r.cell;
-  j["cell_label"] = risk::CellLabel(plan, r.cell);
-  j["limit"] = limit.text;
-  j["column"] = limit.column;
-  j["units"] = limit.units;
-  j["above"] = limit.above;
-  j["value"] = limit.value;
-  // The estimate: the K repetitions pooled (for K = 1 the run's own figures). Levels, thresholds,
-  // the exceedance curve and the design point below are the first repetition's.
-  j["status"] = status_name(pooled.status);
-  j["probability"] = Num(pooled.probability);
-  j["coefficient_of_variation"] = Num(pooled.coefficient_of_variation);
-  j["coefficient_of_variation_correlated_levels"] =
-      pooled.repetitions == 1 ? Num(s.coefficient_of_variation_upper) : ordered_json(nullptr);
-  j["interval_95"] = {Num(pooled.interval_95_low), Num(pooled.interval_95_high)};
-  j["upper_bound"] = pooled.status == rare::SubsetResult::Status::kLevelCap ? Num(pooled.upper_bound)
-                                                                            : ordered_json(nullptr);
-  j["runs"] = pooled.evaluations;
-  j["failed_runs"] = pooled.failed_evaluations;
-  j["dimension"] = r.dimension;
-  int collapsed_runs = collapsed(s) ? 1 : 0;
-  for (const auto& other : r.other_repetitions) collapsed_runs += collapsed(other) ? 1 : 0;
-  j["collapsed_runs"] = collapsed_runs;
+  const long long chains = Chains(spec);
+  const auto collapsed = [&](const rare::SubsetResult& run) { return Collapsed(run, chains); };
   ordered_json repetitions;
   repetitions["count"] = pooled.repetitions;
   repetitions["measured_coefficient_of_variation_one_run"] =
@@ -120,7 +105,7 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   const auto estimate = [&](int repetition, const rare::SubsetResult& run) {
     estimates.push_back({{"repetition", repetition},
                          {"seed", risk::SimulationSeed(spec.subset.seed, r.cell, r.limit, repetition)},
-                         {"status", status_name(run.status)},
+                         {"status", StatusName(run.status)},
                          {"probability", Num(run.probability)},
                          {"coefficient_of_variation", Num(run.coefficient_of_variation)},
                          {"interval_95", {Num(run.interval_95_low), Num(run.interval_95_high)}},
@@ -133,7 +118,12 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   for (std::size_t k = 0; k < r.other_repetitions.size(); ++k)
     estimate(static_cast<int>(k + 1), r.other_repetitions[k]);
   repetitions["estimates"] = estimates;
-  j["repetitions"] = repetitions;
+  return repetitions;
+}
+
+// The first repetition's levels: the thresholds, each level's figures and the exceedance curve.
+void AddLevels(ordered_json& j, const risk::LimitRisk& r, const risk::RiskLimit& limit) {
+  const auto& s = r.subset;
   ordered_json thresholds = ordered_json::array(), levels = ordered_json::array();
   const auto curve = risk::ExceedanceCurve(r, limit);
   for (std::size_t k = 0; k < s.levels.size(); ++k) {
@@ -160,6 +150,13 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
                           {"interval_95", {Num(p.low), Num(p.high)}}});
   }
   j["exceedance"] = exceedance;
+}
+
+// The design point: the failing landings of the last level, the most likely one, and the random
+// parameters' values there.
+ordered_json DesignPointJson(const SweepPlan& plan, const risk::RiskRun& run, const risk::LimitRisk& r,
+                             const risk::RiskLimit& limit) {
+  const auto& s = r.subset;
   ordered_json design;
   design["failing_runs_last_level"] = s.failure_count;
   if (r.most_likely_row >= 0) {
@@ -192,7 +189,43 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
     }
     design["random_parameters"] = parameters;
   }
-  j["design_point"] = design;
+  return design;
+}
+
+ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run,
+                       const risk::LimitRisk& r) {
+  const auto& limit = spec.limits[static_cast<std::size_t>(r.limit)];
+  const auto& s = r.subset;
+  const auto& pooled = r.pooled;
+  const long long chains = Chains(spec);
+  const auto collapsed = [&](const rare::SubsetResult& run) { return Collapsed(run, chains); };
+  ordered_json j;
+  j["cell"] = r.cell;
+  j["cell_label"] = risk::CellLabel(plan, r.cell);
+  j["limit"] = limit.text;
+  j["column"] = limit.column;
+  j["units"] = limit.units;
+  j["above"] = limit.above;
+  j["value"] = limit.value;
+  // The estimate: the K repetitions pooled (for K = 1 the run's own figures). Levels, thresholds,
+  // the exceedance curve and the design point below are the first repetition's.
+  j["status"] = StatusName(pooled.status);
+  j["probability"] = Num(pooled.probability);
+  j["coefficient_of_variation"] = Num(pooled.coefficient_of_variation);
+  j["coefficient_of_variation_correlated_levels"] =
+      pooled.repetitions == 1 ? Num(s.coefficient_of_variation_upper) : ordered_json(nullptr);
+  j["interval_95"] = {Num(pooled.interval_95_low), Num(pooled.interval_95_high)};
+  j["upper_bound"] = pooled.status == rare::SubsetResult::Status::kLevelCap ? Num(pooled.upper_bound)
+                                                                            : ordered_json(nullptr);
+  j["runs"] = pooled.evaluations;
+  j["failed_runs"] = pooled.failed_evaluations;
+  j["dimension"] = r.dimension;
+  int collapsed_runs = collapsed(s) ? 1 : 0;
+  for (const auto& other : r.other_repetitions) collapsed_runs += collapsed(other) ? 1 : 0;
+  j["collapsed_runs"] = collapsed_runs;
+  j["repetitions"] = RepetitionsJson(spec, r);
+  AddLevels(j, r, limit);
+  j["design_point"] = DesignPointJson(plan, run, r, limit);
   return j;
 }
 
