@@ -385,6 +385,28 @@ int Replay(const RiskFlags& flags) {
   });
 }
 
+// What -o, --resume and --force ask of the archive and its journal (refused with one line
+// otherwise); whether the journal exists.
+bool CheckRiskOutputs(const RiskFlags& flags, const std::filesystem::path& output,
+                      const std::filesystem::path& journal) {
+  const bool output_exists = std::filesystem::exists(output);
+  const bool journal_exists = std::filesystem::exists(journal);
+  if (flags.resume && !journal_exists) {
+    throw InputError("command line", "--resume", "",
+                     output_exists ? "a run to resume: " + output.string() + " is complete (no journal)"
+                                   : "a journal " + journal.string() + " to resume from: there is none");
+  }
+  if (!flags.resume && !flags.force && output_exists) {
+    throw InputError("command line", "-o", output.string(), "a new archive: it exists (--force replaces it)");
+  }
+  if (!flags.resume && !flags.force && journal_exists) {
+    throw InputError("command line", "-o", output.string(),
+                     "no interrupted run: " + journal.string() +
+                         " holds one (--resume continues it, --force starts over)");
+  }
+  return journal_exists;
+}
+
 int RunRiskCommand(const RiskFlags& flags) {
   CheckFormat(flags);
   if (flags.replay) return Replay(flags);
@@ -406,22 +428,7 @@ int RunRiskCommand(const RiskFlags& flags) {
   const auto value_count = static_cast<std::uint32_t>(value_columns.size());
   return GuardArchive([&] {
     const ArchiveLock lock = ArchiveLock::AcquireOutput(output, "-o");
-    const bool output_exists = std::filesystem::exists(output);
-    const bool journal_exists = std::filesystem::exists(journal);
-    if (flags.resume && !journal_exists) {
-      throw InputError("command line", "--resume", "",
-                       output_exists ? "a run to resume: " + output.string() + " is complete (no journal)"
-                                     : "a journal " + journal.string() + " to resume from: there is none");
-    }
-    if (!flags.resume && !flags.force && output_exists) {
-      throw InputError("command line", "-o", output.string(),
-                       "a new archive: it exists (--force replaces it)");
-    }
-    if (!flags.resume && !flags.force && journal_exists) {
-      throw InputError("command line", "-o", output.string(),
-                       "no interrupted run: " + journal.string() +
-                           " holds one (--resume continues it, --force starts over)");
-    }
+    const bool journal_exists = CheckRiskOutputs(flags, output, journal);
     risk::JournalContents resumed;
     if (flags.resume) {
       resumed = risk::ReadJournal(journal, spec.fingerprint, value_count);
