@@ -12,14 +12,19 @@
 
 namespace gesweep {
 
+bool ArchiveLock::OpenLockFile(const std::filesystem::path& archive) {
+  lock_path_ = archive.string() + ".lock";
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(lock_path_, ec);
+  fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  return existed;
+}
+
 ArchiveLock ArchiveLock::Acquire(const std::filesystem::path& archive, const std::string& retry_hint) {
   // Before the lock file is made beside it: a device or a FIFO is no archive to write into.
   RequireRegularFile(archive, "archive");
   ArchiveLock lock;
-  lock.lock_path_ = archive.string() + ".lock";
-  std::error_code ec;
-  const bool existed = std::filesystem::exists(lock.lock_path_, ec);
-  lock.fd_ = ::open(lock.lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  const bool existed = lock.OpenLockFile(archive);
   if (lock.fd_ < 0) {
     throw InputError(archive.string(), "", "",
                      "cannot write into the archive: cannot create its lock file " +
@@ -36,10 +41,7 @@ ArchiveLock ArchiveLock::Acquire(const std::filesystem::path& archive, const std
 
 ArchiveLock ArchiveLock::AcquireOutput(const std::filesystem::path& archive, const std::string& field) {
   ArchiveLock lock;
-  lock.lock_path_ = archive.string() + ".lock";
-  std::error_code ec;
-  const bool existed = std::filesystem::exists(lock.lock_path_, ec);
-  lock.fd_ = ::open(lock.lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  const bool existed = lock.OpenLockFile(archive);
   if (lock.fd_ < 0) {
     throw InputError(
         "command line", field, archive.string(),

@@ -29,6 +29,9 @@ class ArchiveLock {
 
  private:
   ArchiveLock() = default;
+  /// Sets lock_path_ (ARCHIVE.lock) and opens it, created when missing, into fd_ (-1 when it cannot
+  /// be; errno says why); returns whether it existed before. Takes no lock.
+  bool OpenLockFile(const std::filesystem::path& archive);
   std::filesystem::path lock_path_;
   int fd_ = -1;
   bool created_ = false;

@@ -2,15 +2,14 @@
 
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "engine/archive/archive_writer.h"
+#include "engine/sweep/run_cost.h"
 #include "engine/sweep/runner.h"
 
 namespace gesweep {
@@ -61,19 +60,9 @@ void SetStoringCost(const WriteTimes& times, WriteCostEstimate& estimate) {
     estimate.seconds_per_run_low = estimate.seconds_per_run_high = estimate.seconds_per_run;
     estimate.measured = true;
   }
-  const std::vector<double>& per_run = times.per_run;
-  if (per_run.size() >= 3) {
-    // z of a two-sided 95 % normal interval, on the batches' scatter.
-    constexpr double kZ95 = 1.959963984540054;
-    double mean = 0, variance = 0;
-    for (double y : per_run) mean += y;
-    mean /= static_cast<double>(per_run.size());
-    for (double y : per_run) variance += (y - mean) * (y - mean);
-    variance /= static_cast<double>(per_run.size() - 1);
-    const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
-    estimate.seconds_per_run_low = std::max(0.0, estimate.seconds_per_run - half_width);
-    estimate.seconds_per_run_high = estimate.seconds_per_run + half_width;
-  }
+  // On the batches' scatter.
+  SetInterval95(times.per_run, estimate.seconds_per_run, estimate.seconds_per_run_low,
+                estimate.seconds_per_run_high);
 }
 
 }  // namespace

@@ -21,8 +21,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kGoldenRatioFraction = 0.6180339887498949;
 // How often the watchdog looks at the external stop flag.
 constexpr auto kStopPollInterval = std::chrono::milliseconds(10);
-// z of a two-sided 95 % normal interval.
-constexpr double kZ95 = 1.959963984540054;
 
 struct Burst {
   std::int64_t runs = 0;
@@ -128,20 +126,26 @@ std::vector<double> SummariseBursts(const std::vector<ThreadResult>& results, Ru
 // estimate itself at both ends).
 void SetSecondsPerRunInterval(const std::vector<double>& per_run, RunCostEstimate& estimate) {
   estimate.seconds_per_run_low = estimate.seconds_per_run_high = estimate.seconds_per_run;
-  if (per_run.size() >= 3) {
-    double mean = 0;
-    for (double y : per_run) mean += y;
-    mean /= static_cast<double>(per_run.size());
-    double variance = 0;
-    for (double y : per_run) variance += (y - mean) * (y - mean);
-    variance /= static_cast<double>(per_run.size() - 1);
-    const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
-    estimate.seconds_per_run_low = std::max(0.0, estimate.seconds_per_run - half_width);
-    estimate.seconds_per_run_high = estimate.seconds_per_run + half_width;
-  }
+  SetInterval95(per_run, estimate.seconds_per_run, estimate.seconds_per_run_low,
+                estimate.seconds_per_run_high);
 }
 
 }  // namespace
+
+void SetInterval95(const std::vector<double>& per_run, double center, double& low, double& high) {
+  if (per_run.size() < 3) return;
+  // z of a two-sided 95 % normal interval.
+  constexpr double kZ95 = 1.959963984540054;
+  double mean = 0;
+  for (double y : per_run) mean += y;
+  mean /= static_cast<double>(per_run.size());
+  double variance = 0;
+  for (double y : per_run) variance += (y - mean) * (y - mean);
+  variance /= static_cast<double>(per_run.size() - 1);
+  const double half_width = kZ95 * std::sqrt(variance / static_cast<double>(per_run.size()));
+  low = std::max(0.0, center - half_width);
+  high = center + half_width;
+}
 
 RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options,
                                 const std::atomic<bool>* stop) {

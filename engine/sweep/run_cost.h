@@ -15,6 +15,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <vector>
 
 #include "engine/sweep/sweep_plan.h"
 
@@ -51,6 +52,12 @@ struct RunCostEstimate {
 /// `stop` (may be null) ends the measurement early.
 RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& options,
                                 const std::atomic<bool>* stop = nullptr);
+
+/// The 95 % interval of a mean time per run `center` from the scatter of the per-run times of three
+/// or more bursts or batches (`per_run`): low = max(0, center - h), high = center + h, h = z95 s / sqrt(n),
+/// s the sample standard deviation. With fewer than three, `low` and `high` are left as they are.
+/// EstimateRunCost's interval and MeasureWriteCost's (engine/archive/write_cost.h).
+void SetInterval95(const std::vector<double>& per_run, double center, double& low, double& high);
 
 /// Wall time, s, RunSweep takes on `threads` threads for `plan` when there is no batch to run: its
 /// fixed cost, whatever the sweep's size -- the pool of batch buffers allocated (sized as the
