@@ -17,6 +17,7 @@
 
 #include "engine/aircraft/atmosphere.h"
 #include "engine/dynamics/longitudinal_model.h"
+#include "engine/simulation/lanes.h"
 
 /// Forces inlining of the few functions on the per-stage path: GCC otherwise keeps
 /// Equation1Derivative out of line (called from five places), which measured 40 % of the
@@ -91,6 +92,31 @@ class DensityPolynomial {
     return ((c[0] + c[1] * y) + (c[2] + c[3] * y) * y2) + ((c[4] + c[5] * y) + c[6] * y2) * y4;
   }
 
+  /// At for the lanes of one chunk (lanes.h): lane i is polynomials[i]->At(height[i]) bit for bit
+  /// (the same operations in the same order; a lane outside its band gets IsaDensity).
+  /// height_m: the chunk of heights, m; height: the same heights as doubles.
+  template <class V>
+  GESWEEP_ALWAYS_INLINE static V AtLanes(const DensityPolynomial* const* polynomials, const V& height_m,
+                                         const double* height) {
+    constexpr int kWidth = lanes::kChunkWidth<V>;
+    const V y = height_m - lanes::Gather<V>([&](int i) { return polynomials[i]->center_m_; });
+    auto c = [&](int k) { return lanes::Gather<V>([&](int i) { return polynomials[i]->coefficients_[k]; }); };
+    const V y2 = y * y;
+    const V y4 = y2 * y2;
+    V rho = ((c(0) + c(1) * y) + (c(2) + c(3) * y) * y2) + ((c(4) + c(5) * y) + c(6) * y2) * y4;
+    alignas(64) double values[kWidth];
+    bool outside = false;
+    for (int i = 0; i < kWidth; ++i) {
+      const DensityPolynomial& p = *polynomials[i];
+      if (std::abs(height[i] - p.center_m_) <= p.half_width_m_) continue;
+      if (!outside) lanes::Store(rho, values);
+      outside = true;
+      values[i] = IsaDensity(p.field_elevation_m_ + height[i]);
+    }
+    if (outside) rho = lanes::Load<V>(values);
+    return rho;
+  }
+
  private:
   double field_elevation_m_;
   double center_m_;
@@ -148,6 +174,50 @@ class LinearDerivativeTable {
     dxdt[2] = rho * (speed_mps * m_1 + u2 * m_2) + mw_dot * w_dot;
     dxdt[3] = q;
     dxdt[4] = reference_speed_mps * dtheta - dw;
+  }
+
+  /// Equation1 for the lanes of one chunk (lanes.h): lane i is tables[i]->Equation1(start_height_m[i],
+  /// reference_speed_mps[i], x_i, elevator_i, dxdt_i, segment_hints[i]) bit for bit, with the same
+  /// operations in the same order; the segment and the density's band are found per lane, the
+  /// rest runs on the chunk. x[c], dxdt[c]: component c of the chunk's lanes.
+  template <class V>
+  GESWEEP_ALWAYS_INLINE static void Equation1Lanes(const LinearDerivativeTable* const* tables,
+                                                   const double* start_height_m,
+                                                   const double* reference_speed_mps, const V* x,
+                                                   const V& elevator_rad, V* dxdt, int* segment_hints) {
+    constexpr int kWidth = lanes::kChunkWidth<V>;
+    const V du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
+    const V u0 = lanes::Load<V>(reference_speed_mps);
+    const V height_m = lanes::Load<V>(start_height_m) + dh;
+    const V speed_mps = u0 + du;
+    alignas(64) double height[kWidth];
+    lanes::Store(height_m, height);
+    const Segment* seg[kWidth];
+    const DensityPolynomial* density[kWidth];
+    for (int i = 0; i < kWidth; ++i) {
+      seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
+      density[i] = &tables[i]->density_;
+    }
+    const V y = height_m - lanes::Gather<V>([&](int i) { return seg[i]->reference_m; });
+    auto r = [&](int j) {
+      return lanes::Gather<V>([&](int i) { return seg[i]->slope[j]; }) * y +
+             lanes::Gather<V>([&](int i) { return seg[i]->value[j]; });
+    };
+    const V x_1 = r(kXu) * du + r(kXw) * dw;
+    const V x_2 = r(kXh) * dh + r(kXde) * elevator_rad;
+    const V z_1 = r(kZu) * du + r(kZw) * dw;
+    const V z_2 = r(kZh) * dh + r(kZde) * elevator_rad;
+    const V m_1 = (r(kMu) * du + r(kMw) * dw) + r(kMq) * q;
+    const V m_2 = r(kMh) * dh + r(kMde) * elevator_rad;
+    const V rho = DensityPolynomial::AtLanes<V>(density, height_m, height);
+    const V mw_dot = rho * r(kMwDot);
+    const V u2 = speed_mps * speed_mps;
+    const V w_dot = rho * (speed_mps * z_1 + u2 * z_2) + u0 * q;
+    dxdt[0] = rho * (speed_mps * x_1 + u2 * x_2) - V(kGravity_mps2) * dtheta;
+    dxdt[1] = w_dot;
+    dxdt[2] = rho * (speed_mps * m_1 + u2 * m_2) + mw_dot * w_dot;
+    dxdt[3] = q;
+    dxdt[4] = u0 * dtheta - dw;
   }
 
   /// Number of segments: one below the first row, one per pair of rows, one above the last.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <optional>
 
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
@@ -400,6 +402,307 @@ OpenLoopResult RunDisturbed(Derivatives derivatives, const DisturbanceField& fie
   return result;
 }
 
+// ---------------------------------------------------------------- many runs in lockstep (SIMD lanes)
+
+// A run flown in a lane: the scalar problem (its recorder: events, lowest height, largest |q|) and
+// the bookkeeping IntegrateWith keeps for one run with Rk4Method, honoured breakpoints and no
+// output, so that every scalar decision below is the one Integrate takes for that run.
+struct LaneRun {
+  using Problem = OpenLoopProblem<TableSource>;
+  using State = Problem::State;
+  using Events = std::array<double, Problem::kEventCount>;
+
+  std::size_t run = 0;  // index in the batch's runs
+  const OpenLoopConfig* config = nullptr;
+  ElevatorSchedule schedule;
+  std::optional<Problem> problem;
+  IntegrationResult<5> result;
+  double t = 0;
+  double end_s = 0;
+  double step_s = 0;
+  long grid_index = 0;
+  std::size_t next_breakpoint = 0;
+  int segment = 0;
+  Events g_previous{};
+};
+
+// W lanes: the runs' states side by side (lanes.h), component c of lane i at [c][i].
+template <int W>
+class OpenLoopLanes {
+ public:
+  using Chunk = lanes::Chunk<W>;
+  static constexpr int kChunkWidth = lanes::kChunkWidth<Chunk>;
+  using State = LaneRun::State;
+
+  OpenLoopLanes(std::span<const OpenLoopBatchRun> runs, std::span<const std::size_t> order,
+                const std::vector<const LinearDerivativeTable*>& tables, std::vector<OpenLoopResult>& results,
+                const std::atomic<bool>* cancel)
+      : runs_(runs), order_(order), run_tables_(tables), results_(results), cancel_(cancel) {
+    for (int i = 0; i < W; ++i) table_[i] = tables[order.front()];  // idle lanes fly zeros on a valid table
+  }
+
+  void FlyAll() {
+    for (int i = 0; i < W; ++i) Refill(i);
+    while (active_count_ > 0) {
+      if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) {
+        for (int i = 0; i < W; ++i) {
+          if (active_[i]) Finish(i, IntegrationStatus::kCancelled);
+        }
+        continue;
+      }
+      for (int i = 0; i < W; ++i) {
+        if (active_[i]) PrepareStep(i);
+      }
+      StepAll();
+      for (int i = 0; i < W; ++i) {
+        if (active_[i]) CompleteStep(i);
+      }
+    }
+  }
+
+ private:
+  // The lane's state as one run's.
+  State Lane(const double (&v)[5][W], int i) const {
+    State s;
+    for (int c = 0; c < 5; ++c) s[static_cast<std::size_t>(c)] = v[c][i];
+    return s;
+  }
+  void SetLane(double (&v)[5][W], int i, const State& s) {
+    for (int c = 0; c < 5; ++c) v[c][i] = s[static_cast<std::size_t>(c)];
+  }
+
+  // The derivative of lane i alone, through its problem (what Integrate's rhs calls).
+  void LaneDerivative(int i, const State& x, State& dxdt) {
+    LaneRun& lane = lane_[i];
+    ++lane.result.rhs_calls;
+    lane.problem->Derivative(lane.t, x, lane.segment, dxdt);
+  }
+
+  // Starts the next run in lane i, or leaves it idle when none is left. IntegrateWith's start: the
+  // initial step record and event values, the derivative at t = 0.
+  void Refill(int i) {
+    while (next_ < order_.size()) {
+      const std::size_t run = order_[next_++];
+      const OpenLoopBatchRun& r = runs_[run];
+      LaneRun& lane = lane_[i];
+      lane = LaneRun{};
+      lane.run = run;
+      lane.config = &r.config;
+      lane.schedule = MakeElevatorSchedule(r.config.elevator);
+      const LinearDerivativeTable* table = run_tables_[run];
+      lane.problem.emplace(TableSource{table, table->SegmentOf(r.config.start_height_m)},
+                           r.config.start_height_m, r.config.reference_speed_mps, lane.schedule.elevator_rad,
+                           TouchdownHeight(*r.model, r.config), StallSpeed(*r.model, r.config), nullptr);
+      lane.end_s = r.config.duration_s;
+      lane.step_s = r.config.integrator.step_s;
+      lane.segment = integrator_detail::SegmentOf(lane.schedule.breakpoints_s, 0.0);
+      lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
+      table_[i] = table;
+      hint_[i] = table->SegmentOf(r.config.start_height_m);
+      h0_[i] = r.config.start_height_m;
+      u0_[i] = r.config.reference_speed_mps;
+      const InitialOffsets& o = r.config.initial_offsets;
+      const State x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
+                        o.delta_height_m};
+      lane.problem->OnStep(0.0, x0, lane.segment);
+      lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
+      State f0;
+      LaneDerivative(i, x0, f0);
+      SetLane(x_, i, x0);
+      SetLane(f_, i, f0);
+      active_[i] = true;
+      ++active_count_;
+      if (!integrator_detail::AllFinite<5>(f0) || !integrator_detail::AllFinite<5>(x0)) {
+        Finish(i, IntegrationStatus::kNonFinite);
+        return;  // Finish refilled the lane
+      }
+      return;
+    }
+    Idle(i);
+  }
+
+  void Idle(int i) {
+    for (int c = 0; c < 5; ++c) x_[c][i] = f_[c][i] = 0.0;
+    h_[i] = half_h_[i] = sixth_h_[i] = elevator_[i] = 0.0;
+  }
+
+  // Rk4Method::Advance up to the stages: the step's end on the lane's grid t0 + n·h, or its limit.
+  void PrepareStep(int i) {
+    LaneRun& lane = lane_[i];
+    const std::vector<double>& breakpoints = lane.schedule.breakpoints_s;
+    double t_limit = lane.end_s;
+    if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] < lane.end_s) {
+      t_limit = breakpoints[lane.next_breakpoint];
+    }
+    const double snap = integrator_detail::kSnapFraction * lane.step_s;
+    auto grid_time = [&](long index) { return 0.0 + static_cast<double>(index) * lane.step_s; };
+    while (grid_time(lane.grid_index + 1) <= lane.t + snap) ++lane.grid_index;
+    const double target = grid_time(lane.grid_index + 1);
+    t_to_[i] = t_limit <= target + snap ? t_limit : target;
+    h_[i] = t_to_[i] - lane.t;
+    half_h_[i] = 0.5 * h_[i];
+    sixth_h_[i] = h_[i] / 6.0;
+    elevator_[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
+  }
+
+  // The RK4 stages of every lane at once (Rk4Method::Advance's arithmetic, per chunk).
+  void StepAll() {
+    for (int k = 0; k < W; k += kChunkWidth) {
+      using V = Chunk;
+      V x[5], f[5], stage[5], k2[5], k3[5], k4[5], x_new[5], f_new[5];
+      for (int c = 0; c < 5; ++c) {
+        x[c] = lanes::Load<V>(&x_[c][k]);
+        f[c] = lanes::Load<V>(&f_[c][k]);
+      }
+      const V h = lanes::Load<V>(&h_[k]);
+      const V half_h = lanes::Load<V>(&half_h_[k]);
+      const V sixth_h = lanes::Load<V>(&sixth_h_[k]);
+      const V elevator = lanes::Load<V>(&elevator_[k]);
+      auto rhs = [&](const V* xs, V* dxdt) {
+        LinearDerivativeTable::Equation1Lanes<V>(&table_[k], &h0_[k], &u0_[k], xs, elevator, dxdt, &hint_[k]);
+      };
+      for (int c = 0; c < 5; ++c) stage[c] = x[c] + half_h * f[c];
+      rhs(stage, k2);
+      for (int c = 0; c < 5; ++c) stage[c] = x[c] + half_h * k2[c];
+      rhs(stage, k3);
+      for (int c = 0; c < 5; ++c) stage[c] = x[c] + h * k3[c];
+      rhs(stage, k4);
+      for (int c = 0; c < 5; ++c) x_new[c] = x[c] + sixth_h * ((f[c] + k4[c]) + V(2.0) * (k2[c] + k3[c]));
+      rhs(x_new, f_new);
+      for (int c = 0; c < 5; ++c) {
+        lanes::Store(x_new[c], &x_new_[c][k]);
+        lanes::Store(f_new[c], &f_new_[c][k]);
+      }
+    }
+  }
+
+  // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the
+  // step, the step's record, and a breakpoint's restart.
+  void CompleteStep(int i) {
+    LaneRun& lane = lane_[i];
+    lane.result.rhs_calls += 4;
+    const State x = Lane(x_, i), f = Lane(f_, i), x_new = Lane(x_new_, i), f_new = Lane(f_new_, i);
+    if (!integrator_detail::AllFinite<5>(x_new)) return Finish(i, IntegrationStatus::kNonFinite);
+    const double t = lane.t;
+    const double t_new = t_to_[i];
+    ++lane.result.accepted_steps;
+    LaneRun::Problem& problem = *lane.problem;
+    const int segment = lane.segment;
+    auto interpolate = [&](double tau, State& out) {
+      if (tau == t_new) {
+        out = x_new;
+      } else if (tau == t) {
+        out = x;
+      } else {
+        hermite_.Interpolate(tau, t, x, f, t_new, x_new, f_new, out);
+      }
+    };
+    LaneRun::Events g_new;
+    problem.EventValues(t_new, x_new, segment, g_new);
+    constexpr int E = LaneRun::Problem::kEventCount;
+    std::array<double, E> event_time{};
+    std::array<int, E> fired{};
+    int fired_count = 0;
+    for (int e = 0; e < E; ++e) {
+      if (!(lane.g_previous[e] > 0.0 && g_new[e] <= 0.0)) continue;
+      double t_event = t_new;
+      if (g_new[e] < 0.0) {
+        auto g_of = [&](double tau) {
+          State xs;
+          interpolate(tau, xs);
+          LaneRun::Events values;
+          problem.EventValues(tau, xs, segment, values);
+          return values[e];
+        };
+        const double tolerance = lane.config->integrator.event_time_tolerance_s;
+        auto converged = [tolerance](double a, double b) { return std::abs(b - a) <= tolerance; };
+        std::uintmax_t iterations = integrator_detail::kMaxEventIterations;
+        t_event = boost::math::tools::toms748_solve(g_of, t, t_new, lane.g_previous[e], g_new[e], converged,
+                                                    iterations)
+                      .second;
+      }
+      event_time[e] = t_event;
+      int position = fired_count++;
+      while (position > 0 && event_time[fired[position - 1]] > t_event) {
+        fired[position] = fired[position - 1];
+        --position;
+      }
+      fired[position] = e;
+    }
+    for (int k = 0; k < fired_count; ++k) {
+      const int e = fired[k];
+      State x_event;
+      interpolate(event_time[e], x_event);
+      ++lane.result.events_fired;
+      const EventAction action = problem.OnEvent(e, event_time[e], x_event, segment);
+      if (action == EventAction::kContinue) continue;
+      GESWEEP_DEMAND(action == EventAction::kStop);  // the open loop only records or stops
+      problem.OnStep(event_time[e], x_event, segment);
+      lane.t = event_time[e];
+      SetLane(x_, i, x_event);
+      lane.result.stopping_event = e;
+      return Finish(i, IntegrationStatus::kStoppedByEvent);
+    }
+    problem.OnStep(t_new, x_new, segment);
+    lane.t = t_new;
+    SetLane(x_, i, x_new);
+    SetLane(f_, i, f_new);
+    lane.g_previous = g_new;
+    const std::vector<double>& breakpoints = lane.schedule.breakpoints_s;
+    if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] <= lane.t) {
+      while (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] <= lane.t) {
+        ++lane.next_breakpoint;
+        ++lane.segment;
+      }
+      State f_restart;
+      LaneDerivative(i, x_new, f_restart);
+      SetLane(f_, i, f_restart);
+      problem.EventValues(lane.t, x_new, lane.segment, lane.g_previous);
+      if (!integrator_detail::AllFinite<5>(f_restart)) return Finish(i, IntegrationStatus::kNonFinite);
+    }
+    if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
+  }
+
+  // IntegrateWith's finish, the run's summary, and the lane's next run.
+  void Finish(int i, IntegrationStatus status) {
+    LaneRun& lane = lane_[i];
+    lane.result.status = status;
+    lane.result.end_time_s = lane.t;
+    lane.result.final_state = Lane(x_, i);
+    lane.result.final_segment = lane.segment;
+    FillSummary(results_[lane.run].summary, lane.result, *lane.problem, *lane.config);
+    active_[i] = false;
+    --active_count_;
+    Refill(i);
+  }
+
+  std::span<const OpenLoopBatchRun> runs_;
+  std::span<const std::size_t> order_;
+  const std::vector<const LinearDerivativeTable*>& run_tables_;
+  std::vector<OpenLoopResult>& results_;
+  const std::atomic<bool>* cancel_;
+  std::size_t next_ = 0;
+  int active_count_ = 0;
+  integrator_detail::Rk4Method<5> hermite_{0.0, IntegratorOptions{}};  // its cubic Hermite interpolant
+
+  std::array<LaneRun, W> lane_;
+  std::array<bool, W> active_{};
+  alignas(64) double x_[5][W]{}, f_[5][W]{}, x_new_[5][W]{}, f_new_[5][W]{};
+  alignas(64) double h_[W]{}, half_h_[W]{}, sixth_h_[W]{}, t_to_[W]{}, elevator_[W]{};
+  alignas(64) double h0_[W]{}, u0_[W]{};
+  const LinearDerivativeTable* table_[W]{};
+  int hint_[W]{};
+};
+
+template <int W>
+void FlyInLanes(std::span<const OpenLoopBatchRun> runs, std::span<const std::size_t> order,
+                const std::vector<const LinearDerivativeTable*>& tables, std::vector<OpenLoopResult>& results,
+                const std::atomic<bool>* cancel) {
+  // On the heap: the lanes hold W runs' problems and arrays.
+  auto lanes = std::make_unique<OpenLoopLanes<W>>(runs, order, tables, results, cancel);
+  lanes->FlyAll();
+}
+
 }  // namespace
 
 void ValidateOpenLoopConfig(const LongitudinalModel& model, const OpenLoopConfig& config,
@@ -511,6 +814,62 @@ OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopCo
   }
   const LinearDerivativeTable table(model);
   return Run(TableSource{&table, table.SegmentOf(h0)}, model, config, cancel);
+}
+
+bool OpenLoopRunUsesLanes(const LongitudinalModel& model, const OpenLoopConfig& config) {
+  if (config.integrator.kind != IntegratorKind::kRk4 || !config.integrator.honour_breakpoints) return false;
+  if (config.freeze_derivatives || config.generic_derivative_path) return false;
+  if (model.options().interpolation != Interpolation::kLinear) return false;
+  if (config.series_interval_s > 0.0) return false;
+  return !DisturbanceField(FieldOptions(model, config), config.seed, config.run_index).active();
+}
+
+std::vector<OpenLoopResult> SimulateOpenLoopBatch(std::span<const OpenLoopBatchRun> runs, int width,
+                                                  const std::atomic<bool>* cancel) {
+  GESWEEP_DEMAND(std::find(std::begin(kOpenLoopBatchWidths), std::end(kOpenLoopBatchWidths), width) !=
+                 std::end(kOpenLoopBatchWidths));
+  for (const OpenLoopBatchRun& run : runs) {
+    GESWEEP_DEMAND(run.model != nullptr);
+    ValidateOpenLoopConfig(*run.model, run.config, "open-loop config");
+  }
+  std::vector<OpenLoopResult> results(runs.size());
+  // One table per model, built as SimulateOpenLoop builds it (its values depend on the model only).
+  std::vector<std::unique_ptr<LinearDerivativeTable>> owned;
+  std::vector<const LongitudinalModel*> owners;
+  std::vector<const LinearDerivativeTable*> tables(runs.size(), nullptr);
+  std::vector<std::size_t> in_lanes;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const LongitudinalModel& model = *runs[i].model;
+    if (!OpenLoopRunUsesLanes(model, runs[i].config)) {
+      results[i] = SimulateOpenLoop(model, runs[i].config, cancel);
+      continue;
+    }
+    const auto known = std::find(owners.begin(), owners.end(), &model);
+    if (known == owners.end()) {
+      owned.push_back(std::make_unique<LinearDerivativeTable>(model));
+      owners.push_back(&model);
+      tables[i] = owned.back().get();
+    } else {
+      tables[i] = owned[static_cast<std::size_t>(known - owners.begin())].get();
+    }
+    in_lanes.push_back(i);
+  }
+  if (in_lanes.empty()) return results;
+  switch (width) {
+    case 1:
+      FlyInLanes<1>(runs, in_lanes, tables, results, cancel);
+      break;
+    case 2:
+      FlyInLanes<2>(runs, in_lanes, tables, results, cancel);
+      break;
+    case 4:
+      FlyInLanes<4>(runs, in_lanes, tables, results, cancel);
+      break;
+    default:
+      FlyInLanes<8>(runs, in_lanes, tables, results, cancel);
+      break;
+  }
+  return results;
 }
 
 }  // namespace gesweep

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -271,5 +272,29 @@ struct OpenLoopResult {
 /// null) is read before every step: once true the run stops there with summary.cancelled.
 OpenLoopResult SimulateOpenLoop(const LongitudinalModel& model, const OpenLoopConfig& config,
                                 const std::atomic<bool>* cancel = nullptr);
+
+/// One run of a batch: its model (which outlives the call) and its settings.
+struct OpenLoopBatchRun {
+  const LongitudinalModel* model = nullptr;
+  OpenLoopConfig config;
+};
+
+/// The lane widths SimulateOpenLoopBatch takes.
+inline constexpr int kOpenLoopBatchWidths[] = {1, 2, 4, 8};
+
+/// Whether SimulateOpenLoopBatch flies `config` in its lanes: fixed-step RK4 honouring the
+/// breakpoints, linear interpolation on the per-segment table (not the generic path, not frozen), still
+/// air, no series. Any other run is flown by SimulateOpenLoop, one at a time.
+bool OpenLoopRunUsesLanes(const LongitudinalModel& model, const OpenLoopConfig& config);
+
+/// SimulateOpenLoop for every run, in order: result i is SimulateOpenLoop(*runs[i].model,
+/// runs[i].config, cancel) bit for bit, whatever the width and whichever runs share a batch
+/// (tests/simulation/open_loop_batch_test.cc). The runs that OpenLoopRunUsesLanes are flown `width`
+/// at a time in lockstep (docs/performance.md, "Batched time responses"): one RK4 step of every lane
+/// at once, each lane on its own time grid, breakpoints and events; a lane whose run ends takes the
+/// next run. width: one of kOpenLoopBatchWidths (GESWEEP_DEMAND). Validates every config first
+/// (throws the first InputError, source "open-loop config", before any run is flown).
+std::vector<OpenLoopResult> SimulateOpenLoopBatch(std::span<const OpenLoopBatchRun> runs, int width,
+                                                  const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace gesweep

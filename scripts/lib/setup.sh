@@ -11,6 +11,7 @@ GESWEEP_PACKAGES=(
   libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
   libslicot-dev liblapack-dev libblas-dev gfortran libgfortran5 libre2-dev
   libopenmpi-dev openmpi-bin
+  libxsimd-dev  # engine/simulation: the SIMD lanes of batched time responses (lanes.h)
   libdeflate-dev  # engine/archive: the faster deflate encoder ([output] deflate_encoder = "libdeflate")
   clang-format clang-tidy  # tests/layout: the formatting check (hygiene.clang_format) and the tidy check
   python3 python3-numpy python3-scipy python3-h5py python3-matplotlib python3-jsonschema

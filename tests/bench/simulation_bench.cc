@@ -55,6 +55,39 @@ void Run(benchmark::State& state, const LongitudinalModel& model, const OpenLoop
   Report(state, result);
 }
 
+// 64 runs of the paper's 30 s run from heights spread over the table (1.5 to 14 m, so the lanes sit in
+// different segments), flown one at a time by SimulateOpenLoop (width 0) or in lanes of the given
+// width by SimulateOpenLoopBatch (docs/performance.md, "Batched time responses", issue 28).
+void BM_Rk4_30s_Batch(benchmark::State& state) {
+  constexpr int kRuns = 64;
+  const int width = static_cast<int>(state.range(0));
+  std::vector<OpenLoopBatchRun> runs(kRuns);
+  for (int i = 0; i < kRuns; ++i) {
+    runs[static_cast<std::size_t>(i)].model = &Model(Interpolation::kLinear);
+    runs[static_cast<std::size_t>(i)].config = PaperRun();
+    runs[static_cast<std::size_t>(i)].config.start_height_m = 1.5 + 12.5 * i / (kRuns - 1);
+  }
+  long steps = 0;
+  for (auto _ : state) {
+    steps = 0;
+    if (width == 0) {
+      for (const auto& run : runs) {
+        const OpenLoopResult result = SimulateOpenLoop(*run.model, run.config);
+        steps += result.summary.steps;
+        benchmark::DoNotOptimize(result.summary.final_state.data());
+      }
+    } else {
+      const std::vector<OpenLoopResult> results = SimulateOpenLoopBatch(runs, width);
+      for (const auto& result : results) steps += result.summary.steps;
+      benchmark::DoNotOptimize(results.data());
+    }
+  }
+  state.counters["steps"] = static_cast<double>(steps);
+  state.counters["time_per_run"] =
+      benchmark::Counter(kRuns, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_Rk4_30s_Batch)->Arg(0)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+
 // The target: re-evaluation at every stage (linear table, fast path).
 void BM_Rk4_30s_Reevaluated(benchmark::State& state) {
   Run(state, Model(Interpolation::kLinear), PaperRun());
