@@ -102,6 +102,79 @@ LqrResult Failure(RiccatiStatus status, std::string message) {
   return result;
 }
 
+/// SB02OD, continuous time, B and R given, Q and R unfactored (upper triangles read), L = N, stable
+/// eigenvalues first so that X is the stabilising solution: X into `x` (n × n), the reciprocal
+/// condition number into `rcond`; SB02OD's INFO (0: solved).
+int SolveSb02od(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const MatrixXd& R,
+                const MatrixXd& cross, MatrixXd& x, double& rcond) {
+  const Eigen::Index n = A.rows();
+  const Eigen::Index m = B.cols();
+  const int n_i = static_cast<int>(n);
+  const int m_i = static_cast<int>(m);
+  const int p_i = 0;  // not referenced when FACT = 'N'
+  const int two_n = 2 * n_i;
+  const int lds = two_n + m_i;
+  const int ldl = n_i;
+  MatrixXd a = A, b = B, q = Q, r = R, l = cross;
+  x = MatrixXd::Zero(n, n);
+  std::vector<double> alfar(two_n), alfai(two_n), beta(two_n);
+  MatrixXd s = MatrixXd::Zero(lds, lds), t = MatrixXd::Zero(lds, two_n), u = MatrixXd::Zero(two_n, two_n);
+  // Documented minimum max(7(2n+1)+16, 16n, 2n+m, 3m); SLICOT's own notes say it can be too small for
+  // large n, so take generously more (these systems are small).
+  const int ldwork = std::max({7 * (two_n + 1) + 16, 16 * n_i, two_n + m_i, 3 * m_i}) * 8 + 64 * lds;
+  std::vector<double> dwork(ldwork);
+  std::vector<int> iwork(std::max({1, m_i, two_n}));
+  std::vector<int> bwork(two_n);
+  const double tol = 0.0;  // SB02OD's default: machine epsilon
+  rcond = 0;
+  int info = 0;
+  sb02od_("C", "B", "N", "U", "N", "S", &n_i, &m_i, &p_i, a.data(), &n_i, b.data(), &n_i, q.data(), &n_i,
+          r.data(), &m_i, l.data(), &ldl, &rcond, x.data(), &n_i, alfar.data(), alfai.data(), beta.data(),
+          s.data(), &lds, t.data(), &lds, u.data(), &two_n, &tol, iwork.data(), dwork.data(), &ldwork,
+          bwork.data(), &info, 1, 1, 1, 1, 1, 1);
+  return info;
+}
+
+/// The failure of an SB02OD that returned INFO ≠ 0, with SB02OD's reason for INFO 1 to 6.
+LqrResult Sb02odFailure(int info) {
+  static constexpr const char* kReasons[] = {
+      "",
+      "the extended matrix pencil is singular",
+      "the QZ algorithm failed",
+      "reordering of the generalized eigenvalues failed",
+      "rounding moved eigenvalues across the stability boundary after reordering",
+      "the stable deflating subspace does not have dimension n (eigenvalues on the imaginary axis?)",
+      "the solution matrix system is singular",
+  };
+  std::ostringstream message;
+  message << "SB02OD failed with INFO = " << info;
+  if (info >= 1 && info <= 6) message << ": " << kReasons[info];
+  return Failure(RiccatiStatus::kSolverFailed, message.str());
+}
+
+/// The result from SB02OD's X: S = (X + Xᵀ)/2, K = R⁻¹(BᵀS + Nᵀ) and the eigenvalues of A − BK,
+/// largest real part first; a failure when S or K is not finite or A − BK is not stable.
+LqrResult StabilisingGain(const MatrixXd& A, const MatrixXd& B, const MatrixXd& cross,
+                          const Eigen::LLT<MatrixXd>& r_factor, const MatrixXd& x, double rcond) {
+  LqrResult result;
+  result.reciprocal_condition = rcond;
+  result.S = 0.5 * (x + x.transpose());
+  result.K = r_factor.solve(B.transpose() * result.S + cross.transpose());
+  VectorXcd closed = Eigen::EigenSolver<MatrixXd>(A - B * result.K, false).eigenvalues();
+  std::sort(closed.data(), closed.data() + closed.size(),
+            [](const std::complex<double>& a, const std::complex<double>& b) {
+              return a.real() != b.real() ? a.real() > b.real() : a.imag() > b.imag();
+            });
+  result.closed_loop_eigenvalues = closed;
+  if (!result.S.allFinite() || !result.K.allFinite() || !(closed(0).real() < 0.0)) {
+    return Failure(RiccatiStatus::kSolverFailed,
+                   "SB02OD returned a solution that does not stabilise A - BK (closed-loop eigenvalue " +
+                       FormatComplex(closed(0)) + ")");
+  }
+  result.status = RiccatiStatus::kOk;
+  return result;
+}
+
 }  // namespace
 
 PbhTest CheckStabilizable(const MatrixXd& A, const MatrixXd& B, const RiccatiTolerances& tolerances) {
@@ -174,64 +247,11 @@ LqrResult Lqr(const MatrixXd& A, const MatrixXd& B, const MatrixXd& Q, const Mat
                                                       " is unweighted by Q and not stable");
   }
 
-  // SB02OD, continuous time, B and R given, Q and R unfactored (upper triangles read), L = N, stable
-  // eigenvalues first so that X is the stabilising solution.
-  const int n_i = static_cast<int>(n);
-  const int m_i = static_cast<int>(m);
-  const int p_i = 0;  // not referenced when FACT = 'N'
-  const int two_n = 2 * n_i;
-  const int lds = two_n + m_i;
-  const int ldl = n_i;
-  MatrixXd a = A, b = B, q = Q, r = R, l = cross;
-  MatrixXd x = MatrixXd::Zero(n, n);
-  std::vector<double> alfar(two_n), alfai(two_n), beta(two_n);
-  MatrixXd s = MatrixXd::Zero(lds, lds), t = MatrixXd::Zero(lds, two_n), u = MatrixXd::Zero(two_n, two_n);
-  // Documented minimum max(7(2n+1)+16, 16n, 2n+m, 3m); SLICOT's own notes say it can be too small for
-  // large n, so take generously more (these systems are small).
-  const int ldwork = std::max({7 * (two_n + 1) + 16, 16 * n_i, two_n + m_i, 3 * m_i}) * 8 + 64 * lds;
-  std::vector<double> dwork(ldwork);
-  std::vector<int> iwork(std::max({1, m_i, two_n}));
-  std::vector<int> bwork(two_n);
-  const double tol = 0.0;  // SB02OD's default: machine epsilon
+  MatrixXd x;
   double rcond = 0;
-  int info = 0;
-  sb02od_("C", "B", "N", "U", "N", "S", &n_i, &m_i, &p_i, a.data(), &n_i, b.data(), &n_i, q.data(), &n_i,
-          r.data(), &m_i, l.data(), &ldl, &rcond, x.data(), &n_i, alfar.data(), alfai.data(), beta.data(),
-          s.data(), &lds, t.data(), &lds, u.data(), &two_n, &tol, iwork.data(), dwork.data(), &ldwork,
-          bwork.data(), &info, 1, 1, 1, 1, 1, 1);
-  if (info != 0) {
-    static constexpr const char* kReasons[] = {
-        "",
-        "the extended matrix pencil is singular",
-        "the QZ algorithm failed",
-        "reordering of the generalized eigenvalues failed",
-        "rounding moved eigenvalues across the stability boundary after reordering",
-        "the stable deflating subspace does not have dimension n (eigenvalues on the imaginary axis?)",
-        "the solution matrix system is singular",
-    };
-    std::ostringstream message;
-    message << "SB02OD failed with INFO = " << info;
-    if (info >= 1 && info <= 6) message << ": " << kReasons[info];
-    return Failure(RiccatiStatus::kSolverFailed, message.str());
-  }
-
-  LqrResult result;
-  result.reciprocal_condition = rcond;
-  result.S = 0.5 * (x + x.transpose());
-  result.K = r_factor.solve(B.transpose() * result.S + cross.transpose());
-  VectorXcd closed = Eigen::EigenSolver<MatrixXd>(A - B * result.K, false).eigenvalues();
-  std::sort(closed.data(), closed.data() + closed.size(),
-            [](const std::complex<double>& a, const std::complex<double>& b) {
-              return a.real() != b.real() ? a.real() > b.real() : a.imag() > b.imag();
-            });
-  result.closed_loop_eigenvalues = closed;
-  if (!result.S.allFinite() || !result.K.allFinite() || !(closed(0).real() < 0.0)) {
-    return Failure(RiccatiStatus::kSolverFailed,
-                   "SB02OD returned a solution that does not stabilise A - BK (closed-loop eigenvalue " +
-                       FormatComplex(closed(0)) + ")");
-  }
-  result.status = RiccatiStatus::kOk;
-  return result;
+  const int info = SolveSb02od(A, B, Q, R, cross, x, rcond);
+  if (info != 0) return Sb02odFailure(info);
+  return StabilisingGain(A, B, cross, r_factor, x, rcond);
 }
 
 LqrResult Lqry(const StateSpace& system, const MatrixXd& Q, const MatrixXd& R,

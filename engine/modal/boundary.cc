@@ -122,84 +122,19 @@ class Search {
   Search(const std::vector<MatrixSegment>& segments, double wingspan_m, EigenvalueSolver solver)
       : segments_(segments), wingspan_m_(wingspan_m), solver_(solver) {}
 
+  /// The crossings of the segments' criteria, each confirmed on the exact model, ascending, with the
+  /// stability on either side; the result so far when a segment's matrix is not finite.
   CrossingSearchResult Run() {
     polynomials_.resize(segments_.size());
+    lower_zone_.resize(segments_.size());
+    upper_zone_.resize(segments_.size());
     std::vector<Candidate> candidates;
-    // Per segment and criterion, where the criterion is ~0 at an end (within the rounding allowance,
-    // or exactly, divided out): the t up to which the undecided region reaches (−1: not ~0 there).
-    std::vector<std::array<double, 2>> lower_zone(segments_.size()), upper_zone(segments_.size());
     for (std::size_t s = 0; s < segments_.size(); ++s) {
       if (!BuildPolynomials(s)) return result_;
-      for (int c = 0; c < 2; ++c) {
-        const bool hopf = c == 0;
-        const SegmentPolynomials& p = polynomials_[s];
-        lower_zone[s][c] = (!hopf && segments_[s].real_root_at_lower) ? 0.0 : -1.0;
-        upper_zone[s][c] = (!hopf && segments_[s].real_root_at_upper) ? 1.0 : -1.0;
-        if (hopf && p.hopf_excluded) continue;
-        const BernsteinPolynomial& poly = hopf ? p.hopf : p.real;
-        const double allowance = kRoundingAllowance * (hopf ? p.hopf_scale : p.real_scale);
-        const RootIsolation isolation = IsolateRoots(poly, allowance);
-        for (const RootInterval& interval : isolation.intervals) {
-          if (interval.lower_t == 0.0 && isolation.sign_at_lower == 0) {
-            lower_zone[s][c] = interval.upper_t;  // decided with the segment below
-            continue;
-          }
-          if (interval.upper_t == 1.0 && isolation.sign_at_upper == 0) {
-            upper_zone[s][c] = interval.lower_t;  // decided with the segment above
-            continue;
-          }
-          if (!interval.certified) {
-            Uncertify("an unresolved cluster of roots of " + CriterionName(hopf, s) + " within " +
-                      FormatMetres((interval.upper_t - interval.lower_t) * Length(s)) +
-                      " of H = " + FormatMetres(HeightAt(s, interval.lower_t)) +
-                      (interval.sign_change
-                           ? " (an odd number: one crossing reported)"
-                           : " (an even number: a tangency or a close pair, none reported)"));
-            if (!interval.sign_change) continue;
-          }
-          candidates.push_back(
-              {HeightAt(s, interval.lower_t), HeightAt(s, interval.upper_t), hopf, s, interval.certified});
-        }
-      }
+      IsolateSegmentRoots(s, candidates);
     }
-    // Where a criterion is ~0 at a table row or an end of the range: the region the isolation left
-    // undecided there is decided by the signs of the exact criterion at its two sides (an odd number
-    // of roots when they differ). Wider than kKnotOffset, it may hide an even number: not certified.
-    auto check_zone_width = [&](std::size_t s, int c, double width_t, double end_m) {
-      if (width_t > kKnotOffset * 1.0000001) {
-        Uncertify(CriterionName(c == 0, s) + " is indistinguishable from 0 within " +
-                  FormatMetres(width_t * Length(s)) + " of H = " + FormatMetres(end_m) +
-                  "; a close pair of crossings there cannot be excluded");
-      }
-    };
-    for (std::size_t s = 0; s < segments_.size(); ++s) {
-      for (int c = 0; c < 2; ++c) {
-        if (lower_zone[s][c] >= 0) check_zone_width(s, c, lower_zone[s][c], segments_[s].lower_height_m);
-        if (upper_zone[s][c] >= 0)
-          check_zone_width(s, c, 1.0 - upper_zone[s][c], segments_[s].upper_height_m);
-      }
-    }
-    for (std::size_t s = 0; s + 1 < segments_.size(); ++s) {
-      int continuous = -1;  // Continuous(s), evaluated where needed (two exact matrices)
-      for (int c = 0; c < 2; ++c) {
-        if (upper_zone[s][c] < 0 && lower_zone[s + 1][c] < 0) continue;
-        if (continuous < 0) continuous = Continuous(s) ? 1 : 0;
-        if (continuous == 0) break;
-        const bool hopf = c == 0;
-        // Where a₅ becomes identically 0 at the row, the neutral root arrives there and stays (the
-        // stability comparison reports it); Δ₄ = a₄Δ₃ continues Δ₃ across the row.
-        const bool mixed = segments_[s].deflated != segments_[s + 1].deflated;
-        if (mixed && !hopf) continue;
-        const double below_t = std::min(upper_zone[s][c] < 0 ? 1.0 : upper_zone[s][c], 1.0 - kKnotOffset);
-        const double above_t = std::max(lower_zone[s + 1][c] < 0 ? 0.0 : lower_zone[s + 1][c], kKnotOffset);
-        const double below = HeightAt(s, below_t), above = HeightAt(s + 1, above_t);
-        const double fb = ExactCriterion(s, below, hopf, mixed),
-                     fa = ExactCriterion(s + 1, above, hopf, mixed);
-        if ((fb < 0) != (fa < 0) && fb != 0 && fa != 0)
-          candidates.push_back({below, above, hopf, s, true, mixed});
-      }
-    }
-
+    CheckZoneWidths();
+    AddRowCandidates(candidates);
     for (const Candidate& candidate : candidates) Confirm(candidate);
     std::sort(result_.crossings.begin(), result_.crossings.end(),
               [](const auto& x, const auto& y) { return x.height_m < y.height_m; });
@@ -222,6 +157,90 @@ class Search {
     const double knot = segments_[s].upper_height_m;
     const Matrix5d below = segments_[s].exact_matrix(knot), above = segments_[s + 1].exact_matrix(knot);
     return (below - above).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, below.cwiseAbs().maxCoeff());
+  }
+
+  /// The roots of segment s's two criteria (Hopf, real) isolated on its polynomials: a candidate per
+  /// root interval inside the segment; one at an end where the criterion is ~0 widens that end's zone
+  /// instead (decided with the neighbouring segment). An unresolved cluster uncertifies.
+  void IsolateSegmentRoots(std::size_t s, std::vector<Candidate>& candidates) {
+    for (int c = 0; c < 2; ++c) {
+      const bool hopf = c == 0;
+      const SegmentPolynomials& p = polynomials_[s];
+      lower_zone_[s][c] = (!hopf && segments_[s].real_root_at_lower) ? 0.0 : -1.0;
+      upper_zone_[s][c] = (!hopf && segments_[s].real_root_at_upper) ? 1.0 : -1.0;
+      if (hopf && p.hopf_excluded) continue;
+      const BernsteinPolynomial& poly = hopf ? p.hopf : p.real;
+      const double allowance = kRoundingAllowance * (hopf ? p.hopf_scale : p.real_scale);
+      const RootIsolation isolation = IsolateRoots(poly, allowance);
+      for (const RootInterval& interval : isolation.intervals) {
+        if (interval.lower_t == 0.0 && isolation.sign_at_lower == 0) {
+          lower_zone_[s][c] = interval.upper_t;  // decided with the segment below
+          continue;
+        }
+        if (interval.upper_t == 1.0 && isolation.sign_at_upper == 0) {
+          upper_zone_[s][c] = interval.lower_t;  // decided with the segment above
+          continue;
+        }
+        if (!interval.certified) {
+          Uncertify("an unresolved cluster of roots of " + CriterionName(hopf, s) + " within " +
+                    FormatMetres((interval.upper_t - interval.lower_t) * Length(s)) +
+                    " of H = " + FormatMetres(HeightAt(s, interval.lower_t)) +
+                    (interval.sign_change ? " (an odd number: one crossing reported)"
+                                          : " (an even number: a tangency or a close pair, none reported)"));
+          if (!interval.sign_change) continue;
+        }
+        candidates.push_back(
+            {HeightAt(s, interval.lower_t), HeightAt(s, interval.upper_t), hopf, s, interval.certified});
+      }
+    }
+  }
+
+  /// Where a criterion is ~0 at a table row or an end of the range, the region the isolation left
+  /// undecided there (its zone) is decided by the signs of the exact criterion at its two sides (an
+  /// odd number of roots when they differ; AddRowCandidates). Wider than kKnotOffset, a zone may hide
+  /// an even number: not certified.
+  void CheckZoneWidths() {
+    for (std::size_t s = 0; s < segments_.size(); ++s) {
+      for (int c = 0; c < 2; ++c) {
+        if (lower_zone_[s][c] >= 0) CheckZoneWidth(s, c, lower_zone_[s][c], segments_[s].lower_height_m);
+        if (upper_zone_[s][c] >= 0)
+          CheckZoneWidth(s, c, 1.0 - upper_zone_[s][c], segments_[s].upper_height_m);
+      }
+    }
+  }
+  /// Uncertifies when criterion c's zone of segment s at H = end_m (m), width_t of the segment's
+  /// length, is wider than kKnotOffset.
+  void CheckZoneWidth(std::size_t s, int c, double width_t, double end_m) {
+    if (width_t > kKnotOffset * 1.0000001) {
+      Uncertify(CriterionName(c == 0, s) + " is indistinguishable from 0 within " +
+                FormatMetres(width_t * Length(s)) + " of H = " + FormatMetres(end_m) +
+                "; a close pair of crossings there cannot be excluded");
+    }
+  }
+
+  /// A candidate at each table row where a criterion is ~0 and the exact criterion has opposite signs
+  /// just outside the zones of the two segments (the model continuous across the row).
+  void AddRowCandidates(std::vector<Candidate>& candidates) {
+    for (std::size_t s = 0; s + 1 < segments_.size(); ++s) {
+      int continuous = -1;  // Continuous(s), evaluated where needed (two exact matrices)
+      for (int c = 0; c < 2; ++c) {
+        if (upper_zone_[s][c] < 0 && lower_zone_[s + 1][c] < 0) continue;
+        if (continuous < 0) continuous = Continuous(s) ? 1 : 0;
+        if (continuous == 0) break;
+        const bool hopf = c == 0;
+        // Where a₅ becomes identically 0 at the row, the neutral root arrives there and stays (the
+        // stability comparison reports it); Δ₄ = a₄Δ₃ continues Δ₃ across the row.
+        const bool mixed = segments_[s].deflated != segments_[s + 1].deflated;
+        if (mixed && !hopf) continue;
+        const double below_t = std::min(upper_zone_[s][c] < 0 ? 1.0 : upper_zone_[s][c], 1.0 - kKnotOffset);
+        const double above_t = std::max(lower_zone_[s + 1][c] < 0 ? 0.0 : lower_zone_[s + 1][c], kKnotOffset);
+        const double below = HeightAt(s, below_t), above = HeightAt(s + 1, above_t);
+        const double fb = ExactCriterion(s, below, hopf, mixed),
+                     fa = ExactCriterion(s + 1, above, hopf, mixed);
+        if ((fb < 0) != (fa < 0) && fb != 0 && fa != 0)
+          candidates.push_back({below, above, hopf, s, true, mixed});
+      }
+    }
   }
 
   CharacteristicCoefficients Exact(std::size_t s, double height_m) {
@@ -623,6 +642,9 @@ class Search {
   double wingspan_m_;
   EigenvalueSolver solver_;
   std::vector<SegmentPolynomials> polynomials_;
+  // Per segment and criterion, where the criterion is ~0 at an end (within the rounding allowance,
+  // or exactly, divided out): the t up to which the undecided region reaches (−1: not ~0 there).
+  std::vector<std::array<double, 2>> lower_zone_, upper_zone_;
   CrossingSearchResult result_;
 };
 
@@ -660,11 +682,120 @@ DimensionalDerivatives InterpolatedDerivatives(const DimensionalDerivatives& a,
   return d;
 }
 
-// The segments of an aircraft's model between lower and upper at speed u.
-std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, double speed_mps, double lower,
-                                            double upper, double* density_bound) {
+/// Which coefficients a segment's rows come from: the first row held below the table, the table, the
+/// free-flight row above it.
+enum class CoefficientSource { kHeld, kTable, kFreeFlight };
+
+/// The coefficients at height H (m) of a segment whose rows come from `source`.
+auto CoefficientsOf(const CoefficientTable& table, CoefficientSource source) {
+  return [&table, source](double h) {
+    switch (source) {
+      case CoefficientSource::kHeld:
+        return table.rows().front();
+      case CoefficientSource::kFreeFlight:
+        return table.free_flight();
+      case CoefficientSource::kTable:
+        return table.At(h);
+    }
+    return table.At(h);
+  };
+}
+
+/// The degree bound of each aₖ of a segment whose coefficients C(H) have degree coefficient_degree.
+void SetDegreeBounds(MatrixSegment& segment, int coefficient_degree) {
+  // The expansion of det(sI − A) (hurwitz.cc) makes aₖ a sum of products of at most min(k, 3)
+  // factors ∝ ρ·C(H) (in a₅ the terms with four cancel exactly: Zw·Mh − Zh·Mw is what remains of
+  // Zw·(Mh + Mẇ Zh) − Zh·(Mw + Mẇ Zw)), each of degree 2 (ρ̂) + that of C(H). The Chebyshev tail
+  // of each fit checks the bound.
+  for (int k = 1; k <= 5; ++k) {
+    segment.coefficient_degrees[static_cast<std::size_t>(k)] = std::min(k, 3) * (2 + coefficient_degree);
+  }
+}
+
+/// Where a₅ has a root by construction: column 4 (ΔH) of A, ρ·(Xh, Zh, Mh + ρ·Mẇ·Zh, 0, 0) per unit
+/// density, is zero at an end exactly where Xh = Zh = Mh = 0 there (ρ > 0); zero at both ends, it is
+/// zero throughout (entries affine in the coefficients, `affine`), and the segment is deflated.
+void SetRealRoots(MatrixSegment& segment, const DimensionalDerivatives& d_lo,
+                  const DimensionalDerivatives& d_hi, bool affine) {
+  auto column_zero = [](const DimensionalDerivatives& d) {
+    return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0;
+  };
+  const double lo = segment.lower_height_m, hi = segment.upper_height_m;
+  const bool zero_lo = column_zero(d_lo);
+  const bool zero_hi = column_zero(d_hi);
+  segment.real_root_at_lower = zero_lo;
+  segment.real_root_at_upper = zero_hi;
+  segment.deflated =
+      zero_lo && zero_hi &&
+      (affine || segment.exact_matrix(0.5 * (lo + hi)).col(kDeltaH).cwiseAbs().maxCoeff() == 0.0);
+  if (segment.deflated) segment.real_root_at_lower = segment.real_root_at_upper = false;
+}
+
+/// The segment [lo, hi] (m) of an aircraft's model at speed u (m/s), ρ there rho_lo and rho_hi: its
+/// degree bounds, its polynomial matrix (on ρ̂) and exact one (on ρ), its roots by construction; ρ̂'s
+/// relative error bound raises *density_bound.
+MatrixSegment AircraftSegment(const LongitudinalModel& model, double speed_mps, double lo, double hi,
+                              double rho_lo, double rho_hi, double* density_bound) {
   const CoefficientTable& table = model.table();
   const std::vector<double>& rows = table.heights_m();
+  const int interpolation_degree = table.interpolation() == Interpolation::kPchip ? 3 : 1;
+  const bool h_derivatives = model.options().h_derivatives;
+  MatrixSegment segment;
+  segment.lower_height_m = lo;
+  segment.upper_height_m = hi;
+  CoefficientSource source = CoefficientSource::kTable;
+  if (hi <= rows.front()) source = CoefficientSource::kHeld;
+  if (lo >= rows.back()) source = CoefficientSource::kFreeFlight;
+  const int coefficient_degree = source == CoefficientSource::kTable ? interpolation_degree : 0;
+  SetDegreeBounds(segment, coefficient_degree);
+  const auto coefficients = CoefficientsOf(table, source);
+  const double altitude = model.aircraft().field_elevation_m;
+  const double rho_mid = model.DensityAt(0.5 * (lo + hi));
+  const double bound = QuadraticDensityErrorBound(altitude + lo, hi - lo) / std::min(rho_lo, rho_hi);
+  *density_bound = std::max(*density_bound, bound);
+  const MassGeometry mg = model.mass_geometry();
+  auto matrix = [=](double h, double density) {
+    DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, density, speed_mps);
+    if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
+    return AssembleStateMatrix(d, speed_mps);
+  };
+  // ρ̂: the Lagrange form on t = 0, ½, 1.
+  auto density = [=](double t) {
+    return rho_lo * (2 * t - 1) * (t - 1) + rho_mid * 4 * t * (1 - t) + rho_hi * t * (2 * t - 1);
+  };
+  // Every derivative of Table 1 is ρ times a function of the coefficients that is affine in them.
+  auto unit_derivatives = [&](double h) {
+    DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, 1.0, speed_mps);
+    if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
+    return d;
+  };
+  const DimensionalDerivatives d_lo = unit_derivatives(lo), d_hi = unit_derivatives(hi);
+  if (coefficient_degree <= 1) {
+    // The coefficients are affine in H here: the derivatives per unit density at the two ends,
+    // linearly interpolated and times ρ̂, are the same derivatives up to rounding (which the fit's
+    // faithfulness check against the exact model covers), without a table lookup per node.
+    segment.polynomial_matrix = [=](double h) {
+      const double t = (h - lo) / (hi - lo);
+      return AssembleStateMatrix(InterpolatedDerivatives(d_lo, d_hi, t, density(t)), speed_mps);
+    };
+  } else {
+    segment.polynomial_matrix = [=](double h) { return matrix(h, density((h - lo) / (hi - lo))); };
+  }
+  const LongitudinalModel* m = &model;
+  // The density at the ends is the knots' (the ISA's pow is most of an exact evaluation).
+  segment.exact_matrix = [=](double h) {
+    const double density = h == lo ? rho_lo : (h == hi ? rho_hi : m->DensityAt(h));
+    return matrix(h, density);
+  };
+  SetRealRoots(segment, d_lo, d_hi, source != CoefficientSource::kTable || interpolation_degree == 1);
+  return segment;
+}
+
+/// The segments of an aircraft's model between lower and upper (m) at speed u (m/s), split at the
+/// table's rows; *density_bound the largest relative error bound of their ρ̂.
+std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, double speed_mps, double lower,
+                                            double upper, double* density_bound) {
+  const std::vector<double>& rows = model.table().heights_m();
   std::vector<double> knots{lower};
   for (double h : rows) {
     if (h > lower && h < upper) knots.push_back(h);
@@ -672,93 +803,12 @@ std::vector<MatrixSegment> AircraftSegments(const LongitudinalModel& model, doub
   knots.push_back(upper);
   std::vector<double> knot_density(knots.size());
   for (std::size_t i = 0; i < knots.size(); ++i) knot_density[i] = model.DensityAt(knots[i]);
-  const int interpolation_degree = table.interpolation() == Interpolation::kPchip ? 3 : 1;
-  const bool h_derivatives = model.options().h_derivatives;
   *density_bound = 0;
   std::vector<MatrixSegment> segments;
   segments.reserve(knots.size() - 1);
   for (std::size_t i = 0; i + 1 < knots.size(); ++i) {
-    MatrixSegment segment;
-    const double lo = knots[i], hi = knots[i + 1];
-    segment.lower_height_m = lo;
-    segment.upper_height_m = hi;
-    // Which coefficients apply: the first row held below the table, the free-flight row above it.
-    enum class Source { kHeld, kTable, kFreeFlight } source = Source::kTable;
-    if (hi <= rows.front()) source = Source::kHeld;
-    if (lo >= rows.back()) source = Source::kFreeFlight;
-    const int coefficient_degree = source == Source::kTable ? interpolation_degree : 0;
-    // The expansion of det(sI − A) (hurwitz.cc) makes aₖ a sum of products of at most min(k, 3)
-    // factors ∝ ρ·C(H) (in a₅ the terms with four cancel exactly: Zw·Mh − Zh·Mw is what remains of
-    // Zw·(Mh + Mẇ Zh) − Zh·(Mw + Mẇ Zw)), each of degree 2 (ρ̂) + that of C(H). The Chebyshev tail
-    // of each fit checks the bound.
-    for (int k = 1; k <= 5; ++k) {
-      segment.coefficient_degrees[static_cast<std::size_t>(k)] = std::min(k, 3) * (2 + coefficient_degree);
-    }
-    auto coefficients = [&table, source](double h) {
-      switch (source) {
-        case Source::kHeld:
-          return table.rows().front();
-        case Source::kFreeFlight:
-          return table.free_flight();
-        case Source::kTable:
-          return table.At(h);
-      }
-      return table.At(h);
-    };
-    const double altitude = model.aircraft().field_elevation_m;
-    const double rho_lo = knot_density[i], rho_mid = model.DensityAt(0.5 * (lo + hi)),
-                 rho_hi = knot_density[i + 1];
-    const double bound = QuadraticDensityErrorBound(altitude + lo, hi - lo) / std::min(rho_lo, rho_hi);
-    *density_bound = std::max(*density_bound, bound);
-    const MassGeometry mg = model.mass_geometry();
-    auto matrix = [=](double h, double density) {
-      DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, density, speed_mps);
-      if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
-      return AssembleStateMatrix(d, speed_mps);
-    };
-    // ρ̂: the Lagrange form on t = 0, ½, 1.
-    auto density = [=](double t) {
-      return rho_lo * (2 * t - 1) * (t - 1) + rho_mid * 4 * t * (1 - t) + rho_hi * t * (2 * t - 1);
-    };
-    // Every derivative of Table 1 is ρ times a function of the coefficients that is affine in them.
-    auto unit_derivatives = [&](double h) {
-      DimensionalDerivatives d = ComputeDerivatives(coefficients(h), mg, 1.0, speed_mps);
-      if (!h_derivatives) d.Xh = d.Zh = d.Mh = 0.0;
-      return d;
-    };
-    const DimensionalDerivatives d_lo = unit_derivatives(lo), d_hi = unit_derivatives(hi);
-    if (coefficient_degree <= 1) {
-      // The coefficients are affine in H here: the derivatives per unit density at the two ends,
-      // linearly interpolated and times ρ̂, are the same derivatives up to rounding (which the fit's
-      // faithfulness check against the exact model covers), without a table lookup per node.
-      segment.polynomial_matrix = [=](double h) {
-        const double t = (h - lo) / (hi - lo);
-        return AssembleStateMatrix(InterpolatedDerivatives(d_lo, d_hi, t, density(t)), speed_mps);
-      };
-    } else {
-      segment.polynomial_matrix = [=](double h) { return matrix(h, density((h - lo) / (hi - lo))); };
-    }
-    const LongitudinalModel* m = &model;
-    // The density at the ends is the knots' (the ISA's pow is most of an exact evaluation).
-    segment.exact_matrix = [=](double h) {
-      const double density = h == lo ? rho_lo : (h == hi ? rho_hi : m->DensityAt(h));
-      return matrix(h, density);
-    };
-    // Column 4 (ΔH) of A, ρ·(Xh, Zh, Mh + ρ·Mẇ·Zh, 0, 0) per unit density, is zero at an end exactly
-    // where Xh = Zh = Mh = 0 there (ρ > 0); zero at both ends, it is zero throughout (entries affine
-    // in the coefficients).
-    auto column_zero = [](const DimensionalDerivatives& d) {
-      return d.Xh == 0.0 && d.Zh == 0.0 && d.Mh == 0.0;
-    };
-    const bool zero_lo = column_zero(d_lo);
-    const bool zero_hi = column_zero(d_hi);
-    segment.real_root_at_lower = zero_lo;
-    segment.real_root_at_upper = zero_hi;
-    segment.deflated = zero_lo && zero_hi &&
-                       (source != Source::kTable || interpolation_degree == 1 ||
-                        segment.exact_matrix(0.5 * (lo + hi)).col(kDeltaH).cwiseAbs().maxCoeff() == 0.0);
-    if (segment.deflated) segment.real_root_at_lower = segment.real_root_at_upper = false;
-    segments.push_back(std::move(segment));
+    segments.push_back(AircraftSegment(model, speed_mps, knots[i], knots[i + 1], knot_density[i],
+                                       knot_density[i + 1], density_bound));
   }
   return segments;
 }
@@ -822,6 +872,86 @@ CrossingSearchResult CrossingSearch(const std::vector<MatrixSegment>& segments, 
   return Search(segments, wingspan_m, solver).Run();
 }
 
+namespace {
+
+/// The certificate of a certified Hurwitz search over `segments` segments: the range, the isolation
+/// and the bound on ρ̂'s relative error.
+std::string HurwitzCertificate(const BoundaryResult& result, std::size_t segments) {
+  // std::to_chars, not printf: the formatting was 3 % of a search.
+  auto general = [](double value, int precision) {
+    char text[32];
+    const auto end =
+        std::to_chars(text, text + sizeof text, value, std::chars_format::general, precision).ptr;
+    return std::string(text, end);
+  };
+  return "every root of Delta4 and a5 in " + general(result.lower_height_m, 7) + " m to " +
+         general(result.upper_height_m, 7) + " m isolated on " + std::to_string(segments) +
+         " segments (Descartes' rule on the Bernstein basis); rho(H) by its quadratic "
+         "interpolant per segment, relative error <= " +
+         general(result.density_interpolation_bound, 2);
+}
+
+/// The Hurwitz search into `result`: its counts, certificate and crossings (highest first, each
+/// bracket at most the tolerance), and whether the range is stable or unstable throughout; false
+/// when the state matrix is not finite somewhere (result.reason says where).
+bool HurwitzSearch(const LongitudinalModel& model, double speed_mps, const BoundaryOptions& options,
+                   BoundaryResult& result, bool& all_stable, bool& all_unstable) {
+  const std::vector<MatrixSegment> segments = AircraftSegments(
+      model, speed_mps, result.lower_height_m, result.upper_height_m, &result.density_interpolation_bound);
+  result.segments = static_cast<int>(segments.size());
+  CrossingSearchResult search =
+      CrossingSearch(segments, model.aircraft().wingspan_m, options.eigenvalue_solver);
+  result.polynomial_evaluations = search.polynomial_evaluations;
+  result.margin_evaluations = search.eigen_analyses;
+  if (!search.finite) {
+    result.reason = search.non_finite_reason;
+    result.certificate = "none: " + search.non_finite_reason;
+    return false;
+  }
+  result.certified = search.certified;
+  result.certificate = search.certified ? HurwitzCertificate(result, segments.size())
+                                        : "not certified: " + search.uncertified_reason;
+  for (auto& crossing : search.crossings) {
+    if (options.tolerance_m < crossing.bracket_width_m) crossing.bracket_width_m = options.tolerance_m;
+  }
+  result.crossings.assign(search.crossings.rbegin(), search.crossings.rend());
+  all_stable = result.crossings.empty() && search.stable_at_lower;
+  all_unstable = result.crossings.empty() && !search.stable_at_lower;
+  if (!result.crossings.empty()) {
+    all_stable = std::all_of(result.crossings.begin(), result.crossings.end(),
+                             [](const auto& c) { return c.stable_above && c.stable_below; });
+    all_unstable = std::all_of(result.crossings.begin(), result.crossings.end(),
+                               [](const auto& c) { return !c.stable_above && !c.stable_below; });
+  }
+  return true;
+}
+
+/// H*: the highest crossing unstable below and stable above, with every crossing's H/b; else the
+/// reason there is none (the range stable or unstable throughout, or neither).
+void SetBoundaryHeight(double wingspan_m, bool all_stable, bool all_unstable, BoundaryResult& result) {
+  for (auto& crossing : result.crossings) crossing.height_over_span = crossing.height_m / wingspan_m;
+  for (const auto& crossing : result.crossings) {
+    if (crossing.stable_above && !crossing.stable_below) {
+      result.height_m = crossing.height_m;
+      result.height_over_span = crossing.height_m / wingspan_m;
+      break;
+    }
+  }
+  if (!result.height_m) {
+    const std::string range =
+        FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
+    if (all_stable) {
+      result.reason = "stable at every height from " + range;
+    } else if (all_unstable) {
+      result.reason = "unstable at every height from " + range;
+    } else {
+      result.reason = "no height in " + range + " has unstable below and stable above";
+    }
+  }
+}
+
+}  // namespace
+
 BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps,
                             const BoundaryOptions& options) {
   const Aircraft& aircraft = model.aircraft();
@@ -841,68 +971,10 @@ BoundaryResult FindBoundary(const LongitudinalModel& model, double speed_mps,
     if (margins.empty()) return result;
     all_stable = std::all_of(margins.begin(), margins.end(), [](double s) { return s < 0; });
     all_unstable = std::all_of(margins.begin(), margins.end(), [](double s) { return s >= 0; });
-  } else {
-    const std::vector<MatrixSegment> segments = AircraftSegments(
-        model, speed_mps, result.lower_height_m, result.upper_height_m, &result.density_interpolation_bound);
-    result.segments = static_cast<int>(segments.size());
-    CrossingSearchResult search = CrossingSearch(segments, aircraft.wingspan_m, options.eigenvalue_solver);
-    result.polynomial_evaluations = search.polynomial_evaluations;
-    result.margin_evaluations = search.eigen_analyses;
-    if (!search.finite) {
-      result.reason = search.non_finite_reason;
-      result.certificate = "none: " + search.non_finite_reason;
-      return result;
-    }
-    result.certified = search.certified;
-    if (search.certified) {
-      // std::to_chars, not printf: the formatting was 3 % of a search.
-      auto general = [](double value, int precision) {
-        char text[32];
-        const auto end =
-            std::to_chars(text, text + sizeof text, value, std::chars_format::general, precision).ptr;
-        return std::string(text, end);
-      };
-      result.certificate = "every root of Delta4 and a5 in " + general(result.lower_height_m, 7) + " m to " +
-                           general(result.upper_height_m, 7) + " m isolated on " +
-                           std::to_string(segments.size()) +
-                           " segments (Descartes' rule on the Bernstein basis); rho(H) by its quadratic "
-                           "interpolant per segment, relative error <= " +
-                           general(result.density_interpolation_bound, 2);
-    } else {
-      result.certificate = "not certified: " + search.uncertified_reason;
-    }
-    for (auto& crossing : search.crossings) {
-      if (options.tolerance_m < crossing.bracket_width_m) crossing.bracket_width_m = options.tolerance_m;
-    }
-    result.crossings.assign(search.crossings.rbegin(), search.crossings.rend());
-    all_stable = result.crossings.empty() && search.stable_at_lower;
-    all_unstable = result.crossings.empty() && !search.stable_at_lower;
-    if (!result.crossings.empty()) {
-      all_stable = std::all_of(result.crossings.begin(), result.crossings.end(),
-                               [](const auto& c) { return c.stable_above && c.stable_below; });
-      all_unstable = std::all_of(result.crossings.begin(), result.crossings.end(),
-                                 [](const auto& c) { return !c.stable_above && !c.stable_below; });
-    }
+  } else if (!HurwitzSearch(model, speed_mps, options, result, all_stable, all_unstable)) {
+    return result;
   }
-  for (auto& crossing : result.crossings) crossing.height_over_span = crossing.height_m / aircraft.wingspan_m;
-  for (const auto& crossing : result.crossings) {
-    if (crossing.stable_above && !crossing.stable_below) {
-      result.height_m = crossing.height_m;
-      result.height_over_span = crossing.height_m / aircraft.wingspan_m;
-      break;
-    }
-  }
-  if (!result.height_m) {
-    const std::string range =
-        FormatMetres(result.lower_height_m) + " to " + FormatMetres(result.upper_height_m);
-    if (all_stable) {
-      result.reason = "stable at every height from " + range;
-    } else if (all_unstable) {
-      result.reason = "unstable at every height from " + range;
-    } else {
-      result.reason = "no height in " + range + " has unstable below and stable above";
-    }
-  }
+  SetBoundaryHeight(aircraft.wingspan_m, all_stable, all_unstable, result);
   return result;
 }
 

@@ -124,23 +124,21 @@ ModeProperties DescribeMode(std::complex<double> lambda) {
   return mode;
 }
 
-ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
-  ModalAnalysis result;
-  if (!A.allFinite()) {
-    result.finite = false;
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    result.eigenvalues.fill({nan, nan});
-    result.stability_margin_per_s = nan;
-    return result;
-  }
-  EigenvalueReport report;
-  const std::array<std::complex<double>, 5> values = Eigenvalues5(A, solver, &report);
-  result.solver_fallback = report.solver_fallback;
+namespace {
 
-  // One representative (Im > 0) per complex pair, and the real roots (fixed storage: no allocation).
+/// The roots of a spectrum in fixed storage (no allocation): the real ones by descending magnitude,
+/// and one representative (Im > 0) per complex pair, by descending |Im λ|.
+struct SortedRoots {
   std::array<std::complex<double>, 2> pair_storage;
   std::array<double, 5> real_storage;
   std::size_t pair_count = 0, real_count = 0;
+  std::span<const double> reals() const { return {real_storage.data(), real_count}; }
+  std::span<const std::complex<double>> pairs() const { return {pair_storage.data(), pair_count}; }
+};
+
+SortedRoots SortRoots(const std::array<std::complex<double>, 5>& values) {
+  SortedRoots roots;
+  auto& [pair_storage, real_storage, pair_count, real_count] = roots;
   for (const std::complex<double>& z : values) {
     if (IsReal(z)) {
       real_storage[real_count++] = z.real();
@@ -148,8 +146,7 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
       pair_storage[pair_count++] = z;
     }
   }
-  // Real roots by descending magnitude; pairs by descending |Im λ| (insertion sorts of ≤ 5 entries,
-  // stable as std::stable_sort would be).
+  // Insertion sorts of ≤ 5 entries, stable as std::stable_sort would be.
   for (std::size_t i = 1; i < real_count; ++i) {
     for (std::size_t j = i; j > 0 && std::abs(real_storage[j]) > std::abs(real_storage[j - 1]); --j) {
       std::swap(real_storage[j], real_storage[j - 1]);
@@ -158,9 +155,14 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
   if (pair_count == 2 && std::abs(pair_storage[1].imag()) > std::abs(pair_storage[0].imag())) {
     std::swap(pair_storage[0], pair_storage[1]);
   }
-  const std::span<const double> reals(real_storage.data(), real_count);
-  const std::span<const std::complex<double>> pairs(pair_storage.data(), pair_count);
+  return roots;
+}
 
+/// The roots in result.eigenvalues' slots (short period 0–1, phugoid 2–3, height 4) and the
+/// classification they make (AnalyzeModes' rule, modal_analysis.h).
+void PlaceModes(const SortedRoots& roots, ModalAnalysis& result) {
+  const std::span<const double> reals = roots.reals();
+  const std::span<const std::complex<double>> pairs = roots.pairs();
   auto put_pair = [&](int slot, std::complex<double> z) {
     result.eigenvalues[slot] = z;
     result.eigenvalues[slot + 1] = std::conj(z);
@@ -191,17 +193,38 @@ ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
     put_split(2, reals[2], reals[3]);
     result.eigenvalues[4] = reals[4];
   }
+}
 
-  result.short_period = DescribeMode(result.eigenvalues[0]);
-  result.phugoid = DescribeMode(result.eigenvalues[2]);
-  result.height = DescribeMode(result.eigenvalues[4]);
-
+/// σ, 1/s: the largest Re λ of the eigenvalues that are not neutral (−∞ when every one is).
+double MarginOf(const std::array<std::complex<double>, 5>& eigenvalues) {
   double sigma = -std::numeric_limits<double>::infinity();
-  for (const auto& z : result.eigenvalues) {
+  for (const auto& z : eigenvalues) {
     const bool neutral = IsReal(z) && std::abs(z.real()) <= kNeutralEigenvalueTolerance_per_s &&
                          std::abs(z) <= kNeutralEigenvalueTolerance_per_s;
     if (!neutral) sigma = std::max(sigma, z.real());
   }
+  return sigma;
+}
+
+}  // namespace
+
+ModalAnalysis AnalyzeModes(const Matrix5d& A, EigenvalueSolver solver) {
+  ModalAnalysis result;
+  if (!A.allFinite()) {
+    result.finite = false;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    result.eigenvalues.fill({nan, nan});
+    result.stability_margin_per_s = nan;
+    return result;
+  }
+  EigenvalueReport report;
+  const std::array<std::complex<double>, 5> values = Eigenvalues5(A, solver, &report);
+  result.solver_fallback = report.solver_fallback;
+  PlaceModes(SortRoots(values), result);
+  result.short_period = DescribeMode(result.eigenvalues[0]);
+  result.phugoid = DescribeMode(result.eigenvalues[2]);
+  result.height = DescribeMode(result.eigenvalues[4]);
+  const double sigma = MarginOf(result.eigenvalues);
   result.stability_margin_per_s = sigma;
   result.stable = sigma < 0.0;
   return result;

@@ -294,6 +294,330 @@ struct FailureRecord {
   }
 };
 
+/// The level a conditional step builds: its number, the threshold its samples stay at or below,
+/// its chains' layout and its values g by position.
+struct ChainLevel {
+  int number = 0;
+  double threshold = 0;
+  ChainLayout layout;
+  std::vector<double> g;
+};
+
+/// The level threshold of values g: the midpoint of the N_s-th and (N_s + 1)-th smallest (NaN as
+/// +infinity), the N_s-th alone when the next is not finite. Fewer than N_s samples with a value (the
+/// rest NaN): +infinity, and no conditional level can be formed (kTooManyFailedEvaluations).
+double LevelThreshold(const std::vector<double>& g, std::int64_t ns) {
+  std::vector<std::int64_t> order(g.size());
+  std::iota(order.begin(), order.end(), std::int64_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::int64_t a, std::int64_t b) { return Ordered(g[a]) < Ordered(g[b]); });
+  const double inner = Ordered(g[order[ns - 1]]), outer = Ordered(g[order[ns]]);
+  return std::isfinite(outer) ? (inner + outer) / 2 : inner;
+}
+
+/// One subset simulation, stage by stage. Memory: the level's values (N), the seeds of the next level
+/// and the chains' states (N_s points each) and one batch of candidates, whatever N: a level never
+/// holds its N points.
+class SubsetRun {
+ public:
+  SubsetRun(const LimitStateBatch& limit_state, int dimension, const SubsetOptions& options)
+      : limit_state_(limit_state),
+        dimension_(dimension),
+        options_(options),
+        n_(options.samples_per_level),
+        ns_(SeedCount(options)),
+        d_(static_cast<std::size_t>(dimension)),
+        g_(static_cast<std::size_t>(n_)),
+        selection_(ns_, d_),
+        next_selection_(ns_, d_),
+        lambda_(options.initial_scale),
+        state_(static_cast<std::size_t>(ns_) * d_),
+        state_tag_(static_cast<std::size_t>(ns_)),
+        state_ancestor_(static_cast<std::size_t>(ns_)) {
+    result_.dimension = dimension;
+    failures_seen_.Reset(d_);
+  }
+
+  /// Level 1, then a conditional level after each level until N_s samples fail or the level cap.
+  SubsetResult Run() {
+    SampleMonteCarloLevel();
+    for (int level = 1;; ++level) {
+      SubsetLevel record = SampledRecord();
+      const auto failures = std::count_if(g_.begin(), g_.end(), [](double v) { return v <= 0; });
+      const bool last = failures >= ns_ || level == options_.max_levels;
+      const double threshold = last ? 0 : LevelThreshold(g_, ns_);
+      MeasureLevel(level, threshold, record);
+      if (!std::isfinite(threshold)) {
+        result_.status = SubsetResult::Status::kTooManyFailedEvaluations;
+        result_.probability = std::numeric_limits<double>::quiet_NaN();
+        break;
+      }
+      if (last) {
+        Conclude(failures, record.conditional_probability);
+        break;
+      }
+      product_ *= record.conditional_probability;
+      const std::vector<std::int64_t> seeds = ShuffledSeeds(level);
+      // Level + 1: N_s chains, chain c of length layout.length[c], its seed at step 0.
+      ChainLevel next{level + 1, threshold, MakeLayout(n_, ns_), std::vector<double>(g_.size())};
+      StartChains(next, seeds);
+      RunChains(next);
+      std::swap(selection_, next_selection_);
+      g_.swap(next.g);
+      layout_ = std::move(next.layout);
+    }
+    CombineLevels();
+    return std::move(result_);
+  }
+
+ private:
+  /// values_ = g at the batch candidates_ (tags batch_tags_); NaN where the limit state sets none.
+  void Evaluate() {
+    std::fill(values_.begin(), values_.end(), std::numeric_limits<double>::quiet_NaN());
+    limit_state_(PointBatch{candidates_, batch_tags_, dimension_}, values_);
+  }
+
+  /// Level 1: plain Monte Carlo, sample i from the stream (level 1, chain i, step 0), in batches of
+  /// N_s (the batches change nothing: every sample is its own stream).
+  void SampleMonteCarloLevel() {
+    for (std::int64_t first = 0; first < n_; first += ns_) {
+      const std::int64_t batch = std::min(ns_, n_ - first);
+      candidates_.resize(static_cast<std::size_t>(batch) * d_);
+      values_.resize(static_cast<std::size_t>(batch));
+      batch_tags_.resize(static_cast<std::size_t>(batch));
+      tbb::parallel_for(std::int64_t{0}, batch, [&](std::int64_t b) {
+        Stream(options_.seed, 1, static_cast<std::uint64_t>(first + b), 0)
+            .Normals(std::span<double>(candidates_).subspan(b * d_, d_));
+        batch_tags_[b] = EvaluationTag{1, static_cast<int>(first + b), 0};
+      });
+      Evaluate();
+      for (std::int64_t b = 0; b < batch; ++b) {
+        g_[first + b] = values_[b];
+        selection_.Offer(SampleKey{values_[b], first + b, batch_tags_[b], first + b}, &candidates_[b * d_]);
+        failures_seen_.Offer(&candidates_[b * d_], d_, values_[b], batch_tags_[b]);
+      }
+    }
+    layout_ = MakeLayout(n_, n_);  // level 1: N chains of one sample, so gamma = 0
+    level_evaluations_ = n_;
+    level_failed_ = std::count_if(g_.begin(), g_.end(), [](double v) { return std::isnan(v); });
+    level_ancestors_ = n_;
+  }
+
+  /// The current level's record as its sampling left it (evaluations, failed ones, acceptance rate,
+  /// scale lambda, ancestors), its evaluations counted into the result.
+  SubsetLevel SampledRecord() {
+    SubsetLevel record;
+    record.evaluations = level_evaluations_;
+    record.failed_evaluations = level_failed_;
+    record.acceptance_rate = level_acceptance_;
+    record.scale = level_scale_;
+    record.ancestors = level_ancestors_;
+    result_.evaluations += record.evaluations;
+    result_.failed_evaluations += record.failed_evaluations;
+    return record;
+  }
+
+  /// The level's threshold, P_j (the fraction of its N values at or below it), gamma_j and delta_j
+  /// into `record`, which joins the result.
+  void MeasureLevel(int level, double threshold, SubsetLevel& record) {
+    std::vector<char> hit(static_cast<std::size_t>(n_));
+    for (std::int64_t i = 0; i < n_; ++i) hit[i] = g_[i] <= threshold ? 1 : 0;
+    const auto hits = std::count(hit.begin(), hit.end(), char{1});
+    record.threshold = threshold;
+    record.conditional_probability = static_cast<double>(hits) / static_cast<double>(n_);
+    record.correlation_factor =
+        level == 1 ? 0 : CorrelationFactor(hit, layout_, record.conditional_probability);
+    record.coefficient_of_variation = LevelCov(record.conditional_probability, n_, record.correlation_factor);
+    result_.levels.push_back(record);
+    deltas_.push_back(record.coefficient_of_variation);
+  }
+
+  /// The last level: converged (N_s or more of its samples fail) or at the level cap (then the bound
+  /// P < prod P_j * N_s / N); P = prod P_j; the failing samples met at this level.
+  void Conclude(std::int64_t failures, double conditional_probability) {
+    result_.status = failures >= ns_ ? SubsetResult::Status::kConverged : SubsetResult::Status::kLevelCap;
+    result_.probability = product_ * conditional_probability;
+    if (result_.status == SubsetResult::Status::kLevelCap) {
+      result_.upper_bound = product_ * static_cast<double>(ns_) / static_cast<double>(n_);
+    }
+    result_.failure_count = failures_seen_.count;
+    if (failures_seen_.count > 0) {
+      result_.failure_mean = failures_seen_.sum;
+      for (double& v : result_.failure_mean) v /= static_cast<double>(failures_seen_.count);
+      result_.most_likely_failure = failures_seen_.nearest;
+      result_.most_likely_failure_tag = failures_seen_.nearest_tag;
+      result_.most_likely_failure_value = failures_seen_.nearest_g;
+    }
+  }
+
+  /// Seeds: the N_s smallest values (slots of selection_), in an order shuffled by (seed, level + 1)
+  /// so that the groups of the adaptation are not sorted by g (Papaioannou et al. 2015).
+  std::vector<std::int64_t> ShuffledSeeds(int level) const {
+    const std::vector<std::int64_t> sorted = selection_.Sorted();
+    GESWEEP_DEMAND(static_cast<std::int64_t>(sorted.size()) == ns_);
+    std::vector<std::int64_t> seeds(sorted);
+    const Stream shuffle(options_.seed, level + 1, kSeedShuffleChain, 0);
+    for (std::int64_t i = ns_ - 1; i > 0; --i) {
+      const auto j = static_cast<std::int64_t>(
+          shuffle.Uniform(kPurposeUniform, static_cast<std::uint64_t>(i)) * static_cast<double>(i + 1) -
+          0x1.0p-60);
+      std::swap(seeds[i], seeds[std::clamp<std::int64_t>(j, 0, i)]);
+    }
+    return seeds;
+  }
+
+  /// Chain c of `next` starts at seed c (its point, value, tag and ancestor), its sample at step 0
+  /// offered to the next level's selection and failure record; the distinct ancestors counted.
+  void StartChains(ChainLevel& next, const std::vector<std::int64_t>& seeds) {
+    next_selection_.Clear();
+    failures_seen_.Reset(d_);
+    for (std::int64_t c = 0; c < ns_; ++c) {
+      const std::int64_t at = next.layout.offset[c];
+      std::copy(selection_.point(seeds[c]), selection_.point(seeds[c]) + d_, state_.begin() + c * d_);
+      next.g[at] = selection_.key(seeds[c]).g;
+      state_tag_[c] = selection_.key(seeds[c]).tag;
+      state_ancestor_[c] = selection_.key(seeds[c]).ancestor;
+      next_selection_.Offer(SampleKey{next.g[at], at, state_tag_[c], state_ancestor_[c]}, &state_[c * d_]);
+      failures_seen_.Offer(&state_[c * d_], d_, next.g[at], state_tag_[c]);
+    }
+    std::vector<std::int64_t> distinct(state_ancestor_);
+    std::sort(distinct.begin(), distinct.end());
+    level_ancestors_ = std::unique(distinct.begin(), distinct.end()) - distinct.begin();
+  }
+
+  /// The chains of `next` in options_.adaptation_groups groups, lambda adapted after each group
+  /// towards the target acceptance; the level's evaluations, acceptance rate and final scale.
+  void RunChains(ChainLevel& next) {
+    std::int64_t accepted_total = 0, proposed_total = 0;
+    level_evaluations_ = 0;
+    level_failed_ = 0;
+    const int groups = options_.adaptation_groups;
+    for (int group = 0; group < groups; ++group) {
+      std::int64_t accepted = 0, proposed = 0;
+      RunGroup(next, ns_ * group / groups, ns_ * (group + 1) / groups, accepted, proposed);
+      if (proposed > 0) {
+        const double rate = static_cast<double>(accepted) / static_cast<double>(proposed);
+        lambda_ = std::exp(std::log(lambda_) + (rate - options_.target_acceptance) / std::sqrt(group + 1.0));
+      }
+      accepted_total += accepted;
+      proposed_total += proposed;
+    }
+    level_acceptance_ =
+        proposed_total > 0 ? static_cast<double>(accepted_total) / static_cast<double>(proposed_total) : 0;
+    level_scale_ = lambda_;
+  }
+
+  /// The chains [first, end) of `next`, stepped together (one batch of candidates a step) until each
+  /// has its length; their accepted and proposed moves counted.
+  void RunGroup(ChainLevel& next, std::int64_t first, std::int64_t end, std::int64_t& accepted,
+                std::int64_t& proposed) {
+    // One scale for every component. Papaioannou et al. (2015) scale component k by the seeds'
+    // standard deviation s_k; but s_k is a function of the seeds, so the kernel then depends on the
+    // chains' own starting states: in 1000 dimensions that coupling pulled the chi-square level's
+    // chains towards the threshold and biased each conditional probability by about -12 %
+    // (docs/dispersion.md). A scalar lambda does not see the seeds.
+    const double sigma = std::min(lambda_, 1.0), rho = std::sqrt(1 - sigma * sigma);
+    for (std::int64_t step = 1;; ++step) {
+      active_.clear();
+      for (std::int64_t c = first; c < end; ++c) {
+        if (step < next.layout.length[c]) active_.push_back(c);
+      }
+      if (active_.empty()) break;
+      Propose(next.number, step, sigma, rho);
+      Evaluate();
+      level_evaluations_ += static_cast<std::int64_t>(active_.size());
+      Accept(next, step, accepted, proposed);
+    }
+  }
+
+  /// A candidate from each active chain's point, from its stream (level, chain, step): Crank-Nicolson
+  /// rho * x + sigma * v, or the modified Metropolis component by component.
+  void Propose(int level, std::int64_t step, double sigma, double rho) {
+    const auto batch = active_.size();
+    candidates_.resize(batch * d_);
+    values_.resize(batch);
+    batch_tags_.resize(batch);
+    tbb::parallel_for(std::size_t{0}, batch, [&](std::size_t b) {
+      const std::int64_t c = active_[b];
+      const double* current = &state_[c * d_];
+      std::span<double> v(candidates_.data() + b * d_, d_);
+      const Stream stream(options_.seed, level, static_cast<std::uint64_t>(c), static_cast<int>(step));
+      stream.Normals(v);
+      if (options_.sampler == ConditionalSampler::kCrankNicolson) {
+        for (std::size_t k = 0; k < d_; ++k) v[k] = rho * current[k] + sigma * v[k];
+      } else {
+        for (std::size_t k = 0; k < d_; ++k) {
+          const double proposal = current[k] + sigma * v[k];
+          const double ratio = std::exp(-0.5 * (proposal * proposal - current[k] * current[k]));
+          v[k] = stream.Uniform(kPurposeUniform, k) <= ratio ? proposal : current[k];
+        }
+      }
+      batch_tags_[b] = EvaluationTag{level, static_cast<int>(c), static_cast<int>(step)};
+    });
+  }
+
+  /// Each active chain moves to its candidate when g there is at or below the threshold (NaN: it
+  /// stays), and its sample at this step is offered to the next level's selection and failure record.
+  void Accept(ChainLevel& next, std::int64_t step, std::int64_t& accepted, std::int64_t& proposed) {
+    for (std::size_t b = 0; b < active_.size(); ++b) {
+      const std::int64_t c = active_[b];
+      const std::int64_t here = next.layout.offset[c] + step;
+      const bool accept = values_[b] <= next.threshold;  // false for NaN
+      if (accept) {
+        std::copy(candidates_.begin() + b * d_, candidates_.begin() + (b + 1) * d_, state_.begin() + c * d_);
+        next.g[here] = values_[b];
+        state_tag_[c] = batch_tags_[b];
+      } else {
+        next.g[here] = next.g[here - 1];
+      }
+      next_selection_.Offer(SampleKey{next.g[here], here, state_tag_[c], state_ancestor_[c]},
+                            &state_[c * d_]);
+      failures_seen_.Offer(&state_[c * d_], d_, next.g[here], state_tag_[c]);
+      // A NaN candidate is a failed evaluation of this level even though the chain stays put.
+      if (std::isnan(values_[b])) ++level_failed_;
+      accepted += accept ? 1 : 0;
+      ++proposed;
+    }
+  }
+
+  /// P's coefficient of variation from the levels' delta_j: sqrt(sum delta_j^2) (levels taken as
+  /// uncorrelated), the fully correlated bound sum delta_j, and the lognormal 95 % interval.
+  void CombineLevels() {
+    double sum2 = 0, sum = 0;
+    for (const double delta : deltas_) {
+      sum2 += delta * delta;
+      sum += delta;
+    }
+    result_.coefficient_of_variation = std::sqrt(sum2);
+    result_.coefficient_of_variation_upper = sum;
+    LognormalInterval95(result_.probability, result_.coefficient_of_variation, result_.interval_95_low,
+                        result_.interval_95_high);
+  }
+
+  const LimitStateBatch& limit_state_;
+  const int dimension_;
+  const SubsetOptions& options_;
+  const std::int64_t n_;   ///< N, samples per level
+  const std::int64_t ns_;  ///< N_s = N * p0, the seeds (chains) of a conditional level
+  const std::size_t d_;
+  SubsetResult result_;
+  std::vector<double> g_;  ///< the current level's values, by position
+  SeedSelection selection_, next_selection_;
+  FailureRecord failures_seen_;
+  std::vector<double> candidates_, values_;  ///< one batch: its points (row-major) and g there
+  std::vector<EvaluationTag> batch_tags_;
+  std::vector<std::int64_t> active_;  ///< the chains of a step's batch
+  ChainLayout layout_;                ///< the current level's chains
+  double lambda_;
+  double level_acceptance_ = 1, level_scale_ = 0;
+  std::int64_t level_evaluations_ = 0, level_failed_ = 0, level_ancestors_ = 0;
+  double product_ = 1;  ///< prod of the previous levels' P_j
+  std::vector<double> deltas_;
+  std::vector<double> state_;                 ///< the chains' current points
+  std::vector<EvaluationTag> state_tag_;      ///< the evaluations that gave them
+  std::vector<std::int64_t> state_ancestor_;  ///< their Monte Carlo ancestors
+};
+
 }  // namespace
 
 SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimension,
@@ -302,234 +626,7 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
   ValidateSubsetOptions(options, source);
   if (dimension < 1) throw InputError(source, "dimension", std::to_string(dimension), "an integer >= 1");
   GESWEEP_DEMAND(static_cast<bool>(limit_state));
-
-  const std::int64_t n = options.samples_per_level;
-  const std::int64_t ns = SeedCount(options);
-  const auto d = static_cast<std::size_t>(dimension);
-  SubsetResult result;
-  result.dimension = dimension;
-
-  // Memory: the level's values (N), the seeds of the next level and the chains' states (N_s points
-  // each) and one batch of candidates, whatever N: a level never holds its N points.
-  std::vector<double> g(static_cast<std::size_t>(n));
-  SeedSelection selection(ns, d), next_selection(ns, d);
-  FailureRecord failures_seen;
-  failures_seen.Reset(d);
-  std::vector<double> candidates, values;
-  std::vector<EvaluationTag> batch_tags;
-  const auto evaluate = [&](std::span<const double> points, std::span<const EvaluationTag> tags,
-                            std::span<double> out) {
-    std::fill(out.begin(), out.end(), std::numeric_limits<double>::quiet_NaN());
-    limit_state(PointBatch{points, tags, dimension}, out);
-  };
-
-  // Level 1: plain Monte Carlo, sample i from the stream (level 1, chain i, step 0), in batches of
-  // N_s (the batches change nothing: every sample is its own stream).
-  for (std::int64_t first = 0; first < n; first += ns) {
-    const std::int64_t batch = std::min(ns, n - first);
-    candidates.resize(static_cast<std::size_t>(batch) * d);
-    values.resize(static_cast<std::size_t>(batch));
-    batch_tags.resize(static_cast<std::size_t>(batch));
-    tbb::parallel_for(std::int64_t{0}, batch, [&](std::int64_t b) {
-      Stream(options.seed, 1, static_cast<std::uint64_t>(first + b), 0)
-          .Normals(std::span<double>(candidates).subspan(b * d, d));
-      batch_tags[b] = EvaluationTag{1, static_cast<int>(first + b), 0};
-    });
-    evaluate(candidates, batch_tags, values);
-    for (std::int64_t b = 0; b < batch; ++b) {
-      g[first + b] = values[b];
-      selection.Offer(SampleKey{values[b], first + b, batch_tags[b], first + b}, &candidates[b * d]);
-      failures_seen.Offer(&candidates[b * d], d, values[b], batch_tags[b]);
-    }
-  }
-  ChainLayout layout = MakeLayout(n, n);  // level 1: N chains of one sample, so gamma = 0
-  double lambda = options.initial_scale;
-  double level_acceptance = 1, level_scale = 0;
-  std::int64_t level_evaluations = n;
-  std::int64_t level_failed = std::count_if(g.begin(), g.end(), [](double v) { return std::isnan(v); });
-  double product = 1;  // prod of the previous levels' P_j
-  std::vector<double> deltas;
-  std::vector<double> state(static_cast<std::size_t>(ns) * d);             // the chains' current points
-  std::vector<EvaluationTag> state_tag(static_cast<std::size_t>(ns));      // the evaluations that gave them
-  std::vector<std::int64_t> state_ancestor(static_cast<std::size_t>(ns));  // their Monte Carlo ancestors
-  std::int64_t level_ancestors = n;
-
-  for (int level = 1;; ++level) {
-    SubsetLevel record;
-    record.evaluations = level_evaluations;
-    record.failed_evaluations = level_failed;
-    record.acceptance_rate = level_acceptance;
-    record.scale = level_scale;
-    record.ancestors = level_ancestors;
-    result.evaluations += record.evaluations;
-    result.failed_evaluations += record.failed_evaluations;
-
-    const auto failures = std::count_if(g.begin(), g.end(), [](double v) { return v <= 0; });
-    const bool last = failures >= ns || level == options.max_levels;
-    double threshold = 0;
-    if (!last) {
-      std::vector<std::int64_t> order(static_cast<std::size_t>(n));
-      std::iota(order.begin(), order.end(), std::int64_t{0});
-      std::stable_sort(order.begin(), order.end(),
-                       [&](std::int64_t a, std::int64_t b) { return Ordered(g[a]) < Ordered(g[b]); });
-      const double inner = Ordered(g[order[ns - 1]]), outer = Ordered(g[order[ns]]);
-      threshold = std::isfinite(outer) ? (inner + outer) / 2 : inner;
-      // Fewer than N_s samples with a value (the rest NaN): threshold is +infinity, no conditional
-      // level can be formed, and the result says so (kTooManyFailedEvaluations).
-    }
-    std::vector<char> hit(static_cast<std::size_t>(n));
-    for (std::int64_t i = 0; i < n; ++i) hit[i] = g[i] <= threshold ? 1 : 0;
-    const auto hits = std::count(hit.begin(), hit.end(), char{1});
-    record.threshold = threshold;
-    record.conditional_probability = static_cast<double>(hits) / static_cast<double>(n);
-    record.correlation_factor =
-        level == 1 ? 0 : CorrelationFactor(hit, layout, record.conditional_probability);
-    record.coefficient_of_variation = LevelCov(record.conditional_probability, n, record.correlation_factor);
-    result.levels.push_back(record);
-    deltas.push_back(record.coefficient_of_variation);
-
-    if (!std::isfinite(threshold)) {
-      result.status = SubsetResult::Status::kTooManyFailedEvaluations;
-      result.probability = std::numeric_limits<double>::quiet_NaN();
-      break;
-    }
-    if (last) {
-      result.status = failures >= ns ? SubsetResult::Status::kConverged : SubsetResult::Status::kLevelCap;
-      result.probability = product * record.conditional_probability;
-      if (result.status == SubsetResult::Status::kLevelCap) {
-        result.upper_bound = product * static_cast<double>(ns) / static_cast<double>(n);
-      }
-      result.failure_count = failures_seen.count;
-      if (failures_seen.count > 0) {
-        result.failure_mean = failures_seen.sum;
-        for (double& v : result.failure_mean) v /= static_cast<double>(failures_seen.count);
-        result.most_likely_failure = failures_seen.nearest;
-        result.most_likely_failure_tag = failures_seen.nearest_tag;
-        result.most_likely_failure_value = failures_seen.nearest_g;
-      }
-      break;
-    }
-    product *= record.conditional_probability;
-
-    // Seeds: the N_s smallest values, in an order shuffled by (seed, level + 1) so that the groups of
-    // the adaptation are not sorted by g (Papaioannou et al. 2015).
-    const std::vector<std::int64_t> sorted = selection.Sorted();
-    GESWEEP_DEMAND(static_cast<std::int64_t>(sorted.size()) == ns);
-    std::vector<std::int64_t> seeds(sorted);
-    const Stream shuffle(options.seed, level + 1, kSeedShuffleChain, 0);
-    for (std::int64_t i = ns - 1; i > 0; --i) {
-      const auto j = static_cast<std::int64_t>(
-          shuffle.Uniform(kPurposeUniform, static_cast<std::uint64_t>(i)) * static_cast<double>(i + 1) -
-          0x1.0p-60);
-      std::swap(seeds[i], seeds[std::clamp<std::int64_t>(j, 0, i)]);
-    }
-    // Level + 1: N_s chains, chain c of length layout.length[c], its seed at step 0.
-    const int next = level + 1;
-    ChainLayout next_layout = MakeLayout(n, ns);
-    std::vector<double> ng(g.size());
-    next_selection.Clear();
-    failures_seen.Reset(d);
-    for (std::int64_t c = 0; c < ns; ++c) {
-      const std::int64_t at = next_layout.offset[c];
-      std::copy(selection.point(seeds[c]), selection.point(seeds[c]) + d, state.begin() + c * d);
-      ng[at] = selection.key(seeds[c]).g;
-      state_tag[c] = selection.key(seeds[c]).tag;
-      state_ancestor[c] = selection.key(seeds[c]).ancestor;
-      next_selection.Offer(SampleKey{ng[at], at, state_tag[c], state_ancestor[c]}, &state[c * d]);
-      failures_seen.Offer(&state[c * d], d, ng[at], state_tag[c]);
-    }
-    {
-      std::vector<std::int64_t> distinct(state_ancestor);
-      std::sort(distinct.begin(), distinct.end());
-      level_ancestors = std::unique(distinct.begin(), distinct.end()) - distinct.begin();
-    }
-    std::int64_t accepted_total = 0, proposed_total = 0;
-    level_evaluations = 0;
-    level_failed = 0;
-    std::vector<std::int64_t> active;
-    const int groups = options.adaptation_groups;
-    for (int group = 0; group < groups; ++group) {
-      // One scale for every component. Papaioannou et al. (2015) scale component k by the seeds'
-      // standard deviation s_k; but s_k is a function of the seeds, so the kernel then depends on the
-      // chains' own starting states: in 1000 dimensions that coupling pulled the chi-square level's
-      // chains towards the threshold and biased each conditional probability by about -12 %
-      // (docs/dispersion.md). A scalar lambda does not see the seeds.
-      const double sigma = std::min(lambda, 1.0), rho = std::sqrt(1 - sigma * sigma);
-      const std::int64_t first = ns * group / groups, end = ns * (group + 1) / groups;
-      std::int64_t accepted = 0, proposed = 0;
-      for (std::int64_t step = 1;; ++step) {
-        active.clear();
-        for (std::int64_t c = first; c < end; ++c) {
-          if (step < next_layout.length[c]) active.push_back(c);
-        }
-        if (active.empty()) break;
-        const auto batch = active.size();
-        candidates.resize(batch * d);
-        values.resize(batch);
-        batch_tags.resize(batch);
-        tbb::parallel_for(std::size_t{0}, batch, [&](std::size_t b) {
-          const std::int64_t c = active[b];
-          const double* current = &state[c * d];
-          std::span<double> v(candidates.data() + b * d, d);
-          const Stream stream(options.seed, next, static_cast<std::uint64_t>(c), static_cast<int>(step));
-          stream.Normals(v);
-          if (options.sampler == ConditionalSampler::kCrankNicolson) {
-            for (std::size_t k = 0; k < d; ++k) v[k] = rho * current[k] + sigma * v[k];
-          } else {
-            for (std::size_t k = 0; k < d; ++k) {
-              const double proposal = current[k] + sigma * v[k];
-              const double ratio = std::exp(-0.5 * (proposal * proposal - current[k] * current[k]));
-              v[k] = stream.Uniform(kPurposeUniform, k) <= ratio ? proposal : current[k];
-            }
-          }
-          batch_tags[b] = EvaluationTag{next, static_cast<int>(c), static_cast<int>(step)};
-        });
-        evaluate(candidates, batch_tags, values);
-        level_evaluations += static_cast<std::int64_t>(batch);
-        for (std::size_t b = 0; b < batch; ++b) {
-          const std::int64_t c = active[b];
-          const std::int64_t here = next_layout.offset[c] + step;
-          const bool accept = values[b] <= threshold;  // false for NaN
-          if (accept) {
-            std::copy(candidates.begin() + b * d, candidates.begin() + (b + 1) * d, state.begin() + c * d);
-            ng[here] = values[b];
-            state_tag[c] = batch_tags[b];
-          } else {
-            ng[here] = ng[here - 1];
-          }
-          next_selection.Offer(SampleKey{ng[here], here, state_tag[c], state_ancestor[c]}, &state[c * d]);
-          failures_seen.Offer(&state[c * d], d, ng[here], state_tag[c]);
-          // A NaN candidate is a failed evaluation of this level even though the chain stays put.
-          if (std::isnan(values[b])) ++level_failed;
-          accepted += accept ? 1 : 0;
-          ++proposed;
-        }
-      }
-      if (proposed > 0) {
-        const double rate = static_cast<double>(accepted) / static_cast<double>(proposed);
-        lambda = std::exp(std::log(lambda) + (rate - options.target_acceptance) / std::sqrt(group + 1.0));
-      }
-      accepted_total += accepted;
-      proposed_total += proposed;
-    }
-    level_acceptance =
-        proposed_total > 0 ? static_cast<double>(accepted_total) / static_cast<double>(proposed_total) : 0;
-    level_scale = lambda;
-    std::swap(selection, next_selection);
-    g.swap(ng);
-    layout = std::move(next_layout);
-  }
-
-  double sum2 = 0, sum = 0;
-  for (const double delta : deltas) {
-    sum2 += delta * delta;
-    sum += delta;
-  }
-  result.coefficient_of_variation = std::sqrt(sum2);
-  result.coefficient_of_variation_upper = sum;
-  LognormalInterval95(result.probability, result.coefficient_of_variation, result.interval_95_low,
-                      result.interval_95_high);
-  return result;
+  return SubsetRun(limit_state, dimension, options).Run();
 }
 
 }  // namespace gesweep::rare

@@ -220,6 +220,134 @@ bool Unfinished(const ResultBlock& block) {
          begin + block.rows;
 }
 
+/// One sweep's pipeline: batches from the source, computed and encoded by the workers, written in
+/// the order they finish by a writer thread. Every batch in flight, queued or being written holds one
+/// of the pool's buffers; a free one waits in free_blocks_.
+class SweepPipeline {
+ public:
+  SweepPipeline(const SweepPlan& plan, BatchSource& source, ResultSink& sink, const RunnerOptions& options,
+                SweepProgress& counters, int pool_size, int queue_capacity)
+      : plan_(plan),
+        source_(source),
+        sink_(sink),
+        options_(options),
+        counters_(counters),
+        pool_(static_cast<std::size_t>(pool_size)),
+        workspaces_([&plan] { return RunWorkspace(plan); }) {
+    for (auto& block : pool_) {
+      block.Allocate(plan);
+      free_blocks_.push(&block);
+    }
+    write_queue_.set_capacity(queue_capacity);
+  }
+
+  /// The writer thread: writes the queued batches until EndWrites, each buffer then freed; after a
+  /// sink error it writes no more (the error kept, the pipeline stopped) but still frees them.
+  void WriteQueued() {
+    for (;;) {
+      ResultBlock* block = nullptr;
+      write_queue_.pop(block);
+      if (block == nullptr) break;
+      if (!writer_error_) {
+        try {
+          sink_.Write(*block);
+          counters_.runs_written.fetch_add(block->rows, std::memory_order_relaxed);
+        } catch (...) {
+          writer_error_ = std::current_exception();
+          stop_.store(true);
+        }
+      }
+      free_blocks_.push(block);
+    }
+  }
+  /// Tells the writer thread that no more batches come.
+  void EndWrites() { write_queue_.push(nullptr); }
+
+  /// The three stages on `threads` threads with `tokens` batches in flight, until the source is
+  /// exhausted, a cancellation or a writer error.
+  void Run(int threads, int tokens) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_pipeline(
+          static_cast<std::size_t>(tokens),
+          tbb::make_filter<void, ResultBlock*>(
+              tbb::filter_mode::serial_in_order,
+              [&](tbb::flow_control& control) { return NextBatch(control); }) &
+              tbb::make_filter<ResultBlock*, ResultBlock*>(
+                  tbb::filter_mode::parallel, [&](ResultBlock* block) { return ComputeAndEncode(block); }) &
+              tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
+                                                   [&](ResultBlock* block) { QueueWrite(block); }));
+    });
+  }
+
+  /// The error the sink threw, if any.
+  std::exception_ptr writer_error() const { return writer_error_; }
+
+  /// The runs' counts, and whether the sweep stopped short of the source's end (cancelled).
+  SweepOutcome Outcome() const {
+    SweepOutcome outcome;
+    outcome.runs_failed = counters_.runs_failed.load();
+    outcome.runs_ok = counters_.runs_done.load() - outcome.runs_failed;
+    outcome.runs_skipped = counters_.runs_skipped.load();
+    outcome.cancelled = !exhausted_ || dropped_.load() > 0;
+    return outcome;
+  }
+
+ private:
+  /// Stage 1 (serial, in order): the source's next batch in a free buffer; none (the pipeline stops)
+  /// after a cancellation or a writer error, or when the source is exhausted.
+  ResultBlock* NextBatch(tbb::flow_control& control) {
+    const bool cancelled = options_.cancel != nullptr && options_.cancel->load();
+    if (cancelled || stop_.load()) {
+      control.stop();
+      return nullptr;
+    }
+    const std::int64_t index = source_.Next();
+    if (index < 0) {
+      exhausted_ = true;
+      control.stop();
+      return nullptr;
+    }
+    ResultBlock* block = nullptr;
+    free_blocks_.pop(block);
+    block->Reset(plan_, index);
+    return block;
+  }
+
+  /// Stage 2 (parallel): the batch's runs; the worker that computed the batch encodes it (filters its
+  /// chunks). A batch a cancellation left unfinished is not encoded (nor written, in stage 3).
+  ResultBlock* ComputeAndEncode(ResultBlock* block) {
+    ComputeBatch(plan_, *block, workspaces_, options_, counters_);
+    if (Unfinished(*block)) return block;
+    sink_.Encode(*block);
+    return block;
+  }
+
+  /// Stage 3 (serial, out of order): the batch to the writer thread; one a cancellation left
+  /// unfinished is not written (its runs stay pending), its buffer freed.
+  void QueueWrite(ResultBlock* block) {
+    if (Unfinished(*block)) {
+      dropped_.fetch_add(1);
+      free_blocks_.push(block);
+      return;
+    }
+    write_queue_.push(block);
+  }
+
+  const SweepPlan& plan_;
+  BatchSource& source_;
+  ResultSink& sink_;
+  const RunnerOptions& options_;
+  SweepProgress& counters_;
+  std::vector<ResultBlock> pool_;
+  tbb::concurrent_bounded_queue<ResultBlock*> free_blocks_, write_queue_;
+  tbb::enumerable_thread_specific<RunWorkspace> workspaces_;
+  std::atomic<bool> stop_{false};
+  std::exception_ptr writer_error_;
+  bool exhausted_ = false;
+  std::atomic<std::size_t> dropped_{0};
+};
+
 }  // namespace
 
 SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& sink,
@@ -230,102 +358,19 @@ SweepOutcome RunSweep(const SweepPlan& plan, BatchSource& source, ResultSink& si
   const int tokens = kTokensPerThread * threads;
   const int queue_capacity = std::max(1, options.queue_batches);
 
-  // The pool of batch buffers: every batch in flight, queued or being written holds one.
-  std::vector<ResultBlock> pool(static_cast<std::size_t>(tokens + queue_capacity + 1));
-  tbb::concurrent_bounded_queue<ResultBlock*> free_blocks;
-  for (auto& block : pool) {
-    block.Allocate(plan);
-    free_blocks.push(&block);
-  }
-  tbb::concurrent_bounded_queue<ResultBlock*> write_queue;
-  write_queue.set_capacity(queue_capacity);
-
-  std::atomic<bool> stop{false};
-  std::exception_ptr writer_error;
-  std::thread writer([&] {
-    for (;;) {
-      ResultBlock* block = nullptr;
-      write_queue.pop(block);
-      if (block == nullptr) break;
-      if (!writer_error) {
-        try {
-          sink.Write(*block);
-          counters.runs_written.fetch_add(block->rows, std::memory_order_relaxed);
-        } catch (...) {
-          writer_error = std::current_exception();
-          stop.store(true);
-        }
-      }
-      free_blocks.push(block);
-    }
-  });
-
-  tbb::enumerable_thread_specific<RunWorkspace> workspaces([&plan] { return RunWorkspace(plan); });
-  bool exhausted = false;
-  std::atomic<std::size_t> dropped{0};
+  SweepPipeline pipeline(plan, source, sink, options, counters, tokens + queue_capacity + 1, queue_capacity);
+  std::thread writer([&] { pipeline.WriteQueued(); });
   std::exception_ptr worker_error;
   try {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_pipeline(
-          static_cast<std::size_t>(tokens),
-          tbb::make_filter<void, ResultBlock*>(tbb::filter_mode::serial_in_order,
-                                               [&](tbb::flow_control& control) -> ResultBlock* {
-                                                 const bool cancelled =
-                                                     options.cancel != nullptr && options.cancel->load();
-                                                 if (cancelled || stop.load()) {
-                                                   control.stop();
-                                                   return nullptr;
-                                                 }
-                                                 const std::int64_t index = source.Next();
-                                                 if (index < 0) {
-                                                   exhausted = true;
-                                                   control.stop();
-                                                   return nullptr;
-                                                 }
-                                                 ResultBlock* block = nullptr;
-                                                 free_blocks.pop(block);
-                                                 block->Reset(plan, index);
-                                                 return block;
-                                               }) &
-              tbb::make_filter<ResultBlock*, ResultBlock*>(tbb::filter_mode::parallel,
-                                                           [&](ResultBlock* block) {
-                                                             ComputeBatch(plan, *block, workspaces, options,
-                                                                          counters);
-                                                             // A batch a cancellation left unfinished is not
-                                                             // encoded (nor written, below).
-                                                             if (Unfinished(*block)) return block;
-                                                             // The worker that computed the batch encodes it
-                                                             // (filters its chunks).
-                                                             sink.Encode(*block);
-                                                             return block;
-                                                           }) &
-              tbb::make_filter<ResultBlock*, void>(tbb::filter_mode::serial_out_of_order,
-                                                   [&](ResultBlock* block) {
-                                                     // A batch a cancellation left unfinished is not written:
-                                                     // its runs stay pending.
-                                                     if (Unfinished(*block)) {
-                                                       dropped.fetch_add(1);
-                                                       free_blocks.push(block);
-                                                       return;
-                                                     }
-                                                     write_queue.push(block);
-                                                   }));
-    });
+    pipeline.Run(threads, tokens);
   } catch (...) {
     worker_error = std::current_exception();
   }
-  write_queue.push(nullptr);
+  pipeline.EndWrites();
   writer.join();
-  if (writer_error) std::rethrow_exception(writer_error);
+  if (pipeline.writer_error()) std::rethrow_exception(pipeline.writer_error());
   if (worker_error) std::rethrow_exception(worker_error);
-
-  SweepOutcome outcome;
-  outcome.runs_failed = counters.runs_failed.load();
-  outcome.runs_ok = counters.runs_done.load() - outcome.runs_failed;
-  outcome.runs_skipped = counters.runs_skipped.load();
-  outcome.cancelled = !exhausted || dropped.load() > 0;
-  return outcome;
+  return pipeline.Outcome();
 }
 
 SweepOutcome RunSweep(const SweepPlan& plan, const std::vector<std::int64_t>& pending_blocks,
