@@ -30,8 +30,19 @@ produced): what is checked is that the estimate does not depend on how it was re
    (the design point at beta = 3) and x1 ~ uniform(0, 1) with P(x1 > 0.999) = 1e-3, each over 10
    repetitions; a random headwind in turbulence: one coordinate after the noise's, 1 and 2 threads
    alike and last-level landings replayed bit for bit; a random start height (a longer noise) and an
-   lhs design refused with one line."""
+   lhs design refused with one line.
+10. The 1 - cos gust's amplitude and half-length as random parameters (they are run parameters of the
+   catalogue like the wind): a still-air landing from 30 m with a down (w) gust entering at 17.5 s,
+   just before touchdown; amplitude ~ normal(0.5, 0.5) m/s, half-length ~ uniform(20, 30) m, limit
+   touchdown_sink_rate_mps > 1.5. The oracle is independent of the subset simulation: for each
+   half-length the threshold amplitude a*(d) is found by bisection on deterministic `gesweep land`
+   runs (the sink rate rises with the amplitude past a*, and stays below the limit from mu - 5 sigma up
+   to it), and P = E_d[Phi(-(a*(d) - mu)/sigma)] by Gauss-Legendre over d; the pooled estimate of 10
+   repetitions within 3 CoV of it; the most likely failing landing just past a* at its half-length and,
+   flown by `gesweep land` at its parameter values, the stored row bit for bit; last-level landings
+   replayed bit for bit."""
 import json
+import math
 import os
 import pathlib
 import signal
@@ -85,6 +96,7 @@ seed = 1
 [[design.parameter]]
 name = "{name}"
 {distribution}
+{more_parameters}
 [subset]
 limits = [{limits}]
 {subset}
@@ -96,6 +108,27 @@ PHI_MINUS_3 = 1.3498980316301e-3
 ORACLE_SIGMAS = 3.0
 # The most likely failing point of x1 > 3 is the last level's smallest failing x1: within this of 3.
 DESIGN_POINT_SLACK = 0.1
+
+# Section 10: a down 1 - cos gust meeting a still-air landing from 30 m (touchdown near 18-19 s) just
+# before touchdown. Its amplitude ~ normal(GUST_MEAN_MPS, GUST_SIGMA_MPS) (mean above 0: an up gust of
+# the same size makes a hard landing too, by ballooning, but only below about -3 m/s, 7 sigma away; the
+# test checks the limit is not reached down to mu - 5 sigma, a tail of 3e-7 left out of the truth), its
+# half-length ~ uniform(GUST_HALF_LENGTHS_M).
+GUST_START_S = 17.5
+GUST_MEAN_MPS, GUST_SIGMA_MPS = 0.5, 0.5
+GUST_HALF_LENGTHS_M = (20.0, 30.0)
+GUST_LIMIT_MPS = 1.5
+# The truth's quadrature over the half-length: Gauss-Legendre nodes (8 nodes change it by 0.02 %).
+GUST_NODES = 5
+# The bisection stops when the bracket of a* is this narrow, m/s: P moves by beta * width / sigma,
+# about 0.1 %, far inside the test's tolerance (3 CoV, about 40 %).
+GUST_BISECTION_WIDTH_MPS = 2e-4
+# The most likely failing landing is a failing landing of the last level nearest the origin: its
+# amplitude is past a* at its half-length, by less than this, m/s (a fifth of sigma).
+GUST_DESIGN_POINT_SLACK_MPS = 0.1
+# One run's stated CoV and the spread measured over 10 repetitions agree within this factor (the
+# measured one, from 9 degrees of freedom, is within [0.39, 1.6] of the truth 99.7 % of the time).
+COV_RATIO_BOUND = 2.0
 
 failures = []
 
@@ -336,6 +369,7 @@ def main():
         check(all("COLLAPSED" not in l for l in r1.stdout.splitlines()), "the test's own runs did not collapse")
 
         random_parameters(tmp)
+        gust_parameters(tmp)
 
     if failures:
         print(f"{len(failures)} failures")
@@ -344,7 +378,7 @@ def main():
 
 
 def write_random(directory, filename, **fields):
-    defaults = dict(aircraft=ANCE, analyses="", kind="monte_carlo",
+    defaults = dict(aircraft=ANCE, analyses="", kind="monte_carlo", more_parameters="",
                     parameters="height_m = 30.0\nspeed_mps = 52.21", subset=SUBSET.format(n=300, levels=6))
     defaults.update(fields)
     path = pathlib.Path(directory) / filename
@@ -425,6 +459,109 @@ def random_parameters(tmp):
         check(r.returncode == 2 and len(lines) == 1 and path.name in lines[0] and key in lines[0] and value in lines[0],
               f"{name}: one line naming the file, {key} and {value}, exit 2: {r.returncode} {lines}")
         check(not out.exists(), f"{name}: nothing written")
+
+
+def gust_landing(amplitude, half_length):
+    """The summary of a deterministic `gesweep land` run of section 10's landing with this gust."""
+    r = subprocess.run([GESWEEP, "land", "--aircraft", str(ANCE), "--start-height-m", "30", "--start-speed-mps", "52.21",
+                        "--summary-only", "--format", "json", "--gust-axis", "w", "--gust-amplitude-mps", repr(amplitude),
+                        "--gust-half-length-m", repr(half_length), "--gust-start-s", repr(GUST_START_S)],
+                       capture_output=True, text=True, check=True)
+    return json.loads(r.stdout)["summary"]
+
+
+def gust_sink(amplitude, half_length):
+    summary = gust_landing(amplitude, half_length)
+    return summary["touchdown_sink_rate_mps"] if summary["outcome"] == "landed" else float("nan")
+
+
+def gust_threshold(half_length):
+    """a*(d): the amplitude past which the landing's sink rate exceeds the limit, by bisection on
+    deterministic landings, after checking the sink rate is below the limit from mu - 5 sigma up to it
+    and above it from there to mu + 6 sigma (on a coarse grid: the event is {amplitude > a*})."""
+    low, high = GUST_MEAN_MPS, GUST_MEAN_MPS + 6 * GUST_SIGMA_MPS
+    check(gust_sink(low, half_length) < GUST_LIMIT_MPS < gust_sink(high, half_length),
+          f"gust: the limit is crossed between {low} and {high} m/s at d = {half_length}")
+    while high - low > GUST_BISECTION_WIDTH_MPS:
+        middle = 0.5 * (low + high)
+        if gust_sink(middle, half_length) > GUST_LIMIT_MPS:
+            high = middle
+        else:
+            low = middle
+    threshold = 0.5 * (low + high)
+    below = np.linspace(GUST_MEAN_MPS - 5 * GUST_SIGMA_MPS, low, 6)
+    above = np.linspace(high, GUST_MEAN_MPS + 6 * GUST_SIGMA_MPS, 4)
+    check(all(gust_sink(a, half_length) <= GUST_LIMIT_MPS for a in below) and
+          all(gust_sink(a, half_length) > GUST_LIMIT_MPS for a in above),
+          f"gust: at d = {half_length} m the sink rate passes {GUST_LIMIT_MPS} once, at a* = {threshold:.5f} m/s")
+    return threshold
+
+
+def normal_upper_tail(beta):
+    return 0.5 * math.erfc(beta / math.sqrt(2.0))
+
+
+def gust_parameters(tmp):
+    """Section 10: the 1 - cos gust's amplitude and half-length as random parameters."""
+    # The truth: P = (1/(d1 - d0)) * integral of Phi(-(a*(d) - mu)/sigma) over d, by Gauss-Legendre.
+    nodes, weights = np.polynomial.legendre.leggauss(GUST_NODES)
+    d0, d1 = GUST_HALF_LENGTHS_M
+    half_lengths = 0.5 * (d0 + d1) + 0.5 * (d1 - d0) * nodes
+    thresholds = [gust_threshold(d) for d in half_lengths]
+    truth = sum(0.5 * w * normal_upper_tail((a - GUST_MEAN_MPS) / GUST_SIGMA_MPS) for w, a in zip(weights, thresholds))
+
+    study = write_random(tmp, "random_gust.toml", name="gust_amplitude_mps",
+                         parameters=f"height_m = 30.0\nspeed_mps = 52.21\ngust_axis = \"w\"\ngust_start_s = {GUST_START_S}",
+                         distribution=f"normal = [{GUST_MEAN_MPS}, {GUST_SIGMA_MPS}]",
+                         more_parameters=f"[[design.parameter]]\nname = \"gust_half_length_m\"\nuniform = [{d0}, {d1}]",
+                         limits=f'"touchdown_sink_rate_mps > {GUST_LIMIT_MPS}"',
+                         subset=SUBSET.format(n=300, levels=6) + "\nrepetitions = 10")
+    archive = tmp / "random_gust.h5"
+    r = risk(study, "-o", archive, "--threads", 2)
+    check(r.returncode == 0, f"gust: risk exits 0: {r.returncode} {r.stderr}")
+    limits = dispersion_json(archive)
+    if r.returncode != 0 or not limits:
+        check(False, "gust: dispersion JSON of the archive")
+        return
+    l = limits[0]
+    p, cov = l["probability"], l["coefficient_of_variation"]
+    print(f"gust: a*(d) = {np.round(thresholds, 5).tolist()} m/s at d = {np.round(half_lengths, 3).tolist()} m; "
+          f"truth {truth:.5g}, estimate {p:.5g} (CoV {cov:.3g})")
+    check(l["dimension"] == 2, f"gust: a still-air landing and two random parameters: dimension 2, not {l['dimension']}")
+    check(abs(p - truth) < ORACLE_SIGMAS * cov * p,
+          f"gust: P(sink > {GUST_LIMIT_MPS}) = {p:.4g} (CoV {cov:.3g}) within {ORACLE_SIGMAS} CoV of {truth:.6g}")
+    measured = l["repetitions"]["measured_coefficient_of_variation_one_run"]
+    stated = l["repetitions"]["estimates"][0]["coefficient_of_variation"]
+    check(1 / COV_RATIO_BOUND < stated / measured < COV_RATIO_BOUND,
+          f"gust: one run's stated CoV {stated:.3g} within a factor {COV_RATIO_BOUND} of the measured {measured:.3g}")
+    amplitude, half_length = l["design_point"]["random_parameters"]
+    check(amplitude["name"] == "gust_amplitude_mps" and amplitude["median"] == GUST_MEAN_MPS and
+          half_length["name"] == "gust_half_length_m" and half_length["median"] == 0.5 * (d0 + d1),
+          f"gust: the random parameters' medians: {amplitude} {half_length}")
+    # The most likely failing landing: past a* at its own half-length, and the deterministic landing
+    # at its parameter values is the stored evaluation, bit for bit.
+    a_most, d_most = amplitude["most_likely"], half_length["most_likely"]
+    check(d0 <= d_most <= d1, f"gust: the most likely half-length within the uniform's range: {d_most}")
+    threshold_there = gust_threshold(d_most)
+    check(threshold_there - GUST_BISECTION_WIDTH_MPS < a_most < threshold_there + GUST_DESIGN_POINT_SLACK_MPS,
+          f"gust: the most likely failing amplitude {a_most:.5f} just past a*({d_most:.3f} m) = {threshold_there:.5f}")
+    stored = contents(archive)[1]
+    with h5py.File(archive, "r") as f:
+        columns = [c.decode() if isinstance(c, bytes) else c for c in f["subset/evaluations"].attrs["columns"]]
+    flown = gust_landing(a_most, d_most)
+    row = stored["values"][l["design_point"]["most_likely_row"]]
+    numbers = [(c.rsplit("/", 1)[-1], v) for c, v in zip(columns, row) if c.rsplit("/", 1)[-1] in flown
+               and c.rsplit("/", 1)[-1] != "outcome"]
+    check(len(numbers) >= 20 and all(np.float64(flown[k]).view(np.uint64) == np.float64(v).view(np.uint64) for k, v in numbers),
+          "gust: `gesweep land` at the most likely point's amplitude and half-length is its stored landing, bit for bit")
+    # Last-level landings of the first and of the last repetition replay bit for bit.
+    for repetition in (0, 9):
+        rows = np.flatnonzero(stored["repetition"] == repetition)
+        last = rows[stored["level"][rows] == stored["level"][rows].max()]
+        for row in last[:: max(1, len(last) // 4)][:4]:
+            rp = risk(archive, "--replay", row, "--format", "json")
+            check(rp.returncode == 0 and json.loads(rp.stdout)["identical"] is True,
+                  f"gust: last-level row {row} (repetition {repetition}) replays bit for bit: {rp.returncode} {rp.stderr}")
 
 
 if __name__ == "__main__":
