@@ -8,6 +8,7 @@
 
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/described_columns.h"
+#include "engine/analyses/described_series.h"
 #include "engine/common/describe_toml.h"
 #include "engine/control/landing_simulation.h"
 
@@ -19,7 +20,6 @@ constexpr double kLandingCost_us = 15000.0;
 // Stored series cover this long unless the study says otherwise (the paper's landing from 500 m at
 // 52.21 m/s down a 2.5° slope lasts about 230 s).
 constexpr double kDefaultSeriesDuration_s = 400.0;
-constexpr double kGridTolerance_s = 1e-9;
 
 // The run parameters a landing reads besides the LQR's Q weights and the winds, and the setting each
 // fills (a NaN flare_tau_s: the automatic time constant).
@@ -83,38 +83,10 @@ class LandingAnalysis final : public Analysis {
       config_.output_interval_s = 0.0;
       return;
     }
-    dt_s_ = storage.output_dt_s;
-    config_.output_interval_s = dt_s_;
-    TimeAxis axis;
-    axis.path = "series/landing/time_s";
-    axis.description = "Time since the start of each landing; samples after a run ended are NaN";
-    samples_ = static_cast<int>(std::floor(series_duration_s_ / dt_s_ + kGridTolerance_s)) + 1;
-    for (int k = 0; k < samples_; ++k) axis.times_s.push_back(k * dt_s_);
-    schema.AddAxis(axis);
-    auto series = [&](const char* name, const char* units, const char* description) {
-      series_.push_back(schema.Add(OutputColumn::Series(std::string("series/landing/") + name, units,
-                                                        description, axis.path, samples_)));
-    };
-    series("height_m", "m", "Height H of the mean chord above ground");
-    series("reference_height_m", "m", "Height of the glide path, or H_ref in the flare");
-    series("tracking_error_m", "m", "H minus the reference");
-    series("distance_past_transmitter_m", "m",
-           "Along-track distance past the glide-slope transmitter: u0 (t - t_transmitter) in still air, the "
-           "ground position with a disturbance");
-    series("speed_mps", "m/s", "Speed u");
-    series("delta_w_mps", "m/s", "Delta w, positive down");
-    series("pitch_rate_radps", "rad/s", "Pitch rate q");
-    series("pitch_rad", "rad", "Pitch angle theta");
-    series("sink_rate_mps", "m/s", "Sink rate -dH/dt, positive down");
-    series("elevator_rad", "rad", "Elevator deflection (actuator position)");
-    series("elevator_command_rad", "rad", "Elevator command before the limits");
-    series("phase", "1", "0 glide slope, 1 flare");
-    // The air motion the airplane met (docs/model.md §9): 0 in still air.
-    series(
-        "u_g_mps", "m/s",
-        "Air velocity along x at the airplane: mean wind + turbulence + a u gust (a headwind is negative)");
-    series("w_g_mps", "m/s", "Air velocity along z at the airplane (positive down): turbulence + a w gust");
-    if (config_.disturbance.pitch_rate_gust) series("q_g_radps", "rad/s", "Pitch-rate gust q_g (Dryden)");
+    config_.output_interval_s = storage.output_dt_s;
+    samples_ = series_.Declare(schema, "landing",
+                               "Time since the start of each landing; samples after a run ended are NaN",
+                               series_duration_s_, storage.output_dt_s, config_.disturbance.pitch_rate_gust);
   }
 
   std::string CheckRun(const RunParameters& p, const Aircraft* aircraft) const override {
@@ -137,7 +109,7 @@ class LandingAnalysis final : public Analysis {
       for (int i = 0; i < kLandingStateCount; ++i) gain[i] = r.design.gain[static_cast<std::size_t>(i)];
     }
     bool truncated = false;
-    if (samples_ > 0) truncated = StoreSeries(r, row);
+    if (samples_ > 0) truncated = series_.Store(r.series, row);
     const std::string note =
         truncated ? r.message + " (series cut at " + ShortNumber(series_duration_s_) + " s)" : r.message;
     if (r.outcome == LandingOutcome::kDiverged || r.outcome == LandingOutcome::kDesignFailed) {
@@ -166,37 +138,6 @@ class LandingAnalysis final : public Analysis {
     return config;
   }
 
-  // Samples on the grid t = k·dt; returns whether some fell past the stored duration.
-  bool StoreSeries(const LandingResult& r, OutputRow& row) const {
-    bool truncated = false;
-    for (const LandingSample& s : r.series) {
-      const double position = s.time_s / dt_s_;
-      const double k = std::round(position);
-      if (std::abs(position - k) * dt_s_ > kGridTolerance_s || k < 0) continue;
-      if (k >= samples_) {
-        truncated = true;
-        continue;
-      }
-      const double values[] = {s.height_m,
-                               s.reference_height_m,
-                               s.tracking_error_m,
-                               s.distance_past_transmitter_m,
-                               s.speed_mps,
-                               s.delta_w_mps,
-                               s.pitch_rate_radps,
-                               s.pitch_rad,
-                               s.sink_rate_mps,
-                               s.elevator_rad,
-                               s.elevator_command_rad,
-                               static_cast<double>(static_cast<int>(s.phase)),
-                               s.u_g_mps,
-                               s.w_g_mps,
-                               s.q_g_radps};
-      for (std::size_t c = 0; c < series_.size(); ++c) row.Slot(series_[c])[static_cast<int>(k)] = values[c];
-    }
-    return truncated;
-  }
-
   LandingStudySettings settings_;  // as the study gave them
   LandingConfig config_;           // with the storage's series interval
   double series_duration_s_;
@@ -204,9 +145,8 @@ class LandingAnalysis final : public Analysis {
   std::vector<ParameterId> q_;
   DescribedColumns<LandingResult> summary_;
   int gain_ = 0;
-  std::vector<int> series_;
+  DescribedSeries<std::vector<LandingSample>> series_;
   int samples_ = 0;
-  double dt_s_ = 0;
 };
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/described_columns.h"
+#include "engine/analyses/described_series.h"
 #include "engine/common/describe_toml.h"
 #include "engine/common/input_limits.h"
 #include "engine/simulation/open_loop.h"
@@ -17,9 +18,6 @@ namespace {
 // Measured (docs/sweep.md): RK4 at 0.015 s for 30 s, derivatives re-evaluated per stage, about 300 µs.
 constexpr double kOpenLoopCost_us = 300.0;
 constexpr double kDefaultDuration_s = 30.0;
-// A sample lands on the series grid when within this of a grid time (the integrator's output times
-// are t0 + j·dt, computed in floating point).
-constexpr double kGridTolerance_s = 1e-9;
 
 class OpenLoopAnalysis final : public Analysis {
  public:
@@ -39,41 +37,10 @@ class OpenLoopAnalysis final : public Analysis {
   void DeclareOutputs(OutputSchema& schema, const StorageOptions& storage) override {
     summary_.Declare(schema, "results/open_loop/");
     if (!storage.time_series) return;
-    dt_s_ = storage.output_dt_s;
-    config_.series_interval_s = dt_s_;
-    TimeAxis axis;
-    axis.path = "series/open_loop/time_s";
-    axis.description = "Time since the start of each open-loop run; samples after a run ended are NaN";
-    const auto samples = static_cast<int>(std::floor(config_.duration_s / dt_s_ + kGridTolerance_s)) + 1;
-    for (int k = 0; k < samples; ++k) axis.times_s.push_back(k * dt_s_);
-    schema.AddAxis(axis);
-    const std::string series = "series/open_loop/";
-    series_height_ =
-        schema.Add(OutputColumn::Series(series + "height_m", "m", "Height H", axis.path, samples));
-    series_speed_ =
-        schema.Add(OutputColumn::Series(series + "speed_mps", "m/s", "Speed u", axis.path, samples));
-    series_w_ = schema.Add(
-        OutputColumn::Series(series + "delta_w_mps", "m/s", "Delta w (positive down)", axis.path, samples));
-    series_q_ = schema.Add(
-        OutputColumn::Series(series + "pitch_rate_radps", "rad/s", "Pitch rate q", axis.path, samples));
-    series_theta_ = schema.Add(
-        OutputColumn::Series(series + "delta_theta_rad", "rad", "Delta theta", axis.path, samples));
-    series_elevator_ = schema.Add(OutputColumn::Series(series + "elevator_rad", "rad",
-                                                       "Elevator deflection (positive trailing edge down)",
-                                                       axis.path, samples));
-    // The air motion the airplane met (docs/model.md §9): 0 in still air.
-    series_u_g_ = schema.Add(OutputColumn::Series(
-        series + "u_g_mps", "m/s",
-        "Air velocity along x at the airplane: mean wind + turbulence + a u gust (a headwind is negative)",
-        axis.path, samples));
-    series_w_g_ = schema.Add(OutputColumn::Series(
-        series + "w_g_mps", "m/s",
-        "Air velocity along z at the airplane (positive down): turbulence + a w gust", axis.path, samples));
-    if (config_.disturbance.pitch_rate_gust) {
-      series_q_g_ = schema.Add(OutputColumn::Series(series + "q_g_radps", "rad/s",
-                                                    "Pitch-rate gust q_g (Dryden)", axis.path, samples));
-    }
-    samples_ = samples;
+    config_.series_interval_s = storage.output_dt_s;
+    samples_ = series_.Declare(
+        schema, "open_loop", "Time since the start of each open-loop run; samples after a run ended are NaN",
+        config_.duration_s, storage.output_dt_s, config_.disturbance.pitch_rate_gust);
   }
 
   std::vector<FieldRecord> SettingsFields() const override { return ListFields(config_); }
@@ -115,7 +82,7 @@ class OpenLoopAnalysis final : public Analysis {
     const OpenLoopSummary& s = result.summary;
     if (s.cancelled) return AnalysisOutcome::Cancelled();
     summary_.Fill(s, row);
-    if (samples_ > 0) StoreSeries(result.series, row);
+    if (samples_ > 0) series_.Store(result.series, row);
     if (s.end_event == OpenLoopEndEvent::kDiverged) {
       return AnalysisOutcome::Failed(s.message.empty() ? "diverged" : s.message);
     }
@@ -123,40 +90,14 @@ class OpenLoopAnalysis final : public Analysis {
   }
 
  private:
-  // The simulation samples every dt and once more at the end; keep the samples on the grid.
-  void StoreSeries(const OpenLoopSeries& series, OutputRow& row) const {
-    const std::pair<int, const std::vector<double>*> columns[] = {
-        {series_height_, &series.height_m},
-        {series_speed_, &series.speed_mps},
-        {series_w_, &series.delta_normal_velocity_mps},
-        {series_q_, &series.pitch_rate_radps},
-        {series_theta_, &series.delta_pitch_rad},
-        {series_elevator_, &series.elevator_rad}};
-    const bool air = !series.u_g_mps.empty();
-    const bool pitch_gust = series_q_g_ >= 0;
-    for (std::size_t i = 0; i < series.time_s.size(); ++i) {
-      const double position = series.time_s[i] / dt_s_;
-      const double k = std::round(position);
-      if (std::abs(position - k) * dt_s_ > kGridTolerance_s || k < 0 || k >= samples_) continue;
-      const int sample = static_cast<int>(k);
-      for (const auto& [column, values] : columns) row.Slot(column)[sample] = (*values)[i];
-      row.Slot(series_u_g_)[sample] = air ? series.u_g_mps[i] : 0.0;
-      row.Slot(series_w_g_)[sample] = air ? series.w_g_mps[i] : 0.0;
-      if (pitch_gust) row.Slot(series_q_g_)[sample] = air ? series.q_g_radps[i] : 0.0;
-    }
-  }
-
   OpenLoopConfig config_;
   ParameterId height_ = RequireParameter("height_m");
   ParameterId speed_ = RequireParameter("speed_mps");
   ParameterId amplitude_ = RequireParameter("pulse_amplitude_deg");
   ParameterId duration_ = RequireParameter("pulse_duration_s");
   DescribedColumns<OpenLoopSummary> summary_;
-  int series_height_ = 0, series_speed_ = 0, series_w_ = 0, series_q_ = 0, series_theta_ = 0,
-      series_elevator_ = 0, series_u_g_ = 0, series_w_g_ = 0;
-  int series_q_g_ = -1;
+  DescribedSeries<OpenLoopSeries> series_;
   int samples_ = 0;
-  double dt_s_ = 0;
 };
 
 }  // namespace

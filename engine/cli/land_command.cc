@@ -17,6 +17,7 @@
 #include "engine/cli/described_output.h"
 #include "engine/cli/model_flags.h"
 #include "engine/cli/record_json.h"
+#include "engine/cli/series_output.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/control/landing_simulation.h"
@@ -122,17 +123,7 @@ int RunLand(const LandFlags& flags) {
 
   if (flags.format == "json") {
     Json series = nullptr;
-    if (!flags.summary_only) {
-      series = Json::object();
-      Json phase = Json::array();
-      for (const LandingSample& s : result.series) phase.push_back(std::string(ToString(s.phase)));
-      for (const LandingSeriesColumn& column : LandingSeriesColumns(config)) {
-        Json values = Json::array();
-        for (const LandingSample& s : result.series) values.push_back(Json(JsonNumber(column.value(s))));
-        series[std::string(column.name)] = std::move(values);
-      }
-      series["phase"] = std::move(phase);
-    }
+    if (!flags.summary_only) series = SeriesJson<Json>(result.series, LandingSeriesContents(config));
     std::cout << Json{{"run",
                        RecordJson<Json>([&](auto& sink) { LandingRunRecord(config, result, model, sink); })},
                       {"summary", SummaryJson(result)},
@@ -146,19 +137,7 @@ int RunLand(const LandFlags& flags) {
   if (flags.summary_only) {
     out += CsvHeader(result) + "\n" + CsvRow(result, Number) + "\n";
   } else {
-    // phase after the still-air columns, so that they are as before, and the air motion's after it.
-    const std::vector<LandingSeriesColumn> columns = LandingSeriesColumns(config);
-    auto line = [&](auto cell, const std::string& phase) {
-      std::string text;
-      for (std::size_t c = 0; c <= columns.size(); ++c) {
-        if (c > 0) text += ",";
-        text += c < kStillAirSeriesColumns ? cell(c) : c == kStillAirSeriesColumns ? phase : cell(c - 1);
-      }
-      return text + "\n";
-    };
-    out += line([&](std::size_t c) { return std::string(columns[c].name); }, "phase");
-    for (const LandingSample& s : result.series)
-      out += line([&](std::size_t c) { return Number(columns[c].value(s)); }, std::string(ToString(s.phase)));
+    out += SeriesCsv(result.series, LandingSeriesContents(config), Number);
   }
   std::cout << out;
   if (result.outcome == LandingOutcome::kDesignFailed)

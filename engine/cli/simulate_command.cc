@@ -13,6 +13,7 @@
 #include "engine/cli/described_output.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/series_output.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
 #include "engine/simulation/open_loop.h"
@@ -75,27 +76,6 @@ std::string Number(double value) {
   return buffer;
 }
 
-// Column names (unit-suffixed) and the series columns, in the CSV and JSON order; the air motion
-// (docs/model.md §9) only when the run had a disturbance.
-std::vector<std::pair<const char*, const std::vector<double>*>> SeriesColumns(const OpenLoopSeries& s) {
-  std::vector<std::pair<const char*, const std::vector<double>*>> columns = {
-      {"time_s", &s.time_s},
-      {"delta_speed_mps", &s.delta_speed_mps},
-      {"delta_normal_velocity_mps", &s.delta_normal_velocity_mps},
-      {"pitch_rate_radps", &s.pitch_rate_radps},
-      {"delta_pitch_rad", &s.delta_pitch_rad},
-      {"delta_height_m", &s.delta_height_m},
-      {"height_m", &s.height_m},
-      {"speed_mps", &s.speed_mps},
-      {"elevator_rad", &s.elevator_rad}};
-  if (!s.u_g_mps.empty()) {
-    columns.push_back({"u_g_mps", &s.u_g_mps});
-    columns.push_back({"w_g_mps", &s.w_g_mps});
-  }
-  if (!s.q_g_radps.empty()) columns.push_back({"q_g_radps", &s.q_g_radps});
-  return columns;
-}
-
 int RunSimulate(const SimulateFlags& flags) {
   flags.described.Apply();
   RequireFormat(flags.format, {"csv", "json"});
@@ -112,14 +92,7 @@ int RunSimulate(const SimulateFlags& flags) {
 
   if (flags.format == "json") {
     nlohmann::json series = nullptr;
-    if (!flags.summary_only) {
-      series = nlohmann::json::object();
-      for (const auto& [name, column] : SeriesColumns(result.series)) {
-        nlohmann::json values = nlohmann::json::array();
-        for (double v : *column) values.push_back(JsonNumber(v));
-        series[name] = std::move(values);
-      }
-    }
+    if (!flags.summary_only) series = SeriesJson<nlohmann::json>(result.series, result.series.contents());
     // The settings under their keys (OpenLoopConfig::Describe), in the keys' units, and the model.
     nlohmann::json run = FieldsJson(config);
     run["aircraft"] = model.aircraft().name;
@@ -138,14 +111,7 @@ int RunSimulate(const SimulateFlags& flags) {
   if (flags.summary_only) {
     out += CsvHeader(result.summary) + "\n" + CsvRow(result.summary, Number) + "\n";
   } else {
-    const auto columns = SeriesColumns(result.series);
-    for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + std::string(columns[c].first);
-    out += "\n";
-    for (std::size_t row = 0; row < result.series.time_s.size(); ++row) {
-      for (std::size_t c = 0; c < columns.size(); ++c)
-        out += (c ? "," : "") + Number((*columns[c].second)[row]);
-      out += "\n";
-    }
+    out += SeriesCsv(result.series, result.series.contents(), Number);
   }
   std::cout << out;
   return 0;

@@ -472,34 +472,13 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
 
 }  // namespace
 
-std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config) {
-  static constexpr LandingSeriesColumn kColumns[] = {
-      {"time_s", [](const LandingSample& s) { return s.time_s; }},
-      {"height_m", [](const LandingSample& s) { return s.height_m; }},
-      {"reference_height_m", [](const LandingSample& s) { return s.reference_height_m; }},
-      {"tracking_error_m", [](const LandingSample& s) { return s.tracking_error_m; }},
-      {"speed_mps", [](const LandingSample& s) { return s.speed_mps; }},
-      {"delta_w_mps", [](const LandingSample& s) { return s.delta_w_mps; }},
-      {"pitch_rate_degps", [](const LandingSample& s) { return s.pitch_rate_radps * kDegreesPerRadian; }},
-      {"pitch_deg", [](const LandingSample& s) { return s.pitch_rad * kDegreesPerRadian; }},
-      {"sink_rate_mps", [](const LandingSample& s) { return s.sink_rate_mps; }},
-      {"elevator_deg", [](const LandingSample& s) { return s.elevator_rad * kDegreesPerRadian; }},
-      {"elevator_command_deg",
-       [](const LandingSample& s) { return s.elevator_command_rad * kDegreesPerRadian; }},
-      {"compensator_m_s", [](const LandingSample& s) { return s.compensator; }},
-      {"error_integral_m_s", [](const LandingSample& s) { return s.error_integral; }},
-      // The air motion the airplane met (docs/model.md §9).
-      {"u_g_mps", [](const LandingSample& s) { return s.u_g_mps; }},
-      {"w_g_mps", [](const LandingSample& s) { return s.w_g_mps; }},
-      {"q_g_radps", [](const LandingSample& s) { return s.q_g_radps; }},
-  };
-  static_assert(std::size(kColumns) == kStillAirSeriesColumns + 3);
+SeriesContents LandingSeriesContents(const LandingConfig& config) {
   DisturbanceOptions still = config.disturbance;
   still.pitch_rate_gust = false;  // needs the aircraft's span; it makes no air motion of its own
-  std::size_t count = kStillAirSeriesColumns;
-  if (DisturbanceField(still, config.seed, config.run_index).active())
-    count += config.disturbance.pitch_rate_gust ? 3 : 2;
-  return {std::begin(kColumns), std::begin(kColumns) + count};
+  SeriesContents contents;
+  contents.disturbance = DisturbanceField(still, config.seed, config.run_index).active();
+  contents.pitch_rate_gust = contents.disturbance && config.disturbance.pitch_rate_gust;
+  return contents;
 }
 
 LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& result) {

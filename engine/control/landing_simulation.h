@@ -63,22 +63,46 @@ struct LandingSample {
   double u_g_mps = 0;
   double w_g_mps = 0;
   double q_g_radps = 0;
+
+  /// The quantities (engine/common/series.h): series/landing/<key> in the archive (those stored),
+  /// `gesweep land`'s CSV and JSON, gesweep.land's series; SI, angles in radians.
+  template <class V>
+  static void DescribeSeries(V& v) {
+    using S = LandingSample;
+    v(SeriesField("time_s", &S::time_s).Unit("s").Axis().Doc("Time since the start of the landing"));
+    v(SeriesField("height_m", &S::height_m).Unit("m").Doc("Height H of the mean chord above ground"));
+    v(SeriesField("reference_height_m", &S::reference_height_m)
+          .Unit("m")
+          .Doc("Height of the glide path, or H_ref in the flare"));
+    v(SeriesField("tracking_error_m", &S::tracking_error_m).Unit("m").Doc("H minus the reference"));
+    v(SeriesField("distance_past_transmitter_m", &S::distance_past_transmitter_m)
+          .Unit("m")
+          .Doc("Along-track distance past the glide-slope transmitter: u0 (t - t_transmitter) in still "
+               "air, the ground position with a disturbance"));
+    v(SeriesField("speed_mps", &S::speed_mps).Unit("m/s").Doc("Speed u"));
+    v(SeriesField("delta_w_mps", &S::delta_w_mps).Unit("m/s").Doc("Delta w, positive down"));
+    v(SeriesField("pitch_rate_radps", &S::pitch_rate_radps).Unit("rad/s").Doc("Pitch rate q"));
+    v(SeriesField("pitch_rad", &S::pitch_rad).Unit("rad").Doc("Pitch angle theta"));
+    v(SeriesField("sink_rate_mps", &S::sink_rate_mps).Unit("m/s").Doc("Sink rate -dH/dt, positive down"));
+    v(SeriesField("elevator_rad", &S::elevator_rad)
+          .Unit("rad")
+          .Doc("Elevator deflection (actuator position)"));
+    v(SeriesField("elevator_command_rad", &S::elevator_command_rad)
+          .Unit("rad")
+          .Doc("Elevator command before the limits"));
+    v(SeriesField("phase", &S::phase).Doc("0 glide slope, 1 flare"));
+    v(SeriesField("compensator_m_s", &S::compensator).Unit("m s").NotStored().Doc("Compensator state x_c"));
+    v(SeriesField("error_integral_m_s", &S::error_integral)
+          .Unit("m s")
+          .NotStored()
+          .Doc("Integral of the tracking error epsilon_c"));
+    DescribeAirMotion<S>(v);
+  }
 };
 
-/// A column of a landing's series as `gesweep land` and gesweep.land give it (the CSV's names, angles
-/// in degrees): its name and its value at a sample.
-struct LandingSeriesColumn {
-  std::string_view name;
-  double (*value)(const LandingSample&);
-};
-
-/// How many of the series' columns are those of still air (the CSV writes phase after them).
-inline constexpr std::size_t kStillAirSeriesColumns = 13;
-
-/// The series' columns of a landing flown with `config`, in order: the kStillAirSeriesColumns of still
-/// air, then the air motion the airplane met (u_g_mps, w_g_mps, and q_g_radps with the pitch-rate gust)
-/// when it had a disturbance. The text column phase (ToString(LandingPhase)) goes beside them.
-std::vector<LandingSeriesColumn> LandingSeriesColumns(const LandingConfig& config);
+/// Which optional quantities a landing flown with `config` has in its series (CSV, JSON, Python):
+/// the air motion with a moving atmosphere, q_g with the pitch-rate gust.
+SeriesContents LandingSeriesContents(const LandingConfig& config);
 
 /// The result of one landing. Quantities that did not occur (no touchdown, no flare) are NaN.
 struct LandingResult {

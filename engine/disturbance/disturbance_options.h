@@ -7,6 +7,7 @@
 #include <string>
 
 #include "engine/common/describe.h"
+#include "engine/common/series.h"
 #include "engine/disturbance/mean_wind.h"
 
 namespace gesweep {
@@ -109,5 +110,25 @@ double EffectiveSigmaW(const DisturbanceOptions& options);
 
 /// Throws InputError(source, key, value, expectation) for the first option out of range.
 void ValidateDisturbanceOptions(const DisturbanceOptions& options, const std::string& source);
+
+/// The air motion a time response met (docs/model.md §9), as quantities of its series
+/// (engine/common/series.h): u_g and w_g with a moving atmosphere, q_g with the pitch-rate gust. S is
+/// the series struct (the open loop's columns, a landing's sample) with members of these names.
+template <class S, class V>
+void DescribeAirMotion(V& v) {
+  v(SeriesField("u_g_mps", &S::u_g_mps)
+        .Unit("m/s")
+        .Only(SeriesPresence::kDisturbance)
+        .Doc("Air velocity along x at the airplane: mean wind + turbulence + a u gust (a headwind is "
+             "negative)"));
+  v(SeriesField("w_g_mps", &S::w_g_mps)
+        .Unit("m/s")
+        .Only(SeriesPresence::kDisturbance)
+        .Doc("Air velocity along z at the airplane (positive down): turbulence + a w gust"));
+  v(SeriesField("q_g_radps", &S::q_g_radps)
+        .Unit("rad/s")
+        .Only(SeriesPresence::kPitchRateGust)
+        .Doc("Pitch-rate gust q_g (Dryden)"));
+}
 
 }  // namespace gesweep

@@ -1,4 +1,5 @@
 // gesweep.land: the landing; its settings, summary, design and series.
+#include "engine/python/series_dict.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
@@ -40,22 +41,6 @@ void TakeQWeights(py::dict& options, LandingConfig& config) {
         ToNumber(weights[static_cast<std::size_t>(i)], "q_weights." + std::string(LandingStateNames()[i]));
 }
 
-/// The series' columns of `gesweep land`'s CSV and JSON (LandingSeriesColumns), and phase.
-py::dict LandingSeriesDict(const LandingConfig& config, const std::vector<LandingSample>& samples) {
-  const auto n = static_cast<py::ssize_t>(samples.size());
-  py::dict out;
-  for (const LandingSeriesColumn& column : LandingSeriesColumns(config)) {
-    py::array_t<double> values(n);
-    double* data = values.mutable_data();
-    for (py::ssize_t i = 0; i < n; ++i) data[i] = column.value(samples[static_cast<std::size_t>(i)]);
-    out[py::str(std::string(column.name))] = values;
-  }
-  py::list phase;
-  for (const LandingSample& x : samples) phase.append(std::string(ToString(x.phase)));
-  out["phase"] = phase;
-  return out;
-}
-
 py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, const py::kwargs& kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
@@ -80,7 +65,7 @@ py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, c
   py::dict summary = FieldsDict(r);
   summary["design"] = RecordDict([&](auto& sink) { DesignRecord(r.design, sink); });
   py::object series = py::none();
-  if (!summary_only) series = LandingSeriesDict(config, r.series);
+  if (!summary_only) series = SeriesDict(r.series, LandingSeriesContents(config));
   return py::make_tuple(RecordDict([&](auto& sink) { LandingRunRecord(config, r, *model, sink); }), summary,
                         series);
 }

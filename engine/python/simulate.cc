@@ -1,4 +1,5 @@
 // gesweep.simulate: the open-loop response; its settings and summary from their descriptions.
+#include "engine/python/series_dict.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
@@ -51,25 +52,7 @@ py::tuple Simulate(const PyAircraft& aircraft, const py::object& height_m, const
   run["seed"] = config.seed;
   run["run_index"] = config.run_index;
   py::object series = py::none();
-  if (!summary_only) {
-    const OpenLoopSeries& s = result.series;
-    py::dict columns;
-    columns["time_s"] = Array(s.time_s);
-    columns["delta_speed_mps"] = Array(s.delta_speed_mps);
-    columns["delta_normal_velocity_mps"] = Array(s.delta_normal_velocity_mps);
-    columns["pitch_rate_radps"] = Array(s.pitch_rate_radps);
-    columns["delta_pitch_rad"] = Array(s.delta_pitch_rad);
-    columns["delta_height_m"] = Array(s.delta_height_m);
-    columns["height_m"] = Array(s.height_m);
-    columns["speed_mps"] = Array(s.speed_mps);
-    columns["elevator_rad"] = Array(s.elevator_rad);
-    if (!s.u_g_mps.empty()) {  // the air motion met, as the CSV has it: only with a disturbance
-      columns["u_g_mps"] = Array(s.u_g_mps);
-      columns["w_g_mps"] = Array(s.w_g_mps);
-    }
-    if (!s.q_g_radps.empty()) columns["q_g_radps"] = Array(s.q_g_radps);
-    series = columns;
-  }
+  if (!summary_only) series = SeriesDict(result.series, result.series.contents());
   return py::make_tuple(run, FieldsDict(result.summary), series);
 }
 

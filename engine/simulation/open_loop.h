@@ -258,6 +258,28 @@ struct OpenLoopSeries {
   std::vector<double> u_g_mps;
   std::vector<double> w_g_mps;
   std::vector<double> q_g_radps;
+
+  /// Which optional quantities the series has: the air motion only when the run had a disturbance.
+  SeriesContents contents() const { return {!u_g_mps.empty(), !q_g_radps.empty()}; }
+
+  /// The quantities (engine/common/series.h): series/open_loop/<key> in the archive (those stored),
+  /// simulate's CSV and JSON, gesweep.simulate's series. The state's keys are kStateComponents'.
+  template <class V>
+  static void DescribeSeries(V& v) {
+    using S = OpenLoopSeries;
+    v(SeriesField("time_s", &S::time_s).Unit("s").Axis().Doc("Time since the start of the run"));
+    v(SeriesField("height_m", &S::height_m).Unit("m").Doc("Height H"));
+    v(SeriesField("speed_mps", &S::speed_mps).Unit("m/s").Doc("Speed u"));
+    v(SeriesField("delta_u_mps", &S::delta_speed_mps).Unit("m/s").NotStored().Doc("Delta u"));
+    v(SeriesField("delta_w_mps", &S::delta_normal_velocity_mps).Unit("m/s").Doc("Delta w (positive down)"));
+    v(SeriesField("pitch_rate_radps", &S::pitch_rate_radps).Unit("rad/s").Doc("Pitch rate q"));
+    v(SeriesField("delta_theta_rad", &S::delta_pitch_rad).Unit("rad").Doc("Delta theta"));
+    v(SeriesField("delta_h_m", &S::delta_height_m).Unit("m").NotStored().Doc("Delta H"));
+    v(SeriesField("elevator_rad", &S::elevator_rad)
+          .Unit("rad")
+          .Doc("Elevator deflection (positive trailing edge down)"));
+    DescribeAirMotion<S>(v);
+  }
 };
 
 /// A run's result: the summary, and the series when series_interval_s > 0 (else empty).

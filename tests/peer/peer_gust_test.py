@@ -102,8 +102,8 @@ class PeerGustTest(unittest.TestCase):
         engine = self.engine_series()
         times = np.array(engine["time_s"], dtype=float)
         peer, w_g = self.peer_series(times)
-        columns = {"delta_speed_mps": 0, "delta_normal_velocity_mps": 1, "pitch_rate_radps": 2,
-                   "delta_pitch_rad": 3, "delta_height_m": 4}
+        columns = {"delta_u_mps": 0, "delta_w_mps": 1, "pitch_rate_radps": 2, "delta_theta_rad": 3,
+                   "delta_h_m": 4}
         largest = 0.0
         for name, row in columns.items():
             values = np.array(engine[name], dtype=float)

@@ -194,8 +194,8 @@ def test_simulate_frozen_response_is_linear(gesweep, ance):
     one = gesweep.simulate(ance, 8.0, 40.0, pulse_amplitude_deg=1, **base).series
     two = gesweep.simulate(ance, 8.0, 40.0, pulse_amplitude_deg=2, **base).series
     linearity_tolerance = 1e-12  # relative: the frozen model is linear, only rounding differs
-    scale = np.abs(one["delta_pitch_rad"]).max()
-    np.testing.assert_allclose(two["delta_pitch_rad"], 2 * one["delta_pitch_rad"], atol=linearity_tolerance * scale)
+    scale = np.abs(one["delta_theta_rad"]).max()
+    np.testing.assert_allclose(two["delta_theta_rad"], 2 * one["delta_theta_rad"], atol=linearity_tolerance * scale)
 
 
 def test_simulate_summary_only_and_output_dt(gesweep, ance):
@@ -218,7 +218,7 @@ def test_land_equals_cli(gesweep, ance):
                                                                       design["closed_loop_eigenvalues_per_s"]]
     series = gesweep.land(ance, glide_slope_deg=3).series
     assert series["phase"].iloc[-1] in ("flare", "glide_slope")
-    assert {"time_s", "height_m", "elevator_deg", "pitch_deg"} <= set(series.columns)
+    assert {"time_s", "height_m", "elevator_rad", "pitch_rad"} <= set(series.columns)
 
 
 def same_value(mine, theirs):

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from conftest import ANCE, cli_json
+from conftest import ANCE, cli, cli_json
 
 SPEED = 32.0208  # the paper's speed, m/s
 
@@ -74,3 +74,41 @@ def test_landing_design_and_run_are_one_record(gesweep, ance, flags, kwargs):
     assert_same_record(as_json(mine.run), theirs["run"], "run")
     assert_same_record(as_json(mine.summary["design"]), theirs["summary"]["design"], "design")
     assert all(isinstance(z, complex) for z in mine.summary["design"]["closed_loop_eigenvalues_per_s"])
+
+
+def frame_as_json(frame):
+    """A module series (a DataFrame) as the command's JSON would write it: key -> list."""
+    return {key: as_json(list(frame[key])) for key in frame.columns}
+
+
+@pytest.mark.parametrize("flags,kwargs", [
+    ((), {}),                                                               # still air: no air motion
+    (("--wind-20ft-mps", -7.7, "--turbulence", "dryden", "--pitch-rate-gust", "--seed", 3),
+     {"wind_20ft_mps": -7.7, "turbulence": "dryden", "pitch_rate_gust": True, "seed": 3}),
+])
+def test_open_loop_series_is_one_description(gesweep, ance, flags, kwargs):
+    """simulate's CSV header, its JSON series and gesweep.simulate's series: the same quantities, in the
+    same order (CSV and module), with the same values, exactly."""
+    common = ("simulate", "--aircraft", ANCE, "--height-m", 2.5, "--speed-mps", SPEED, "--duration-s", 3,
+              "--output-dt-s", 0.05, *flags)
+    theirs = cli_json(*common)["series"]
+    header = cli(*common)[1].splitlines()[0].split(",")
+    mine = gesweep.simulate(ance, 2.5, SPEED, duration_s=3, output_dt_s=0.05, **kwargs).series
+    assert list(mine.columns) == header
+    assert_same_record(frame_as_json(mine), theirs, "series")
+    # The archive's names: the state's components as the summary's final_* columns have them.
+    assert {"delta_u_mps", "delta_w_mps", "pitch_rate_radps", "delta_theta_rad", "delta_h_m"} <= set(header)
+    assert ("u_g_mps" in header) == ("q_g_radps" in header) == bool(flags)
+
+
+def test_landing_series_is_one_description(gesweep, ance):
+    """land's CSV header, its JSON series and gesweep.land's series: one description (SI, radians), the
+    phase as its name."""
+    common = ("land", "--aircraft", ANCE, "--start-height-m", 30, "--output-interval-s", 0.5)
+    theirs = cli_json(*common)["series"]
+    header = cli(*common)[1].splitlines()[0].split(",")
+    mine = gesweep.land(ance, start_height_m=30, output_interval_s=0.5).series
+    assert list(mine.columns) == header
+    assert_same_record(frame_as_json(mine), theirs, "series")
+    assert set(theirs["phase"]) == {"glide_slope", "flare"}
+    assert {"pitch_rad", "elevator_rad", "pitch_rate_radps", "distance_past_transmitter_m"} <= set(header)

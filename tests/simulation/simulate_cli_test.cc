@@ -44,10 +44,9 @@ TEST(SimulateCliTest, CsvHasUnitSuffixedHeaderAndOneRowPerSample) {
   std::istringstream lines(r.out);
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(
-      header,
-      "time_s,delta_speed_mps,delta_normal_velocity_mps,pitch_rate_radps,delta_pitch_rad,delta_height_m,"
-      "height_m,speed_mps,elevator_rad");
+  EXPECT_EQ(header,
+            "time_s,height_m,speed_mps,delta_u_mps,delta_w_mps,pitch_rate_radps,delta_theta_rad,delta_h_m,"
+            "elevator_rad");
   int rows = 0;
   std::string line, last;
   while (std::getline(lines, line)) {

@@ -267,9 +267,9 @@ def simulate(aircraft, height_m, speed_mps, *, summary_only=False, output_dt_s=N
     interval, s (None: the step). Ctrl-C (KeyboardInterrupt) stops it within a step.
     Returns Response(run, summary, series): run and summary are dicts with the keys of
     `gesweep simulate --format json` (numbers in the key's unit; nan where the JSON has null), series a
-    pandas DataFrame with the CSV's columns (time_s, delta_speed_mps, delta_normal_velocity_mps,
-    pitch_rate_radps, delta_pitch_rad, delta_height_m, height_m, speed_mps, elevator_rad), or None with
-    summary_only=True.
+    pandas DataFrame with the CSV's columns (time_s, height_m, speed_mps, delta_u_mps, delta_w_mps,
+    pitch_rate_radps, delta_theta_rad, delta_h_m, elevator_rad; u_g_mps, w_g_mps with a disturbance),
+    or None with summary_only=True.
     Settings (keywords; the fields of the engine's OpenLoopConfig, as `gesweep simulate --help`):
 """
     run_, summary, series = _gesweep.simulate(_aircraft(aircraft), height_m, speed_mps, summary_only, output_dt_s,
