@@ -7,6 +7,10 @@
 #include <string_view>
 #include <system_error>
 
+#include "engine/archive/archive_error.h"
+#include "engine/cli/request_names.h"
+#include "engine/common/errors.h"
+
 namespace gesweep::cli {
 namespace {
 
@@ -44,6 +48,30 @@ std::string FailureInWords(const std::exception& error) {
   return "an internal failure (" +
          std::string(dynamic_cast<const std::logic_error*>(&error) ? "logic" : "runtime") + " error)" +
          std::string(kReport);
+}
+
+int FailureLine(const std::exception_ptr& error, std::string& line) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const InputError& e) {
+    // The engine names remedies ("force", "no_write"); the command line words them (request_names.h).
+    line = EscapeForMessage(ForCommandLine(e).what());
+    return 2;
+  } catch (const ArchiveError& e) {
+    // An archive's I/O the command did not catch: its own line (the archive and the cause).
+    line = EscapeForMessage(e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    // Not a person's input and not caught by the command: one line in the project's words, never
+    // a library's own text (issue 26, item 6), the I/O exit code.
+    line = EscapeForMessage(FailureInWords(e));
+    return 1;
+  } catch (...) {
+    // Not a std::exception (gesweep throws none; a library might): still one line and exit code 1,
+    // never std::terminate.
+    line = "an unexpected exception (not a std::exception)";
+    return 1;
+  }
 }
 
 }  // namespace gesweep::cli

@@ -13,4 +13,11 @@ namespace gesweep::cli {
 /// is the operating system's (a file system error names the path and the system's reason).
 std::string FailureInWords(const std::exception& error);
 
+/// What `gesweep` prints after "gesweep: error: " for a failure that ends a command (`error`, from
+/// std::current_exception()), escaped for one line, and the exit code: 2 for an InputError (its
+/// request fields and remedies in the command line's words), 1 for an ArchiveError or anything else
+/// (FailureInWords). main.cc prints every failure no command caught so; `gesweep risk --mpi` the one
+/// its ranks agree on.
+int FailureLine(const std::exception_ptr& error, std::string& line);
+
 }  // namespace gesweep::cli

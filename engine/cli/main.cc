@@ -9,7 +9,6 @@
 #include <set>
 #include <string>
 
-#include "engine/archive/archive_error.h"
 #include "engine/archive/archive_identity.h"
 #include "engine/cli/command.h"
 #include "engine/cli/failure_text.h"
@@ -126,23 +125,11 @@ int main(int argc, char** argv) {
   });
   try {
     return Run(argc, argv);
-  } catch (const gesweep::InputError& e) {
-    // The engine names remedies ("force", "no_write"); the command line words them (request_names.h).
-    std::cerr << "gesweep: error: " << EscapeForMessage(gesweep::cli::ForCommandLine(e).what()) << "\n";
-    return 2;
-  } catch (const gesweep::ArchiveError& e) {
-    // An archive's I/O the command did not catch: its own line (the archive and the cause).
-    std::cerr << "gesweep: error: " << EscapeForMessage(e.what()) << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    // Not a person's input and not caught by the command: one line in the project's words, never
-    // a library's own text (issue 26, item 6), the I/O exit code.
-    std::cerr << "gesweep: error: " << EscapeForMessage(gesweep::cli::FailureInWords(e)) << "\n";
-    return 1;
   } catch (...) {
-    // Not a std::exception (gesweep throws none; a library might): still one line and exit code 1,
-    // never std::terminate.
-    std::cerr << "gesweep: error: an unexpected exception (not a std::exception)\n";
-    return 1;
+    // One line and its exit code (failure_text.h): 2 for a person's bad input, 1 otherwise.
+    std::string line;
+    const int code = gesweep::cli::FailureLine(std::current_exception(), line);
+    std::cerr << "gesweep: error: " << line << "\n";
+    return code;
   }
 }

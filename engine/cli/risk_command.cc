@@ -1,6 +1,7 @@
 // gesweep risk: the landing risk by subset simulation (docs/dispersion.md, "Landing risk by subset
 // simulation").
 //   gesweep risk STUDY -o ARCHIVE [--threads N] [--resume] [--force] [--format table|json] [-q]
+//   mpirun -n R gesweep risk STUDY -o ARCHIVE --mpi [--threads N] ...   (the same archive, bit for bit)
 //   gesweep risk ARCHIVE --replay ROW [--format table|json]
 // STUDY has a [subset] table (the limits and the method). The run journals every batch of landings
 // (ARCHIVE.journal) so that a killed run resumes with --resume to the same estimate bit for bit; the
@@ -9,18 +10,25 @@
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "engine/archive/archive_lock.h"
 #include "engine/archive/provenance.h"
 #include "engine/cli/command.h"
+#include "engine/cli/failure_text.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
 #include "engine/cli/risk_output.h"
@@ -31,6 +39,10 @@
 #include "engine/risk/risk_archive.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
+#ifdef GESWEEP_HAVE_MPI
+#include "engine/mpi/mpi_runner.h"
+#include "engine/mpi/risk_exchange.h"
+#endif
 
 namespace gesweep::cli {
 namespace {
@@ -51,6 +63,7 @@ struct RiskFlags {
   bool resume = false;
   bool force = false;
   bool quiet = false;
+  bool mpi = false;
   DescribedFlags described{{{"quiet", "-q"}}};
 
   template <class V>
@@ -61,6 +74,9 @@ struct RiskFlags {
     v(Field("force", &force)
           .Doc("Replace an existing archive (and discard the journal of an interrupted run)"));
     v(Field("quiet", &quiet).Doc("No progress lines"));
+    v(Field("mpi", &mpi)
+          .Doc("Spread each batch of landings over MPI ranks: mpirun -n R gesweep risk ... --mpi (the same "
+               "archive as one process, bit for bit)"));
   }
 };
 
@@ -70,6 +86,7 @@ std::string CommandLine(const RiskFlags& flags) {
   if (flags.threads) line += " --threads " + std::to_string(*flags.threads);
   if (flags.resume) line += " --resume";
   if (flags.force) line += " --force";
+  if (flags.mpi) line += " --mpi";
   return line;
 }
 
@@ -407,9 +424,28 @@ bool CheckRiskOutputs(const RiskFlags& flags, const std::filesystem::path& outpu
   return journal_exists;
 }
 
-int RunRiskCommand(const RiskFlags& flags) {
+// What a run needs before its first landing: the plan and the spec (on every process), and on the
+// process that writes (the only one, or MPI rank 0) the archive's lock, the journal read back (the
+// resume's landings: `cache`) and its writer.
+struct RiskSetup {
+  std::unique_ptr<SweepPlan> plan;
+  risk::RiskSpec spec;
+  std::optional<ArchiveLock> lock;
+  std::map<EvaluationKey, Evaluation> cache;
+  std::int64_t resumed_records = 0;
+  bool torn_tail = false;
+  std::unique_ptr<risk::JournalWriter> journal;
+};
+
+// Reads the study and its [subset] table into `s`; with `writes`, also checks -o, --resume and
+// --force against the files there, takes the lock and opens the journal. Throws InputError (a
+// person's mistake) or ArchiveError.
+void SetUpRisk(const RiskFlags& flags, bool writes, RiskSetup& s) {
   CheckFormat(flags);
-  if (flags.replay) return Replay(flags);
+  if (flags.replay) {
+    throw InputError("command line", "--mpi", "",
+                     "not with --replay: a replay flies one landing, in one process (leave out --mpi)");
+  }
   Study study = LoadStudy(flags.input);
   if (flags.output.empty()) {
     throw InputError("command line", "-o", "",
@@ -417,65 +453,198 @@ int RunRiskCommand(const RiskFlags& flags) {
   }
   const std::filesystem::path output(flags.output), journal = risk::JournalPath(output);
   const std::filesystem::path partial(output.string() + ".partial");
-  CheckOutputPath(output, OutputKind::kFile, study.inputs, "-o", {journal, partial});
-  RequireOutputDirectory(output, "-o");
+  if (writes) {
+    CheckOutputPath(output, OutputKind::kFile, study.inputs, "-o", {journal, partial});
+    RequireOutputDirectory(output, "-o");
+  }
   if (flags.resume && flags.force) {
     throw InputError("command line", "--resume", "", "not with --force: resume a run, or start it over");
   }
-  const SweepPlan plan(std::move(study), ShardSpec{});
-  const risk::RiskSpec spec = risk::ReadRiskSpec(plan);
-  const auto value_columns = risk::RiskColumns(plan);
-  const auto value_count = static_cast<std::uint32_t>(value_columns.size());
-  return GuardArchive([&] {
-    const ArchiveLock lock = ArchiveLock::AcquireOutput(output, "-o");
-    const bool journal_exists = CheckRiskOutputs(flags, output, journal);
-    risk::JournalContents resumed;
-    if (flags.resume) {
-      resumed = risk::ReadJournal(journal, spec.fingerprint, value_count);
-    } else if (journal_exists) {
-      std::filesystem::remove(journal);
-    }
-    risk::JournalWriter writer(journal, spec.fingerprint, value_count,
-                               flags.resume ? resumed.valid_length : 0);
-    if (flags.resume && !flags.quiet) {
-      std::cerr << "gesweep: resuming from " << journal.string() << ": " << resumed.records << " landings"
-                << (resumed.torn_tail ? " (a torn last record dropped)" : "") << "\n";
-    }
-    SignalCancellation signals;
-    risk::RiskRunOptions options;
-    options.cancel = signals.flag();
-    options.cache = flags.resume ? &resumed.evaluations : nullptr;
-    options.on_batch = [&](std::span<const Evaluation> batch) { writer.Append(batch); };
-    if (!flags.quiet)
-      options.progress = [](const std::string& line) { std::cerr << "gesweep: " << line << "\n"; };
-    const int threads = flags.threads.value_or(tbb::info::default_concurrency());
-    risk::RiskRun run;
-    tbb::task_arena arena(threads);
-    arena.execute([&] { run = risk::RunRisk(plan, spec, options); });
-    if (run.cancelled || signals.cancelled()) {
-      std::cerr << "gesweep: stopped by signal " << signals.signal() << ": the landings made are in "
-                << journal.string() << "; `" << CommandLine(flags) << " --resume` continues\n";
-      return signals.exit_code();
-    }
-    risk::RiskArchive archive;
-    archive.study_path = plan.study().path;
-    archive.study_text = plan.study().text;
-    archive.fingerprint = spec.fingerprint;
-    archive.command_line = CommandLine(flags);
-    archive.result_json = ResultJson(plan, spec, run).dump(2);
-    for (const int c : value_columns)
-      archive.value_columns.push_back(plan.schema().columns[static_cast<std::size_t>(c)].path);
-    archive.evaluations = std::move(run.evaluations);
-    archive.design_points = DesignPoints(plan, spec, run);
-    risk::WriteRiskArchive(output, archive);
+  s.plan = std::make_unique<SweepPlan>(std::move(study), ShardSpec{});
+  s.spec = risk::ReadRiskSpec(*s.plan);
+  if (!writes) return;
+  const auto value_count = static_cast<std::uint32_t>(risk::RiskColumns(*s.plan).size());
+  s.lock.emplace(ArchiveLock::AcquireOutput(output, "-o"));
+  const bool journal_exists = CheckRiskOutputs(flags, output, journal);
+  std::uint64_t resume_length = 0;
+  if (flags.resume) {
+    risk::JournalContents resumed = risk::ReadJournal(journal, s.spec.fingerprint, value_count);
+    s.cache = std::move(resumed.evaluations);
+    s.resumed_records = resumed.records;
+    s.torn_tail = resumed.torn_tail;
+    resume_length = resumed.valid_length;
+  } else if (journal_exists) {
     std::filesystem::remove(journal);
-    if (flags.format == "json") {
-      std::cout << WithArchive(archive.result_json, output) << "\n";
-    } else {
-      PrintRiskTable(archive.result_json);
-      std::cout << "# written to " << output.string() << " (" << archive.evaluations.size() << " landings)\n";
+  }
+  s.journal = std::make_unique<risk::JournalWriter>(journal, s.spec.fingerprint, value_count, resume_length);
+}
+
+// The collectives around a run on MPI ranks (none for one process): the batches' exchange, the
+// largest of the ranks' values, and rank 0's value on every rank.
+struct RiskProcesses {
+  risk::BatchExchange* exchange = nullptr;
+  std::function<std::int64_t(std::int64_t)> max;
+  std::function<int(int)> from_rank0;
+  bool speaks() const { return exchange == nullptr || exchange->rank() == 0; }
+};
+
+// The finished run's archive (written whole, then the journal removed) and its table or JSON.
+void WriteRiskOutputs(const RiskFlags& flags, const RiskSetup& s, risk::RiskRun& run) {
+  const SweepPlan& plan = *s.plan;
+  const std::filesystem::path output(flags.output);
+  risk::RiskArchive archive;
+  archive.study_path = plan.study().path;
+  archive.study_text = plan.study().text;
+  archive.fingerprint = s.spec.fingerprint;
+  archive.command_line = CommandLine(flags);
+  archive.result_json = ResultJson(plan, s.spec, run).dump(2);
+  for (const int c : risk::RiskColumns(plan))
+    archive.value_columns.push_back(plan.schema().columns[static_cast<std::size_t>(c)].path);
+  archive.evaluations = std::move(run.evaluations);
+  archive.design_points = DesignPoints(plan, s.spec, run);
+  risk::WriteRiskArchive(output, archive);
+  std::filesystem::remove(risk::JournalPath(output));
+  if (flags.format == "json") {
+    std::cout << WithArchive(archive.result_json, output) << "\n";
+  } else {
+    PrintRiskTable(archive.result_json);
+    std::cout << "# written to " << output.string() << " (" << archive.evaluations.size() << " landings)\n";
+  }
+}
+
+// On MPI ranks, rank 0's line of how the landings were spread: "gesweep: 940 landings flown on 3 MPI
+// ranks (landings per rank: 314 313 313)". Collective.
+void ReportRanks(const RiskFlags& flags, const risk::RiskRun& run, risk::BatchExchange& exchange) {
+  std::vector<unsigned char> mine(sizeof run.flown_here);
+  std::memcpy(mine.data(), &run.flown_here, sizeof run.flown_here);
+  const std::vector<std::vector<unsigned char>> all = exchange.AllGather(mine);
+  if (exchange.rank() != 0 || flags.quiet) return;
+  std::int64_t total = 0;
+  std::string per_rank;
+  for (const auto& bytes : all) {
+    std::int64_t flown = 0;
+    std::memcpy(&flown, bytes.data(), std::min(bytes.size(), sizeof flown));
+    total += flown;
+    per_rank += " " + std::to_string(flown);
+  }
+  std::cerr << "gesweep: " << total << " landings flown on " << all.size()
+            << " MPI ranks (landings per rank:" << per_rank << ")\n";
+}
+
+// Runs the subset simulations (every process alike) and, on the process that speaks, writes the
+// archive; the exit code, the same on every process: 0, 1 (the archive could not be written, or the
+// ranks diverged), or 128 + the signal that stopped the run (the journal kept for --resume).
+int FlyRisk(const RiskFlags& flags, RiskSetup& s, const RiskProcesses& processes) {
+  const bool speaks = processes.speaks();
+  const std::filesystem::path journal = risk::JournalPath(flags.output);
+  if (flags.resume && speaks && !flags.quiet) {
+    std::cerr << "gesweep: resuming from " << journal.string() << ": " << s.resumed_records << " landings"
+              << (s.torn_tail ? " (a torn last record dropped)" : "") << "\n";
+  }
+  SignalCancellation signals;
+  risk::RiskRunOptions options;
+  options.cancel = signals.flag();
+  options.cache = flags.resume ? &s.cache : nullptr;
+  options.exchange = processes.exchange;
+  if (s.journal) options.on_batch = [&](std::span<const Evaluation> batch) { s.journal->Append(batch); };
+  if (speaks && !flags.quiet)
+    options.progress = [](const std::string& line) { std::cerr << "gesweep: " << line << "\n"; };
+  const int threads = flags.threads.value_or(tbb::info::default_concurrency());
+  risk::RiskRun run;
+  tbb::task_arena arena(threads);
+  arena.execute([&] { run = risk::RunRisk(*s.plan, s.spec, options); });
+  // A signal after the last batch stops the run too, on every rank if on any.
+  const int signal = static_cast<int>(processes.max ? processes.max(signals.signal()) : signals.signal());
+  if (!run.diverged.empty()) {
+    if (speaks) {
+      std::cerr
+          << "gesweep: error: the MPI ranks flew different landings (" << run.diverged
+          << "): run them on machines that compute alike, or with one process; the landings made are in "
+          << journal.string() << " for --resume\n";
     }
+    return 1;
+  }
+  if (run.cancelled || signal != 0) {
+    if (speaks) {
+      std::cerr << "gesweep: stopped by signal " << signal << ": the landings made are in "
+                << journal.string() << "; `" << CommandLine(flags) << " --resume` continues\n";
+    }
+    return 128 + signal;
+  }
+  if (processes.exchange != nullptr) ReportRanks(flags, run, *processes.exchange);
+  const int code = speaks ? GuardArchive([&] {
+    WriteRiskOutputs(flags, s, run);
     return 0;
+  })
+                          : 0;
+  return processes.from_rank0 ? processes.from_rank0(code) : code;
+}
+
+// mpirun -n R gesweep risk STUDY -o ARCHIVE --mpi (docs/dispersion.md, "On MPI ranks"): every rank
+// runs the same driver and flies its share of each batch; rank 0 alone reads and writes files and
+// prints. A person's mistake on any rank is one line from rank 0, and every rank exits with its code.
+int RunRiskMpi(const RiskFlags& flags) {
+#ifdef GESWEEP_HAVE_MPI
+  MpiFinalizer finalize_after_printing;
+  MpiBatchExchange mpi;
+  const bool speaks = mpi.rank() == 0;
+  RiskSetup setup;
+  std::string error, first;
+  int code = 0;
+  try {
+    SetUpRisk(flags, speaks, setup);
+  } catch (...) {
+    code = FailureLine(std::current_exception(), error);
+  }
+  if ((code = mpi.AgreeOnError(code, error, &first)) != 0) {
+    if (speaks) std::cerr << "gesweep: error: " << first << "\n";
+    return code;
+  }
+  if (!mpi.Same(setup.spec.fingerprint)) {
+    if (speaks) {
+      std::cerr
+          << "gesweep: error: the " << mpi.ranks() << " MPI ranks did not read the same study and "
+          << "[subset] table (fingerprints differ): every node must see the same study and aircraft files\n";
+    }
+    return 2;
+  }
+  // A resume's landings: rank 0 read them from the journal; every rank takes the same ones.
+  std::vector<Evaluation> cached;
+  for (const auto& entry : setup.cache) cached.push_back(entry.second);
+  const std::vector<unsigned char> bytes = mpi.Broadcast(risk::EncodeEvaluations(cached));
+  cached.clear();
+  const auto value_count = static_cast<std::uint32_t>(risk::RiskColumns(*setup.plan).size());
+  GESWEEP_DEMAND(risk::DecodeEvaluations(bytes, value_count, cached));
+  for (auto& e : cached) setup.cache.emplace(e.key, std::move(e));
+  RiskProcesses processes{&mpi, [&](std::int64_t v) { return mpi.Max(v); },
+                          [&](int v) {
+                            const auto from =
+                                mpi.Broadcast(std::vector<unsigned char>{static_cast<unsigned char>(v)});
+                            return static_cast<int>(from.at(0));
+                          }};
+  try {
+    return FlyRisk(flags, setup, processes);
+  } catch (...) {
+    // An I/O error of rank 0's journal, or a failure nothing caught: the other ranks may wait in a
+    // collective, so every rank is ended; the journal keeps every batch before it.
+    code = FailureLine(std::current_exception(), error);
+    std::cerr << "gesweep: error: " << error << " (stopping every rank)\n";
+    AbortMpi(code);
+  }
+#else
+  (void)flags;
+  throw InputError("command line", "--mpi", "", "this gesweep was built without MPI (libopenmpi-dev)");
+#endif
+}
+
+int RunRiskCommand(const RiskFlags& flags) {
+  if (flags.mpi) return RunRiskMpi(flags);
+  CheckFormat(flags);
+  if (flags.replay) return Replay(flags);
+  return GuardArchive([&] {
+    RiskSetup setup;
+    SetUpRisk(flags, true, setup);
+    return FlyRisk(flags, setup, RiskProcesses{});
   });
 }
 

@@ -22,10 +22,16 @@
 #include "engine/archive/archive_layout.h"
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
+#include "engine/mpi/mpi_common.h"
 #include "engine/sweep/study.h"
 
 namespace gesweep {
 namespace {
+
+using mpi::AgreeOnError;
+using mpi::CheckMpi;
+using mpi::EnsureMpi;
+using mpi::kIdlePoll;
 
 // Message tags (docs/cluster.md, "MPI").
 constexpr int kTagRequest = 1;  // rank -> 0: int64[3] {batches wanted (0: I am done), runs done, runs failed}
@@ -34,37 +40,8 @@ constexpr int kTagResult = 3;   // rank -> the owning node's writer: one filtere
 constexpr int kTagFinished = 4;  // rank -> each writer: int64, the batches it sent that writer
 constexpr int kTagError = 5;     // rank -> 0: char[], why it cannot go on (stop handing out batches)
 
-// An idle main thread sleeps this long between polls: MPI's own blocking calls spin, which on a
-// shared or oversubscribed node takes a core from the compute threads.
-constexpr auto kIdlePoll = std::chrono::microseconds(200);
 // Filtered batches a rank holds for sending (back-pressure on its pipeline beyond that).
 constexpr int kOutgoingBatches = 8;
-
-class MpiError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-void CheckMpi(int code, const char* what) {
-  if (code == MPI_SUCCESS) return;
-  char text[MPI_MAX_ERROR_STRING];
-  int length = 0;
-  MPI_Error_string(code, text, &length);
-  throw MpiError(std::string("MPI error in ") + what + ": " +
-                 std::string(text, static_cast<std::size_t>(length)));
-}
-
-// MPI for the runner: initialised here when the caller has not (FUNNELED: only the main thread
-// calls MPI); finalised by FinalizeMpi once the caller has printed the outcome -- a rank that
-// finalises before its output is out may lose it when mpirun is stopping the job.
-void EnsureMpi() {
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  if (initialized) return;
-  int provided = 0;
-  CheckMpi(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
-  GESWEEP_DEMAND(provided >= MPI_THREAD_FUNNELED);
-}
 
 // ---- Who is who ----
 
@@ -167,45 +144,6 @@ std::vector<std::int64_t> PlanSignature(const SweepPlan& plan) {
           plan.design().column_count(),
           static_cast<std::int64_t>(plan.schema().columns.size()),
           doubles};
-}
-
-// Rank 0 receives one text from every rank (empty for most).
-std::vector<std::string> GatherText(const std::string& text, int ranks) {
-  const int length = static_cast<int>(text.size());
-  std::vector<int> lengths(static_cast<std::size_t>(ranks)), offsets(static_cast<std::size_t>(ranks));
-  CheckMpi(MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
-  int total = 0;
-  for (int r = 0; r < ranks; ++r) {
-    offsets[static_cast<std::size_t>(r)] = total;
-    total += lengths[static_cast<std::size_t>(r)];
-  }
-  std::vector<char> all(static_cast<std::size_t>(std::max(total, 1)));
-  CheckMpi(MPI_Gatherv(text.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR, 0,
-                       MPI_COMM_WORLD),
-           "MPI_Gatherv");
-  std::vector<std::string> texts(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) {
-    texts[static_cast<std::size_t>(r)].assign(all.data() + offsets[static_cast<std::size_t>(r)],
-                                              static_cast<std::size_t>(lengths[static_cast<std::size_t>(r)]));
-  }
-  return texts;
-}
-
-// Every rank learns the worst code (2 > 1 > 0) and rank 0 the first text of a rank with that code.
-int AgreeOnError(int code, const std::string& text, const Topology& t, std::string* first) {
-  int worst = 0;
-  CheckMpi(MPI_Allreduce(&code, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
-  if (worst == 0) return 0;
-  const std::vector<std::string> texts = GatherText(code == worst ? text : std::string(), t.ranks);
-  if (t.rank == 0) {
-    for (const auto& candidate : texts) {
-      if (!candidate.empty()) {
-        *first = candidate;
-        break;
-      }
-    }
-  }
-  return worst;
 }
 
 // ---- A filtered batch on the wire ----
@@ -900,7 +838,7 @@ bool CloseNodeShards(std::unique_ptr<ArchiveWriter>& writer, bool writes, const 
   report.cancelled = any_cancelled != 0 && report.runs_pending > 0;
   const std::string rank0_error = report.error;  // an error another rank reported during the sweep
   const std::string& fatal = exchange.fatal();
-  if ((report.error_code = AgreeOnError(fatal.empty() ? 0 : 1, fatal, t, &report.error)) != 0) {
+  if ((report.error_code = AgreeOnError(fatal.empty() ? 0 : 1, fatal, t.rank, t.ranks, &report.error)) != 0) {
     if (report.error.empty()) report.error = rank0_error;
     return false;
   }
@@ -928,7 +866,7 @@ void MergeNodeShards(const SweepPlan& plan, const MpiRunOptions& options, const 
   }
   CheckMpi(MPI_Bcast(&merged, 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Bcast");
   report.merged = merged != 0;
-  report.error_code = AgreeOnError(code, error, t, &report.error);
+  report.error_code = AgreeOnError(code, error, t.rank, t.ranks, &report.error);
 }
 
 }  // namespace
@@ -975,7 +913,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       error = options.describe_input_error ? options.describe_input_error(e) : std::string(e.what());
     }
   }
-  if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
+  if ((report.error_code = AgreeOnError(code, error, t.rank, t.ranks, &report.error)) != 0) return report;
 
   NodeShard shard;
   if (writes) {
@@ -985,7 +923,7 @@ MpiSweepReport RunStudyMpi(const SweepPlan& plan, const MpiRunOptions& options, 
       code = ErrorOfThisRank(options, error);
     }
   }
-  if ((report.error_code = AgreeOnError(code, error, t, &report.error)) != 0) return report;
+  if ((report.error_code = AgreeOnError(code, error, t.rank, t.ranks, &report.error)) != 0) return report;
 
   std::int64_t all_complete = 0;
   std::vector<std::deque<std::int64_t>> pending =

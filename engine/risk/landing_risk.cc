@@ -8,12 +8,14 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <mutex>
 
 #include "engine/common/errors.h"
 #include "engine/common/toml_reader.h"
 #include "engine/disturbance/run_noise.h"
+#include "engine/risk/risk_archive.h"
 #include "engine/sweep/runner.h"
 
 namespace gesweep::risk {
@@ -445,52 +447,160 @@ struct BatchContext {
   const RiskRunOptions& options;
   tbb::enumerable_thread_specific<FlightWorkspace>& workspaces;
   std::mutex& capture_mutex;
+  /// Landings dealt to the processes so far in the run (the same count on every process): a batch's
+  /// k-th landing not in the cache goes to process (dealt + k) mod ranks, so that batches smaller
+  /// than the ranks still spread evenly over the run.
+  std::int64_t& dealt;
   std::int64_t cell;
   int limit;
   int repetition;
 };
 
-// A batch's landings: each taken from the cache (a resume, a replay) or flown (fresh), and whether
-// the replay's point was among them.
+// A batch's landings: each taken from the cache (a resume, a replay) or flown (fresh), whether the
+// replay's point was among them, and whether the batch stops the run (a stop asked of this process,
+// or with an exchange of any; a divergence of the processes' points).
 struct FlownBatch {
   std::vector<Evaluation> made;
   std::vector<char> fresh;
   bool captured = false;
+  bool stop = false;
+  std::string diverged;
+  std::int64_t flown_here = 0;  ///< complete landings this process flew
 };
 
+EvaluationKey KeyOf(const BatchContext& c, const rare::EvaluationTag& tag) {
+  return EvaluationKey{
+      static_cast<std::int32_t>(c.cell), c.limit, c.repetition, tag.level, tag.chain, tag.step};
+}
+
+// A hash of one point's coordinates, bit for bit (FNV-1a over 64-bit words).
+std::uint64_t PointHash(std::span<const double> point) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const double v : point) hash = (hash ^ std::bit_cast<std::uint64_t>(v)) * 0x100000001b3ULL;
+  return hash;
+}
+
+// Every process's share of the batch to every process (BatchExchange): its stop flag, the hash of the
+// points it proposed, and the landings it flew (those of `owner` equal to its rank, in batch order).
+void ShareBatch(const BatchContext& c, const rare::PointBatch& batch, const std::vector<int>& owner,
+                std::uint64_t points_hash, FlownBatch& out) {
+  BatchExchange& exchange = *c.options.exchange;
+  std::vector<Evaluation> mine;
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    if (owner[i] == exchange.rank()) mine.push_back(out.made[i]);
+  std::vector<unsigned char> bytes(1 + sizeof points_hash);
+  bytes[0] = c.options.cancel != nullptr && c.options.cancel->load() ? 1 : 0;
+  std::memcpy(bytes.data() + 1, &points_hash, sizeof points_hash);
+  const std::vector<unsigned char> records = EncodeEvaluations(mine);
+  bytes.insert(bytes.end(), records.begin(), records.end());
+  const std::vector<std::vector<unsigned char>> all = exchange.AllGather(bytes);
+  GESWEEP_DEMAND(static_cast<int>(all.size()) == exchange.ranks());
+  const auto value_count = static_cast<std::uint32_t>(RiskColumns(c.plan).size());
+  for (int r = 0; r < exchange.ranks(); ++r) {
+    const std::vector<unsigned char>& theirs = all[static_cast<std::size_t>(r)];
+    GESWEEP_DEMAND(theirs.size() >= 1 + sizeof points_hash);
+    out.stop = out.stop || theirs[0] != 0;
+    if (std::memcmp(theirs.data() + 1, bytes.data() + 1, sizeof points_hash) != 0) {
+      out.diverged = "process " + std::to_string(r) + " proposed other points than process " +
+                     std::to_string(exchange.rank()) + " at level " + std::to_string(batch.tags[0].level) +
+                     " of cell " + std::to_string(c.cell) + ", limit " + std::to_string(c.limit);
+      continue;
+    }
+    std::vector<Evaluation> flown;
+    GESWEEP_DEMAND(DecodeEvaluations(std::span(theirs).subspan(1 + sizeof points_hash), value_count, flown));
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      if (owner[i] != r) continue;
+      GESWEEP_DEMAND(next < flown.size() && flown[next].key == KeyOf(c, batch.tags[i]));
+      if (r != exchange.rank()) out.made[i] = std::move(flown[next]);
+      out.fresh[i] = 1;
+      ++next;
+    }
+    GESWEEP_DEMAND(next == flown.size());
+  }
+  if (!out.diverged.empty()) out.stop = true;
+}
+
 // Flies (or takes from the cache) every point of `batch` in parallel, writing each g into `values`.
+// With an exchange this process flies only its share of the points not in the cache (the k-th on
+// process (dealt + k) mod ranks) and receives the others' (ShareBatch).
 FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::span<double> values) {
   FlownBatch out;
   out.made.resize(batch.size());
   out.fresh.assign(batch.size(), 0);
-  std::atomic<bool> captured{false};
   const RiskRunOptions& options = c.options;
+  const int ranks = options.exchange != nullptr ? options.exchange->ranks() : 1;
+  const int rank = options.exchange != nullptr ? options.exchange->rank() : 0;
+  std::vector<const Evaluation*> cached(batch.size(), nullptr);
+  std::vector<int> owner(batch.size(), -1);  // -1: from the cache
+  std::int64_t uncached = 0;
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    if (options.cache != nullptr) {
+      const auto found = options.cache->find(KeyOf(c, batch.tags[i]));
+      if (found != options.cache->end()) cached[i] = &found->second;
+    }
+    if (cached[i] == nullptr) owner[i] = static_cast<int>((c.dealt + uncached++) % ranks);
+  }
+  c.dealt += uncached;
+  std::atomic<bool> captured{false};
+  std::vector<std::uint64_t> hashes(options.exchange != nullptr ? batch.size() : 0);
   tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
-    const rare::EvaluationTag& tag = batch.tags[i];
-    const EvaluationKey key{
-        static_cast<std::int32_t>(c.cell), c.limit, c.repetition, tag.level, tag.chain, tag.step};
+    const EvaluationKey key = KeyOf(c, batch.tags[i]);
     if (options.capture && key == *options.capture && options.captured_point != nullptr) {
       const std::lock_guard lock(c.capture_mutex);
       options.captured_point->assign(batch.point(i).begin(), batch.point(i).end());
       captured = true;
     }
-    const Evaluation* cached = nullptr;
-    if (options.cache != nullptr) {
-      const auto found = options.cache->find(key);
-      if (found != options.cache->end()) cached = &found->second;
-    }
-    if (cached != nullptr) {
-      out.made[i] = *cached;
-    } else {
+    if (!hashes.empty()) hashes[i] = PointHash(batch.point(i));
+    if (cached[i] != nullptr) {
+      out.made[i] = *cached[i];
+    } else if (owner[i] == rank) {
       out.made[i] =
           Fly(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, batch.point(i), options.cancel);
       out.made[i].key = key;
       out.fresh[i] = 1;
     }
-    values[i] = out.made[i].g;
   });
   out.captured = captured.load();
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    out.flown_here += owner[i] == rank && out.made[i].status != static_cast<std::int8_t>(RunStatus::kPending);
+  if (options.exchange != nullptr) {
+    std::uint64_t points_hash = PointHash({});
+    for (std::size_t i = 0; i < batch.size(); ++i)
+      points_hash =
+          (points_hash ^ hashes[i] ^ (static_cast<std::uint64_t>(owner[i] + 1) << 56)) * 0x100000001b3ULL;
+    ShareBatch(c, batch, owner, points_hash, out);
+  } else {
+    out.stop = options.cancel != nullptr && options.cancel->load();
+  }
+  for (std::size_t i = 0; i < batch.size(); ++i) values[i] = out.made[i].g;
   return out;
+}
+
+// A flown batch's end: its fresh landings journaled (on_batch), and either the run stopped (a stop,
+// a landing the flag cut short, a divergence: Cancelled; a replay's point reached: Captured) or its
+// landings appended to the run's. A landing the flag stopped is no evaluation: it is neither kept
+// nor journaled, and the simulation stops after the complete ones are. (With an exchange every
+// process has every landing of the batch and every process's flag, so all stop at the same batch.)
+void KeepBatch(FlownBatch flown, const RiskRunOptions& options, RiskRun& run) {
+  run.flown_here += flown.flown_here;
+  bool stopped = flown.stop;
+  std::vector<Evaluation> journal;
+  for (std::size_t i = 0; i < flown.made.size(); ++i) {
+    if (flown.made[i].status == static_cast<std::int8_t>(RunStatus::kPending)) {
+      stopped = true;
+      continue;
+    }
+    if (flown.fresh[i]) journal.push_back(flown.made[i]);
+  }
+  if (!flown.diverged.empty()) {
+    run.diverged = flown.diverged;
+    throw Cancelled{};
+  }
+  if (options.on_batch && !journal.empty()) options.on_batch(journal);
+  if (stopped) throw Cancelled{};
+  if (flown.captured) throw Captured{};
+  for (auto& e : flown.made) run.evaluations.push_back(std::move(e));
 }
 
 }  // namespace
@@ -505,6 +615,7 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
   RiskRun run;
   tbb::enumerable_thread_specific<FlightWorkspace> workspaces([&] { return FlightWorkspace(plan); });
   std::mutex capture_mutex;
+  std::int64_t dealt = 0;
   try {
     for (std::int64_t cell = 0; cell < CellCount(plan); ++cell) {
       const std::uint64_t dimension = CellDimension(plan, cell);
@@ -526,28 +637,10 @@ RiskRun RunRisk(const SweepPlan& plan, const RiskSpec& spec, const RiskRunOption
                                                          : std::string());
           int last_level = 0;
           const rare::LimitStateBatch g = [&](const rare::PointBatch& batch, std::span<double> values) {
-            const BatchContext context{plan,          spec, options, workspaces,
-                                       capture_mutex, cell, limit,   repetition};
-            FlownBatch flown = FlyBatch(context, batch, values);
-            std::vector<Evaluation>& made = flown.made;
-            const std::vector<char>& fresh = flown.fresh;
-            const bool captured = flown.captured;
-            // A run the flag stopped is no evaluation: it is neither kept nor journaled, and the
-            // simulation stops after the complete ones are.
-            bool stopped = false;
-            std::vector<Evaluation> journal;
-            for (std::size_t i = 0; i < made.size(); ++i) {
-              if (made[i].status == static_cast<std::int8_t>(RunStatus::kPending)) {
-                stopped = true;
-                continue;
-              }
-              if (fresh[i]) journal.push_back(made[i]);
-            }
-            if (options.on_batch && !journal.empty()) options.on_batch(journal);
-            if (stopped || (options.cancel != nullptr && options.cancel->load())) throw Cancelled{};
-            if (captured) throw Captured{};
-            const std::size_t before = run.evaluations.size();
-            for (auto& e : made) run.evaluations.push_back(std::move(e));
+            const BatchContext context{plan,  spec, options, workspaces, capture_mutex,
+                                       dealt, cell, limit,   repetition};
+            KeepBatch(FlyBatch(context, batch, values), options, run);
+            const std::size_t before = run.evaluations.size() - batch.size();
             if (!batch.tags.empty() && batch.tags[0].level != last_level) {
               if (options.progress && last_level > 0) {
                 options.progress(what + ": level " + std::to_string(last_level) + " done, " +

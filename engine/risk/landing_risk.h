@@ -126,11 +126,31 @@ struct LimitRisk {
   std::int64_t most_likely_row = -1;
 };
 
+/// The processes a run's landings are spread over (`gesweep risk --mpi`: the MPI ranks of
+/// engine/mpi/risk_exchange.h; nothing here knows how the bytes travel). Every process runs the same
+/// driver with the same seeds, so every process proposes the same batches of points; each flies its
+/// share of a batch's landings that are not in the cache (dealt round the processes in turn,
+/// batch after batch), and AllGather gives every process every share, so that the driver goes on alike
+/// everywhere. No point is ever sent: only the landings' Evaluations, with each process's stop flag
+/// and a hash of the batch it proposed (so that every process knows it flew the same points).
+class BatchExchange {
+ public:
+  virtual ~BatchExchange() = default;
+  virtual int rank() const = 0;
+  virtual int ranks() const = 0;
+  /// Collective: every process passes its bytes; each receives every process's, by rank.
+  virtual std::vector<std::vector<unsigned char>> AllGather(std::span<const unsigned char> mine) = 0;
+};
+
 /// What RunRisk gives.
 struct RiskRun {
   std::vector<LimitRisk> results;       ///< cell-major: cell 0's limits, then cell 1's, ...
   std::vector<Evaluation> evaluations;  ///< every landing, in the order they were made
   bool cancelled = false;               ///< stopped by the flag: `results` is incomplete
+  std::int64_t flown_here = 0;          ///< landings this process flew (not taken from the cache)
+  /// With an exchange: a process proposed other points than process 0 (different floating-point
+  /// results on different machines); the run stopped there, as `cancelled`, and this says where.
+  std::string diverged;
 };
 
 struct RiskRunOptions {
@@ -147,6 +167,11 @@ struct RiskRunOptions {
   std::vector<double>* captured_point = nullptr;
   /// Only this (cell, limit, repetition) simulation (a replay); all when empty.
   std::optional<std::tuple<std::int64_t, int, int>> only;
+  /// The processes each batch is spread over (every one calls RunRisk alike, with the same cache);
+  /// null: this process flies every landing. With one, `cancel` is read when a batch is exchanged,
+  /// and a batch stops on every process when any was asked to stop; `on_batch` and `progress` are
+  /// given only on the process that journals and prints (its rank 0).
+  BatchExchange* exchange = nullptr;
 };
 
 /// Runs every (cell, limit) subset simulation of the plan's design. The threads are the calling

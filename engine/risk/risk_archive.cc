@@ -130,12 +130,36 @@ JournalWriter::~JournalWriter() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void JournalWriter::Append(std::span<const Evaluation> evaluations) {
+std::vector<unsigned char> EncodeEvaluations(std::span<const Evaluation> evaluations) {
   std::vector<unsigned char> bytes;
   for (const auto& e : evaluations) {
     const auto record = EncodeRecord(e);
     bytes.insert(bytes.end(), record.begin(), record.end());
   }
+  return bytes;
+}
+
+bool DecodeEvaluations(std::span<const unsigned char> bytes, std::uint32_t value_count,
+                       std::vector<Evaluation>& out) {
+  const unsigned char* p = bytes.data();
+  const unsigned char* end = p + bytes.size();
+  while (p < end) {
+    std::uint32_t length = 0;
+    std::uint64_t checksum = 0;
+    if (!Get(p, end, length) || static_cast<std::size_t>(end - p) < length + 8u) return false;
+    const unsigned char* payload = p;
+    p += length;
+    Get(p, end, checksum);
+    Evaluation e;
+    if (checksum != Checksum(payload, length) || !DecodeRecord(payload, payload + length, value_count, e))
+      return false;
+    out.push_back(std::move(e));
+  }
+  return true;
+}
+
+void JournalWriter::Append(std::span<const Evaluation> evaluations) {
+  const std::vector<unsigned char> bytes = EncodeEvaluations(evaluations);
   WriteAll(fd_, bytes.data(), bytes.size(), path_);
   if (::fdatasync(fd_) != 0) throw ArchiveError("sync " + path_.string() + ": " + std::strerror(errno));
 }

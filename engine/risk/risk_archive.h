@@ -48,6 +48,14 @@ class JournalWriter {
   std::filesystem::path path_;
 };
 
+/// Evaluations as the journal's records (each with its checksum), for a process that sends them.
+std::vector<unsigned char> EncodeEvaluations(std::span<const Evaluation> evaluations);
+
+/// The evaluations of EncodeEvaluations's bytes, each with `value_count` values; false (and `out`
+/// partly filled) when the bytes are not whole records of that width.
+bool DecodeEvaluations(std::span<const unsigned char> bytes, std::uint32_t value_count,
+                       std::vector<Evaluation>& out);
+
 /// A journal read back.
 struct JournalContents {
   std::map<EvaluationKey, Evaluation> evaluations;
