@@ -2,6 +2,7 @@
 // pybind11, with the GIL released while they compute. engine/python/gesweep/__init__.py wraps it in
 // the public API (signatures, docstrings from the described fields, DataFrames, open_archive).
 // Each domain has its own file (support.h lists them); this one binds them, with the aircraft's facts.
+#include "engine/products/product_layouts.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
@@ -62,6 +63,9 @@ PYBIND11_MODULE(_gesweep, m) {
     run_status[py::str(std::string(entry.name))] = static_cast<int>(entry.value);
   }
   m.attr("_run_status") = run_status;
+  // The archive's layout beyond the columns (groups, runs/, run statuses, the /analysis products, the
+  // subset-simulation archive): the keys of the column manifest that gesweep/_hdf5.py reads paths from.
+  m.attr("_archive_layout") = py::module_::import("json").attr("loads")(ArchiveLayoutJson().dump());
 
   // A ValueError, and a TypeError too: an argument of the wrong type is an InputError as well, and
   // code that catches the TypeError Python itself would raise keeps working (docs/python.md).
