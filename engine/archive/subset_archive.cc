@@ -28,7 +28,7 @@ constexpr ProductField kStudyText{"study_text", "string", "", "",
 constexpr ProductField kFingerprint{"spec_fingerprint", "string", "", "",
                                     "Hash of the study as the engine read it, 16 hexadecimal digits"};
 constexpr ProductField kResultJson{"result_json", "string", "", "",
-                                   "The estimates, as `gesweep dispersion ARCHIVE --format json` prints them "
+                                   "The estimates, as `gesweep dispersion` prints them in JSON "
                                    "(less the archive key)"};
 constexpr ProductField kCell{"cell", "int32", "1", "evaluation", "Tag: the cell of the study"};
 constexpr ProductField kLimit{"limit", "int32", "1", "evaluation", "Tag: the limit's index within its cell"};

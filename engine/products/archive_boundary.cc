@@ -400,7 +400,7 @@ const ProductLayout& BoundaryProduct() {
   static const ProductLayout layout{
       "boundary",
       kBoundaryGroup,
-      "gesweep boundary --archive",
+      "gesweep boundary",
       "The stability boundary H* of a sweep's results, per combination of the other swept parameters",
       {kProductDescription, kBoundaryMethod, kBoundaryKeys, kSourceDataset, kAlong, kToleranceM, kWingspanM,
        kAircraftName, kRunsUsed, kRunsSkipped, kEngineVersion, kGitCommit, kCreated, kCommandLine},
@@ -414,7 +414,7 @@ const ProductLayout& BoundaryCurveProduct() {
   static const ProductLayout layout{
       "boundary_curve",
       kBoundaryCurveGroup,
-      "gesweep boundary --archive",
+      "gesweep boundary",
       "The boundary H*(u0) traced by continuation over the archive's speed range",
       {kProductDescription, kWingspanM, kEngineVersion, kCreated, kCommandLine},
       {kCurveSpeed, kCurveHeight, kCurveRatio, kCurveSlope, kCurveBranch, kCurveEventSpeed, kCurveEventWhat},

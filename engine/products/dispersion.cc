@@ -888,7 +888,7 @@ const ProductLayout& DispersionProduct() {
        kGevShape},
       {{"limits",
         "limits",
-        "gesweep dispersion --limit",
+        "gesweep dispersion",
         "The exceedance of each limit, per group",
         {kLimitsDescription},
         {kLimitText, kLimitColumn, kLimitValue, kLimitAbove, kExceed, kLimitValues, kLimitFailed,
