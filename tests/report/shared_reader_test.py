@@ -21,6 +21,7 @@ import sys
 import tempfile
 import unittest
 
+import h5py
 import numpy as np
 
 GESWEEP = os.path.abspath(sys.argv.pop(1)) if len(sys.argv) > 1 else None
@@ -128,7 +129,7 @@ def same(a, b):
 
 class SweepArchive(unittest.TestCase):
     def test_runs_as_gesweep_query_prints_them(self):
-        printed = json.loads(gesweep("query", SWEEP_H5, "--columns", "*", "--limit", "-1", "--format", "json"))
+        printed = json.loads(gesweep("query", SWEEP_H5, "--columns", "*", "--format", "json"))
         with hdf5.open_archive(checked(SWEEP_H5), LAYOUT) as archive:
             self.assertIsInstance(archive, hdf5.SweepArchive)
             ok, failed, pending = archive.counts()
@@ -153,7 +154,7 @@ class SweepArchive(unittest.TestCase):
                     continue
                 mine = archive.column(path)[index]
                 levels = archive.levels(path)
-                self.assertEqual(levels, column["levels"] or [], path)
+                self.assertEqual(levels, column.get("levels", []), path)
                 for row, value in zip(rows, mine):
                     shown = row[column["name"]]
                     if isinstance(shown, str):  # a level's name
@@ -228,12 +229,59 @@ class RiskArchive(unittest.TestCase):
             self.assertEqual(archive.values.shape, (archive.run_count, len(archive.columns)))
             sink = archive.values[:, archive.column("touchdown_sink_rate_mps")]
             self.assertGreater(int(np.isfinite(sink).sum()), 0)
-            # The design point of a limit some landings exceed: its three landing series.
-            if limit["probability"] is not None and limit["probability"] > 0:
-                series = archive.design_series(limit)
-                self.assertEqual(sorted(series), ["mean_failure", "most_likely", "steady"])
-                for columns_of in series.values():
-                    self.assertIn("time_s", columns_of)
+            # The limit is exceeded by some landings (a few per cent): its design point's three series.
+            self.assertGreater(limit["probability"], 0)
+            series = archive.design_series(limit)
+            self.assertEqual(sorted(series), ["mean_failure", "most_likely", "steady"])
+            for columns_of in series.values():
+                self.assertIn("time_s", columns_of)
+
+
+# The manifest's type names of the stored HDF5 types (schemas/archive.md).
+STORED_TYPES = {("f", 8): "float64", ("i", 1): "int8", ("i", 4): "int32", ("i", 8): "int64"}
+
+
+def stored_type(dataset):
+    if dataset.dtype.kind in "OS" or h5py.check_string_dtype(dataset.dtype) is not None:
+        return "string"
+    return STORED_TYPES[(dataset.dtype.kind, dataset.dtype.itemsize)]
+
+
+def compare_listing(test, group, entry, families=()):
+    """Every dataset and attribute of the HDF5 `group` is listed by the layout `entry` with the type and
+    units it is stored with, and every listed one (but a <family> and those of `families`) is there."""
+    listed = {f["name"]: f for f in entry["datasets"]}
+    for name, dataset in group.items():
+        if not isinstance(dataset, h5py.Dataset):
+            continue
+        field = listed.get(name) or next((f for f in listed.values() if "<" in f["name"]
+                                          and name.endswith(f["name"].split(">", 1)[-1])), None)
+        test.assertIsNotNone(field, f"{group.name}/{name} is not in the layout")
+        test.assertEqual(stored_type(dataset), field["type"], f"{group.name}/{name}")
+        units = dataset.attrs.get("units")
+        if units is not None and "<" not in field["units"] and not field["units"].startswith("see ") \
+                and "the parameter" not in field["units"]:
+            test.assertEqual(units.decode() if isinstance(units, bytes) else units, field["units"], name)
+    for name in listed:
+        if "<" not in name and name not in families:
+            test.assertIn(name, group, f"{group.name}: the layout lists {name}")
+    attributes = {f["name"] for f in entry["attributes"]}
+    test.assertEqual(set(group.attrs) - attributes, set(), group.name)
+
+
+class LayoutListsWhatIsWritten(unittest.TestCase):
+    def test_dispersion_and_subset_archive(self):
+        gesweep("dispersion", SWEEP_H5, "--group-by", GROUP_BY, "--limit", LIMIT, "--format", "json")
+        product = LAYOUT.product("dispersion")
+        with h5py.File(SWEEP_H5, "r") as f:
+            compare_listing(self, f[product["path"]], product)
+            (limits,) = product["groups"]
+            compare_listing(self, f[product["path"]][limits["path"]], limits)
+        root = LAYOUT.subset()
+        with h5py.File(RISK_H5, "r") as f:
+            self.assertEqual(set(f.attrs) - {a["name"] for a in root["attributes"]}, set())
+            evaluations = LAYOUT.subset("evaluations")
+            compare_listing(self, f[evaluations["path"]], evaluations)
 
 
 class Layout(unittest.TestCase):

@@ -316,7 +316,11 @@ def list_products(path):
 def _open_product(archive, product):
     f = archive.file
     available = sorted(archive.products())
-    key = archive.layout.product_root(product) if product in archive.layout.product_names() else None
+    # A product by its name, or a group inside one ("sensitivity/boundary/height_m").
+    first, _, rest = product.partition("/")
+    key = None
+    if first in archive.layout.product_names():
+        key = archive.layout.product_root(first) + (f"/{rest}" if rest else "")
     if key is None or key not in f:
         filename = f.filename
         f.close()
