@@ -33,7 +33,28 @@ NumberTypes TypesOf() {
   }
 }
 
+// The manifest's name of a stored number type (ProductField::type).
+template <typename T>
+std::string_view TypeName() {
+  if constexpr (std::is_same_v<T, double>) {
+    return "float64";
+  } else if constexpr (std::is_same_v<T, std::int8_t>) {
+    return "int8";
+  } else if constexpr (std::is_same_v<T, std::int32_t>) {
+    return "int32";
+  } else {
+    return "int64";
+  }
+}
+
 }  // namespace
+
+std::string Filled(std::string_view text, std::string_view placeholder, const std::string& value) {
+  std::string out(text);
+  const std::size_t at = out.find(placeholder);
+  if (at != std::string::npos) out.replace(at, placeholder.size(), value);
+  return out;
+}
 
 void ProductObject::Attribute(const std::string& name, const std::string& value) {
   hdf5::WriteAttribute(id_, name, value);
@@ -97,10 +118,20 @@ ProductDataset ProductGroup::Numbers(const std::string& name, const std::vector<
   return dataset;
 }
 
+template <typename T>
+ProductDataset ProductGroup::Numbers(const ProductField& field, const std::vector<T>& values,
+                                     const std::vector<std::size_t>& dims) {
+  GESWEEP_DEMAND(field.type == TypeName<T>());
+  return Numbers(std::string(field.name), values, std::string(field.units), std::string(field.description),
+                 dims);
+}
+
 // The element types Numbers stores (analysis_product.h), one explicit instantiation each.
-#define GESWEEP_INSTANTIATE_NUMBERS(T)                                                        \
-  template ProductDataset ProductGroup::Numbers<T>(const std::string&, const std::vector<T>&, \
-                                                   const std::string&, const std::string&,    \
+#define GESWEEP_INSTANTIATE_NUMBERS(T)                                                         \
+  template ProductDataset ProductGroup::Numbers<T>(const std::string&, const std::vector<T>&,  \
+                                                   const std::string&, const std::string&,     \
+                                                   const std::vector<std::size_t>&);           \
+  template ProductDataset ProductGroup::Numbers<T>(const ProductField&, const std::vector<T>&, \
                                                    const std::vector<std::size_t>&)
 GESWEEP_INSTANTIATE_NUMBERS(double);
 GESWEEP_INSTANTIATE_NUMBERS(std::int8_t);
@@ -128,6 +159,11 @@ ProductDataset ProductGroup::Strings(const std::string& name, const std::vector<
   dataset.Attribute("units", "1");
   dataset.Attribute("description", description);
   return dataset;
+}
+
+ProductDataset ProductGroup::Strings(const ProductField& field, const std::vector<std::string>& values) {
+  GESWEEP_DEMAND(field.type == "string" && field.units == "1");
+  return Strings(std::string(field.name), values, std::string(field.description));
 }
 
 ProductGroup ProductGroup::Group(const std::string& name) {

@@ -12,11 +12,46 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "engine/common/copy_rules.h"
 
 namespace gesweep {
+
+/// One dataset or attribute of a product (or of a subset-simulation archive), described once: its
+/// writer stores it under this name with these units and this description (ProductGroup::Numbers and
+/// Strings below), and the column manifest lists it (`gesweep columns --json`, "products" and
+/// "subset_archive"), which the Python reader of archives reads its layout from. A name in
+/// <angle brackets> stands for a family (`<key>`: one dataset per key, named by it).
+struct ProductField {
+  std::string_view name;
+  std::string_view type;   ///< float64, int8, int32, int64, string; an attribute may be "list of ..."
+  std::string_view units;  ///< a dataset's `units` attribute; "" for an attribute
+  std::string_view shape;  ///< its dimensions ("point", "group, column"); "" for a scalar attribute
+  std::string_view description;
+};
+
+/// The layout of a product: where it is, what writes it, its attributes, datasets and subgroups.
+struct ProductLayout {
+  std::string_view name;  ///< what the readers call it ("boundary")
+  std::string_view path;  ///< its group ("analysis/boundary"); a subgroup's is relative to its parent
+  std::string_view written_by;
+  std::string_view description;
+  std::vector<ProductField> attributes;
+  std::vector<ProductField> datasets;
+  std::vector<ProductLayout> groups;
+};
+
+/// `text` (a field's name, units or description) with its `placeholder` ("<level>") replaced by `value`.
+std::string Filled(std::string_view text, std::string_view placeholder, const std::string& value);
+
+/// The attributes a product group records of itself and its writing (each writer stores those it has).
+inline constexpr ProductField kProductDescription{"description", "string", "", "", "What the group holds"};
+inline constexpr ProductField kEngineVersion{"engine_version", "string", "", "", "The gesweep that wrote it"};
+inline constexpr ProductField kGitCommit{"git_commit", "string", "", "", "Its commit"};
+inline constexpr ProductField kCreated{"created", "string", "", "", "When it was written (UTC, ISO 8601)"};
+inline constexpr ProductField kCommandLine{"command_line", "string", "", "", "The command that wrote it"};
 
 /// An HDF5 object of a product being written (a dataset or a group): its attributes.
 class ProductObject {
@@ -28,6 +63,11 @@ class ProductObject {
   void Attribute(const std::string& name, const std::vector<std::string>& values);
   void Attribute(const std::string& name, const std::vector<double>& values);
   void Attribute(const std::string& name, const std::vector<std::int64_t>& values);
+  /// The attribute `field` describes (ProductLayout::attributes).
+  template <typename V>
+  void Attribute(const ProductField& field, const V& value) {
+    Attribute(std::string(field.name), value);
+  }
 
  protected:
   explicit ProductObject(std::int64_t id) : id_(id) {}
@@ -50,9 +90,15 @@ class ProductGroup : public ProductObject {
   template <typename T>
   ProductDataset Numbers(const std::string& name, const std::vector<T>& values, const std::string& units,
                          const std::string& description, const std::vector<std::size_t>& dims = {});
+  /// The same, named and described by `field` (its type must be that of T).
+  template <typename T>
+  ProductDataset Numbers(const ProductField& field, const std::vector<T>& values,
+                         const std::vector<std::size_t>& dims = {});
   /// A 1-D dataset of variable-length UTF-8 strings (units "1").
   ProductDataset Strings(const std::string& name, const std::vector<std::string>& values,
                          const std::string& description);
+  /// The same, named and described by `field` (of type string).
+  ProductDataset Strings(const ProductField& field, const std::vector<std::string>& values);
   /// A subgroup.
   ProductGroup Group(const std::string& name);
 

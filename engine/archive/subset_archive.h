@@ -14,6 +14,8 @@
 #include <tuple>
 #include <vector>
 
+#include "engine/archive/analysis_product.h"
+
 namespace gesweep::risk {
 
 inline constexpr const char* kRiskArchiveKind = "subset_simulation";
@@ -68,6 +70,11 @@ struct RiskArchive {
   std::vector<Evaluation> evaluations;
   std::vector<DesignPoint> design_points;
 };
+
+/// The archive's layout, described once (the writer and the reader name its fields through it; the
+/// column manifest lists it, "subset_archive"). Paths are from the root; a <placeholder> names a
+/// family of groups.
+const ProductLayout& SubsetArchiveLayout();
 
 /// Writes `archive` to `path` + ".partial" and renames it onto `path`. Throws ArchiveError.
 void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& archive);

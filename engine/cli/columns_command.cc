@@ -18,6 +18,7 @@
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
 #include "engine/common/toml_reader.h"
+#include "engine/products/product_layouts.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -178,53 +179,6 @@ Json SettingsJson(std::string_view name, const Analysis& analysis) {
   return properties;
 }
 
-// The bookkeeping datasets every archive has (engine/archive/archive_writer.cc writes the same
-// units, descriptions and levels; the manifest test compares them with a real archive).
-Json RunsJson() {
-  Json runs = Json::array();
-  runs.push_back({{"path", archive::kRunIndex},
-                  {"units", "1"},
-                  {"description", "Index of the run in the design (0-based); -1 where not written yet"},
-                  {"type", "int64"},
-                  {"levels", Json::array()}});
-  runs.push_back({{"path", archive::kRunId},
-                  {"units", "1"},
-                  {"description",
-                   "Stable id of the run: FNV-1a hash of its design parameters' names and values (with "
-                   "runs/index, identifies the run across shards and resumes)"},
-                  {"type", "uint64"},
-                  {"levels", Json::array()}});
-  runs.push_back(
-      {{"path", archive::kRunStatus},
-       {"units", "1"},
-       {"description",
-        "Run status: 0 pending (not complete), 1 ok, 2 failed; written after the run's results, so "
-        "a nonzero status marks a complete run"},
-       {"type", "int8"},
-       {"levels", RunStatusLevels()}});
-  runs.push_back(
-      {{"path", archive::kRunMessage},
-       {"units", "1"},
-       {"description",
-        "Why a run failed, or a note on an ok run (e.g. no boundary); UTF-8, NUL-padded, at most " +
-            std::to_string(kMessageLength) +
-            " bytes (a longer message ends in '...'); empty for most runs, whose chunks are never "
-            "written"},
-       {"type", "string" + std::to_string(kMessageLength)},
-       {"levels", Json::array()}});
-  return runs;
-}
-
-// The run-status levels with their codes, from RunStatus's names table (engine/sweep/runner.h):
-// the codes the Python readers compare /runs/status with.
-Json RunStatusJson() {
-  Json levels = Json::array();
-  for (const auto& entry : EnumNames<RunStatus>::kTable) {
-    levels.push_back({{"name", entry.name}, {"code", static_cast<int>(entry.value)}});
-  }
-  return levels;
-}
-
 // Every parameter a design can sweep: design/<name> when swept (float64; a boolean 0/1, a choice the
 // index of its level).
 Json DesignJson() {
@@ -243,6 +197,7 @@ Json DesignJson() {
 }
 
 Json Manifest(const Aircraft& aircraft) {
+  const Json layout = ArchiveLayoutJson();
   StorageOptions storage;
   storage.time_series = true;
   Json analyses = Json::array();
@@ -279,12 +234,18 @@ Json Manifest(const Aircraft& aircraft) {
            "Every dataset an archive can hold (schemas/archive.md). Each analysis is built with its default "
            "settings; series widths are for output.time_series = true at the default output_dt_s and "
            "durations (a study's own settings change them, not the names). role: 'rating' for an int8 "
-           "column whose levels begin 'level 1', 'overall_rating' for the one named 'level'."},
+           "column whose levels begin 'level 1', 'overall_rating' for the one named 'level'. groups, runs, "
+           "run_status, products (the /analysis groups) and subset_archive (gesweep risk's archive): the "
+           "layout the readers of archives find their paths in, from what the writers store; a name or "
+           "path in <angle brackets> stands for a family."},
           {"storage", {{"time_series", storage.time_series}, {"output_dt_s", storage.output_dt_s}}},
-          {"runs", RunsJson()},
-          {"run_status", RunStatusJson()},
+          {"runs", layout["runs"]},
+          {"run_status", layout["run_status"]},
           {"design", DesignJson()},
-          {"analyses", analyses}};
+          {"analyses", analyses},
+          {"groups", layout["groups"]},
+          {"products", layout["products"]},
+          {"subset_archive", layout["subset_archive"]}};
 }
 
 std::string Text(const Json& value) {
@@ -295,6 +256,29 @@ std::string Text(const Json& value) {
     return out;
   }
   return value.dump();
+}
+
+// The datasets of a product (or of one of its subgroups) under `path`, then its subgroups'.
+template <class Row>
+void PrintLayout(const Json& layout, const std::string& path, const Row& row) {
+  for (const auto& d : layout["datasets"]) {
+    row(path + "/" + Text(d["name"]), Text(d["type"]), Text(d["units"]), Text(d["shape"]),
+        Text(d["description"]));
+  }
+  for (const auto& group : layout["groups"]) PrintLayout(group, path + "/" + Text(group["path"]), row);
+}
+
+// The /analysis products and the subset-simulation archive.
+template <class Row>
+void PrintLayouts(const Json& manifest, const Row& row) {
+  for (const auto& product : manifest["products"]) {
+    std::cout << "\n## /" << Text(product["path"]) << " (" << Text(product["written_by"])
+              << "): " << Text(product["description"]) << "\n";
+    PrintLayout(product, Text(product["path"]), row);
+  }
+  const Json& subset = manifest["subset_archive"];
+  std::cout << "\n## " << Text(subset["written_by"]) << ": " << Text(subset["description"]) << "\n";
+  for (const auto& group : subset["groups"]) PrintLayout(group, Text(group["path"]), row);
 }
 
 void PrintText(const Json& manifest) {
@@ -316,6 +300,7 @@ void PrintText(const Json& manifest) {
     if (!c["levels"].empty()) extra += "; levels: " + Text(c["levels"]);
     row(Text(c["path"]), Text(c["type"]), Text(c["units"]), extra, Text(c["description"]));
   }
+  PrintLayouts(manifest, row);
   for (const auto& analysis : manifest["analyses"]) {
     std::cout << "\n## " << Text(analysis["name"]) << ": " << Text(analysis["description"]) << "\n";
     for (const auto& c : analysis["columns"]) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "engine/analyses/analysis.h"
+#include "engine/archive/analysis_product.h"
 #include "engine/modal/boundary.h"
 
 namespace gesweep {
@@ -97,5 +98,10 @@ void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const Boundar
 
 /// The path of the group: "analysis/boundary_curve".
 inline constexpr const char* kBoundaryCurveGroup = "analysis/boundary_curve";
+
+/// What WriteBoundaryGroup and WriteBoundaryCurveGroup write, described once (the writers store
+/// these fields; the column manifest lists them, "products").
+const ProductLayout& BoundaryProduct();
+const ProductLayout& BoundaryCurveProduct();
 
 }  // namespace gesweep

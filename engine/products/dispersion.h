@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/archive/analysis_product.h"
+
 namespace gesweep {
 
 class ArchiveReader;
@@ -205,5 +207,9 @@ void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion
 
 /// "analysis/dispersion".
 std::string DispersionGroupPath();
+
+/// What WriteDispersionGroup writes, described once (the writer stores these fields; the column
+/// manifest lists them, "products"): its attributes, datasets and the subgroup `limits`.
+const ProductLayout& DispersionProduct();
 
 }  // namespace gesweep

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "engine/archive/analysis_product.h"
 #include "engine/products/archive_sensitivity.h"
 
 namespace gesweep {
@@ -13,6 +14,11 @@ namespace gesweep {
 /// The group of an output's result: "analysis/sensitivity/" + output.name, e.g.
 /// "analysis/sensitivity/boundary/height_m" for results/boundary/height_m.
 std::string SensitivityGroupPath(const ArchiveOutput& output);
+
+/// What WriteSensitivityGroup writes, described once (the writer stores these fields; the column
+/// manifest lists them, "products"). The Sobol' and Morris attributes and datasets are both listed:
+/// a group holds those of its method.
+const ProductLayout& SensitivityProduct();
 
 /// Writes `result` (status kOk) into the archive at SensitivityGroupPath(result.output), replacing a
 /// previous result for the same output: the new group is written under a temporary name and moved

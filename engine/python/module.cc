@@ -2,6 +2,7 @@
 // pybind11, with the GIL released while they compute. engine/python/gesweep/__init__.py wraps it in
 // the public API (signatures, docstrings from the described fields, DataFrames, open_archive).
 // Each domain has its own file (support.h lists them); this one binds them, with the aircraft's facts.
+#include "engine/products/product_layouts.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
@@ -46,6 +47,14 @@ py::dict AircraftTable(const PyAircraft& a) {
   return out;
 }
 
+// What the archive reader (gesweep/_archive.py over gesweep/_hdf5.py) needs of the engine: the archive's
+// layout beyond the columns (groups, runs/, the run-status codes from RunStatus's names table, the
+// /analysis products, the subset-simulation archive), the keys of the column manifest that
+// gesweep/_hdf5.py reads every path and code from.
+void BindArchiveLayout(py::module_& m) {
+  m.attr("_archive_layout") = py::module_::import("json").attr("loads")(ArchiveLayoutJson().dump());
+}
+
 }  // namespace
 }  // namespace gesweep::python
 
@@ -55,13 +64,7 @@ PYBIND11_MODULE(_gesweep, m) {
   m.doc() = "The native part of the gesweep module (docs/python.md); use `import gesweep`.";
   m.attr("__version__") = GESWEEP_VERSION;
   m.attr("git_commit") = GESWEEP_GIT_COMMIT;
-  // The run-status codes by name, from RunStatus's names table (the manifest's `run_status`), for
-  // the archive reader's comparisons with /runs/status (gesweep/_archive.py).
-  py::dict run_status;
-  for (const auto& entry : EnumNames<RunStatus>::kTable) {
-    run_status[py::str(std::string(entry.name))] = static_cast<int>(entry.value);
-  }
-  m.attr("_run_status") = run_status;
+  BindArchiveLayout(m);
 
   // A ValueError, and a TypeError too: an argument of the wrong type is an InputError as well, and
   // code that catches the TypeError Python itself would raise keeps working (docs/python.md).

@@ -17,7 +17,6 @@ import numpy as np
 from scipy import stats
 
 import figures_common as common
-import report_data
 from figures_common import Figure
 
 # Seconds before the most likely failing landing's touchdown that the design-point figure shows.
@@ -61,7 +60,7 @@ def _plain_curves(plain, column):
         if column not in names:
             continue
         c = names.index(column)
-        stored = archive.file[report_data.DISPERSION]
+        stored = product["datasets"]
         for g, label in enumerate(product["labels"]):
             values = archive.column(product["column_paths"][c])[product["members"](g)]
             values = np.sort(values[np.isfinite(values)])

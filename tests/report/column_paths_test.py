@@ -76,6 +76,65 @@ def lookups(path):
     return out
 
 
+# A string that is the path of an /analysis product or of a group of a subset-simulation archive
+# ("analysis/boundary", "/analysis/dispersion", f"analysis/{name}", "subset/evaluations"): the shared
+# reader finds them in the manifest's layout (`products`, `subset_archive`).
+PRODUCT_PATH = re.compile(r"^/?(analysis|subset)(/|$)")
+# The run-status names, whose codes come from the manifest's run_status (RunStatus's names table).
+STATUS_NAMES = {"pending", "ok", "failed"}
+
+
+def literal_product_paths_in(tree):
+    """(line, text) of every string literal (or f-string) of a parsed script that is a product path."""
+    prose = docstrings(tree)
+    pieces = {id(v) for node in ast.walk(tree) if isinstance(node, ast.JoinedStr) for v in node.values}
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in prose | pieces:
+            if PRODUCT_PATH.match(node.value):
+                found.append((node.lineno, node.value))
+        elif isinstance(node, ast.JoinedStr) and node.values:
+            first = node.values[0]
+            if isinstance(first, ast.Constant) and PRODUCT_PATH.match(first.value):
+                found.append((node.lineno, ast.unparse(node)))
+    return found
+
+
+def _integers(node):
+    """Whether `node` is an integer literal (or a tuple, list or set of them): a code, not a name."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        node = node.operand
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return bool(node.elts) and all(_integers(e) for e in node.elts)
+    return isinstance(node, ast.Constant) and type(node.value) is int
+
+
+def literal_status_codes_in(tree):
+    """(line, text) of every place a parsed script spells a run-status code: a comparison of something
+    named status with an integer, a name of a status bound to an integer, a status name mapped to one."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            named = [o for o in operands if isinstance(o, (ast.Name, ast.Attribute, ast.Subscript))]
+            if any("status" in ast.unparse(o).lower() for o in named) and any(_integers(o) for o in operands):
+                found.append((node.lineno, ast.unparse(node)))
+        elif isinstance(node, ast.Assign) and _integers(node.value):
+            names = " ".join(ast.unparse(t) for t in node.targets).lower()
+            if "status" in names or any(name in names.split("_") for name in STATUS_NAMES):
+                found.append((node.lineno, ast.unparse(node)))
+        elif isinstance(node, ast.Dict):
+            if any(isinstance(k, ast.Constant) and k.value in STATUS_NAMES and _integers(v)
+                   for k, v in zip(node.keys, node.values)):
+                found.append((node.lineno, ast.unparse(node)))
+    return found
+
+
+def parsed(path):
+    with open(path, encoding="utf-8") as f:
+        return ast.parse(f.read(), path)
+
+
 def imports_h5py(source):
     """Whether Python `source` imports h5py (or a submodule of it)."""
     for node in ast.walk(ast.parse(source)):
@@ -139,6 +198,45 @@ class NoLiteralColumnPaths(unittest.TestCase):
         for expected in (("modes", "stability_margin_per_s"), ("open_loop", "min_height_time_s"),
                          ("landing", "outcome"), ("open_loop", "height_m")):
             self.assertIn(expected, names)
+
+
+class NoLiteralStatusCodesOrProductPaths(unittest.TestCase):
+    """scripts/report spells no run-status code and no /analysis (or subset-simulation) path: the shared
+    reader (engine/python/gesweep/_hdf5.py) finds them in the manifest (issue 29, item 4)."""
+
+    def report_scripts(self):
+        report = [p for p in SCRIPTS if os.sep + "report" + os.sep in p]
+        self.assertGreaterEqual(len(report), 5, report)
+        return report
+
+    def test_no_product_path_spelled_out(self):
+        found = [f"{os.path.relpath(p, ROOT)}:{line}: {text!r}" for p in self.report_scripts()
+                 for line, text in literal_product_paths_in(parsed(p))]
+        self.assertEqual(found, [], "/analysis paths spelled out; read products through report_data's "
+                                    "shared reader (archive.boundary(), .dispersion(), ...):\n" + "\n".join(found))
+
+    def test_no_status_code_spelled_out(self):
+        found = [f"{os.path.relpath(p, ROOT)}:{line}: {text}" for p in self.report_scripts()
+                 for line, text in literal_status_codes_in(parsed(p))]
+        self.assertEqual(found, [], "run-status codes spelled out; use archive.ok, .complete, .counts() or the "
+                                    "layout's status_code(name):\n" + "\n".join(found))
+
+    def test_the_checks_find_what_they_look_for(self):
+        source = ('a = "analysis/boundary"\nb = f"analysis/{name}"\nc = "/analysis/dispersion"\n'
+                  'd = "subset/evaluations"\ne = "analysis"\n')
+        self.assertEqual(sorted(line for line, _ in literal_product_paths_in(ast.parse(source))), [1, 2, 3, 4, 5])
+        # Prose is not a path: a docstring, a legend naming the product, a word.
+        self.assertEqual(literal_product_paths_in(ast.parse(
+            '"""Reads analysis/boundary."""\nx = "H* refined (/analysis/boundary)"\ny = "analysis of it"\n')), [])
+        source = ('x = archive.status == 1\nSTATUS_OK = 1\nSTATUS_PENDING, STATUS_OK = 0, 1\n'
+                  'y = status[rows] != 0\nz = e["status"] in (1, 2)\nc = {"ok": 1}\nok_code = 1\n'
+                  'w = 2 == run_status\n')
+        self.assertEqual(sorted(line for line, _ in literal_status_codes_in(ast.parse(source))),
+                         [1, 2, 3, 4, 5, 6, 7, 8])
+        # A code asked by name, and counts of runs, are not codes.
+        self.assertEqual(literal_status_codes_in(ast.parse(
+            'x = status == layout.status_code("ok")\nok, failed, pending = archive.counts()\n'
+            'n = len(statuses) > 0\n')), [])
 
 
 class ColumnsModule(unittest.TestCase):

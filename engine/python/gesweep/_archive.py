@@ -19,12 +19,11 @@ from xarray.core import indexing
 from . import _hdf5  # the one reader of archive files, shared with scripts/report
 
 
-
-def _status_code(name):
-    """The /runs/status code of the status `name` ("ok"), from the engine's RunStatus names table
-    (the manifest's `run_status`), never typed here."""
-    from ._gesweep import _run_status
-    return _run_status[name]
+def _layout():
+    """The archive's layout (groups, runs/, run statuses, /analysis products) as the native module
+    carries it: the column manifest's keys, from the engine's writers (gesweep columns --json)."""
+    from ._gesweep import _archive_layout
+    return _hdf5.Layout(_archive_layout)
 
 
 class ArchiveNote(UserWarning):
@@ -42,7 +41,7 @@ def _input_error(source, key, value, expected):
 
 
 def _open_checked(path):
-    """The archive at `path` opened (_hdf5, the one reader), after the checks every gesweep command makes before it
+    """The archive at `path` opened (_hdf5.SweepArchive, the one reader: runs/status read), after the checks every gesweep command makes before it
     reads a value (the engine's ArchiveReader::Open, the one checker: the file, its layout, and a
     virtual archive's shard files -- missing, replaced, moved, foreign, itself, cyclic): those refuse
     with gesweep.InputError in the command's words; a note on what could not be checked is an
@@ -58,7 +57,7 @@ def _open_checked(path):
     for note in checked["notes"]:
         warnings.warn(note, ArchiveNote, stacklevel=3)
     try:
-        return _hdf5.open_checked(name, checked)
+        return _hdf5.SweepArchive(name, checked, _layout())
     except OSError as error:  # changed between the check and the open
         raise _input_error(name, "", "", f"cannot open the archive: {error}") from None
 
@@ -160,29 +159,30 @@ def _lazy(array):
     return indexing.LazilyIndexedArray(array)
 
 
-def _design_link(f, obj, name):
+def _design_link(f, layout, obj, name):
     """Whether `obj` at results|series/<analysis>/`name` is the netCDF view's link to design/`name`
     (schemas/archive.md, "netCDF view"), not a column of its own."""
-    other = f.get("design/" + name) if "/" not in name else None
+    other = f.get(layout.design_path(name)) if "/" not in name else None
     return _hdf5.is_dataset(other) and other == obj
 
 
-def _names(f):
+def _names(f, layout):
     """Variable name of each results/<analysis>/<leaf> and series/<analysis>/<leaf>: the leaf (with
     '/' as '_'), or '<analysis>_<leaf>' where two analyses, or a design column, share a leaf."""
     entries = []
-    for group in ("results", "series"):
+    series = layout.group("series")
+    for group in (layout.group("results"), series):
         if group not in f:
             continue
         for analysis in f[group]:
             def visit(name, obj, group=group, analysis=analysis):
-                if _hdf5.is_dataset(obj) and not _design_link(f, obj, name):
+                if _hdf5.is_dataset(obj) and not _design_link(f, layout, obj, name):
                     entries.append((group, analysis, name))
             f[group][analysis].visititems(visit)
-    taken = set(f["design"]) if "design" in f else set()
+    taken = set(f[layout.group("design")]) if layout.group("design") in f else set()
     leaves = {}
     for group, analysis, name in entries:
-        if group == "series" and name == "time_s":
+        if group == series and name == "time_s":
             continue
         leaves.setdefault(name.replace("/", "_"), []).append((group, analysis, name))
     out = {}
@@ -193,13 +193,11 @@ def _names(f):
     return out
 
 
-def _design(f):
-    design = f["design"] if "design" in f else None
+def _design(archive):
+    design = archive.file.get(archive.layout.group("design"))
     if design is None:
         return {}, [], None
-    attrs = {k: _text(v) for k, v in design.attrs.items()}
-    parameters = _text(list(np.atleast_1d(design.attrs.get("parameters", []))))
-    return attrs, parameters, design
+    return archive.design_attrs, list(archive.design_names), design
 
 
 def _axis_coordinate(dataset):
@@ -239,14 +237,15 @@ def open_archive(path, product=None):
     if product is not None and not isinstance(product, str):
         raise _input_error("argument", "product", repr(product),
                            "expected the name of a product under /analysis (a str; see list_products), or None")
-    f = _open_checked(path)
+    archive = _open_checked(path)
     if product is not None:
-        return _open_product(f, product)
-    status = f["runs/status"][:]
-    ok = status == _status_code("ok")
+        return _open_product(archive, product)
+    f, layout = archive.file, archive.layout
+    status_path = layout.runs_path("status")
+    status, ok = archive.status, archive.ok
     mask = None if ok.all() else ok
     n = status.shape[0]
-    design_attrs, parameters, design = _design(f)
+    design_attrs, parameters, design = _design(archive)
     grid = (design is not None and design_attrs.get("kind") == "grid" and parameters
             and int(np.prod(design.attrs["shape"])) == n
             and all("axis_values" in design[p].attrs for p in parameters))
@@ -258,8 +257,7 @@ def open_archive(path, product=None):
         for p in parameters:
             values, attrs = _axis_coordinate(design[p])
             coords[p] = xr.Variable((p,), values, attrs)
-        variables["status"] = xr.Variable(run_dims, status.reshape(grid_shape),
-                                          _attrs(f["runs/status"]))
+        variables["status"] = xr.Variable(run_dims, status.reshape(grid_shape), _attrs(f[status_path]))
     else:
         run_dims = ("run",)
         grid_shape = ()
@@ -267,17 +265,18 @@ def open_archive(path, product=None):
         if design is not None:
             for p in parameters:
                 coords[p] = xr.Variable(("run",), _lazy(_RunRows(design[p], None, ())), _attrs(design[p]))
-        variables["status"] = xr.Variable(("run",), status, _attrs(f["runs/status"]))
+        variables["status"] = xr.Variable(("run",), status, _attrs(f[status_path]))
 
-    names = _names(f)
+    names = _names(f, layout)
     time_dims = {}
-    if "series" in f:
-        groups = list(f["series"])
+    series = layout.group("series")
+    if series in f:
+        groups = list(f[series])
         for analysis in groups:
-            if "time_s" in f["series"][analysis]:
+            if "time_s" in f[series][analysis]:
                 dim = "time_s" if len(groups) == 1 else f"{analysis}_time_s"
                 time_dims[analysis] = dim
-                axis = f["series"][analysis]["time_s"]
+                axis = f[series][analysis]["time_s"]
                 coords[dim] = xr.Variable((dim,), axis[:], _attrs(axis))
     for path, name in names.items():
         dataset = f[path]
@@ -286,7 +285,7 @@ def open_archive(path, product=None):
         group, analysis = path.split("/")[:2]
         extra = []
         for axis in range(1, dataset.ndim):
-            if group == "series" and axis == 1 and analysis in time_dims:
+            if group == series and axis == 1 and analysis in time_dims:
                 extra.append(time_dims[analysis])
             elif dataset.name.endswith("/eigenvalues"):
                 extra.append("eigenvalue")
@@ -308,15 +307,21 @@ def open_archive(path, product=None):
 
 
 def list_products(path):
-    """The names of an archive's /analysis products (`gesweep boundary --archive`, `gesweep sensitivity`)."""
-    with _open_checked(path) as f:
-        return sorted(f["analysis"]) if "analysis" in f else []
+    """The names of an archive's /analysis products (`gesweep boundary --archive`, `gesweep sensitivity`,
+    `gesweep dispersion`), as the archive layout names them."""
+    with _open_checked(path) as archive:
+        return sorted(archive.products())
 
 
-def _open_product(f, product):
-    key = f"analysis/{product}"
-    if key not in f:
-        available = sorted(f["analysis"]) if "analysis" in f else []
+def _open_product(archive, product):
+    f = archive.file
+    available = sorted(archive.products())
+    # A product by its name, or a group inside one ("sensitivity/boundary/height_m").
+    first, _, rest = product.partition("/")
+    key = None
+    if first in archive.layout.product_names():
+        key = archive.layout.product_root(first) + (f"/{rest}" if rest else "")
+    if key is None or key not in f:
         filename = f.filename
         f.close()
         from ._gesweep import InputError
