@@ -50,18 +50,17 @@ class DensityPolynomial {
 
   /// At for the lanes of one chunk on architecture Arch (lanes.h): lane i is polynomials[i]->At(height[i])
   /// bit for bit (the same operations in the same order; a lane outside its band gets IsaDensity).
-  /// height_m: the chunk of heights, m; height: the same heights as doubles.
+  /// height_m: the chunk of heights, m; height: the same heights as doubles; center_m and
+  /// coefficients: lane i's polynomial's (GatherLanes).
   template <class Arch, class V>
   GESWEEP_ALWAYS_INLINE static V AtLanes(const DensityPolynomial* const* polynomials, const V& height_m,
-                                         const double* height) {
+                                         const double* height, const V& center_m, const V* coefficients) {
     constexpr int kWidth = lanes::kChunkWidth<V>;
-    const V y = height_m - lanes::Gather<Arch, V>([&](int i) { return polynomials[i]->center_m_; });
-    auto c = [&](int k) {
-      return lanes::Gather<Arch, V>([&](int i) { return polynomials[i]->coefficients_[k]; });
-    };
+    const V y = height_m - center_m;
+    const V* c = coefficients;
     const V y2 = y * y;
     const V y4 = y2 * y2;
-    V rho = ((c(0) + c(1) * y) + (c(2) + c(3) * y) * y2) + ((c(4) + c(5) * y) + c(6) * y2) * y4;
+    V rho = ((c[0] + c[1] * y) + (c[2] + c[3] * y) * y2) + ((c[4] + c[5] * y) + c[6] * y2) * y4;
     alignas(64) double values[kWidth];
     bool outside = false;
     for (int i = 0; i < kWidth; ++i) {
@@ -73,6 +72,16 @@ class DensityPolynomial {
     }
     if (outside) rho = lanes::Load<Arch, V>(values);
     return rho;
+  }
+
+  /// The centres and coefficients of the lanes' polynomials as chunks, for AtLanes.
+  template <class Arch, class V>
+  GESWEEP_ALWAYS_INLINE static void GatherLanes(const DensityPolynomial* const* polynomials, V& center_m,
+                                                V* coefficients) {
+    center_m = lanes::Gather<Arch, V>([&](int i) { return polynomials[i]->center_m_; });
+    for (int k = 0; k <= kDegree; ++k) {
+      coefficients[k] = lanes::Gather<Arch, V>([&](int i) { return polynomials[i]->coefficients_[k]; });
+    }
   }
 
  private:
@@ -134,15 +143,21 @@ class LinearDerivativeTable {
     dxdt[4] = reference_speed_mps * dtheta - dw;
   }
 
+  /// What Equation1Lanes reads from the lanes' tables, as chunks (defined below).
+  template <class Arch, class V>
+  struct LanesGathered;
+
   /// Equation1 for the lanes of one chunk on architecture Arch (lanes.h): lane i is
   /// tables[i]->Equation1(start_height_m[i], reference_speed_mps[i], x_i, elevator_i, dxdt_i,
   /// segment_hints[i]) bit for bit, with the same operations in the same order; the segment and the density's
   /// band are found per lane, the rest runs on the chunk. x[c], dxdt[c]: component c of the chunk's lanes.
+  /// gathered: the lanes' table values of an earlier call with the same tables, or default-constructed.
   template <class Arch, class V>
   GESWEEP_ALWAYS_INLINE static void Equation1Lanes(const LinearDerivativeTable* const* tables,
                                                    const double* start_height_m,
                                                    const double* reference_speed_mps, const V* x,
-                                                   const V& elevator_rad, V* dxdt, int* segment_hints) {
+                                                   const V& elevator_rad, V* dxdt, int* segment_hints,
+                                                   LanesGathered<Arch, V>& gathered) {
     constexpr int kWidth = lanes::kChunkWidth<V>;
     const V du = x[0], dw = x[1], q = x[2], dtheta = x[3], dh = x[4];
     const V u0 = lanes::Load<Arch, V>(reference_speed_mps);
@@ -152,22 +167,23 @@ class LinearDerivativeTable {
     lanes::Store<Arch>(height_m, height);
     const Segment* seg[kWidth];
     const DensityPolynomial* density[kWidth];
+    bool same = true;
     for (int i = 0; i < kWidth; ++i) {
       seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
       density[i] = &tables[i]->density_;
+      same = same && seg[i] == gathered.segment[i];
     }
-    const V y = height_m - lanes::Gather<Arch, V>([&](int i) { return seg[i]->reference_m; });
-    auto r = [&](int j) {
-      return lanes::Gather<Arch, V>([&](int i) { return seg[i]->slope[j]; }) * y +
-             lanes::Gather<Arch, V>([&](int i) { return seg[i]->value[j]; });
-    };
+    if (!same) Gather(seg, density, gathered);
+    const V y = height_m - gathered.reference_m;
+    auto r = [&](int j) { return gathered.slope[j] * y + gathered.value[j]; };
     const V x_1 = r(kXu) * du + r(kXw) * dw;
     const V x_2 = r(kXh) * dh + r(kXde) * elevator_rad;
     const V z_1 = r(kZu) * du + r(kZw) * dw;
     const V z_2 = r(kZh) * dh + r(kZde) * elevator_rad;
     const V m_1 = (r(kMu) * du + r(kMw) * dw) + r(kMq) * q;
     const V m_2 = r(kMh) * dh + r(kMde) * elevator_rad;
-    const V rho = DensityPolynomial::AtLanes<Arch, V>(density, height_m, height);
+    const V rho = DensityPolynomial::AtLanes<Arch, V>(density, height_m, height, gathered.density_center_m,
+                                                      gathered.density_coefficients);
     const V mw_dot = rho * r(kMwDot);
     const V u2 = speed_mps * speed_mps;
     const V w_dot = rho * (speed_mps * z_1 + u2 * z_2) + u0 * q;
@@ -208,6 +224,20 @@ class LinearDerivativeTable {
     double high_m = 0;
   };
   int Locate(double height_m, int start) const;
+
+ public:
+  /// What Equation1Lanes reads from the lanes' tables, as chunks: each lane's segment (R's values and
+  /// slopes, the reference height) and density polynomial. Gathered on the first call and again only
+  /// when a lane's segment is not the one they came from, so that the calls of one step, which
+  /// almost always stay in their segments, gather once. Valid while the lanes' tables are.
+  template <class Arch, class V>
+  struct LanesGathered {
+    const Segment* segment[lanes::kChunkWidth<V>] = {};
+    V reference_m, slope[kReducedCount], value[kReducedCount];
+    V density_center_m, density_coefficients[DensityPolynomial::kDegree + 1];
+  };
+
+ private:
   GESWEEP_ALWAYS_INLINE const Segment& SegmentFor(double height_m, int& segment_hint) const {
     int s = segment_hint;
     if (!(height_m > segments_[s].low_m && height_m <= segments_[s].high_m)) s = Locate(height_m, s);
@@ -215,6 +245,19 @@ class LinearDerivativeTable {
     return segments_[s];
   }
   static std::array<double, kReducedCount> Reduce(const DimensionalDerivatives& d);
+  // The lanes' segments and polynomials as chunks (out of line: taken a few times per run).
+  template <class Arch, class V>
+  [[gnu::noinline]] static void Gather(const Segment* const* seg, const DensityPolynomial* const* density,
+                                       LanesGathered<Arch, V>& gathered) {
+    for (int i = 0; i < lanes::kChunkWidth<V>; ++i) gathered.segment[i] = seg[i];
+    gathered.reference_m = lanes::Gather<Arch, V>([&](int i) { return seg[i]->reference_m; });
+    for (int j = 0; j < kReducedCount; ++j) {
+      gathered.slope[j] = lanes::Gather<Arch, V>([&](int i) { return seg[i]->slope[j]; });
+      gathered.value[j] = lanes::Gather<Arch, V>([&](int i) { return seg[i]->value[j]; });
+    }
+    DensityPolynomial::GatherLanes<Arch, V>(density, gathered.density_center_m,
+                                            gathered.density_coefficients);
+  }
 
   std::vector<Segment> segments_;
   DensityPolynomial density_;
