@@ -3,6 +3,7 @@
 // integrator.h. Everything here works on stack arrays; nothing allocates.
 
 #include <algorithm>
+#include <array>
 #include <boost/math/tools/toms748_solve.hpp>
 #include <boost/numeric/odeint/stepper/controlled_runge_kutta.hpp>
 #include <boost/numeric/odeint/stepper/runge_kutta_dopri5.hpp>
@@ -44,6 +45,44 @@ inline constexpr int kMaxConsecutiveRejections = 200;
 
 /// TOMS 748 iterations allowed per event; it converges in well under 20 on a smooth interpolant.
 inline constexpr std::uintmax_t kMaxEventIterations = 100;
+
+/// The events that fired in a step from t to t_new: those whose value fell from > 0 at t to ≤ 0 at
+/// t_new, in time order. An event that is 0 at t_new fired there; one below 0 is located on the step's
+/// interpolant by TOMS 748 between t and t_new, to `tolerance` in time, and reported at the bracket's
+/// right end (past the crossing, g ≤ 0 there). g_at(i, tau): event i's value at tau in [t, t_new].
+template <std::size_t E>
+struct FiredEvents {
+  std::array<double, E> time{};  ///< by event: when it fired (only the fired ones are set)
+  std::array<int, E> order{};    ///< the fired events, earliest first
+  int count = 0;
+};
+
+template <std::size_t E, class EventValueAt>
+FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::array<double, E>& g_new,
+                            double t, double t_new, double tolerance, EventValueAt&& g_at) {
+  FiredEvents<E> fired;
+  for (int i = 0; i < static_cast<int>(E); ++i) {
+    if (!(g_previous[i] > 0.0 && g_new[i] <= 0.0)) continue;
+    double t_event = t_new;
+    if (g_new[i] < 0.0) {
+      auto g_of = [&](double tau) { return g_at(i, tau); };
+      auto converged = [tolerance](double a, double b) { return std::abs(b - a) <= tolerance; };
+      std::uintmax_t iterations = kMaxEventIterations;
+      t_event =
+          boost::math::tools::toms748_solve(g_of, t, t_new, g_previous[i], g_new[i], converged, iterations)
+              .second;
+    }
+    fired.time[i] = t_event;
+    // Insertion by time keeps the handful of simultaneous events ordered.
+    int position = fired.count++;
+    while (position > 0 && fired.time[fired.order[position - 1]] > t_event) {
+      fired.order[position] = fired.order[position - 1];
+      --position;
+    }
+    fired.order[position] = i;
+  }
+  return fired;
+}
 
 enum class StepOutcome { kAccepted, kNonFinite, kUnderflow };
 
@@ -299,40 +338,17 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
     int cut_event = -1;
     if constexpr (E > 0) {
       problem.EventValues(t_new, *x_new, segment_at(t_new), g_new);
-      std::array<double, E> event_time{};
-      std::array<int, E> fired{};
-      int fired_count = 0;
-      for (int i = 0; i < E; ++i) {
-        if (!(g_previous[i] > 0.0 && g_new[i] <= 0.0)) continue;
-        double t_event = t_new;
-        if (g_new[i] < 0.0) {
-          auto g_of = [&](double tau) {
+      const auto fired =
+          LocateEvents(g_previous, g_new, t, t_new, options.event_time_tolerance_s, [&](int i, double tau) {
             State xs;
             interpolate(tau, xs);
             Events values;
             problem.EventValues(tau, xs, segment_at(tau), values);
             return values[i];
-          };
-          const double tolerance = options.event_time_tolerance_s;
-          auto converged = [tolerance](double a, double b) { return std::abs(b - a) <= tolerance; };
-          std::uintmax_t iterations = kMaxEventIterations;
-          // The bracket's right end is past the crossing (g ≤ 0 there): report it.
-          t_event = boost::math::tools::toms748_solve(g_of, t, t_new, g_previous[i], g_new[i], converged,
-                                                      iterations)
-                        .second;
-        }
-        event_time[i] = t_event;
-        // Insertion by time keeps the handful of simultaneous events ordered.
-        int position = fired_count++;
-        while (position > 0 && event_time[fired[position - 1]] > t_event) {
-          fired[position] = fired[position - 1];
-          --position;
-        }
-        fired[position] = i;
-      }
-      for (int k = 0; k < fired_count; ++k) {
-        const int i = fired[k];
-        const double t_event = event_time[i];
+          });
+      for (int k = 0; k < fired.count; ++k) {
+        const int i = fired.order[k];
+        const double t_event = fired.time[i];
         interpolate(t_event, x_event);
         emit_outputs_through(t_event, interpolate);
         ++result.events_fired;

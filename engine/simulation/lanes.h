@@ -1,52 +1,65 @@
 #pragma once
 /// Lanes of a batch (docs/performance.md, "Batched time responses"): W runs integrated in lockstep
 /// keep each state component as W doubles side by side, and the arithmetic on them goes through
-/// xsimd's batch<double> (Debian's libxsimd-dev) in chunks of its hardware width, or through plain
-/// doubles when W is not a multiple of it. Every operation is the same IEEE operation, in the same
-/// order, as the scalar code it mirrors: no fused multiply-add (the build has no FMA, and
-/// -ffp-contract=off keeps the compiler from forming one), no vector exp or pow. So a lane's result
+/// xsimd's batch<double, Arch> (Debian's libxsimd-dev) in chunks of the architecture's width, or
+/// through plain doubles when W is not a multiple of it. Every operation is the same IEEE operation,
+/// in the same order, as the scalar code it mirrors: no fused multiply-add (the lanes' translation
+/// units are built without FMA and with -ffp-contract=off), no vector exp or pow. So a lane's result
 /// does not depend on the width, on the other lanes, or on the instruction set, bit for bit.
+///
+/// Every template here takes the architecture (xsimd::sse2, xsimd::avx2, xsimd::avx512f) as its first
+/// parameter, also where the chunk is a plain double: the code of each architecture is compiled in a
+/// translation unit of its own, with its own -m flags (open_loop_lanes_<isa>.cc), and the architecture
+/// in every instantiation's name keeps the linker from merging one architecture's copy into
+/// another's. Only those translation units instantiate these templates (open_loop_lanes_kernel.h).
 
+#include <type_traits>
 #include <xsimd/xsimd.hpp>
 
 namespace gesweep::lanes {
 
-/// The hardware vector of doubles of this build (SSE2: 2 lanes, AVX2: 4, AVX-512: 8).
-using HardwareVector = xsimd::batch<double>;
-inline constexpr int kHardwareWidth = static_cast<int>(HardwareVector::size);
+/// The vector of doubles of architecture Arch (xsimd::sse2: 2 lanes, xsimd::avx2: 4, xsimd::avx512f: 8).
+template <class Arch>
+using Vector = xsimd::batch<double, Arch>;
+template <class Arch>
+inline constexpr int kVectorWidth = static_cast<int>(Vector<Arch>::size);
 
-/// The chunk type for W lanes: the hardware vector when W is a multiple of its width, else double.
-template <int W>
-using Chunk = std::conditional_t<W % kHardwareWidth == 0, HardwareVector, double>;
+/// The chunk type for W lanes on Arch: its vector when W is a multiple of its width, else double.
+template <class Arch, int W>
+using Chunk = std::conditional_t<W % kVectorWidth<Arch> == 0, Vector<Arch>, double>;
 
 /// Lanes in one chunk of type V.
 template <class V>
-inline constexpr int kChunkWidth = std::is_same_v<V, double> ? 1 : kHardwareWidth;
+inline constexpr int kChunkWidth = 1;
+template <class Arch>
+inline constexpr int kChunkWidth<Vector<Arch>> = kVectorWidth<Arch>;
 
-template <class V>
+template <class Arch, class V>
 [[gnu::always_inline]] inline V Load(const double* p) {
   if constexpr (std::is_same_v<V, double>) {
     return *p;
   } else {
+    static_assert(std::is_same_v<V, Vector<Arch>>);
     return V::load_unaligned(p);
   }
 }
 
-template <class V>
+template <class Arch, class V>
 [[gnu::always_inline]] inline void Store(const V& v, double* p) {
   if constexpr (std::is_same_v<V, double>) {
     *p = v;
   } else {
+    static_assert(std::is_same_v<V, Vector<Arch>>);
     v.store_unaligned(p);
   }
 }
 
 /// The chunk whose lane i is value(i).
-template <class V, class F>
+template <class Arch, class V, class F>
 [[gnu::always_inline]] inline V Gather(F&& value) {
   alignas(64) double lanes[kChunkWidth<V>];
   for (int i = 0; i < kChunkWidth<V>; ++i) lanes[i] = value(i);
-  return Load<V>(lanes);
+  return Load<Arch, V>(lanes);
 }
 
 }  // namespace gesweep::lanes

@@ -11,6 +11,7 @@
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
+#include "engine/simulation/open_loop_lanes.h"
 
 namespace gesweep {
 
@@ -426,19 +427,24 @@ struct LaneRun {
   Events g_previous{};
 };
 
-// W lanes: the runs' states side by side (lanes.h), component c of lane i at [c][i].
+// W lanes: the runs' states side by side (open_loop_lanes.h), component c of lane i at [c][i]. The
+// per-lane decisions are here, in scalar code; the RK4 stages of all lanes are the kernel of the
+// batch's instruction set.
 template <int W>
 class OpenLoopLanes {
  public:
-  using Chunk = lanes::Chunk<W>;
-  static constexpr int kChunkWidth = lanes::kChunkWidth<Chunk>;
   using State = LaneRun::State;
 
   OpenLoopLanes(std::span<const OpenLoopBatchRun> runs, std::span<const std::size_t> order,
                 const std::vector<const LinearDerivativeTable*>& tables, std::vector<OpenLoopResult>& results,
-                const std::atomic<bool>* cancel)
-      : runs_(runs), order_(order), run_tables_(tables), results_(results), cancel_(cancel) {
-    for (int i = 0; i < W; ++i) table_[i] = tables[order.front()];  // idle lanes fly zeros on a valid table
+                LanesIsa isa, const std::atomic<bool>* cancel)
+      : runs_(runs),
+        order_(order),
+        run_tables_(tables),
+        results_(results),
+        cancel_(cancel),
+        kernels_(lanes::LaneKernelsFor<W>(isa)) {
+    for (int i = 0; i < W; ++i) a_.table[i] = tables[order.front()];  // idle lanes fly zeros on a valid table
   }
 
   void FlyAll() {
@@ -453,7 +459,7 @@ class OpenLoopLanes {
       for (int i = 0; i < W; ++i) {
         if (active_[i]) PrepareStep(i);
       }
-      StepAll();
+      kernels_.rk4_stages(a_);
       for (int i = 0; i < W; ++i) {
         if (active_[i]) CompleteStep(i);
       }
@@ -461,13 +467,19 @@ class OpenLoopLanes {
   }
 
  private:
+  // One lane's step: its ends and the states and derivatives there.
+  struct Step {
+    double t, t_new;
+    State x, f, x_new, f_new;
+  };
+
   // The lane's state as one run's.
-  State Lane(const double (&v)[5][W], int i) const {
+  static State Lane(const double (&v)[5][W], int i) {
     State s;
     for (int c = 0; c < 5; ++c) s[static_cast<std::size_t>(c)] = v[c][i];
     return s;
   }
-  void SetLane(double (&v)[5][W], int i, const State& s) {
+  static void SetLane(double (&v)[5][W], int i, const State& s) {
     for (int c = 0; c < 5; ++c) v[c][i] = s[static_cast<std::size_t>(c)];
   }
 
@@ -497,10 +509,10 @@ class OpenLoopLanes {
       lane.step_s = r.config.integrator.step_s;
       lane.segment = integrator_detail::SegmentOf(lane.schedule.breakpoints_s, 0.0);
       lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
-      table_[i] = table;
-      hint_[i] = table->SegmentOf(r.config.start_height_m);
-      h0_[i] = r.config.start_height_m;
-      u0_[i] = r.config.reference_speed_mps;
+      a_.table[i] = table;
+      a_.hint[i] = table->SegmentOf(r.config.start_height_m);
+      a_.h0[i] = r.config.start_height_m;
+      a_.u0[i] = r.config.reference_speed_mps;
       const InitialOffsets& o = r.config.initial_offsets;
       const State x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
                         o.delta_height_m};
@@ -508,8 +520,8 @@ class OpenLoopLanes {
       lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
       State f0;
       LaneDerivative(i, x0, f0);
-      SetLane(x_, i, x0);
-      SetLane(f_, i, f0);
+      SetLane(a_.x, i, x0);
+      SetLane(a_.f, i, f0);
       active_[i] = true;
       ++active_count_;
       if (!integrator_detail::AllFinite<5>(f0) || !integrator_detail::AllFinite<5>(x0)) {
@@ -522,8 +534,8 @@ class OpenLoopLanes {
   }
 
   void Idle(int i) {
-    for (int c = 0; c < 5; ++c) x_[c][i] = f_[c][i] = 0.0;
-    h_[i] = half_h_[i] = sixth_h_[i] = elevator_[i] = 0.0;
+    for (int c = 0; c < 5; ++c) a_.x[c][i] = a_.f[c][i] = 0.0;
+    a_.h[i] = a_.half_h[i] = a_.sixth_h[i] = a_.elevator[i] = 0.0;
   }
 
   // Rk4Method::Advance up to the stages: the step's end on the lane's grid t0 + n·h, or its limit.
@@ -539,114 +551,79 @@ class OpenLoopLanes {
     while (grid_time(lane.grid_index + 1) <= lane.t + snap) ++lane.grid_index;
     const double target = grid_time(lane.grid_index + 1);
     t_to_[i] = t_limit <= target + snap ? t_limit : target;
-    h_[i] = t_to_[i] - lane.t;
-    half_h_[i] = 0.5 * h_[i];
-    sixth_h_[i] = h_[i] / 6.0;
-    elevator_[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
-  }
-
-  // The RK4 stages of every lane at once (Rk4Method::Advance's arithmetic, per chunk).
-  void StepAll() {
-    for (int k = 0; k < W; k += kChunkWidth) {
-      using V = Chunk;
-      V x[5], f[5], stage[5], k2[5], k3[5], k4[5], x_new[5], f_new[5];
-      for (int c = 0; c < 5; ++c) {
-        x[c] = lanes::Load<V>(&x_[c][k]);
-        f[c] = lanes::Load<V>(&f_[c][k]);
-      }
-      const V h = lanes::Load<V>(&h_[k]);
-      const V half_h = lanes::Load<V>(&half_h_[k]);
-      const V sixth_h = lanes::Load<V>(&sixth_h_[k]);
-      const V elevator = lanes::Load<V>(&elevator_[k]);
-      auto rhs = [&](const V* xs, V* dxdt) {
-        LinearDerivativeTable::Equation1Lanes<V>(&table_[k], &h0_[k], &u0_[k], xs, elevator, dxdt, &hint_[k]);
-      };
-      for (int c = 0; c < 5; ++c) stage[c] = x[c] + half_h * f[c];
-      rhs(stage, k2);
-      for (int c = 0; c < 5; ++c) stage[c] = x[c] + half_h * k2[c];
-      rhs(stage, k3);
-      for (int c = 0; c < 5; ++c) stage[c] = x[c] + h * k3[c];
-      rhs(stage, k4);
-      for (int c = 0; c < 5; ++c) x_new[c] = x[c] + sixth_h * ((f[c] + k4[c]) + V(2.0) * (k2[c] + k3[c]));
-      rhs(x_new, f_new);
-      for (int c = 0; c < 5; ++c) {
-        lanes::Store(x_new[c], &x_new_[c][k]);
-        lanes::Store(f_new[c], &f_new_[c][k]);
-      }
-    }
+    a_.h[i] = t_to_[i] - lane.t;
+    a_.half_h[i] = 0.5 * a_.h[i];
+    a_.sixth_h[i] = a_.h[i] / 6.0;
+    a_.elevator[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
   }
 
   // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the
-  // step, the step's record, and a breakpoint's restart.
+  // step (StopAtEvent), the step's record and a breakpoint's restart (AcceptStep).
   void CompleteStep(int i) {
     LaneRun& lane = lane_[i];
     lane.result.rhs_calls += 4;
-    const State x = Lane(x_, i), f = Lane(f_, i), x_new = Lane(x_new_, i), f_new = Lane(f_new_, i);
-    if (!integrator_detail::AllFinite<5>(x_new)) return Finish(i, IntegrationStatus::kNonFinite);
-    const double t = lane.t;
-    const double t_new = t_to_[i];
+    const Step step{lane.t, t_to_[i], Lane(a_.x, i), Lane(a_.f, i), Lane(a_.x_new, i), Lane(a_.f_new, i)};
+    if (!integrator_detail::AllFinite<5>(step.x_new)) return Finish(i, IntegrationStatus::kNonFinite);
     ++lane.result.accepted_steps;
+    LaneRun::Events g_new;
+    lane.problem->EventValues(step.t_new, step.x_new, lane.segment, g_new);
+    if (StopAtEvent(i, step, g_new)) return;
+    AcceptStep(i, step, g_new);
+  }
+
+  // The state at tau in [t, t_new]: exactly the step's end states at its ends, the cubic Hermite
+  // interpolant between them.
+  void Interpolate(const Step& step, double tau, State& out) const {
+    if (tau == step.t_new) {
+      out = step.x_new;
+    } else if (tau == step.t) {
+      out = step.x;
+    } else {
+      hermite_.Interpolate(tau, step.t, step.x, step.f, step.t_new, step.x_new, step.f_new, out);
+    }
+  }
+
+  // The events fired in lane i's step, in time order: one that records is recorded; one that stops
+  // ends the run at its time (true).
+  bool StopAtEvent(int i, const Step& step, const LaneRun::Events& g_new) {
+    LaneRun& lane = lane_[i];
     LaneRun::Problem& problem = *lane.problem;
     const int segment = lane.segment;
-    auto interpolate = [&](double tau, State& out) {
-      if (tau == t_new) {
-        out = x_new;
-      } else if (tau == t) {
-        out = x;
-      } else {
-        hermite_.Interpolate(tau, t, x, f, t_new, x_new, f_new, out);
-      }
-    };
-    LaneRun::Events g_new;
-    problem.EventValues(t_new, x_new, segment, g_new);
-    constexpr int E = LaneRun::Problem::kEventCount;
-    std::array<double, E> event_time{};
-    std::array<int, E> fired{};
-    int fired_count = 0;
-    for (int e = 0; e < E; ++e) {
-      if (!(lane.g_previous[e] > 0.0 && g_new[e] <= 0.0)) continue;
-      double t_event = t_new;
-      if (g_new[e] < 0.0) {
-        auto g_of = [&](double tau) {
-          State xs;
-          interpolate(tau, xs);
-          LaneRun::Events values;
-          problem.EventValues(tau, xs, segment, values);
-          return values[e];
-        };
-        const double tolerance = lane.config->integrator.event_time_tolerance_s;
-        auto converged = [tolerance](double a, double b) { return std::abs(b - a) <= tolerance; };
-        std::uintmax_t iterations = integrator_detail::kMaxEventIterations;
-        t_event = boost::math::tools::toms748_solve(g_of, t, t_new, lane.g_previous[e], g_new[e], converged,
-                                                    iterations)
-                      .second;
-      }
-      event_time[e] = t_event;
-      int position = fired_count++;
-      while (position > 0 && event_time[fired[position - 1]] > t_event) {
-        fired[position] = fired[position - 1];
-        --position;
-      }
-      fired[position] = e;
-    }
-    for (int k = 0; k < fired_count; ++k) {
-      const int e = fired[k];
+    const auto fired = integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
+                                                       lane.config->integrator.event_time_tolerance_s,
+                                                       [&](int e, double tau) {
+                                                         State xs;
+                                                         Interpolate(step, tau, xs);
+                                                         LaneRun::Events values;
+                                                         problem.EventValues(tau, xs, segment, values);
+                                                         return values[e];
+                                                       });
+    for (int k = 0; k < fired.count; ++k) {
+      const int e = fired.order[k];
+      const double t_event = fired.time[e];
       State x_event;
-      interpolate(event_time[e], x_event);
+      Interpolate(step, t_event, x_event);
       ++lane.result.events_fired;
-      const EventAction action = problem.OnEvent(e, event_time[e], x_event, segment);
+      const EventAction action = problem.OnEvent(e, t_event, x_event, segment);
       if (action == EventAction::kContinue) continue;
       GESWEEP_DEMAND(action == EventAction::kStop);  // the open loop only records or stops
-      problem.OnStep(event_time[e], x_event, segment);
-      lane.t = event_time[e];
-      SetLane(x_, i, x_event);
+      problem.OnStep(t_event, x_event, segment);
+      lane.t = t_event;
+      SetLane(a_.x, i, x_event);
       lane.result.stopping_event = e;
-      return Finish(i, IntegrationStatus::kStoppedByEvent);
+      Finish(i, IntegrationStatus::kStoppedByEvent);
+      return true;
     }
-    problem.OnStep(t_new, x_new, segment);
-    lane.t = t_new;
-    SetLane(x_, i, x_new);
-    SetLane(f_, i, f_new);
+    return false;
+  }
+
+  // Lane i's step recorded and taken; at a breakpoint, the next segment's start.
+  void AcceptStep(int i, const Step& step, const LaneRun::Events& g_new) {
+    LaneRun& lane = lane_[i];
+    lane.problem->OnStep(step.t_new, step.x_new, lane.segment);
+    lane.t = step.t_new;
+    SetLane(a_.x, i, step.x_new);
+    SetLane(a_.f, i, step.f_new);
     lane.g_previous = g_new;
     const std::vector<double>& breakpoints = lane.schedule.breakpoints_s;
     if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] <= lane.t) {
@@ -655,9 +632,9 @@ class OpenLoopLanes {
         ++lane.segment;
       }
       State f_restart;
-      LaneDerivative(i, x_new, f_restart);
-      SetLane(f_, i, f_restart);
-      problem.EventValues(lane.t, x_new, lane.segment, lane.g_previous);
+      LaneDerivative(i, step.x_new, f_restart);
+      SetLane(a_.f, i, f_restart);
+      lane.problem->EventValues(lane.t, step.x_new, lane.segment, lane.g_previous);
       if (!integrator_detail::AllFinite<5>(f_restart)) return Finish(i, IntegrationStatus::kNonFinite);
     }
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
@@ -668,7 +645,7 @@ class OpenLoopLanes {
     LaneRun& lane = lane_[i];
     lane.result.status = status;
     lane.result.end_time_s = lane.t;
-    lane.result.final_state = Lane(x_, i);
+    lane.result.final_state = Lane(a_.x, i);
     lane.result.final_segment = lane.segment;
     FillSummary(results_[lane.run].summary, lane.result, *lane.problem, *lane.config);
     active_[i] = false;
@@ -681,25 +658,23 @@ class OpenLoopLanes {
   const std::vector<const LinearDerivativeTable*>& run_tables_;
   std::vector<OpenLoopResult>& results_;
   const std::atomic<bool>* cancel_;
+  lanes::LaneKernels<W> kernels_;
   std::size_t next_ = 0;
   int active_count_ = 0;
   integrator_detail::Rk4Method<5> hermite_{0.0, IntegratorOptions{}};  // its cubic Hermite interpolant
 
   std::array<LaneRun, W> lane_;
   std::array<bool, W> active_{};
-  alignas(64) double x_[5][W]{}, f_[5][W]{}, x_new_[5][W]{}, f_new_[5][W]{};
-  alignas(64) double h_[W]{}, half_h_[W]{}, sixth_h_[W]{}, t_to_[W]{}, elevator_[W]{};
-  alignas(64) double h0_[W]{}, u0_[W]{};
-  const LinearDerivativeTable* table_[W]{};
-  int hint_[W]{};
+  lanes::StepArrays<W> a_;
+  double t_to_[W]{};
 };
 
 template <int W>
 void FlyInLanes(std::span<const OpenLoopBatchRun> runs, std::span<const std::size_t> order,
                 const std::vector<const LinearDerivativeTable*>& tables, std::vector<OpenLoopResult>& results,
-                const std::atomic<bool>* cancel) {
+                LanesIsa isa, const std::atomic<bool>* cancel) {
   // On the heap: the lanes hold W runs' problems and arrays.
-  auto lanes = std::make_unique<OpenLoopLanes<W>>(runs, order, tables, results, cancel);
+  auto lanes = std::make_unique<OpenLoopLanes<W>>(runs, order, tables, results, isa, cancel);
   lanes->FlyAll();
 }
 
@@ -825,9 +800,12 @@ bool OpenLoopRunUsesLanes(const LongitudinalModel& model, const OpenLoopConfig& 
 }
 
 std::vector<OpenLoopResult> SimulateOpenLoopBatch(std::span<const OpenLoopBatchRun> runs, int width,
-                                                  const std::atomic<bool>* cancel) {
+                                                  const std::atomic<bool>* cancel,
+                                                  std::optional<LanesIsa> isa) {
   GESWEEP_DEMAND(std::find(std::begin(kOpenLoopBatchWidths), std::end(kOpenLoopBatchWidths), width) !=
                  std::end(kOpenLoopBatchWidths));
+  GESWEEP_DEMAND(!isa || LanesIsaSupported(*isa));
+  const LanesIsa lanes_isa = isa ? *isa : ChooseLanesIsa(width);
   for (const OpenLoopBatchRun& run : runs) {
     GESWEEP_DEMAND(run.model != nullptr);
     ValidateOpenLoopConfig(*run.model, run.config, "open-loop config");
@@ -857,16 +835,16 @@ std::vector<OpenLoopResult> SimulateOpenLoopBatch(std::span<const OpenLoopBatchR
   if (in_lanes.empty()) return results;
   switch (width) {
     case 1:
-      FlyInLanes<1>(runs, in_lanes, tables, results, cancel);
+      FlyInLanes<1>(runs, in_lanes, tables, results, lanes_isa, cancel);
       break;
     case 2:
-      FlyInLanes<2>(runs, in_lanes, tables, results, cancel);
+      FlyInLanes<2>(runs, in_lanes, tables, results, lanes_isa, cancel);
       break;
     case 4:
-      FlyInLanes<4>(runs, in_lanes, tables, results, cancel);
+      FlyInLanes<4>(runs, in_lanes, tables, results, lanes_isa, cancel);
       break;
     default:
-      FlyInLanes<8>(runs, in_lanes, tables, results, cancel);
+      FlyInLanes<8>(runs, in_lanes, tables, results, lanes_isa, cancel);
       break;
   }
   return results;

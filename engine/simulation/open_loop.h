@@ -17,6 +17,7 @@
 #include "engine/disturbance/disturbance_options.h"
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/simulation/integrator.h"
+#include "engine/simulation/lanes_isa.h"
 
 namespace gesweep {
 
@@ -314,9 +315,13 @@ bool OpenLoopRunUsesLanes(const LongitudinalModel& model, const OpenLoopConfig& 
 /// (tests/simulation/open_loop_batch_test.cc). The runs that OpenLoopRunUsesLanes are flown `width`
 /// at a time in lockstep (docs/performance.md, "Batched time responses"): one RK4 step of every lane
 /// at once, each lane on its own time grid, breakpoints and events; a lane whose run ends takes the
-/// next run. width: one of kOpenLoopBatchWidths (GESWEEP_DEMAND). Validates every config first
-/// (throws the first InputError, source "open-loop config", before any run is flown).
+/// next run. width: one of kOpenLoopBatchWidths (GESWEEP_DEMAND). isa: the instruction set of the
+/// lanes' arithmetic, one this CPU runs (GESWEEP_DEMAND, LanesIsaSupported); by default
+/// ChooseLanesIsa(width): GESWEEP_LANES_ISA when it is set, else the widest that fits the width (every
+/// choice gives the same results). Validates every config first (throws the first InputError, source
+/// "open-loop config", before any run is flown; ChooseLanesIsa's before that).
 std::vector<OpenLoopResult> SimulateOpenLoopBatch(std::span<const OpenLoopBatchRun> runs, int width,
-                                                  const std::atomic<bool>* cancel = nullptr);
+                                                  const std::atomic<bool>* cancel = nullptr,
+                                                  std::optional<LanesIsa> isa = std::nullopt);
 
 }  // namespace gesweep

@@ -3,7 +3,9 @@
 // most 3x the same run with A frozen at its initial value, and at most 60 us on one core.
 #include <benchmark/benchmark.h>
 
+#include <optional>
 #include <random>
+#include <string>
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/aircraft/atmosphere.h"
@@ -57,10 +59,15 @@ void Run(benchmark::State& state, const LongitudinalModel& model, const OpenLoop
 
 // 64 runs of the paper's 30 s run from heights spread over the table (1.5 to 14 m, so the lanes sit in
 // different segments), flown one at a time by SimulateOpenLoop (width 0) or in lanes of the given
-// width by SimulateOpenLoopBatch (docs/performance.md, "Batched time responses", issue 28).
-void BM_Rk4_30s_Batch(benchmark::State& state) {
+// width by SimulateOpenLoopBatch on the given instruction set (docs/performance.md, "Batched time
+// responses", issue 28). An instruction set this CPU lacks is reported as skipped.
+void BM_Rk4_30s_Batch(benchmark::State& state, std::optional<LanesIsa> isa) {
   constexpr int kRuns = 64;
   const int width = static_cast<int>(state.range(0));
+  if (isa && !LanesIsaSupported(*isa)) {
+    state.SkipWithError(("this CPU does not run " + std::string(ToString(*isa))).c_str());
+    return;
+  }
   std::vector<OpenLoopBatchRun> runs(kRuns);
   for (int i = 0; i < kRuns; ++i) {
     runs[static_cast<std::size_t>(i)].model = &Model(Interpolation::kLinear);
@@ -77,7 +84,7 @@ void BM_Rk4_30s_Batch(benchmark::State& state) {
         benchmark::DoNotOptimize(result.summary.final_state.data());
       }
     } else {
-      const std::vector<OpenLoopResult> results = SimulateOpenLoopBatch(runs, width);
+      const std::vector<OpenLoopResult> results = SimulateOpenLoopBatch(runs, width, nullptr, isa);
       for (const auto& result : results) steps += result.summary.steps;
       benchmark::DoNotOptimize(results.data());
     }
@@ -86,7 +93,25 @@ void BM_Rk4_30s_Batch(benchmark::State& state) {
   state.counters["time_per_run"] =
       benchmark::Counter(kRuns, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_Rk4_30s_Batch)->Arg(0)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Rk4_30s_Batch, one_at_a_time, std::nullopt)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Rk4_30s_Batch, sse2, LanesIsa::kSse2)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Rk4_30s_Batch, avx2, LanesIsa::kAvx2)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Rk4_30s_Batch, avx512, LanesIsa::kAvx512)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Unit(benchmark::kMillisecond);
 
 // The target: re-evaluation at every stage (linear table, fast path).
 void BM_Rk4_30s_Reevaluated(benchmark::State& state) {

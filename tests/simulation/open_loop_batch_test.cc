@@ -2,20 +2,30 @@
 // (tested in open_loop_test.cc against the generic model path, the matrix exponential and closed
 // forms): every run's summary bit for bit, for every lane width, whichever runs share a batch and in
 // whatever order, with runs ending early (touchdown, stall), late (the time limit), at different
-// steps and breakpoints, on two models, and mixed with runs the lanes do not take.
+// steps and breakpoints, on two models, and mixed with runs the lanes do not take; on every
+// instruction set of the lanes this CPU runs (sse2, avx2, avx512), each skipped with a message when
+// the CPU lacks it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <numbers>
 #include <random>
+#include <sstream>
 
 #include "engine/simulation/derivative_kernel.h"
 #include "engine/simulation/open_loop.h"
+#include "engine/simulation/open_loop_lanes.h"
 
 namespace gesweep {
+
+// The instruction set by name in the parameterized tests' messages.
+void PrintTo(LanesIsa isa, std::ostream* os) { *os << ToString(isa); }
+
 namespace {
 
 constexpr double kPaperSpeed_mps = 32.0208;
@@ -91,7 +101,19 @@ class OpenLoopBatchTest : public ::testing::Test {
                              }()};
 };
 
-TEST_F(OpenLoopBatchTest, EveryWidthGivesEveryRunsScalarResultBitForBit) {
+// The tests below run once per instruction set, skipped on a CPU without it.
+class OpenLoopBatchIsaTest : public OpenLoopBatchTest, public ::testing::WithParamInterface<LanesIsa> {
+ protected:
+  void SetUp() override {
+    if (!LanesIsaSupported(GetParam())) {
+      GTEST_SKIP() << "this CPU does not run " << ToString(GetParam()) << " (or its operating system does "
+                   << "not save its registers): its lanes are not tested here";
+    }
+  }
+  std::string Name() const { return std::string(ToString(GetParam())); }
+};
+
+TEST_P(OpenLoopBatchIsaTest, EveryWidthGivesEveryRunsScalarResultBitForBit) {
   const std::vector<OpenLoopBatchRun> runs = Runs(with_, without_);
   std::vector<OpenLoopResult> one;
   for (const auto& run : runs) one.push_back(SimulateOpenLoop(*run.model, run.config));
@@ -107,30 +129,81 @@ TEST_F(OpenLoopBatchTest, EveryWidthGivesEveryRunsScalarResultBitForBit) {
   EXPECT_GE(limits, 3);
   EXPECT_GE(stalls, 1);
   for (int width : kOpenLoopBatchWidths) {
-    const std::vector<OpenLoopResult> batch = SimulateOpenLoopBatch(runs, width);
+    const std::vector<OpenLoopResult> batch = SimulateOpenLoopBatch(runs, width, nullptr, GetParam());
     ASSERT_EQ(batch.size(), runs.size());
     for (std::size_t i = 0; i < runs.size(); ++i) {
       ExpectSameSummary(batch[i].summary, one[i].summary,
-                        "width " + std::to_string(width) + ", run " + std::to_string(i));
+                        Name() + ", width " + std::to_string(width) + ", run " + std::to_string(i));
     }
   }
 }
 
-TEST_F(OpenLoopBatchTest, ARunsResultDoesNotDependOnTheRunsBesideIt) {
+TEST_P(OpenLoopBatchIsaTest, ARunsResultDoesNotDependOnTheRunsBesideIt) {
   std::vector<OpenLoopBatchRun> runs = Runs(with_, without_);
-  const std::vector<OpenLoopResult> forward = SimulateOpenLoopBatch(runs, 4);
-  std::vector<OpenLoopBatchRun> reversed(runs.rbegin(), runs.rend());
-  const std::vector<OpenLoopResult> backward = SimulateOpenLoopBatch(reversed, 4);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    ExpectSameSummary(backward[runs.size() - 1 - i].summary, forward[i].summary,
-                      "run " + std::to_string(i) + " reversed");
+  std::vector<OpenLoopResult> one;
+  for (const auto& run : runs) one.push_back(SimulateOpenLoop(*run.model, run.config));
+  for (int width : {4, 8}) {
+    std::vector<OpenLoopBatchRun> reversed(runs.rbegin(), runs.rend());
+    const std::vector<OpenLoopResult> backward = SimulateOpenLoopBatch(reversed, width, nullptr, GetParam());
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      ExpectSameSummary(
+          backward[runs.size() - 1 - i].summary, one[i].summary,
+          Name() + ", width " + std::to_string(width) + ", run " + std::to_string(i) + " reversed");
+    }
   }
   // Alone in a batch of 8: seven idle lanes beside it.
   for (std::size_t i : {0u, 5u, 11u}) {
-    const std::vector<OpenLoopResult> alone = SimulateOpenLoopBatch(std::span(&runs[i], 1), 8);
-    ExpectSameSummary(alone[0].summary, forward[i].summary, "run " + std::to_string(i) + " alone");
+    const std::vector<OpenLoopResult> alone =
+        SimulateOpenLoopBatch(std::span(&runs[i], 1), 8, nullptr, GetParam());
+    ExpectSameSummary(alone[0].summary, one[i].summary, Name() + ", run " + std::to_string(i) + " alone");
   }
 }
+
+// Eq. (1)'s kernel of the instruction set on W lanes against the scalar kernel, lane by lane: lanes on
+// two tables, in different segments, some outside the density polynomial's band.
+template <int W>
+void ExpectKernelLanesAreTheScalarKernel(LanesIsa isa, const LinearDerivativeTable& a,
+                                         const LinearDerivativeTable& b) {
+  const lanes::LaneKernels<W> kernels = lanes::LaneKernelsFor<W>(isa);
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    lanes::StepArrays<W> lanes;
+    for (int i = 0; i < W; ++i) {
+      lanes.table[i] = (trial + i) % 2 == 0 ? &a : &b;
+      lanes.h0[i] = (trial + i) % 17 == 0 ? 800.0 : 5.0 + 4.0 * unit(random);
+      lanes.u0[i] = 32.0 + 5.0 * unit(random);
+      for (int c = 0; c < 5; ++c) lanes.x[c][i] = (c == 4 ? 4.0 : 1.0) * unit(random);
+      lanes.elevator[i] = 0.1 * unit(random);
+      lanes.hint[i] = 0;
+    }
+    kernels.derivatives(lanes);
+    for (int i = 0; i < W; ++i) {
+      double xi[5], di[5];
+      for (int c = 0; c < 5; ++c) xi[c] = lanes.x[c][i];
+      int hint = 0;
+      lanes.table[i]->Equation1(lanes.h0[i], lanes.u0[i], xi, lanes.elevator[i], di, hint);
+      for (int c = 0; c < 5; ++c) {
+        EXPECT_TRUE(SameBits(lanes.f[c][i], di[c])) << ToString(isa) << ", width " << W << ", trial " << trial
+                                                    << ", lane " << i << ", component " << c;
+      }
+    }
+  }
+}
+
+TEST_P(OpenLoopBatchIsaTest, Equation1OnEachLaneIsTheScalarKernelBitForBit) {
+  const LinearDerivativeTable a(with_), b(without_);
+  ExpectKernelLanesAreTheScalarKernel<1>(GetParam(), a, b);
+  ExpectKernelLanesAreTheScalarKernel<2>(GetParam(), a, b);
+  ExpectKernelLanesAreTheScalarKernel<4>(GetParam(), a, b);
+  ExpectKernelLanesAreTheScalarKernel<8>(GetParam(), a, b);
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryIsa, OpenLoopBatchIsaTest,
+                         ::testing::Values(LanesIsa::kSse2, LanesIsa::kAvx2, LanesIsa::kAvx512),
+                         [](const ::testing::TestParamInfo<LanesIsa>& info) {
+                           return std::string(ToString(info.param));
+                         });
 
 TEST_F(OpenLoopBatchTest, RunsTheLanesDoNotTakeAreFlownOneAtATimeInPlace) {
   std::vector<OpenLoopBatchRun> runs = Runs(with_, without_);
@@ -169,42 +242,97 @@ TEST_F(OpenLoopBatchTest, ABadConfigIsRefusedBeforeAnyRunIsFlown) {
   EXPECT_THROW(SimulateOpenLoopBatch(runs, 4), InputError);
 }
 
-TEST(Equation1LanesTest, EachLaneIsTheScalarKernelBitForBit) {
-  // Lanes on two tables, in different segments, one outside the density polynomial's band.
-  const LongitudinalModel with(Ance(), ModelOptions{});
-  ModelOptions no_h;
-  no_h.h_derivatives = false;
-  const LongitudinalModel without(Ance(), no_h);
-  const LinearDerivativeTable a(with), b(without);
-  using V = lanes::Chunk<lanes::kHardwareWidth>;
-  constexpr int kWidth = lanes::kHardwareWidth;
-  std::mt19937_64 random(7);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  for (int trial = 0; trial < 200; ++trial) {
-    const LinearDerivativeTable* tables[kWidth];
-    double h0[kWidth], u0[kWidth], x[5][kWidth], elevator[kWidth];
-    int hints[kWidth];
-    for (int i = 0; i < kWidth; ++i) {
-      tables[i] = (trial + i) % 2 == 0 ? &a : &b;
-      h0[i] = trial % 17 == 0 ? 800.0 : 5.0 + 4.0 * unit(random);
-      u0[i] = 32.0 + 5.0 * unit(random);
-      for (int c = 0; c < 5; ++c) x[c][i] = (c == 4 ? 4.0 : 1.0) * unit(random);
-      elevator[i] = 0.1 * unit(random);
-      hints[i] = 0;
-    }
-    V xv[5], dv[5];
-    for (int c = 0; c < 5; ++c) xv[c] = lanes::Load<V>(x[c]);
-    LinearDerivativeTable::Equation1Lanes<V>(tables, h0, u0, xv, lanes::Load<V>(elevator), dv, hints);
-    double d[5][kWidth];
-    for (int c = 0; c < 5; ++c) lanes::Store(dv[c], d[c]);
-    for (int i = 0; i < kWidth; ++i) {
-      double xi[5], di[5];
-      for (int c = 0; c < 5; ++c) xi[c] = x[c][i];
-      int hint = 0;
-      tables[i]->Equation1(h0[i], u0[i], xi, elevator[i], di, hint);
-      for (int c = 0; c < 5; ++c) EXPECT_TRUE(SameBits(d[c][i], di[c])) << "trial " << trial << " lane " << i;
+// The flags Linux reports for the CPU (/proc/cpuinfo), which it clears for registers it does not save.
+std::optional<std::string> CpuFlags() {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("flags", 0) == 0) return " " + line.substr(line.find(':') + 1) + " ";
+  }
+  return std::nullopt;
+}
+
+TEST(LanesIsaTest, TheInstructionSetsSupportedAreThoseLinuxReports) {
+  const std::optional<std::string> flags = CpuFlags();
+  if (!flags) GTEST_SKIP() << "no flags line in /proc/cpuinfo";
+  auto has = [&](const char* flag) {
+    return flags->find(" " + std::string(flag) + " ") != std::string::npos;
+  };
+  EXPECT_TRUE(LanesIsaSupported(LanesIsa::kSse2));
+  EXPECT_EQ(LanesIsaSupported(LanesIsa::kAvx2), has("avx2"));
+  EXPECT_EQ(LanesIsaSupported(LanesIsa::kAvx512), has("avx512f") && has("avx512dq") && has("avx512vl"));
+  EXPECT_EQ(SupportedLanesIsas().front(), LanesIsa::kSse2);
+}
+
+// Sets GESWEEP_LANES_ISA for one test, and unsets it after.
+class ForcedIsa {
+ public:
+  explicit ForcedIsa(const char* value) { setenv(kLanesIsaVariable, value, 1); }
+  ~ForcedIsa() { unsetenv(kLanesIsaVariable); }
+  ForcedIsa(const ForcedIsa&) = delete;
+  ForcedIsa& operator=(const ForcedIsa&) = delete;
+};
+
+TEST(LanesIsaTest, UnforcedTheWidestInstructionSetWhoseVectorFitsTheWidthIsChosen) {
+  unsetenv(kLanesIsaVariable);
+  const bool avx2 = LanesIsaSupported(LanesIsa::kAvx2), avx512 = LanesIsaSupported(LanesIsa::kAvx512);
+  EXPECT_EQ(ChooseLanesIsa(1), LanesIsa::kSse2);
+  EXPECT_EQ(ChooseLanesIsa(2), LanesIsa::kSse2);
+  EXPECT_EQ(ChooseLanesIsa(4), avx2 ? LanesIsa::kAvx2 : LanesIsa::kSse2);
+  EXPECT_EQ(ChooseLanesIsa(8), avx512 ? LanesIsa::kAvx512 : avx2 ? LanesIsa::kAvx2 : LanesIsa::kSse2);
+}
+
+TEST(LanesIsaTest, TheEnvironmentForcesAnInstructionSetThisCpuRuns) {
+  for (LanesIsa isa : SupportedLanesIsas()) {
+    const ForcedIsa forced(std::string(ToString(isa)).c_str());
+    for (int width : kOpenLoopBatchWidths) EXPECT_EQ(ChooseLanesIsa(width), isa) << ToString(isa);
+  }
+  {
+    const ForcedIsa forced("");
+    EXPECT_EQ(ChooseLanesIsa(2), LanesIsa::kSse2);  // empty: as unset
+  }
+  for (const char* wrong : {"AVX2", "avx512f", "neon", " sse2"}) {
+    const ForcedIsa forced(wrong);
+    try {
+      ChooseLanesIsa(4);
+      ADD_FAILURE() << wrong << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.source(), "environment");
+      EXPECT_EQ(e.key(), "GESWEEP_LANES_ISA");
+      EXPECT_NE(e.expected().find("sse2, avx2 or avx512"), std::string::npos) << e.expected();
     }
   }
+}
+
+TEST(LanesIsaTest, AnInstructionSetThisCpuLacksIsRefusedBeforeAnyRunIsFlown) {
+  std::optional<LanesIsa> lacking;
+  for (LanesIsa isa : {LanesIsa::kAvx2, LanesIsa::kAvx512}) {
+    if (!LanesIsaSupported(isa)) lacking = isa;
+  }
+  if (!lacking) GTEST_SKIP() << "this CPU runs every instruction set of the lanes";
+  const ForcedIsa forced(std::string(ToString(*lacking)).c_str());
+  const LongitudinalModel model(Ance(), ModelOptions{});
+  std::vector<OpenLoopBatchRun> runs(1);
+  runs[0].model = &model;
+  runs[0].config.start_height_m = 5.0;
+  runs[0].config.reference_speed_mps = 32.0;
+  EXPECT_THROW(SimulateOpenLoopBatch(runs, 4), InputError);
+}
+
+TEST_F(OpenLoopBatchTest, ABatchForcedByTheEnvironmentGivesTheScalarResults) {
+  std::vector<OpenLoopBatchRun> runs = Runs(with_, without_);
+  runs.resize(9);
+  for (LanesIsa isa : SupportedLanesIsas()) {
+    const ForcedIsa forced(std::string(ToString(isa)).c_str());
+    const std::vector<OpenLoopResult> batch = SimulateOpenLoopBatch(runs, 8);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const OpenLoopResult one = SimulateOpenLoop(*runs[i].model, runs[i].config);
+      ExpectSameSummary(batch[i].summary, one.summary,
+                        std::string(ToString(isa)) + ", run " + std::to_string(i));
+    }
+  }
+  const ForcedIsa forced("sse4");
+  EXPECT_THROW(SimulateOpenLoopBatch(runs, 8), InputError);
 }
 
 }  // namespace
