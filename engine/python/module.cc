@@ -2,6 +2,11 @@
 // pybind11, with the GIL released while they compute. engine/python/gesweep/__init__.py wraps it in
 // the public API (signatures, docstrings from the described fields, DataFrames, open_archive).
 // Each domain has its own file (support.h lists them); this one binds them, with the aircraft's facts.
+#include <iostream>
+#include <mutex>
+#include <set>
+
+#include "engine/common/notes.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
@@ -55,6 +60,14 @@ PYBIND11_MODULE(_gesweep, m) {
   m.doc() = "The native part of the gesweep module (docs/python.md); use `import gesweep`.";
   m.attr("__version__") = GESWEEP_VERSION;
   m.attr("git_commit") = GESWEEP_GIT_COMMIT;
+  // An older name a study used (docs/sweep.md, "Renamed parameters"): one line on stderr, once, as
+  // the command line shows it (std::cerr: a study may be read with the GIL released).
+  SetNoteHandler([](const std::string& note) {
+    static std::mutex mutex;
+    static std::set<std::string> shown;
+    std::lock_guard lock(mutex);
+    if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << std::endl;
+  });
   // The run-status codes by name, from RunStatus's names table (the manifest's `run_status`), for
   // the archive reader's comparisons with /runs/status (gesweep/_archive.py).
   py::dict run_status;
@@ -123,7 +136,7 @@ PYBIND11_MODULE(_gesweep, m) {
         py::arg("repetitions"));
   m.def("simulate_settings", [] { return SettingsList(OpenLoopConfig{}, {"height_m", "speed_mps"}); });
   m.def("land_settings", &LandingSettingsList);
-  m.def("model_option_keys", [] { return ModelOptionKeys(); });
+  m.def("model_options", &ModelOptionSettings);
   m.def("classification_levels", [] {
     std::vector<std::string> levels;
     for (auto c : {ModeClassification::kStandard, ModeClassification::kPhugoidSplit,
