@@ -12,6 +12,17 @@
 namespace gesweep::python {
 namespace {
 
+// An older name a study used (docs/sweep.md, "Renamed parameters"): one line on stderr, once, as the
+// command line shows it (std::cerr: a study may be read with the GIL released).
+void ShowNote(const std::string& note) {
+  static std::mutex mutex;
+  static std::set<std::string> shown;
+  std::lock_guard lock(mutex);
+  if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << std::endl;
+}
+// Installed as the module is loaded (before any study is read).
+[[maybe_unused]] const bool kShowsNotes = (SetNoteHandler(&ShowNote), true);
+
 /// Aircraft.<fact> of the Python class: the aircraft file's numbers, SI, under their keys.
 constexpr std::pair<const char*, double Aircraft::*> kAircraftNumbers[] = {
     {"wingspan_m", &Aircraft::wingspan_m},
@@ -60,14 +71,6 @@ PYBIND11_MODULE(_gesweep, m) {
   m.doc() = "The native part of the gesweep module (docs/python.md); use `import gesweep`.";
   m.attr("__version__") = GESWEEP_VERSION;
   m.attr("git_commit") = GESWEEP_GIT_COMMIT;
-  // An older name a study used (docs/sweep.md, "Renamed parameters"): one line on stderr, once, as
-  // the command line shows it (std::cerr: a study may be read with the GIL released).
-  SetNoteHandler([](const std::string& note) {
-    static std::mutex mutex;
-    static std::set<std::string> shown;
-    std::lock_guard lock(mutex);
-    if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << std::endl;
-  });
   // The run-status codes by name, from RunStatus's names table (the manifest's `run_status`), for
   // the archive reader's comparisons with /runs/status (gesweep/_archive.py).
   py::dict run_status;
