@@ -3,10 +3,12 @@
 (flare_tau_s, lqr.r, lqr.q_<state>) still runs, with one note line on stderr per older name, and gives
 the archive of the same study written with today's names: the same results and run ids, the design
 columns under today's names. A study that gives one parameter under both names is refused (one line,
-exit 2).
+exit 2). An archive written before the rename (its attributes name the older names) is still read:
+`gesweep boundary --archive` rebuilds its runs' models as from today's archive.
 
 The oracle is the same study written with today's names: nothing about the run may differ but the
 note."""
+import json
 import os
 import subprocess
 import sys
@@ -95,6 +97,35 @@ class RenamedParameters(unittest.TestCase):
         self.assertEqual(len(errors), 1, out.stderr)
         self.assertIn("expected one value of r_weight", errors[0])
         self.assertIn(study, errors[0])
+
+    def test_an_archive_with_the_older_names_is_read(self):
+        study = os.path.join(self.directory.name, "map.toml")
+        with open(study, "w") as f:
+            f.write(STUDY.format(aircraft=ANCE, **TODAY).replace("[analyses.landing]", "[analyses.modes]\n[analyses.landing]")
+                    .replace("height_m = 100.0\n", "flare_height_m = 0.9\n")
+                    .replace('name = "q_weights.delta_u"\nvalues = [1.0, 4.0]',
+                             'name = "height_m"\nlinspace = [1.0, 6.0, 11]'))
+        today = os.path.join(self.directory.name, "today.h5")
+        out = run("run", study, "-o", today, "--quiet")
+        self.assertEqual(out.returncode, 0, out.stderr)
+        older = os.path.join(self.directory.name, "older.h5")
+        with open(today, "rb") as source, open(older, "wb") as target:
+            target.write(source.read())
+        back = {today_name: OLDER[key] for key, today_name in TODAY.items()}
+        with h5py.File(older, "r+") as f:
+            attributes = f["design"].attrs
+            names = [n.decode() if isinstance(n, bytes) else n for n in attributes["unswept_parameter_names"]]
+            self.assertIn("r_weight", names)
+            dtype = attributes["unswept_parameter_names"].dtype
+            del attributes["unswept_parameter_names"]
+            attributes.create("unswept_parameter_names", [back.get(n, n) for n in names], dtype=dtype)
+        boundaries = []
+        for archive in (today, older):
+            out = run("boundary", "--archive", archive, "--format", "json")
+            self.assertEqual(out.returncode, 0, out.stderr)
+            boundaries.append(json.loads(out.stdout)["boundaries"])
+        self.assertEqual(boundaries[0], boundaries[1])
+        self.assertTrue(all(b["height_m"] is not None for b in boundaries[0]))
 
 
 if __name__ == "__main__":
