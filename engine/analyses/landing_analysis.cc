@@ -2,7 +2,9 @@
 // paper's Fig. 6-9): SimulateLanding from the run's start height and speed, glide slope, flare and
 // LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
 // the gain always; time series when the study stores them.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -21,15 +23,21 @@ constexpr double kLandingCost_us = 15000.0;
 // 52.21 m/s down a 2.5° slope lasts about 230 s).
 constexpr double kDefaultSeriesDuration_s = 400.0;
 
-// The run parameters a landing reads besides the LQR's Q weights and the winds, and the setting each
-// fills (a NaN flare_tau_s: the automatic time constant).
-constexpr std::pair<const char*, double LandingConfig::*> kRunSettings[] = {
-    {"height_m", &LandingConfig::start_height_m},
-    {"speed_mps", &LandingConfig::start_speed_mps},
-    {"glide_slope_deg", &LandingConfig::glide_slope_deg},
-    {"flare_height_m", &LandingConfig::flare_height_m},
-    {"flare_tau_s", &LandingConfig::flare_time_constant_s},
-    {"lqr.r", &LandingConfig::r_weight}};
+// The flight condition a landing starts from (the run parameters height_m and speed_mps, every
+// analysis's); its other run parameters are LandingConfig's own (RunParameter, a NaN
+// flare_time_constant_s: the automatic time constant), the Q weights and the moving atmosphere's.
+constexpr std::pair<const char*, double LandingConfig::*> kStartCondition[] = {
+    {"height_m", &LandingConfig::start_height_m}, {"speed_mps", &LandingConfig::start_speed_mps}};
+
+// LandingConfig's own run parameters, less the moving atmosphere's (DisturbanceParameterIds).
+std::vector<ParameterId> LandingParameterIds() {
+  std::vector<ParameterId> ids;
+  const std::vector<ParameterId>& atmosphere = DisturbanceParameterIds();
+  for (ParameterId id : RunParameterIds<LandingConfig>()) {
+    if (std::find(atmosphere.begin(), atmosphere.end(), id) == atmosphere.end()) ids.push_back(id);
+  }
+  return ids;
+}
 
 // The [analyses.landing] table: the landing's settings, and how long its stored series last.
 struct LandingStudySettings {
@@ -51,17 +59,18 @@ class LandingAnalysis final : public Analysis {
  public:
   explicit LandingAnalysis(const LandingStudySettings& settings)
       : settings_(settings), config_(settings.config), series_duration_s_(settings.series_duration_s) {
-    for (const auto& [name, setting] : kRunSettings)
-      run_settings_.emplace_back(RequireParameter(name), setting);
+    for (const auto& [name, setting] : kStartCondition) start_.emplace_back(RequireParameter(name), setting);
     for (std::string_view state : LandingStateNames()) {
-      q_.push_back(RequireParameter("lqr.q_" + std::string(state)));
+      q_.push_back(RequireParameter("q_weights." + std::string(state)));
     }
   }
 
   std::string_view name() const override { return "landing"; }
   std::vector<ParameterId> parameters_used() const override {
     std::vector<ParameterId> ids;
-    for (const auto& [id, setting] : run_settings_) ids.push_back(id);
+    for (const auto& [id, setting] : start_) ids.push_back(id);
+    const std::vector<ParameterId> own = LandingParameterIds();
+    ids.insert(ids.end(), own.begin(), own.end());
     ids.insert(ids.end(), q_.begin(), q_.end());
     const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
     ids.insert(ids.end(), disturbance.begin(), disturbance.end());
@@ -130,18 +139,19 @@ class LandingAnalysis final : public Analysis {
   LandingConfig ConfigFor(const RunParameters& p) const {
     auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
     LandingConfig config = config_;
-    for (const auto& [id, setting] : run_settings_) config.*setting = at(id);
+    for (const auto& [id, setting] : start_) config.*setting = at(id);
+    ApplyRunParameters(p, config);  // its own and the moving atmosphere's
     for (int i = 0; i < kLandingStateCount; ++i) {
       config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
     }
-    config.seed = ApplyDisturbanceParameters(p, config.disturbance);
+    config.seed = static_cast<std::uint64_t>(at(DisturbanceParameterIds().back()));
     return config;
   }
 
   LandingStudySettings settings_;  // as the study gave them
   LandingConfig config_;           // with the storage's series interval
   double series_duration_s_;
-  std::vector<std::pair<ParameterId, double LandingConfig::*>> run_settings_;  // kRunSettings
+  std::vector<std::pair<ParameterId, double LandingConfig::*>> start_;  // kStartCondition
   std::vector<ParameterId> q_;
   DescribedColumns<LandingResult> summary_;
   int gain_ = 0;

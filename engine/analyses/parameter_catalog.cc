@@ -7,8 +7,10 @@
 #include "engine/aircraft/coefficient.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/control/landing_config.h"
 #include "engine/disturbance/disturbance_options.h"
 #include "engine/dynamics/model_options.h"
+#include "engine/simulation/open_loop.h"
 
 namespace gesweep {
 namespace {
@@ -34,39 +36,74 @@ ParameterInfo Real(std::string name, std::string units, std::string description,
 }
 
 // A boolean or a choice: no range, held as the index of its level.
-ParameterInfo Levels(std::string name, std::string description, ParameterKind kind, double default_value,
-                     std::vector<std::string> levels) {
+ParameterInfo Levels(std::string name, std::string description, ParameterKind kind, ParameterGroup group,
+                     double default_value, std::vector<std::string> levels) {
   ParameterInfo info;
   info.name = std::move(name);
   info.units = "1";
   info.description = std::move(description);
   info.kind = kind;
-  info.group = ParameterGroup::kModel;
+  info.group = group;
   info.default_value = default_value;
   info.levels = std::move(levels);
   return info;
 }
 
-std::vector<ParameterInfo> BuildCatalog() {
-  std::vector<ParameterInfo> c;
+// The entry of a described run parameter (RunParameter, describe.h): its key, unit, description,
+// limits-table range (the entry of its key unless it names one) and default; a choice's levels from
+// its enum's names table.
+ParameterInfo FromField(const FieldRecord& field, ParameterGroup group) {
+  const FieldAttributes& a = field.attributes;
+  switch (field.kind) {
+    case FieldKind::kNumber:
+      return Real(std::string(a.key), std::string(a.unit), std::string(a.doc), group, *field.number,
+                  std::string(a.limit.empty() ? a.key : a.limit));
+    case FieldKind::kBoolean:
+      return Levels(std::string(a.key), std::string(a.doc), ParameterKind::kBoolean, group,
+                    field.default_text == "true" ? 1.0 : 0.0, {"false", "true"});
+    case FieldKind::kChoice: {
+      const auto code = std::find(field.levels.begin(), field.levels.end(), field.default_text);
+      GESWEEP_DEMAND(code != field.levels.end());
+      return Levels(std::string(a.key), std::string(a.doc), ParameterKind::kChoice, group,
+                    static_cast<double>(code - field.levels.begin()), field.levels);
+    }
+    default:
+      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool or a named enum
+  }
+}
+
+// Appends the entries of `object`'s run parameters in field order, with `by_hand` in their struct
+// place: just before the field `by_hand_before` (the catalogue's order is the archive's). A key
+// already catalogued (the flight condition) or in `elsewhere` (a nested description catalogued in its
+// own group) is not appended again; one already catalogued must have the same unit and range.
+template <class T>
+void AppendDescribed(std::vector<ParameterInfo>& c, const T& object, ParameterGroup group,
+                     const std::vector<std::string>& elsewhere, std::vector<ParameterInfo> by_hand = {},
+                     std::string_view by_hand_before = {}) {
+  for (const FieldRecord& field : ListFields(object)) {
+    if (!field.attributes.run_parameter) continue;
+    const std::string key(field.attributes.key);
+    if (key == by_hand_before) {
+      for (ParameterInfo& info : by_hand) c.push_back(std::move(info));
+      by_hand.clear();
+    }
+    const auto known =
+        std::find_if(c.begin(), c.end(), [&](const ParameterInfo& i) { return i.name == key; });
+    if (known != c.end()) {
+      GESWEEP_DEMAND(known->units == field.attributes.unit && known->limit == field.attributes.limit);
+      continue;
+    }
+    if (std::find(elsewhere.begin(), elsewhere.end(), key) != elsewhere.end()) continue;
+    c.push_back(FromField(field, group));
+  }
+  GESWEEP_DEMAND(by_hand.empty());  // `by_hand_before` is one of the run parameters
+}
+
+// The model options' entries by hand (ModelOptions::Describe says why): the scale factors and the
+// mass properties, whose defaults are the aircraft's (DefaultValue).
+std::vector<ParameterInfo> ModelEntriesByHand() {
   using G = ParameterGroup;
-
-  // The flight condition.
-  c.push_back(Real("height_m", "m",
-                   "Height H of the mean aerodynamic chord above ground: the evaluation height (modes), "
-                   "the start height (open_loop, landing)",
-                   G::kFlight, std::nullopt, "height_m"));
-  c.push_back(Real("speed_mps", "m/s", "Reference forward speed u0", G::kFlight, std::nullopt, "speed_mps"));
-
-  // Model switches (docs/model.md §2-§4).
-  c.push_back(Levels("h_derivatives", "Whether Xh, Zh and Mh are in the model (docs/model.md §4)",
-                     ParameterKind::kBoolean, 1.0, {"false", "true"}));
-  c.push_back(Levels("cdh", "How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)",
-                     ParameterKind::kChoice, 0.0, EnumLevels<CdhMode>()));
-  c.push_back(Levels("interpolation", "Table interpolation in height: linear or pchip (docs/model.md §2)",
-                     ParameterKind::kChoice, 0.0, EnumLevels<Interpolation>()));
-
-  // Multiplicative scale factors on every coefficient column and on CDo.
+  std::vector<ParameterInfo> c;
   for (std::string_view name : kCoefficientNames) {
     c.push_back(Real("scale." + std::string(name), "1",
                      "Multiplicative factor on the coefficient " + std::string(name) + " at every height",
@@ -74,67 +111,54 @@ std::vector<ParameterInfo> BuildCatalog() {
   }
   c.push_back(Real("scale.CDo", "1", "Multiplicative factor on the parasite drag coefficient CDo", G::kModel,
                    1.0, "scale_factor"));
-
-  // Mass properties; the defaults are the aircraft's (DefaultValue).
   c.push_back(Real("mass_kg", "kg", "Airplane mass m (default: the aircraft file's)", G::kModel, std::nullopt,
                    "mass_kg"));
   c.push_back(Real("pitch_inertia_kgm2", "kg m^2",
                    "Pitching moment of inertia Iy (default: the aircraft file's)", G::kModel, std::nullopt,
                    "pitch_inertia_kgm2"));
-  c.push_back(Real("cg_shift_over_chord", "1",
-                   "CG moved aft by this fraction of the mean chord (negative: forward)", G::kModel, 0.0,
-                   "cg_shift_over_chord"));
+  return c;
+}
 
-  // Open-loop perturbation (docs/model.md §7).
-  c.push_back(Real("pulse_amplitude_deg", "deg",
-                   "Elevator pulse amplitude, positive trailing edge down (paper: 5 deg)", G::kOpenLoop, 5.0,
-                   "pulse_amplitude_deg"));
-  c.push_back(Real("pulse_duration_s", "s", "Elevator pulse duration (paper: 0.2 s)", G::kOpenLoop, 0.2,
-                   "pulse_duration_s"));
-
-  // Landing controller (docs/model.md §8; engine/control/landing_config.h, docs/landing.md). A NaN
-  // default means "automatic": the controller's own rule.
-  {
-    c.push_back(Real("glide_slope_deg", "deg",
-                     "Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)", G::kLanding,
-                     2.5, "glide_slope_deg"));
-    c.push_back(Real("flare_height_m", "m", "Height Ho at which the flare starts", G::kLanding, 10.0,
-                     "flare_height_m"));
-    c.push_back(Real("flare_tau_s", "s",
-                     "Time constant tau of the exponential flare command (default NaN: automatic, "
-                     "Ho/(u0 sin gamma), so the commanded sink rate is continuous at Ho)",
-                     G::kLanding, std::numeric_limits<double>::quiet_NaN(), "flare_tau_s"));
-    const char* states[] = {"delta_u",  "delta_w",   "pitch_rate",  "delta_theta",   "delta_h",
-                            "elevator", "deviation", "compensator", "error_integral"};
-    for (const char* state : states) {
-      c.push_back(Real(std::string("lqr.q_") + state, "1",
-                       std::string("LQR weight on the state ") + state +
-                           " of the paper's Eq. (14) (diagonal of Q; the paper: identity)",
-                       G::kLanding, 1.0, "lqr.q"));
-    }
-    c.push_back(
-        Real("lqr.r", "1", "LQR weight R on the elevator command (the paper: 1)", G::kLanding, 1.0, "lqr.r"));
+// The landing's Q weights by hand (LandingConfig::q_weights, an array of nine keyed by state name):
+// q_weights.<state>.
+std::vector<ParameterInfo> QWeightEntries() {
+  std::vector<ParameterInfo> c;
+  for (std::string_view state : LandingStateNames()) {
+    c.push_back(Real("q_weights." + std::string(state), "1",
+                     "LQR weight on the state " + std::string(state) +
+                         " of the paper's Eq. (14) (diagonal of Q; the paper: identity)",
+                     ParameterGroup::kLanding, 1.0, "q_weights"));
   }
+  return c;
+}
 
-  // The moving atmosphere (docs/model.md §9): every command-line field of DisturbanceOptions::Describe
-  // is a run parameter of the same name, unit, range and default (read by open_loop and landing),
-  // and the seed of the run's turbulence (RunNoise(seed, run index), docs/disturbance.md).
-  for (const FieldRecord& field : ListFields(DisturbanceOptions{})) {
-    const FieldAttributes& a = field.attributes;
-    if (a.scope != FieldScope::kCommandLineOnly) continue;
-    if (field.kind == FieldKind::kNumber) {
-      const std::string limit(a.limit.empty() ? a.key : a.limit);
-      c.push_back(Real(std::string(a.key), std::string(a.unit), std::string(a.doc), G::kFlight, *field.number,
-                       limit));
-    } else {
-      GESWEEP_DEMAND(field.kind == FieldKind::kChoice);
-      const auto code = std::find(field.levels.begin(), field.levels.end(), field.default_text);
-      ParameterInfo info = Levels(std::string(a.key), std::string(a.doc), ParameterKind::kChoice,
-                                  static_cast<double>(code - field.levels.begin()), field.levels);
-      info.group = G::kFlight;
-      c.push_back(std::move(info));
-    }
-  }
+std::vector<std::string> KeysOf(const std::vector<FieldRecord>& fields) {
+  std::vector<std::string> keys;
+  for (const FieldRecord& field : fields) keys.emplace_back(field.attributes.key);
+  return keys;
+}
+
+std::vector<ParameterInfo> BuildCatalog() {
+  std::vector<ParameterInfo> c;
+  using G = ParameterGroup;
+
+  // The flight condition, every analysis's (the open loop's and the landing's start).
+  c.push_back(Real("height_m", "m",
+                   "Height H of the mean aerodynamic chord above ground: the evaluation height (modes), "
+                   "the start height (open_loop, landing)",
+                   G::kFlight, std::nullopt, "height_m"));
+  c.push_back(Real("speed_mps", "m/s", "Reference forward speed u0", G::kFlight, std::nullopt, "speed_mps"));
+
+  // The model options (docs/model.md §2-§4), the scale factors and mass properties in their place.
+  const std::vector<std::string> atmosphere = KeysOf(ListFields(DisturbanceOptions{}));
+  AppendDescribed(c, ModelOptions{}, G::kModel, {}, ModelEntriesByHand(), "cg_shift_over_chord");
+  // The open-loop perturbation (docs/model.md §7) and the landing controller (docs/model.md §8,
+  // docs/landing.md); a NaN default means "automatic": the controller's own rule.
+  AppendDescribed(c, OpenLoopConfig{}, G::kOpenLoop, atmosphere);
+  AppendDescribed(c, LandingConfig{}, G::kLanding, atmosphere, QWeightEntries(), "r_weight");
+  // The moving atmosphere (docs/model.md §9), read by open_loop and landing, and the seed of the
+  // run's turbulence (RunNoise(seed, run index), docs/disturbance.md).
+  AppendDescribed(c, DisturbanceOptions{}, G::kFlight, {});
   c.push_back(Real("seed", "1",
                    "Seed of the run's turbulence: run i of a sweep flies RunNoise(seed, i) "
                    "(docs/disturbance.md); a whole number",
@@ -146,6 +170,12 @@ std::vector<ParameterInfo> BuildCatalog() {
     name += std::to_string(i);
     c.push_back(Real(name, "1", "Input " + name + " of the verification models", G::kVerification, 0.0,
                      "verification_input"));
+  }
+  for (ParameterInfo& info : c) {
+    info.identity_name = info.name;
+    for (const ParameterRename& rename : RenamedParameters()) {
+      if (rename.name == info.name) info.identity_name = rename.older;
+    }
   }
   return c;
 }
@@ -163,6 +193,30 @@ std::optional<ParameterId> FindParameter(std::string_view name) {
   const auto& catalog = ParameterCatalog();
   for (std::size_t i = 0; i < catalog.size(); ++i) {
     if (catalog[i].name == name) return static_cast<ParameterId>(i);
+  }
+  return std::nullopt;
+}
+
+const std::vector<ParameterRename>& RenamedParameters() {
+  static const std::vector<ParameterRename> renames = [] {
+    std::vector<ParameterRename> list = {{"flare_tau_s", "flare_time_constant_s"}, {"lqr.r", "r_weight"}};
+    for (std::string_view state : LandingStateNames()) {
+      list.push_back({"lqr.q_" + std::string(state), "q_weights." + std::string(state)});
+    }
+    return list;
+  }();
+  return renames;
+}
+
+std::optional<ParameterId> FindParameterOrOlder(std::string_view name, std::string* note) {
+  if (const auto id = FindParameter(name)) return id;
+  for (const ParameterRename& rename : RenamedParameters()) {
+    if (rename.older != name) continue;
+    if (note != nullptr) {
+      *note = "parameter '" + rename.older + "' is now '" + rename.name +
+              "' (the older name is accepted until the next release; docs/sweep.md, \"Renamed parameters\")";
+    }
+    return RequireParameter(rename.name);
   }
   return std::nullopt;
 }
@@ -241,39 +295,9 @@ std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text)
   return std::nullopt;
 }
 
-}  // namespace gesweep
-
-namespace gesweep {
-namespace {
-
-// Sets each command-line field of DisturbanceOptions from the run's parameters, in field order.
-struct DisturbanceSetter {
-  const std::vector<double>* parameters;
-  const std::vector<ParameterId>* ids;
-  std::size_t next = 0;
-  template <class U>
-  void operator()(const Field<U>& field) {
-    if (field.attributes().scope != FieldScope::kCommandLineOnly) return;
-    const double value = (*parameters)[static_cast<std::size_t>((*ids)[next++])];
-    if constexpr (NamedEnum<U>) {
-      *field.value() = static_cast<U>(static_cast<int>(value));
-    } else if constexpr (std::floating_point<U>) {
-      *field.value() = value * field.attributes().scale;
-    } else {
-      GESWEEP_UNREACHABLE();
-    }
-  }
-};
-
-}  // namespace
-
 const std::vector<ParameterId>& DisturbanceParameterIds() {
   static const std::vector<ParameterId> ids = [] {
-    std::vector<ParameterId> list;
-    for (const FieldRecord& field : ListFields(DisturbanceOptions{})) {
-      if (field.attributes.scope == FieldScope::kCommandLineOnly)
-        list.push_back(RequireParameter(field.attributes.key));
-    }
+    std::vector<ParameterId> list = RunParameterIds<DisturbanceOptions>();
     list.push_back(RequireParameter("seed"));
     return list;
   }();
@@ -281,11 +305,8 @@ const std::vector<ParameterId>& DisturbanceParameterIds() {
 }
 
 std::uint64_t ApplyDisturbanceParameters(const std::vector<double>& parameters, DisturbanceOptions& options) {
-  const std::vector<ParameterId>& ids = DisturbanceParameterIds();
-  DisturbanceSetter setter{&parameters, &ids};
-  options.Describe(setter);
-  GESWEEP_DEMAND(setter.next + 1 == ids.size());
-  return static_cast<std::uint64_t>(parameters[static_cast<std::size_t>(ids.back())]);
+  ApplyRunParameters(parameters, options);
+  return static_cast<std::uint64_t>(parameters[static_cast<std::size_t>(DisturbanceParameterIds().back())]);
 }
 
 }  // namespace gesweep

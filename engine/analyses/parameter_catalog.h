@@ -3,7 +3,15 @@
 /// the flight condition, the model switches of docs/model.md, scale factors on every coefficient,
 /// mass properties, the open-loop perturbation, the landing controller, and the inputs of the
 /// verification models. The unit is in each name; degrees only where the name says `_deg`.
+///
+/// A run parameter that a settings struct describes (a field marked RunParameter(), describe.h) has
+/// its entry from that field: ModelOptions, the open loop's and the landing's start conditions and
+/// inputs, DisturbanceOptions. The flight condition (height_m, speed_mps: every analysis's), the
+/// arrays (the scale factors, the landing's Q weights), the mass properties, the seed and the
+/// verification inputs are written here by hand (docs/architecture.md, "Still by hand").
 
+#include <concepts>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -11,6 +19,8 @@
 #include <vector>
 
 #include "engine/aircraft/aircraft.h"
+#include "engine/common/describe.h"
+#include "engine/common/errors.h"
 #include "engine/disturbance/disturbance_options.h"
 
 namespace gesweep {
@@ -51,6 +61,9 @@ struct ParameterInfo {
   double maximum = 0;
   bool minimum_exclusive = false;
   bool maximum_exclusive = false;
+  /// The name hashed into run ids (runs/id) and Monte Carlo draws: the first name the parameter had
+  /// (its older name when renamed, RenamedParameters), so that a rename changes no run's id or draw.
+  std::string identity_name;
 };
 
 /// Index of a parameter in the catalogue.
@@ -64,6 +77,22 @@ int ParameterCount();
 
 /// The id of a name, or nullopt.
 std::optional<ParameterId> FindParameter(std::string_view name);
+
+/// A run parameter's older name, kept for one release (issue 29: one name per run parameter, the
+/// described field's key).
+struct ParameterRename {
+  std::string older;  ///< "flare_tau_s"
+  std::string name;   ///< "flare_time_constant_s"
+};
+
+/// Every renamed run parameter: the one table of older names, read by the study (with a note) and by
+/// the readers of older archives (docs/sweep.md, "Renamed parameters").
+const std::vector<ParameterRename>& RenamedParameters();
+
+/// The id of `name`, or of the parameter whose older name it is (RenamedParameters); nullopt when
+/// neither. For an older name, `*note` (when not null) is set to the one line to show: "parameter
+/// 'flare_tau_s' is now 'flare_time_constant_s' (the older name is accepted until the next release)".
+std::optional<ParameterId> FindParameterOrOlder(std::string_view name, std::string* note);
 
 /// The id of a name the engine itself uses; GESWEEP_DEMAND that it exists.
 ParameterId RequireParameter(std::string_view name);
@@ -91,8 +120,56 @@ std::optional<double> ParseParameterLevel(ParameterId id, std::string_view text)
 /// A short description of the allowed values ("one of linear, pchip", "a number in (0, 1e+06] kg").
 std::string DescribeAllowedValues(ParameterId id);
 
+namespace catalog_detail {
+
+struct RunParameterSetter {
+  const std::vector<double>* parameters;
+  const std::vector<ParameterId>* ids;
+  std::size_t next = 0;
+  template <class U>
+  void operator()(const Field<U>& field) {
+    if (!field.attributes().run_parameter) return;
+    const double value = (*parameters)[static_cast<std::size_t>((*ids)[next++])];
+    if constexpr (std::same_as<U, bool>) {
+      *field.value() = value != 0.0;
+    } else if constexpr (NamedEnum<U>) {
+      *field.value() = EnumAt<U>(value);  // a choice's level code is the enum's code
+    } else if constexpr (std::floating_point<U>) {
+      *field.value() = value * field.attributes().scale;
+    } else {
+      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool or a named enum (FromField)
+    }
+  }
+};
+
+}  // namespace catalog_detail
+
+/// The run parameters a described struct T holds: its fields marked RunParameter() (describe.h), in
+/// field order (a nested description's included).
+template <class T>
+const std::vector<ParameterId>& RunParameterIds() {
+  static const std::vector<ParameterId> ids = [] {
+    std::vector<ParameterId> list;
+    for (const FieldRecord& field : ListFields(T{})) {
+      if (field.attributes.run_parameter) list.push_back(RequireParameter(field.attributes.key));
+    }
+    return list;
+  }();
+  return ids;
+}
+
+/// Writes a run's values of T's run parameters into `object`: a boolean's level (0, 1) as false and
+/// true, a choice's level index as the enum's code, a number in the key's unit times the field's scale.
+template <class T>
+void ApplyRunParameters(const std::vector<double>& parameters, T& object) {
+  const std::vector<ParameterId>& ids = RunParameterIds<T>();
+  catalog_detail::RunParameterSetter setter{&parameters, &ids};
+  object.Describe(setter);
+  GESWEEP_DEMAND(setter.next == ids.size());
+}
+
 /// The run parameters of the moving atmosphere, in the order of DisturbanceOptions::Describe's
-/// command-line fields, then `seed` (docs/model.md §9, docs/disturbance.md).
+/// run-parameter fields, then `seed` (docs/model.md §9, docs/disturbance.md).
 const std::vector<ParameterId>& DisturbanceParameterIds();
 
 /// Writes a run's values of the disturbance parameters into `options` (a choice's level index is the

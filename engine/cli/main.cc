@@ -14,6 +14,7 @@
 #include "engine/cli/failure_text.h"
 #include "engine/cli/request_names.h"
 #include "engine/common/errors.h"
+#include "engine/common/notes.h"
 
 namespace gesweep::cli {
 std::vector<Command>& CommandRegistry() {
@@ -118,11 +119,14 @@ int Run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using gesweep::EscapeForMessage;
-  // What a reader could not check (an archive merged before identities): one line each, once.
-  gesweep::archive::SetArchiveNoteHandler([](const std::string& note) {
+  // What a reader could not check (an archive merged before identities), an older name a study used:
+  // one line each, once.
+  auto note = [](const std::string& text) {
     static std::set<std::string> shown;
-    if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << "\n";
-  });
+    if (shown.insert(text).second) std::cerr << "gesweep: note: " << EscapeForMessage(text) << "\n";
+  };
+  gesweep::archive::SetArchiveNoteHandler(note);
+  gesweep::SetNoteHandler(note);
   try {
     return Run(argc, argv);
   } catch (...) {

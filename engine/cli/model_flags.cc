@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "engine/cli/described_flags.h"
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
 
@@ -51,27 +52,18 @@ double ParseNumber(const std::string& token, const std::string& flag, bool allow
 
 }  // namespace
 
+ModelFlags::ModelFlags() : described_(std::make_unique<DescribedFlags>()) {}
+ModelFlags::~ModelFlags() = default;
+
 void ModelFlags::AddTo(CLI::App& app, bool aircraft_required) {
   auto* option =
       app.add_option("--aircraft", aircraft_path, "Aircraft file (TOML), e.g. studies/aircraft/ance.toml");
   if (aircraft_required) option->required();
-  app.add_option("--cdh", cdh, "CDh model: polar (default, d(k CLo^2)/dh) or zero");
-  app.add_flag("--no-h-derivatives", no_h_derivatives, "Leave out Xh, Zh and Mh");
-  app.add_option("--interpolation", interpolation, "Table interpolation: linear (default) or pchip");
+  described_->Add(app, options);
 }
 
 ModelOptions ModelFlags::Options() const {
-  ModelOptions options;
-  auto cdh_mode = ParseCdhMode(cdh);
-  if (!cdh_mode) throw InputError("command line", "--cdh", "'" + cdh + "'", "expected polar or zero");
-  auto interpolation_kind = ParseInterpolation(interpolation);
-  if (!interpolation_kind) {
-    throw InputError("command line", "--interpolation", "'" + interpolation + "'",
-                     "expected linear or pchip");
-  }
-  options.cdh = *cdh_mode;
-  options.interpolation = *interpolation_kind;
-  options.h_derivatives = !no_h_derivatives;
+  described_->Apply();
   return options;
 }
 

@@ -1,9 +1,11 @@
 #pragma once
 /// Flags shared by every subcommand that builds a model: --aircraft and the model options of
-/// docs/model.md (--cdh, --no-h-derivatives, --interpolation).
+/// docs/model.md, one flag per field of ModelOptions::Describe (--no-h-derivatives, --cdh,
+/// --interpolation, --cg-shift-over-chord).
 
 #include <CLI/CLI.hpp>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -11,18 +13,26 @@
 
 namespace gesweep::cli {
 
+class DescribedFlags;
+
 struct ModelFlags {
+  ModelFlags();
+  ~ModelFlags();
+  ModelFlags(const ModelFlags&) = delete;  // its flags write into `options`
+  ModelFlags& operator=(const ModelFlags&) = delete;
+
   std::string aircraft_path;
-  std::string cdh = "polar";
-  std::string interpolation = "linear";
-  bool no_h_derivatives = false;
+  ModelOptions options;  // its described fields are flags; defaults as the struct's
 
   /// Adds the flags; `aircraft_required` makes --aircraft mandatory.
   void AddTo(CLI::App& app, bool aircraft_required = true);
   /// Loads the aircraft and builds the model; throws InputError on bad values.
   LongitudinalModel BuildModel() const;
-  /// The options alone (validated).
+  /// The options alone, with the flags given (each checked as it was parsed).
   ModelOptions Options() const;
+
+ private:
+  std::unique_ptr<DescribedFlags> described_;
 };
 
 /// Parses a comma-separated list of numbers given to `flag` ("inf" allowed when allow_infinity).

@@ -76,6 +76,10 @@ struct FieldAttributes {
   /// NaN is never an input: a flag, a study key and a keyword argument refuse it; left out, the
   /// field stays unset. CheckFieldRanges passes an unset field.
   bool automatic = false;
+  /// A sweep's run parameter of the same key (engine/analyses/parameter_catalog.h): its catalogue
+  /// entry (unit, range, default, description) is this field, and a run's value is written into it
+  /// (ApplyRunParameters). A flag, never a key of [analyses.<name>] (scope kCommandLineOnly).
+  bool run_parameter = false;
   /// An array field: its components; CSV columns and archive columns are prefix + name
   std::span<const FieldComponent> components;
   /// An array field: the components stored in the archive, in archive order (empty: all)
@@ -116,6 +120,11 @@ class Field {
   Field& CommandLineOnly() {
     attributes_.scope = FieldScope::kCommandLineOnly;
     return *this;
+  }
+  /// A sweep's run parameter of the same key (FieldAttributes::run_parameter); a flag only.
+  Field& RunParameter() {
+    attributes_.run_parameter = true;
+    return CommandLineOnly();
   }
   Field& StudyOnly() {
     attributes_.scope = FieldScope::kStudyOnly;

@@ -86,12 +86,12 @@ std::vector<InputLimit> BuildTable() {
                               "approaches are 5.5 to 7 deg");
   t.push_back(glide);
   t.push_back(Positive("flare_height_m", "m", 1000.0, "a flare starts within tens of metres of the ground"));
-  t.push_back(Positive("flare_tau_s", "s", 1e4, "the flare's time constant is seconds to minutes"));
-  t.push_back(Closed("lqr.q", "1", 0.0, kMaximumWeight,
-                     "every lqr.q_<state>: beyond 1e12 the Riccati equation is ill-conditioned in double "
+  t.push_back(Positive("flare_time_constant_s", "s", 1e4, "the flare's time constant is seconds to minutes"));
+  t.push_back(Closed("q_weights", "1", 0.0, kMaximumWeight,
+                     "every q_weights.<state>: beyond 1e12 the Riccati equation is ill-conditioned in double "
                      "precision"));
-  t.push_back(Closed("lqr.r", "1", 1e-12, kMaximumWeight,
-                     "as lqr.q; R must be positive for the LQR problem to have a solution"));
+  t.push_back(Closed("r_weight", "rad^2", 1e-12, kMaximumWeight,
+                     "as q_weights; R must be positive for the LQR problem to have a solution"));
 
   // The moving atmosphere (run parameters of open_loop and landing; flags of simulate and land).
   t.push_back(Closed("wind_20ft_mps", "m/s", -50.0, 50.0,

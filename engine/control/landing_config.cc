@@ -120,13 +120,13 @@ void ValidateLandingConfig(const LandingConfig& c, const Aircraft& aircraft, con
   if (!std::isnan(c.design_speed_mps)) limit("speed_mps", "design_speed_mps", c.design_speed_mps);
   for (int i = 0; i < kLandingStateCount; ++i) {
     const std::string key = "q_weights." + std::string(LandingStateNames()[i]);
-    CheckInputLimit("lqr.q", c.q_weights[i], source, key);
+    CheckInputLimit("q_weights", c.q_weights[i], source, key);
   }
-  limit("lqr.r", "r_weight", c.r_weight);
+  limit("r_weight", "r_weight", c.r_weight);
   limit("landing.actuator_pole_per_s", "actuator_pole_per_s", c.actuator_pole_per_s);
   limit("landing.compensator_pole_per_s", "compensator_pole_per_s", c.compensator_pole_per_s);
   if (!std::isnan(c.flare_time_constant_s))
-    limit("flare_tau_s", "flare_time_constant_s", c.flare_time_constant_s);
+    limit("flare_time_constant_s", "flare_time_constant_s", c.flare_time_constant_s);
   require(std::isfinite(c.flare_asymptote_m) && c.flare_asymptote_m >= 0.0 &&
               c.flare_asymptote_m < c.flare_height_m,
           "flare_asymptote_m", c.flare_asymptote_m,

@@ -132,10 +132,11 @@ struct LandingConfig {
   IntegratorKind turbulent_integrator = IntegratorKind::kRk4;
 
   /// The settings a person gives (describe.h): [analyses.landing], the flags of `gesweep land` and
-  /// the keywords of gesweep.land, under the keys ValidateLandingConfig names. The start condition,
-  /// the glide slope, the flare and the LQR weights are a sweep's run parameters (height_m,
-  /// speed_mps, glide_slope_deg, flare_height_m, flare_tau_s, lqr.r, lqr.q_*), so they are flags
-  /// only; so are the series interval (a study's [storage]) and the turbulence's seed and run index.
+  /// the keywords of gesweep.land, under the keys ValidateLandingConfig names. The glide slope, the
+  /// flare and the LQR weights are a sweep's run parameters of the same keys (RunParameter: their
+  /// catalogue entries are these fields; q_weights.<state> by hand), and the start condition is the
+  /// run parameters height_m and speed_mps, so they are flags only; so are the series interval (a
+  /// study's [storage]) and the turbulence's seed and run index.
   /// q_weights, an array of 9, is read by each front end itself (--q-weights, q_weights=[...]).
   template <class V>
   void Describe(V& v) {
@@ -160,25 +161,26 @@ struct LandingConfig {
     v(Field("glide_slope_deg", &glide_slope_deg)
           .Unit("deg")
           .Limit("glide_slope_deg")
-          .CommandLineOnly()
-          .Doc("Glide-slope angle, deg, positive down"));
+          .RunParameter()
+          .Doc("Glide-slope angle gamma, positive for a descent (the paper: 2.5 to 3 deg)"));
     v(Field("flare_height_m", &flare_height_m)
           .Unit("m")
           .Limit("flare_height_m")
-          .CommandLineOnly()
-          .Doc("Flare height Ho, m"));
+          .RunParameter()
+          .Doc("Height Ho at which the flare starts"));
     v(Field("flare_time_constant_s", &flare_time_constant_s)
           .Automatic()
           .Unit("s")
-          .Limit("flare_tau_s")
-          .CommandLineOnly()
-          .Doc("Flare time constant, s; default (left out): Ho/(u0 sin(glide slope)), continuous sink rate "
-               "at Ho"));
+          .Limit("flare_time_constant_s")
+          .RunParameter()
+          .Doc("Time constant tau of the exponential flare command; default (left out): automatic, "
+               "Ho/(u0 sin gamma), so the commanded sink rate is continuous at Ho"));
+    // The Q weights, an array keyed by state name, are by hand (run parameters q_weights.<state>).
     v(Field("r_weight", &r_weight)
           .Unit("rad^2")
-          .Limit("lqr.r")
-          .CommandLineOnly()
-          .Doc("LQR weight on the elevator command (rad^2)"));
+          .Limit("r_weight")
+          .RunParameter()
+          .Doc("LQR weight R on the elevator command (the paper: 1)"));
     v(Field("design_height_m", &design_height_m)
           .Automatic()
           .Unit("m")

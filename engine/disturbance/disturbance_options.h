@@ -53,47 +53,47 @@ struct DisturbanceOptions {
   double gust_start_s = 0.0;
 
   /// The settings a person gives (describe.h): the flags of `gesweep simulate` and `gesweep land`,
-  /// and in a sweep the run parameters of the same names (engine/analyses/parameter_catalog.cc makes
-  /// a catalogue entry of every command-line-only field here), so they can be fixed, swept or drawn
-  /// per run. The sample interval and the pitch-rate gust are settings of the analysis
+  /// and in a sweep the run parameters of the same names (RunParameter: engine/analyses/
+  /// parameter_catalog.cc makes their catalogue entries from these fields), so they can be fixed, swept or
+  /// drawn per run. The sample interval and the pitch-rate gust are settings of the analysis
   /// ([analyses.open_loop], [analyses.landing]). The span of the pitch-rate gust is the aircraft's.
   template <class V>
   void Describe(V& v) {
     v(Field("wind_20ft_mps", &wind_20ft_mps)
           .Unit("m/s")
           .Limit("wind_20ft_mps")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Mean wind at 20 ft as u_g, m/s: a headwind is negative (docs/model.md section 9)"));
     v(Field("wind_shear", &wind_shear)
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Mean-wind profile in height: logarithmic (MIL-F-8785C) or none (W20 at every height)"));
     v(Field("turbulence", &turbulence)
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Continuous turbulence: none or dryden (low-altitude Dryden, docs/model.md section 9)"));
     v(Field("turbulence_sigma_w_mps", &turbulence_sigma_w_mps)
           .Unit("m/s")
           .Limit("turbulence_sigma_w_mps")
           .Automatic()
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Vertical turbulence intensity sigma_w, m/s; default (left out): 0.1 |wind_20ft_mps| "
                "as the specification's low-altitude model"));
     v(Field("gust_axis", &gust_axis)
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Axis of the 1 - cos gust: u (positive: a tail gust) or w (positive: a down gust)"));
     v(Field("gust_amplitude_mps", &gust_amplitude_mps)
           .Unit("m/s")
           .Limit("gust_amplitude_mps")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Amplitude v_m of the 1 - cos gust, m/s; 0: no gust"));
     v(Field("gust_half_length_m", &gust_half_length_m)
           .Unit("m")
           .Limit("gust_half_length_m")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Half-length d_m of the 1 - cos gust, m"));
     v(Field("gust_start_s", &gust_start_s)
           .Unit("s")
           .Limit("gust_start_s")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Time at which the airplane enters the gust, s"));
     v(Field("turbulence_sample_interval_s", &turbulence_sample_interval_s)
           .Unit("s")

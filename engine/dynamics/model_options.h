@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "engine/aircraft/coefficient.h"
+#include "engine/common/describe.h"
 #include "engine/common/enum_names.h"
 
 namespace gesweep {
@@ -44,6 +45,32 @@ struct ModelOptions {
   /// transferred to the new CG: CMx += CLx·shift for x in {o, α, α̇, q, δe, h} (docs/model.md).
   double cg_shift_over_chord = 0.0;
 
+  /// The options a person gives (describe.h): each is a sweep's run parameter of the same key (its
+  /// catalogue entry, engine/analyses/parameter_catalog.cc), a flag of every command that builds a
+  /// model (engine/cli/model_flags.cc) and a keyword of the Python functions (gesweep.MODEL_OPTIONS).
+  /// By hand, and why (docs/architecture.md, "Still by hand"): the scale factors (an array of
+  /// columns keyed by coefficient name, and CDo's beside them: parameters scale.<name>, Python's
+  /// scale={...} and CDo_scale), and the mass and pitch inertia (unset: the aircraft's; the field
+  /// list has no optional number).
+  template <class V>
+  void Describe(V& v) {
+    v(Field("h_derivatives", &h_derivatives)
+          .RunParameter()
+          .Doc("Whether Xh, Zh and Mh are in the model (docs/model.md §4)"));
+    v(Field("cdh", &cdh)
+          .RunParameter()
+          .Doc("How CDh is obtained: polar = d(k CLo^2)/dh, zero (docs/model.md §3)"));
+    v(Field("interpolation", &interpolation)
+          .RunParameter()
+          .Doc("Table interpolation in height: linear or pchip (docs/model.md §2)"));
+    v(Field("cg_shift_over_chord", &cg_shift_over_chord)
+          .Limit("cg_shift_over_chord")
+          .RunParameter()
+          .Doc("CG moved aft by this fraction of the mean chord (negative: forward)"));
+  }
+
+  bool operator==(const ModelOptions&) const = default;
+
   static CoefficientRow UnitScale() {
     CoefficientRow scale;
     scale.fill(1.0);
@@ -52,9 +79,5 @@ struct ModelOptions {
 };
 
 // Their names: ToString, ParseEnum, EnumChoices of engine/common/enum_names.h.
-/// Parses "polar" / "zero"; nullopt otherwise.
-std::optional<CdhMode> ParseCdhMode(std::string_view text);
-/// Parses "linear" / "pchip"; nullopt otherwise.
-std::optional<Interpolation> ParseInterpolation(std::string_view text);
 
 }  // namespace gesweep

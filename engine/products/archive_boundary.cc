@@ -181,10 +181,12 @@ DesignSlots FindDesignSlots(const std::vector<ParameterId>& design_ids,
   DesignSlots slots;
   slots.of_key.assign(key_names.size(), -1);
   for (std::size_t d = 0; d < design_ids.size(); ++d) {
-    const std::string& name = ParameterCatalog()[static_cast<std::size_t>(design_ids[d])].name;
-    if (name == "height_m") slots.height = static_cast<int>(d);
+    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(design_ids[d])];
+    if (info.name == "height_m") slots.height = static_cast<int>(d);
     for (std::size_t k = 0; k < key_names.size(); ++k) {
-      if (key_names[k] == name) slots.of_key[k] = static_cast<int>(d);
+      // An archive written before a rename names the axis by its older name (RenamedParameters).
+      if (key_names[k] == info.name || key_names[k] == info.identity_name)
+        slots.of_key[k] = static_cast<int>(d);
     }
   }
   return slots;

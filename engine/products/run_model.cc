@@ -13,8 +13,10 @@
 namespace gesweep {
 namespace {
 
+// An archive's parameter name: today's, or an older name of it, as an older archive has it
+// (RenamedParameters).
 ParameterId ParameterOf(const std::string& name, const std::string& source, const std::string& where) {
-  const auto id = FindParameter(name);
+  const auto id = FindParameterOrOlder(name, nullptr);
   if (!id)
     throw InputError(source, where, name,
                      "a parameter this engine does not know (an archive of another version?)");

@@ -2,11 +2,27 @@
 // pybind11, with the GIL released while they compute. engine/python/gesweep/__init__.py wraps it in
 // the public API (signatures, docstrings from the described fields, DataFrames, open_archive).
 // Each domain has its own file (support.h lists them); this one binds them, with the aircraft's facts.
+#include <iostream>
+#include <mutex>
+#include <set>
+
+#include "engine/common/notes.h"
 #include "engine/products/product_layouts.h"
 #include "engine/python/support.h"
 
 namespace gesweep::python {
 namespace {
+
+// An older name a study used (docs/sweep.md, "Renamed parameters"): one line on stderr, once, as the
+// command line shows it (std::cerr: a study may be read with the GIL released).
+void ShowNote(const std::string& note) {
+  static std::mutex mutex;
+  static std::set<std::string> shown;
+  std::lock_guard lock(mutex);
+  if (shown.insert(note).second) std::cerr << "gesweep: note: " << EscapeForMessage(note) << std::endl;
+}
+// Installed as the module is loaded (before any study is read).
+[[maybe_unused]] const bool kShowsNotes = (SetNoteHandler(&ShowNote), true);
 
 /// Aircraft.<fact> of the Python class: the aircraft file's numbers, SI, under their keys.
 constexpr std::pair<const char*, double Aircraft::*> kAircraftNumbers[] = {
@@ -126,7 +142,7 @@ PYBIND11_MODULE(_gesweep, m) {
         py::arg("repetitions"));
   m.def("simulate_settings", [] { return SettingsList(OpenLoopConfig{}, {"height_m", "speed_mps"}); });
   m.def("land_settings", &LandingSettingsList);
-  m.def("model_option_keys", [] { return ModelOptionKeys(); });
+  m.def("model_options", &ModelOptionSettings);
   m.def("classification_levels", [] {
     std::vector<std::string> levels;
     for (auto c : {ModeClassification::kStandard, ModeClassification::kPhugoidSplit,

@@ -132,93 +132,16 @@ class PyAircraft {
 
   std::shared_ptr<const LongitudinalModel> Model(const ModelOptions& options) const {
     std::lock_guard lock(mutex_);
-    if (model_ && Same(model_->options(), options)) return model_;
+    if (model_ && model_->options() == options) return model_;
     model_ = std::make_shared<const LongitudinalModel>(aircraft_, options);
     return model_;
   }
 
  private:
-  static bool Same(const ModelOptions& a, const ModelOptions& b) {
-    return a.h_derivatives == b.h_derivatives && a.cdh == b.cdh && a.interpolation == b.interpolation &&
-           a.coefficient_scale == b.coefficient_scale && a.CDo_scale == b.CDo_scale &&
-           a.mass_kg == b.mass_kg && a.pitch_inertia_kgm2 == b.pitch_inertia_kgm2 &&
-           a.cg_shift_over_chord == b.cg_shift_over_chord;
-  }
-
   Aircraft aircraft_;
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const LongitudinalModel> model_;
 };
-
-/// The model options of docs/model.md from keyword arguments (the keys of gesweep.MODEL_OPTIONS);
-/// every key it takes is removed from `kwargs`.
-inline ModelOptions TakeModelOptions(py::dict& kwargs) {
-  ModelOptions options;
-  if (kwargs.empty()) return options;
-  auto take = [&](const char* key) -> std::optional<py::object> {
-    if (!kwargs.contains(key)) return std::nullopt;
-    py::object value = kwargs[key];
-    PyDict_DelItemString(kwargs.ptr(), key);
-    if (value.is_none()) return std::nullopt;
-    return value;
-  };
-  if (auto v = take("h_derivatives")) options.h_derivatives = ToBool(*v, "h_derivatives");
-  if (auto v = take("cdh")) {
-    const std::string text = ToText(*v, "cdh");
-    const auto mode = ParseCdhMode(text);
-    if (!mode) throw InputError(kArguments, "cdh", "'" + text + "'", "expected polar or zero");
-    options.cdh = *mode;
-  }
-  if (auto v = take("interpolation")) {
-    const std::string text = ToText(*v, "interpolation");
-    const auto kind = ParseInterpolation(text);
-    if (!kind) throw InputError(kArguments, "interpolation", "'" + text + "'", "expected linear or pchip");
-    options.interpolation = *kind;
-  }
-  if (auto v = take("mass_kg")) options.mass_kg = ToNumber(*v, "mass_kg");
-  if (auto v = take("pitch_inertia_kgm2")) options.pitch_inertia_kgm2 = ToNumber(*v, "pitch_inertia_kgm2");
-  if (auto v = take("cg_shift_over_chord")) options.cg_shift_over_chord = ToNumber(*v, "cg_shift_over_chord");
-  if (auto v = take("CDo_scale")) options.CDo_scale = ToNumber(*v, "CDo_scale");
-  if (auto v = take("scale")) {
-    if (!py::isinstance<py::dict>(*v))
-      throw InputError(kArguments, "scale", Repr(*v), "expected a dict of coefficient name -> factor");
-    for (auto [name, factor] : v->cast<py::dict>()) {
-      const std::string text = py::str(name).cast<std::string>();
-      const auto c = CoefficientFromName(text);
-      if (!c) {
-        std::string names;
-        for (auto n : kCoefficientNames) names += (names.empty() ? "" : ", ") + std::string(n);
-        throw InputError(kArguments, "scale", "'" + text + "'", "expected a coefficient name: " + names);
-      }
-      std::string key = "scale.";
-      key += text;
-      options.coefficient_scale[Index(*c)] = ToNumber(factor, key);
-    }
-  }
-  return options;
-}
-
-/// Refuses keyword arguments nothing took.
-inline void RefuseLeftovers(const py::dict& kwargs, const std::vector<std::string>& known) {
-  if (kwargs.empty()) return;
-  for (auto [key, value] : kwargs) {
-    const std::string name = py::str(key).cast<std::string>();
-    std::string list;
-    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-    throw InputError(kArguments, name, Repr(value), "unknown option; expected one of: " + list);
-  }
-}
-
-inline const std::vector<std::string>& ModelOptionKeys() {
-  static const std::vector<std::string> keys = {
-      "h_derivatives",       "cdh",       "interpolation", "mass_kg", "pitch_inertia_kgm2",
-      "cg_shift_over_chord", "CDo_scale", "scale"};
-  return keys;
-}
-
-inline std::shared_ptr<const LongitudinalModel> ModelOf(const PyAircraft& aircraft, py::dict& kwargs) {
-  return aircraft.Model(TakeModelOptions(kwargs));
-}
 
 // ---------------------------------------------------------------- running with the GIL released
 
@@ -405,6 +328,104 @@ inline py::list SettingsList(const T& object, const std::set<std::string>& leave
     out.append(entry);
   }
   return out;
+}
+
+// ---------------------------------------------------------------- the model options
+
+/// The model options the module reads by hand (ModelOptions::Describe says why), after the described
+/// ones: key and description (gesweep.MODEL_OPTIONS).
+struct ModelOptionByHand {
+  const char* key;
+  const char* doc;
+};
+inline constexpr ModelOptionByHand kModelOptionsByHand[] = {
+    {"mass_kg", "Mass override, kg (None: the aircraft's)"},
+    {"pitch_inertia_kgm2", "Pitch inertia Iy override, kg m^2 (None: the aircraft's)"},
+    {"CDo_scale", "Factor on CDo (the run parameter scale.CDo)"},
+    {"scale", "Factors on coefficient columns, e.g. {'CLh': 1.1} (names of the aircraft file)"}};
+
+/// The model options of docs/model.md from keyword arguments (the keys of gesweep.MODEL_OPTIONS):
+/// ModelOptions' described fields (KwargsReader), then those of kModelOptionsByHand; every key it
+/// takes is removed from `kwargs`.
+inline ModelOptions TakeModelOptions(py::dict& kwargs) {
+  ModelOptions options;
+  if (kwargs.empty()) return options;
+  std::vector<std::string> described;
+  KwargsReader reader{&kwargs, &described};
+  options.Describe(reader);
+  CheckFieldRanges(options, kArguments);
+  auto take = [&](const char* key) -> std::optional<py::object> {
+    if (!kwargs.contains(key)) return std::nullopt;
+    py::object value = kwargs[key];
+    PyDict_DelItemString(kwargs.ptr(), key);
+    if (value.is_none()) return std::nullopt;
+    return value;
+  };
+  if (auto v = take("mass_kg")) options.mass_kg = ToNumber(*v, "mass_kg");
+  if (auto v = take("pitch_inertia_kgm2")) options.pitch_inertia_kgm2 = ToNumber(*v, "pitch_inertia_kgm2");
+  if (auto v = take("CDo_scale")) options.CDo_scale = ToNumber(*v, "CDo_scale");
+  if (auto v = take("scale")) {
+    if (!py::isinstance<py::dict>(*v))
+      throw InputError(kArguments, "scale", Repr(*v), "expected a dict of coefficient name -> factor");
+    for (auto [name, factor] : v->cast<py::dict>()) {
+      const std::string text = py::str(name).cast<std::string>();
+      const auto c = CoefficientFromName(text);
+      if (!c) {
+        std::string names;
+        for (auto n : kCoefficientNames) names += (names.empty() ? "" : ", ") + std::string(n);
+        throw InputError(kArguments, "scale", "'" + text + "'", "expected a coefficient name: " + names);
+      }
+      std::string key = "scale.";
+      key += text;
+      options.coefficient_scale[Index(*c)] = ToNumber(factor, key);
+    }
+  }
+  return options;
+}
+
+/// Refuses keyword arguments nothing took.
+inline void RefuseLeftovers(const py::dict& kwargs, const std::vector<std::string>& known) {
+  if (kwargs.empty()) return;
+  for (auto [key, value] : kwargs) {
+    const std::string name = py::str(key).cast<std::string>();
+    std::string list;
+    for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw InputError(kArguments, name, Repr(value), "unknown option; expected one of: " + list);
+  }
+}
+
+/// The keys of TakeModelOptions, in gesweep.MODEL_OPTIONS's order.
+inline const std::vector<std::string>& ModelOptionKeys() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> list;
+    for (const FieldRecord& field : ListFields(ModelOptions{})) {
+      if (InScope(field.attributes, false)) list.emplace_back(field.attributes.key);
+    }
+    for (const ModelOptionByHand& option : kModelOptionsByHand) list.emplace_back(option.key);
+    return list;
+  }();
+  return keys;
+}
+
+/// gesweep.MODEL_OPTIONS: key, default (a Python value; None for the aircraft's) and description of
+/// each model option, the described ones (SettingsList) first.
+inline py::list ModelOptionSettings() {
+  const ModelOptions defaults;
+  py::list out = SettingsList(defaults, {});
+  for (const ModelOptionByHand& option : kModelOptionsByHand) {
+    py::dict entry;
+    entry["key"] = option.key;
+    entry["default"] = std::string_view(option.key) == "CDo_scale"
+                           ? py::object(py::float_(defaults.CDo_scale))
+                           : py::object(py::none());
+    entry["doc"] = option.doc;
+    out.append(entry);
+  }
+  return out;
+}
+
+inline std::shared_ptr<const LongitudinalModel> ModelOf(const PyAircraft& aircraft, py::dict& kwargs) {
+  return aircraft.Model(TakeModelOptions(kwargs));
 }
 
 /// A vector's values as a new NumPy array.

@@ -92,33 +92,34 @@ struct OpenLoopConfig {
 
   /// The settings a person gives (describe.h): [analyses.open_loop] and the flags of `gesweep
   /// simulate`. The start condition, the input's amplitude and length are a sweep's run parameters
-  /// of the same names, so they are flags only; so are the initial offsets.
+  /// of the same names (RunParameter: the catalogue's entries of the input are these fields), so they
+  /// are flags only; so are the initial offsets.
   template <class V>
   void Describe(V& v) {
     v(Field("height_m", &start_height_m)
           .Unit("m")
           .Limit("height_m")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc(
               "Start height H0 of the mean chord above ground, m; must be above the aircraft's wheel-contact "
               "height: starts on or below it are refused"));
     v(Field("speed_mps", &reference_speed_mps)
           .Unit("m/s")
           .Limit("speed_mps")
-          .CommandLineOnly()
+          .RunParameter()
           .Doc("Reference speed u0, m/s; must be above the stall speed"));
     v(Field("input", &elevator.kind).Doc("Elevator input: pulse, step, doublet or none"));
     v(Field("pulse_amplitude_deg", &elevator.amplitude_rad)
           .Unit("deg")
           .Scale(kRadiansPerDegree)
           .Limit("pulse_amplitude_deg")
-          .CommandLineOnly()
-          .Doc("Input amplitude, deg, positive trailing edge down (nose down)"));
+          .RunParameter()
+          .Doc("Elevator pulse amplitude, positive trailing edge down (paper: 5 deg)"));
     v(Field("pulse_duration_s", &elevator.duration_s)
           .Unit("s")
           .Limit("pulse_duration_s")
-          .CommandLineOnly()
-          .Doc("Pulse length (doublet: each half), s"));
+          .RunParameter()
+          .Doc("Elevator pulse duration (paper: 0.2 s)"));
     v(Field("input_start_s", &elevator.start_s)
           .Unit("s")
           .Limit("open_loop.input_start_s")

@@ -229,8 +229,9 @@ double MapUnit(const DesignParameter& parameter, double u) {
 double MonteCarloUnit(std::uint64_t seed, std::int64_t index, ParameterId id) {
   GESWEEP_DEMAND(index >= 0);
   const std::uint64_t run_key = HashWords(seed ^ kMonteCarloTag, static_cast<std::uint64_t>(index));
+  // A renamed parameter's older name (identity_name): a rename changes no draw.
   const std::uint64_t bits =
-      HashWords(run_key, Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].name));
+      HashWords(run_key, Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].identity_name));
   return (static_cast<double>(bits >> 12) + 0.5) * 0x1.0p-52;
 }
 

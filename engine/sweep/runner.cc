@@ -21,14 +21,12 @@ namespace {
 constexpr int kTokensPerThread =
     2;  // batches in flight per worker: keeps every thread busy at a batch's tail
 
+// The model options' parameters by hand (ModelOptions::Describe says why): the scale factors and
+// the mass properties.
 struct ModelParameterIds {
-  ParameterId h_derivatives = RequireParameter("h_derivatives");
-  ParameterId cdh = RequireParameter("cdh");
-  ParameterId interpolation = RequireParameter("interpolation");
   ParameterId CDo_scale = RequireParameter("scale.CDo");
   ParameterId mass = RequireParameter("mass_kg");
   ParameterId inertia = RequireParameter("pitch_inertia_kgm2");
-  ParameterId cg_shift = RequireParameter("cg_shift_over_chord");
   std::array<ParameterId, kCoefficientCount> scale{};
   ModelParameterIds() {
     for (int i = 0; i < kCoefficientCount; ++i) {
@@ -47,17 +45,13 @@ ModelOptions OptionsFrom(const RunParameters& p) {
   const ModelParameterIds& ids = ModelIds();
   auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
   ModelOptions options;
-  options.h_derivatives = at(ids.h_derivatives) != 0.0;
-  // A choice's level code is its index in the enum's names table, whence the catalogue's levels.
-  options.cdh = EnumAt<CdhMode>(at(ids.cdh));
-  options.interpolation = EnumAt<Interpolation>(at(ids.interpolation));
+  ApplyRunParameters(p, options);  // the described ones (ModelOptions::Describe)
   for (int i = 0; i < kCoefficientCount; ++i) {
     options.coefficient_scale[static_cast<std::size_t>(i)] = at(ids.scale[static_cast<std::size_t>(i)]);
   }
   options.CDo_scale = at(ids.CDo_scale);
   options.mass_kg = at(ids.mass);
   options.pitch_inertia_kgm2 = at(ids.inertia);
-  options.cg_shift_over_chord = at(ids.cg_shift);
   return options;
 }
 

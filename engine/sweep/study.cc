@@ -8,6 +8,7 @@
 
 #include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/common/notes.h"
 #include "engine/common/toml_reader.h"
 #include "engine/sweep/hashing.h"
 
@@ -25,6 +26,17 @@ std::string Quote(const std::string& text) { return "\"" + text + "\""; }
 std::string FormatNumber(double value) { return ShortNumber(value); }
 
 int NodeLine(const toml::node& node) { return static_cast<int>(node.source().begin.line); }
+
+// The id of a parameter's name or of an older name of it (RenamedParameters); an older name is
+// accepted with a note naming where it was written (docs/sweep.md, "Renamed parameters").
+std::optional<ParameterId> IdOfNameOrOlder(const std::string& name, const std::string& key, int line,
+                                           const std::string& source) {
+  std::string note;
+  const auto id = FindParameterOrOlder(name, &note);
+  if (!note.empty())
+    SendNote(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + key + ": " + note);
+  return id;
+}
 
 class StudyParser {
  public:
@@ -219,8 +231,9 @@ class StudyParser {
     return value;
   }
 
+  // The id of a parameter's name or of an older name of it (RenamedParameters, with a note).
   ParameterId ParameterIdOf(const std::string& name, const std::string& key, int line) const {
-    const auto id = FindParameter(name);
+    const auto id = IdOfNameOrOlder(name, key, line, source_);
     if (!id) {
       const std::string near = NearestName(name, ParameterNames());
       throw InputError(source_, key, Quote(name),
@@ -251,6 +264,12 @@ class StudyParser {
     for (const auto& [name, node] : flat) {
       const std::string key = "parameters." + name;
       const ParameterId id = ParameterIdOf(name, key, NodeLine(*node));
+      if (fixed_lines_.count(id) != 0) {  // a name and an older name of it
+        throw InputError(source_, key, DescribeNode(*node),
+                         "expected one value of " + ParameterCatalog()[static_cast<std::size_t>(id)].name +
+                             " (it is given on line " + std::to_string(fixed_lines_.at(id)) + " too)",
+                         NodeLine(*node));
+      }
       study_.fixed.push_back({id, ParameterValue(id, *node, key)});
       fixed_lines_[id] = NodeLine(*node);
     }
@@ -697,7 +716,7 @@ class StudyParser {
     std::vector<std::string> names = cells;
     std::set<ParameterId> seen;
     for (std::size_t i = 0; i < names.size(); ++i) {
-      const auto id = FindParameter(names[i]);
+      const auto id = IdOfNameOrOlder(names[i], "header", line_number, csv_source);
       if (!id) {
         const std::string near = NearestName(names[i], ParameterNames());
         throw InputError(

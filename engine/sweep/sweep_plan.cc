@@ -265,7 +265,8 @@ std::uint64_t SweepPlan::RunId(const double* design_row) const {
   std::uint64_t hash = kFnvOffset;
   for (int c = 0; c < design_->column_count(); ++c) {
     const ParameterId id = design_->spec().parameters[static_cast<std::size_t>(c)].id;
-    hash = Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].name, hash);
+    // A renamed parameter's older name (identity_name): a rename changes no run's id.
+    hash = Fnv1a64(ParameterCatalog()[static_cast<std::size_t>(id)].identity_name, hash);
     hash = Fnv1a64(design_row[c], hash);
   }
   return hash;

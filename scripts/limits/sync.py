@@ -21,7 +21,7 @@ SCHEMA = ROOT / "schemas" / "study.schema.json"
 DOC = ROOT / "docs" / "limits.md"
 DOC_HEADING = "## The table\n\n"
 # The catalogue's parameters that take their range from a family entry of the table.
-FAMILIES = {"scale.": "scale_factor", "lqr.q_": "lqr.q", "x": "verification_input"}
+FAMILIES = {"scale.": "scale_factor", "q_weights.": "q_weights", "x": "verification_input"}
 
 
 def number(value):

@@ -35,13 +35,14 @@ HEADWIND_NEGATIVE = "a headwind is negative"
 SYMBOLS = {
     "speed_mps": "u0", "height_m": "H", "wind_20ft_mps": "W20", "turbulence_sigma_w_mps": "σ_w",
     "pulse_amplitude_deg": "pulse", "pulse_duration_s": "pulse length", "glide_slope_deg": "γ",
-    "flare_height_m": "Ho", "flare_tau_s": "τ", "mass_kg": "m", "pitch_inertia_kgm2": "Iy",
+    "flare_height_m": "Ho", "flare_time_constant_s": "τ", "mass_kg": "m", "pitch_inertia_kgm2": "Iy",
+    "flare_tau_s": "τ",  # flare_time_constant_s in an archive written before its rename (docs/sweep.md)
     "gust_amplitude_mps": "v_m", "gust_half_length_m": "d_m", "cg_shift_over_chord": "CG shift / c",
 }
 # Booleans named as a clause ("with h-derivatives") rather than "name = true".
 BOOLEAN_WORDS = {"h_derivatives": ("without h-derivatives", "with h-derivatives")}
 # Units as a reader writes them after a number.
-UNIT_TEXT = {"1": "", "deg": "°", "kg m^2": "kg m²"}
+UNIT_TEXT = {"1": "", "deg": "°", "kg m^2": "kg m²", "rad^2": "rad²"}
 
 
 def number(value, digits=MAX_SIGNIFICANT):

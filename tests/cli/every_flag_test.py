@@ -76,9 +76,6 @@ NOT_NUMERIC = {
     ("sensitivity", "--format"): "format name",
     ("simulate", "--aircraft"): "path", ("simulate", "--format"): "format name",
 }
-for command in ("boundary", "land", "modes", "simulate"):
-    NOT_NUMERIC[(command, "--cdh")] = "name: polar or zero"
-    NOT_NUMERIC[(command, "--interpolation")] = "name: linear or pchip"
 
 # Numbers given as a list or a pattern, checked after parsing: (command, first name) -> bad values
 # (one past each end of their range), each refused with one line naming the flag.

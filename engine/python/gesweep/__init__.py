@@ -28,18 +28,9 @@ __all__ = ["Aircraft", "modes", "boundary", "simulate", "land", "run", "open_arc
            "InputError", "ArchiveError", "ArchiveNote", "MODEL_OPTIONS", "CLASSIFICATION_LEVELS"]
 
 #: The model options of docs/model.md that modes, boundary, simulate and land take as keywords:
-#: (key, default, description).
-MODEL_OPTIONS = (
-    ("h_derivatives", True, "Include Xh, Zh and Mh (docs/model.md section 4); False leaves them out"),
-    ("cdh", "polar", "CDh model: 'polar' (d(k CLo^2)/dh) or 'zero'"),
-    ("interpolation", "linear", "Table interpolation: 'linear' or 'pchip'"),
-    ("mass_kg", None, "Mass override, kg (None: the aircraft's)"),
-    ("pitch_inertia_kgm2", None, "Pitch inertia Iy override, kg m^2 (None: the aircraft's)"),
-    ("cg_shift_over_chord", 0.0, "CG moved aft by this fraction of the mean chord"),
-    ("CDo_scale", 1.0, "Factor on CDo"),
-    ("scale", None, "Factors on coefficient columns, e.g. {'CLh': 1.1} (names of the aircraft file)"),
-)
-assert [k for k, _, _ in MODEL_OPTIONS] == list(_gesweep.model_option_keys())
+#: (key, default, description), from their description (ModelOptions::Describe) and, for the scale
+#: factors and the mass properties, the module's list (engine/python/support.h).
+MODEL_OPTIONS = tuple((s["key"], s["default"], s["doc"]) for s in _gesweep.model_options())
 
 #: The names of the codes of modes(...)["classification"] (0, 1, 2, 3).
 CLASSIFICATION_LEVELS = tuple(_gesweep.classification_levels())
