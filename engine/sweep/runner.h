@@ -173,9 +173,11 @@ void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& bl
 /// analysis of the study takes lanes (Analysis::takes_lanes). Otherwise one at a time (ExecuteRun).
 bool RunsInLanes(const SweepPlan& plan, int lanes);
 
-/// The lane width of a sweep when none is asked for: the widest, since the archive is the same bit
-/// for bit whatever the width (docs/sweep.md, "Lanes").
-inline constexpr int kDefaultLanes = 8;
+/// The lane width of a sweep when none is asked for: one at a time. The archive is the same bit for
+/// bit whatever the width, so this is a matter of speed only, and on the generic x86-64 build (SSE2:
+/// two doubles per vector) every width was measured slower than one at a time (docs/performance.md,
+/// "The open loop in lanes"): make it the widest width that is faster once one is.
+inline constexpr int kDefaultLanes = 1;
 
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {

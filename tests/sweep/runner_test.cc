@@ -305,19 +305,23 @@ SweepPlan LongOpenLoopPlan(int chunk_runs) {
 
 TEST(Runner, CancelReachesInsideALongRunAndItsBatchIsNotWritten) {
   const SweepPlan plan = LongOpenLoopPlan(2);
-  std::atomic<bool> cancel{false};
-  // Cancels once the runs are under way (as SIGINT would); each needs seconds, so none can finish.
-  std::thread canceller([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    cancel.store(true);
-  });
-  MemorySink sink;
-  SweepProgress progress;
-  const SweepOutcome outcome = RunSweep(plan, {0, 1}, sink, RunnerOptions{2, &cancel, 1}, &progress);
-  canceller.join();
-  EXPECT_TRUE(outcome.cancelled);
-  EXPECT_EQ(sink.writes_, 0) << "a batch whose runs were stopped half-way must not be written";
-  EXPECT_EQ(progress.runs_done.load(), 0) << "a stopped run is not a completed one";
+  for (int lanes : {1, 2}) {  // one at a time, and the two runs of a batch flown in lanes
+    std::atomic<bool> cancel{false};
+    // Cancels once the runs are under way (as SIGINT would); each needs seconds, so none can finish.
+    std::thread canceller([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      cancel.store(true);
+    });
+    MemorySink sink;
+    SweepProgress progress;
+    RunnerOptions options{2, &cancel, 1};
+    options.lanes = lanes;
+    const SweepOutcome outcome = RunSweep(plan, {0, 1}, sink, options, &progress);
+    canceller.join();
+    EXPECT_TRUE(outcome.cancelled) << lanes;
+    EXPECT_EQ(sink.writes_, 0) << "a batch whose runs were stopped half-way must not be written";
+    EXPECT_EQ(progress.runs_done.load(), 0) << "a stopped run is not a completed one";
+  }
 }
 
 TEST(Runner, ExecuteRunLeavesACancelledRunPending) {
