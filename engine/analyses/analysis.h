@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <memory>
 #include <span>
 #include <string>
@@ -155,6 +156,20 @@ struct AnalysisOutcome {
   static AnalysisOutcome Cancelled() { return {false, "cancelled", true}; }
 };
 
+/// One run of a group that an analysis computes at once (Analysis::RunLanes): its context and row,
+/// and what Run would have given for it, an outcome or an exception.
+struct LaneRun {
+  const RunContext* context = nullptr;
+  OutputRow* row = nullptr;
+  AnalysisOutcome outcome;   ///< what Run returned for this run
+  std::exception_ptr error;  ///< or what it threw (then `outcome` means nothing)
+};
+
+/// The lane widths a sweep takes (`gesweep run --lanes`, docs/sweep.md): runs computed W at a time in
+/// the lanes of SIMD vectors, W = 1 being one at a time. Those of the open loop's lanes
+/// (kOpenLoopBatchWidths, engine/simulation/open_loop.h; open_loop_analysis.cc checks it).
+inline constexpr int kLaneWidths[] = {1, 2, 4, 8};
+
 /// What a study says about storage that analyses need when declaring their columns.
 struct StorageOptions {
   bool time_series = false;   ///< store time series (open_loop, landing)
@@ -190,6 +205,23 @@ class Analysis {
   /// Fills its columns for one run. Thread-safe (const, no shared mutable state). May throw; the
   /// runner turns any exception into a failed run.
   virtual AnalysisOutcome Run(const RunContext& context, OutputRow& row) const = 0;
+  /// Whether RunLanes computes several runs at once faster than Run one at a time (a time response
+  /// flown in SIMD lanes): the runner then hands it its runs in groups. Default: false.
+  virtual bool takes_lanes() const { return false; }
+  /// Fills its columns for a group of runs, `lanes` (one of kLaneWidths) at a time where it can. Each
+  /// run's columns and its outcome or exception are exactly what Run gives for it, bit for bit,
+  /// whatever the width and whichever runs share the group. Thread-safe, as Run. Default: Run for
+  /// each run in turn, its exception kept in LaneRun::error.
+  virtual void RunLanes(std::span<LaneRun> runs, int lanes) const {
+    (void)lanes;
+    for (LaneRun& run : runs) {
+      try {
+        run.outcome = Run(*run.context, *run.row);
+      } catch (...) {
+        run.error = std::current_exception();
+      }
+    }
+  }
   /// The dimension of the run's noise as a point of the standard-normal space (RunContext::noise_point):
   /// 0 for an analysis that draws no noise (default) or a run without turbulence.
   virtual std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const {

@@ -1,15 +1,17 @@
 // Adapter: the `open_loop` analysis. The time response of docs/model.md §7 (the paper's Fig. 4):
 // SimulateOpenLoop from the run's height and speed after an elevator input of the run's amplitude
 // and duration; summary scalars always, time series when the study stores them.
+#include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <sstream>
 
 #include "engine/analyses/analysis.h"
 #include "engine/analyses/described_columns.h"
 #include "engine/analyses/described_series.h"
 #include "engine/common/describe_toml.h"
+#include "engine/common/errors.h"
 #include "engine/common/input_limits.h"
+#include "engine/common/units.h"
 #include "engine/simulation/open_loop.h"
 
 namespace gesweep {
@@ -18,6 +20,9 @@ namespace {
 // Measured (docs/sweep.md): RK4 at 0.015 s for 30 s, derivatives re-evaluated per stage, about 300 µs.
 constexpr double kOpenLoopCost_us = 300.0;
 constexpr double kDefaultDuration_s = 30.0;
+// The runner's lane widths are the open loop's (a width it hands RunLanes is one SimulateOpenLoopBatch
+// takes).
+static_assert(std::ranges::equal(kLaneWidths, kOpenLoopBatchWidths));
 
 class OpenLoopAnalysis final : public Analysis {
  public:
@@ -71,14 +76,50 @@ class OpenLoopAnalysis final : public Analysis {
   }
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
+    return Record(SimulateOpenLoop(*context.model, ConfigOf(context), context.cancel), row);
+  }
+
+  bool takes_lanes() const override { return true; }
+
+  // The runs flown together by SimulateOpenLoopBatch, each result bit for bit its SimulateOpenLoop
+  // run's (those the lanes do not take are flown one at a time inside it). A run it refuses (it
+  // validates every run before flying any) makes it throw: every run of the group is then given to
+  // Run, one at a time, so that each gets its own outcome or exception, as without lanes.
+  void RunLanes(std::span<LaneRun> runs, int lanes) const override {
+    if (runs.empty()) return;
+    const std::atomic<bool>* cancel = runs.front().context->cancel;
+    std::vector<OpenLoopBatchRun> batch;
+    batch.reserve(runs.size());
+    for (const LaneRun& run : runs) {
+      GESWEEP_DEMAND(run.context->cancel == cancel);
+      batch.push_back({run.context->model, ConfigOf(*run.context)});
+    }
+    std::vector<OpenLoopResult> results;
+    try {
+      results = SimulateOpenLoopBatch(batch, lanes, cancel);
+    } catch (...) {
+      Analysis::RunLanes(runs, lanes);
+      return;
+    }
+    for (std::size_t i = 0; i < runs.size(); ++i) runs[i].outcome = Record(results[i], *runs[i].row);
+  }
+
+ private:
+  // The run's settings: the study's, with the run's start condition, input and disturbance.
+  OpenLoopConfig ConfigOf(const RunContext& context) const {
     OpenLoopConfig config = config_;
     config.start_height_m = context.value(height_);
     config.reference_speed_mps = context.value(speed_);
-    config.elevator.amplitude_rad = context.value(amplitude_) * std::numbers::pi / 180.0;
+    // As OpenLoopConfig::Describe scales pulse_amplitude_deg (simulate's flag): a row replays bit for bit.
+    config.elevator.amplitude_rad = context.value(amplitude_) * kRadiansPerDegree;
     config.elevator.duration_s = context.value(duration_);
     config.seed = ApplyDisturbanceParameters(context.parameters, config.disturbance);
     config.run_index = context.run_index;
-    const OpenLoopResult result = SimulateOpenLoop(*context.model, config, context.cancel);
+    return config;
+  }
+
+  // Fills the row from a run's result; its outcome.
+  AnalysisOutcome Record(const OpenLoopResult& result, OutputRow& row) const {
     const OpenLoopSummary& s = result.summary;
     if (s.cancelled) return AnalysisOutcome::Cancelled();
     summary_.Fill(s, row);
@@ -89,7 +130,6 @@ class OpenLoopAnalysis final : public Analysis {
     return AnalysisOutcome::Ok(s.message);
   }
 
- private:
   OpenLoopConfig config_;
   ParameterId height_ = RequireParameter("height_m");
   ParameterId speed_ = RequireParameter("speed_mps");

@@ -57,6 +57,7 @@ struct RunFlags {
   bool quiet = false;
   bool mpi = false;
   int ranks_per_node = 0;
+  int lanes = kDefaultLanes;
   std::string merge = "virtual";
   std::string format = "text";
   DescribedFlags described{{{"quiet", "-q"}}};
@@ -75,6 +76,11 @@ struct RunFlags {
           .Unit("s")
           .Limit("dry_run_budget_s")
           .Doc("Wall time the dry run's measurement may take, s (at most 600)"));
+    v(Field("lanes", &lanes)
+          .Limit("lanes")
+          .Doc("Runs computed at once in SIMD lanes by the analyses that take them (open_loop with RK4 in "
+               "still air): 1, 2, 4 or 8; 1 is one at a time. The archive is the same bit for bit whatever "
+               "it is"));
     v(Field("quiet", &quiet).Doc("No progress output"));
     v(Field("mpi", &mpi).Doc("Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi"));
     v(Field("ranks_per_node", &ranks_per_node)
@@ -119,6 +125,7 @@ std::string Milliseconds(double seconds) {
 std::string CommandLine(const RunFlags& flags) {
   std::string line = "gesweep run " + flags.study + " -o " + flags.output;
   if (flags.threads) line += " --threads " + std::to_string(*flags.threads);
+  if (flags.lanes != kDefaultLanes) line += " --lanes " + std::to_string(flags.lanes);
   if (!flags.shard.empty()) line += " --shard " + flags.shard;
   if (flags.resume) line += " --resume";
   if (flags.force) line += " --force";
@@ -213,6 +220,7 @@ std::optional<DryRunEstimate> EstimateSweep(SweepPlan& plan, int threads, const 
     RunCostOptions options;
     options.threads = threads;
     options.budget_s = 0.75 * flags.dry_run_budget_s;
+    options.lanes = flags.lanes;
     e.cost = EstimateRunCost(plan, options, signals.flag());
     if (!e.cost.stopped && !e.cost.lower_bound) {
       // What the sweep costs whatever its size: the pipeline's start and end (the process's first
@@ -461,6 +469,7 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
   options.command_line = CommandLine(flags) + " --mpi";
   options.cancel = signals.flag();
   options.ranks_per_node = flags.ranks_per_node;
+  options.lanes = flags.lanes;
   options.describe_input_error = [](const InputError& e) { return std::string(ForCommandLine(e).what()); };
   options.merge = flags.merge == "copy" ? MergeKind::kCopy : MergeKind::kVirtual;
   MpiFinalizer finalize_after_printing;
@@ -517,6 +526,9 @@ void CheckRunFlags(const RunFlags& flags) {
   if (flags.threads && (*flags.threads < 1 || *flags.threads > 4096)) {
     throw InputError("command line", "--threads", std::to_string(*flags.threads),
                      "expected 1 to 4096 worker threads; leave --threads out to use every core");
+  }
+  if (std::ranges::find(kLaneWidths, flags.lanes) == std::end(kLaneWidths)) {
+    throw InputError("command line", "--lanes", std::to_string(flags.lanes), "expected 1, 2, 4 or 8 lanes");
   }
   if (!(flags.dry_run_budget_s > 0.0) || flags.dry_run_budget_s > kMaximumDryRunBudget_s) {
     throw InputError("command line", "--dry-run-budget-s", ShortNumber(flags.dry_run_budget_s),
@@ -646,6 +658,7 @@ int Run(const RunFlags& flags) {
     RunnerOptions options;
     options.threads = threads;
     options.cancel = signals.flag();
+    options.lanes = flags.lanes;
     try {
       outcome = RunSweep(plan, opened.pending_blocks, *writer, options, &progress);
     } catch (const ArchiveError& e) {

@@ -188,6 +188,10 @@ std::vector<InputLimit> BuildTable() {
   t.push_back(
       Whole("threads", 4096, "worker threads of a sweep (left out: every core); beyond 4096 is a typo"));
   t.back().minimum = 1;
+  t.push_back(Whole("lanes", 8,
+                    "runs a sweep computes at once in the lanes of SIMD vectors: 1, 2, 4 or 8 (the widths of "
+                    "the open loop's lanes); 1 is one at a time"));
+  t.back().minimum = 1;
   t.push_back(Whole("ranks_per_node", 4096,
                     "with MPI, the shard writers per node (0: $GESWEEP_RANKS_PER_NODE, else the ranks "
                     "sharing a machine); as threads"));

@@ -530,6 +530,7 @@ class Exchange {
     RunnerOptions runner_options;
     runner_options.threads = threads;
     runner_options.cancel = options_.cancel;
+    runner_options.lanes = options_.lanes;
     start_ = std::chrono::steady_clock::now();
     std::thread compute([&] {
       try {

@@ -40,10 +40,39 @@ class NoSink final : public ResultSink {
   void Write(const ResultBlock&) override { GESWEEP_UNREACHABLE(); }
 };
 
+// Runs design runs first .. first + burst - 1 of the shard as the sweep runs them (one at a time, or
+// as one group in `lanes` lanes: RunsInLanes) until one is stopped at `expired`; returns the runs
+// finished, and sets `cut` when one was stopped.
+std::int64_t FlyBurst(const SweepPlan& plan, std::int64_t first, std::int64_t burst, int lanes,
+                      const std::atomic<bool>& expired, RunWorkspace& workspace, ResultBlock& block,
+                      bool& cut) {
+  auto pending = [&](std::int64_t r) {
+    return block.status[static_cast<std::size_t>(r)] == static_cast<std::int8_t>(RunStatus::kPending);
+  };
+  cut = false;
+  if (!RunsInLanes(plan, lanes)) {
+    for (std::int64_t r = 0; r < burst; ++r) {
+      ExecuteRun(plan, plan.first_run() + first + r, workspace, block, static_cast<int>(r), &expired);
+      cut = pending(r);
+      if (cut) return r;
+    }
+    return burst;
+  }
+  for (std::int64_t r = 0; r < burst; ++r)
+    block.design_index[static_cast<std::size_t>(r)] = plan.first_run() + first + r;
+  ExecuteRuns(plan, workspace, block, 0, static_cast<int>(burst), lanes, &expired);
+  std::int64_t done = 0;
+  for (std::int64_t r = 0; r < burst; ++r) {
+    cut = cut || pending(r);
+    done += pending(r) ? 0 : 1;
+  }
+  return done;
+}
+
 // One thread's sampling: bursts of `burst` runs spread over the shard by the golden-ratio sequence
 // (burst numbers from `next_burst`), the first a warm-up, until `expired` or the shard's runs are
 // timed (`timed_total`, shared by the threads).
-void SampleBursts(const SweepPlan& plan, std::int64_t burst, const std::atomic<bool>& expired,
+void SampleBursts(const SweepPlan& plan, std::int64_t burst, int lanes, const std::atomic<bool>& expired,
                   std::atomic<std::int64_t>& next_burst, std::atomic<std::int64_t>& timed_total,
                   ThreadResult& out) {
   const std::int64_t runs = plan.run_count();
@@ -58,16 +87,8 @@ void SampleBursts(const SweepPlan& plan, std::int64_t burst, const std::atomic<b
     const std::int64_t first =
         std::min<std::int64_t>(runs - burst, static_cast<std::int64_t>(where * static_cast<double>(runs)));
     const auto burst_start = Clock::now();
-    std::int64_t done = 0;
     bool cut = false;
-    for (std::int64_t r = 0; r < burst; ++r) {
-      ExecuteRun(plan, plan.first_run() + first + r, workspace, block, static_cast<int>(r), &expired);
-      if (block.status[static_cast<std::size_t>(r)] == static_cast<std::int8_t>(RunStatus::kPending)) {
-        cut = true;
-        break;
-      }
-      ++done;
-    }
+    const std::int64_t done = FlyBurst(plan, first, burst, lanes, expired, workspace, block, cut);
     const double seconds = std::chrono::duration<double>(Clock::now() - burst_start).count();
     if (cut) {
       // Stopped at the deadline: the burst took at least this long.
@@ -180,7 +201,9 @@ RunCostEstimate EstimateRunCost(const SweepPlan& plan, const RunCostOptions& opt
   // take longer than the sweep itself.
   std::atomic<std::int64_t> timed_total{0};
   std::vector<ThreadResult> results(static_cast<std::size_t>(options.threads));
-  auto sample = [&](ThreadResult& out) { SampleBursts(plan, burst, expired, next_burst, timed_total, out); };
+  auto sample = [&](ThreadResult& out) {
+    SampleBursts(plan, burst, options.lanes, expired, next_burst, timed_total, out);
+  };
   std::vector<std::thread> workers;
   for (int t = 1; t < options.threads; ++t)
     workers.emplace_back(sample, std::ref(results[static_cast<std::size_t>(t)]));

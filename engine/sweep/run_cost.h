@@ -26,6 +26,7 @@ struct RunCostOptions {
   int threads = 1;        ///< threads the sweep will use (and the sampling uses)
   double budget_s = 2.0;  ///< wall time for the whole measurement, warm-up included; > 0
   int burst_runs = 8;     ///< consecutive runs per sample (cut to the plan's batch size)
+  int lanes = 1;  ///< the sweep's lane width (RunnerOptions::lanes): a burst is run as the sweep runs it
 };
 
 /// What EstimateRunCost measured.

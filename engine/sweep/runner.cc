@@ -107,102 +107,250 @@ RunWorkspace::RunWorkspace(const SweepPlan& plan)
       design_row(static_cast<std::size_t>(plan.design().column_count())) {}
 
 const LongitudinalModel& RunWorkspace::Model(const SweepPlan& plan) {
-  const auto& ids = plan.model_parameters();
-  bool same = model_.has_value() && model_key_.size() == ids.size();
-  for (std::size_t i = 0; same && i < ids.size(); ++i) {
-    same = model_key_[i] == parameters[static_cast<std::size_t>(ids[i])];
-  }
-  if (!same) {
-    model_.reset();
-    model_key_.resize(ids.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) model_key_[i] = parameters[static_cast<std::size_t>(ids[i])];
-    model_.emplace(*plan.study().aircraft, OptionsFrom(parameters));
-  }
-  return *model_;
+  StartGroup();
+  return GroupModel(plan, parameters);
 }
 
-void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
-                int row, const std::atomic<bool>* cancel, std::span<const double> noise_point,
-                std::span<const double> design_values) {
-  const auto r = static_cast<std::size_t>(row);
-  const Design& design = plan.design();
-  if (design_values.empty()) {
-    design.Row(design_index, workspace.design_row.data());
-  } else {
-    GESWEEP_DEMAND(design_values.size() == workspace.design_row.size());
-    std::copy(design_values.begin(), design_values.end(), workspace.design_row.begin());
-  }
-  workspace.parameters = plan.base_parameters();
-  for (int c = 0; c < design.column_count(); ++c) {
-    const double value = workspace.design_row[static_cast<std::size_t>(c)];
-    workspace.parameters[static_cast<std::size_t>(design.spec().parameters[static_cast<std::size_t>(c)].id)] =
-        value;
-    block.design[static_cast<std::size_t>(c)][r] = value;
-  }
-  block.design_index[r] = design_index;
-  block.run_id[r] = plan.RunId(workspace.design_row.data());
-  std::string& message = block.message[r];
-  message.clear();
-  bool ok = true;
+void RunWorkspace::StartGroup() {
+  ++group_;
+  std::erase_if(models_, [&](const CachedModel& cached) { return cached.group < group_ - 1; });
+}
 
-  const LongitudinalModel* model = nullptr;
-  if (plan.study().needs_model()) {
-    try {
-      model = &workspace.Model(plan);
-    } catch (const std::exception& e) {
-      AppendMessage(message, "model", e.what());
-      TruncateMessage(message);
-      block.status[r] = static_cast<std::int8_t>(RunStatus::kFailed);
-      return;
+const LongitudinalModel& RunWorkspace::GroupModel(const SweepPlan& plan,
+                                                  const RunParameters& run_parameters) {
+  const auto& ids = plan.model_parameters();
+  auto same = [&](const CachedModel& cached) {
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (cached.key[i] != run_parameters[static_cast<std::size_t>(ids[i])]) return false;
     }
+    return true;
+  };
+  // The last model built or used first: consecutive runs mostly share theirs.
+  for (auto cached = models_.rbegin(); cached != models_.rend(); ++cached) {
+    if (!same(*cached)) continue;
+    cached->group = group_;
+    return *cached->model;
   }
-  // The run's global index in the design: its turbulence is RunNoise(seed, design_index).
-  const RunContext context{workspace.parameters, model, cancel, static_cast<std::uint64_t>(design_index),
-                           noise_point};
-  OutputRow output(&block.results, &plan.schema(), row);
-  for (const auto& analysis : plan.study().analyses) {
-    AnalysisOutcome outcome;
-    try {
-      outcome = analysis->Run(context, output);
-    } catch (const std::exception& e) {
-      outcome = AnalysisOutcome::Failed(std::string("exception: ") + e.what());
-    } catch (...) {
-      outcome = AnalysisOutcome::Failed("unknown exception");
-    }
-    if (outcome.cancelled) {  // not a result: the run stays pending
-      message = "cancelled";
-      block.status[r] = static_cast<std::int8_t>(RunStatus::kPending);
-      return;
-    }
-    ok = ok && outcome.ok;
-    AppendMessage(message, analysis->name(), outcome.message);
-  }
-  TruncateMessage(message);
-  block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
+  CachedModel built;
+  built.key.resize(ids.size());
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    built.key[i] = run_parameters[static_cast<std::size_t>(ids[i])];
+  built.model =
+      std::make_unique<const LongitudinalModel>(*plan.study().aircraft, OptionsFrom(run_parameters));
+  built.group = group_;
+  models_.push_back(std::move(built));
+  return *models_.back().model;
 }
 
 namespace {
 
-// Computes the runs of a batch in parallel (each thread in its own workspace), counting them into
-// `counters` and the batch's runs_failed; a cancellation leaves the rest of the batch pending.
+// Sets run `row` of `block` up for design run `design_index`: `design_row` and `parameters` from the
+// design (or from `design_values` when given), its design values, index and id; its message cleared.
+void PrepareRun(const SweepPlan& plan, std::int64_t design_index, RunParameters& parameters,
+                std::vector<double>& design_row, ResultBlock& block, int row,
+                std::span<const double> design_values) {
+  const auto r = static_cast<std::size_t>(row);
+  const Design& design = plan.design();
+  if (design_values.empty()) {
+    design.Row(design_index, design_row.data());
+  } else {
+    GESWEEP_DEMAND(design_values.size() == design_row.size());
+    std::copy(design_values.begin(), design_values.end(), design_row.begin());
+  }
+  parameters = plan.base_parameters();
+  for (int c = 0; c < design.column_count(); ++c) {
+    const double value = design_row[static_cast<std::size_t>(c)];
+    parameters[static_cast<std::size_t>(design.spec().parameters[static_cast<std::size_t>(c)].id)] = value;
+    block.design[static_cast<std::size_t>(c)][r] = value;
+  }
+  block.design_index[r] = design_index;
+  block.run_id[r] = plan.RunId(design_row.data());
+  block.message[r].clear();
+}
+
+// The run's model, or null with the run failed ("model: ...") when it cannot be built; null too when
+// the study needs none (then `*failed` stays false).
+template <class Build>
+const LongitudinalModel* ModelOrFail(const SweepPlan& plan, ResultBlock& block, int row, bool* failed,
+                                     const Build& build) {
+  *failed = false;
+  if (!plan.study().needs_model()) return nullptr;
+  const auto r = static_cast<std::size_t>(row);
+  try {
+    return &build();
+  } catch (const std::exception& e) {
+    AppendMessage(block.message[r], "model", e.what());
+    TruncateMessage(block.message[r]);
+    block.status[r] = static_cast<std::int8_t>(RunStatus::kFailed);
+    *failed = true;
+    return nullptr;
+  }
+}
+
+// The outcome of an analysis that threw `error`: a failed run whose message says what.
+AnalysisOutcome OutcomeOfError(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return AnalysisOutcome::Failed(std::string("exception: ") + e.what());
+  } catch (...) {
+    return AnalysisOutcome::Failed("unknown exception");
+  }
+}
+
+// Adds an analysis' outcome to run `row`'s message and `ok`; false when it was cancelled: the run then
+// stays pending ("cancelled") and no further analysis runs it.
+bool TakeOutcome(const AnalysisOutcome& outcome, std::string_view analysis, ResultBlock& block, int row,
+                 bool& ok) {
+  const auto r = static_cast<std::size_t>(row);
+  if (outcome.cancelled) {  // not a result: the run stays pending
+    block.message[r] = "cancelled";
+    block.status[r] = static_cast<std::int8_t>(RunStatus::kPending);
+    return false;
+  }
+  ok = ok && outcome.ok;
+  AppendMessage(block.message[r], analysis, outcome.message);
+  return true;
+}
+
+// Run `row`'s status once every analysis has run it.
+void FinishRun(ResultBlock& block, int row, bool ok) {
+  const auto r = static_cast<std::size_t>(row);
+  TruncateMessage(block.message[r]);
+  block.status[r] = static_cast<std::int8_t>(ok ? RunStatus::kOk : RunStatus::kFailed);
+}
+
+}  // namespace
+
+void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& workspace, ResultBlock& block,
+                int row, const std::atomic<bool>* cancel, std::span<const double> noise_point,
+                std::span<const double> design_values) {
+  PrepareRun(plan, design_index, workspace.parameters, workspace.design_row, block, row, design_values);
+  bool failed = false;
+  const LongitudinalModel* model = ModelOrFail(
+      plan, block, row, &failed, [&]() -> const LongitudinalModel& { return workspace.Model(plan); });
+  if (failed) return;
+  // The run's global index in the design: its turbulence is RunNoise(seed, design_index).
+  const RunContext context{workspace.parameters, model, cancel, static_cast<std::uint64_t>(design_index),
+                           noise_point};
+  OutputRow output(&block.results, &plan.schema(), row);
+  bool ok = true;
+  for (const auto& analysis : plan.study().analyses) {
+    AnalysisOutcome outcome;
+    try {
+      outcome = analysis->Run(context, output);
+    } catch (...) {
+      outcome = OutcomeOfError(std::current_exception());
+    }
+    if (!TakeOutcome(outcome, analysis->name(), block, row, ok)) return;
+  }
+  FinishRun(block, row, ok);
+}
+
+void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& block, int first_row, int count,
+                 int lanes, const std::atomic<bool>* cancel) {
+  GESWEEP_DEMAND(std::ranges::find(kLaneWidths, lanes) != std::end(kLaneWidths));
+  GESWEEP_DEMAND(count >= 0 && first_row >= 0 && first_row + count <= block.rows);
+  workspace.StartGroup();
+  if (workspace.group_parameters.size() < static_cast<std::size_t>(count)) {
+    workspace.group_parameters.resize(static_cast<std::size_t>(count));
+    workspace.group_rows.resize(static_cast<std::size_t>(count), workspace.design_row);
+  }
+  std::vector<RunContext> contexts;
+  std::vector<OutputRow> outputs;
+  std::vector<char> live, ok;  // a run every analysis so far ran to an end; and none failed it
+  contexts.reserve(static_cast<std::size_t>(count));
+  outputs.reserve(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    const int row = first_row + i;
+    const auto k = static_cast<std::size_t>(i);
+    const std::int64_t design_index = block.design_index[static_cast<std::size_t>(row)];
+    RunParameters& parameters = workspace.group_parameters[k];
+    PrepareRun(plan, design_index, parameters, workspace.group_rows[k], block, row, {});
+    bool failed = false;
+    const LongitudinalModel* model =
+        ModelOrFail(plan, block, row, &failed,
+                    [&]() -> const LongitudinalModel& { return workspace.GroupModel(plan, parameters); });
+    contexts.push_back(RunContext{parameters, model, cancel, static_cast<std::uint64_t>(design_index)});
+    outputs.emplace_back(&block.results, &plan.schema(), row);
+    live.push_back(failed ? 0 : 1);
+    ok.push_back(1);
+  }
+  std::vector<LaneRun> runs;
+  std::vector<int> run_of;  // runs[j] is run run_of[j] of the group
+  for (const auto& analysis : plan.study().analyses) {
+    runs.clear();
+    run_of.clear();
+    for (int i = 0; i < count; ++i) {
+      if (!live[static_cast<std::size_t>(i)]) continue;
+      runs.push_back({&contexts[static_cast<std::size_t>(i)], &outputs[static_cast<std::size_t>(i)], {}, {}});
+      run_of.push_back(i);
+    }
+    analysis->RunLanes(runs, lanes);
+    for (std::size_t j = 0; j < runs.size(); ++j) {
+      const auto k = static_cast<std::size_t>(run_of[j]);
+      const AnalysisOutcome outcome = runs[j].error ? OutcomeOfError(runs[j].error) : runs[j].outcome;
+      bool run_ok = ok[k] != 0;
+      live[k] = TakeOutcome(outcome, analysis->name(), block, first_row + run_of[j], run_ok) ? 1 : 0;
+      ok[k] = run_ok ? 1 : 0;
+    }
+  }
+  for (int i = 0; i < count; ++i) {
+    if (live[static_cast<std::size_t>(i)])
+      FinishRun(block, first_row + i, ok[static_cast<std::size_t>(i)] != 0);
+  }
+}
+
+bool RunsInLanes(const SweepPlan& plan, int lanes) {
+  if (lanes <= 1) return false;
+  return std::ranges::any_of(plan.study().analyses,
+                             [](const auto& analysis) { return analysis->takes_lanes(); });
+}
+
+namespace {
+
+// Runs per lane in a group of ExecuteRuns: a lane whose run ended takes the group's next, so the
+// lanes idle only at a group's end; 16 runs per lane keep that tail short and a batch of 2048
+// open-loop runs in 16 or more groups for the threads to share.
+constexpr int kGroupRunsPerLane = 16;
+
+// Counts the computed runs [begin, end) of a batch into `counters` (a pending run, which a
+// cancellation stopped, is not counted); returns the failed ones.
+int CountRuns(const ResultBlock& block, int begin, int end, SweepProgress& counters) {
+  int failed = 0, done = 0;
+  for (int row = begin; row != end; ++row) {
+    const auto status = block.status[static_cast<std::size_t>(row)];
+    if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
+    failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
+    ++done;
+  }
+  counters.runs_done.fetch_add(done, std::memory_order_relaxed);
+  counters.runs_failed.fetch_add(failed, std::memory_order_relaxed);
+  return failed;
+}
+
+// Computes the runs of a batch in parallel (each thread in its own workspace), one at a time or in
+// groups flown in lanes (RunsInLanes), counting them into `counters` and the batch's runs_failed; a
+// cancellation leaves the rest of the batch pending.
 void ComputeBatch(const SweepPlan& plan, ResultBlock& block,
                   tbb::enumerable_thread_specific<RunWorkspace>& workspaces, const RunnerOptions& options,
                   SweepProgress& counters) {
+  const bool in_lanes = RunsInLanes(plan, options.lanes);
+  const int group = in_lanes ? kGroupRunsPerLane * options.lanes : 1;
+  auto cancelled = [&] { return options.cancel != nullptr && options.cancel->load(); };
   std::atomic<int> failed{0};
-  tbb::parallel_for(tbb::blocked_range<int>(0, block.rows, 1), [&](const tbb::blocked_range<int>& range) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, block.rows, group), [&](const tbb::blocked_range<int>& range) {
     RunWorkspace& workspace = workspaces.local();
-    int range_failed = 0;
-    for (int row = range.begin(); row != range.end(); ++row) {
-      if (options.cancel != nullptr && options.cancel->load()) break;
-      ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row,
-                 options.cancel);
-      const auto status = block.status[static_cast<std::size_t>(row)];
-      if (status == static_cast<std::int8_t>(RunStatus::kPending)) continue;
-      range_failed += status == static_cast<std::int8_t>(RunStatus::kFailed);
-      counters.runs_done.fetch_add(1, std::memory_order_relaxed);
+    for (int row = range.begin(); row < range.end() && !cancelled(); row += group) {
+      const int count = std::min(group, range.end() - row);
+      if (in_lanes) {
+        ExecuteRuns(plan, workspace, block, row, count, options.lanes, options.cancel);
+      } else {
+        ExecuteRun(plan, block.design_index[static_cast<std::size_t>(row)], workspace, block, row,
+                   options.cancel);
+      }
+      failed.fetch_add(CountRuns(block, row, row + count, counters), std::memory_order_relaxed);
     }
-    failed.fetch_add(range_failed, std::memory_order_relaxed);
-    counters.runs_failed.fetch_add(range_failed, std::memory_order_relaxed);
   });
   block.runs_failed = failed.load();
 }

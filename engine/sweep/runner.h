@@ -13,7 +13,7 @@
 #include <atomic>
 #include <cstdint>
 #include <exception>
-#include <optional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -115,8 +115,8 @@ class ListBatchSource final : public BatchSource {
   std::size_t next_ = 0;
 };
 
-/// The per-thread state of the workers: the parameter vector, the design row, and a cache of the
-/// last model built (consecutive runs often share their model parameters).
+/// The per-thread state of the workers: the parameter vector, the design row, the per-run slots of a
+/// group of runs (ExecuteRuns), and the models built, kept while consecutive runs share them.
 class RunWorkspace {
  public:
   explicit RunWorkspace(const SweepPlan& plan);
@@ -125,9 +125,23 @@ class RunWorkspace {
   RunParameters parameters;
   std::vector<double> design_row;
 
+  /// Starts a group of runs: the models the previous group used are kept, older ones dropped.
+  void StartGroup();
+  /// The model for `run_parameters` (built once for each distinct set of model parameters among the
+  /// runs of this group and the last): valid until the next group starts but one.
+  const LongitudinalModel& GroupModel(const SweepPlan& plan, const RunParameters& run_parameters);
+  /// The parameters and design row of each run of a group (at least as many as its runs).
+  std::vector<RunParameters> group_parameters;
+  std::vector<std::vector<double>> group_rows;
+
  private:
-  std::vector<double> model_key_;
-  std::optional<LongitudinalModel> model_;
+  struct CachedModel {
+    std::vector<double> key;  // the values of the plan's model parameters
+    std::unique_ptr<const LongitudinalModel> model;
+    std::int64_t group = 0;  // the last group that used it
+  };
+  std::vector<CachedModel> models_;
+  std::int64_t group_ = 0;
 };
 
 /// Cuts a run's message to the stored length (kMessageLength bytes) without splitting a UTF-8
@@ -146,6 +160,25 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
                 int row, const std::atomic<bool>* cancel = nullptr, std::span<const double> noise_point = {},
                 std::span<const double> design_values = {});
 
+/// Runs rows [first_row, first_row + count) of `block` (design runs block.design_index[...]) as a
+/// group, each run exactly as ExecuteRun runs it alone: every analysis gets the group's runs at once
+/// (Analysis::RunLanes), `lanes` at a time where it takes lanes; the runs' design values, ids,
+/// statuses, messages and results are bit for bit ExecuteRun's, whatever `lanes` (one of
+/// kLaneWidths) and whichever runs share the group. A run a cancellation stops keeps status
+/// kPending ("cancelled"); a run whose model cannot be built fails, the others go on.
+void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& block, int first_row, int count,
+                 int lanes, const std::atomic<bool>* cancel = nullptr);
+
+/// Whether a sweep of `plan` with `lanes` runs its runs in groups (ExecuteRuns): lanes > 1 and an
+/// analysis of the study takes lanes (Analysis::takes_lanes). Otherwise one at a time (ExecuteRun).
+bool RunsInLanes(const SweepPlan& plan, int lanes);
+
+/// The lane width of a sweep when none is asked for: one at a time. The archive is the same bit for
+/// bit whatever the width, so this is a matter of speed only, and on the generic x86-64 build (SSE2:
+/// two doubles per vector) every width was measured slower than one at a time (docs/performance.md,
+/// "The open loop in lanes"): make it the widest width that is faster once one is.
+inline constexpr int kDefaultLanes = 1;
+
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {
   std::atomic<std::int64_t> runs_done{0};     ///< computed in this process
@@ -163,6 +196,9 @@ struct RunnerOptions {
   /// pending for --resume). Batches finished before are written, so the archive stays resumable.
   const std::atomic<bool>* cancel = nullptr;
   int queue_batches = 4;  ///< capacity of the queue to the writer
+  /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop),
+  /// one of kLaneWidths; 1: one at a time. The archive is the same bit for bit whatever it is.
+  int lanes = kDefaultLanes;
 };
 
 /// What a sweep did.

@@ -56,10 +56,11 @@ TEST(RunCost, EstimateIsTheMeanCostTimesRunsOverThreadsWithAnIntervalAroundIt) {
               kRounding * e.estimated_seconds_high);
 }
 
-TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
+// Open-loop runs (RK4 at 1 ms, no input) of `duration_s` from heights of 100 m and up.
+SweepPlan OpenLoopPlan(double duration_s, int runs) {
   static const Aircraft aircraft = LoadAircraftFile(kAircraft);
   toml::table settings;
-  settings.insert("duration_s", 1e5);  // 1e8 RK4 steps: seconds per run
+  settings.insert("duration_s", duration_s);
   settings.insert("step_s", 1e-3);
   settings.insert("input", "none");
   Study study;
@@ -67,17 +68,40 @@ TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
   study.aircraft = aircraft;
   study.analyses.push_back(
       MakeAnalysis("open_loop", TomlSection(settings, "<test>", "analyses.open_loop"), &aircraft));
-  study.fixed = {{RequireParameter("speed_mps"), 32.0208}, {RequireParameter("height_m"), 100.0}};
-  const SweepPlan plan(std::move(study), ShardSpec{});
+  std::vector<double> heights;
+  for (int i = 0; i < runs; ++i) heights.push_back(100.0 + i);
+  study.design.kind = DesignKind::kGrid;
+  study.design.parameters = {Axis("height_m", heights)};
+  study.fixed = {{RequireParameter("speed_mps"), 32.0208}};
+  return SweepPlan(std::move(study), ShardSpec{});
+}
+
+TEST(RunCost, ARunLongerThanTheBudgetIsCutAndReportedAsALowerBound) {
+  const SweepPlan plan = OpenLoopPlan(1e5, 1);  // 1e8 RK4 steps: seconds per run
+  for (int lanes : {1, 8}) {                    // one at a time, and a burst flown in lanes
+    RunCostOptions options;
+    options.budget_s = 0.2;
+    options.lanes = lanes;
+    const RunCostEstimate e = EstimateRunCost(plan, options);
+    // Had the deadline not reached inside the run, the run would have finished (as a warm-up) and
+    // the estimate would not be a bound.
+    EXPECT_TRUE(e.lower_bound) << lanes;
+    EXPECT_EQ(e.timed_runs, 0) << lanes;
+    EXPECT_GT(e.seconds_per_run, 0.0) << lanes;
+    EXPECT_TRUE(std::isinf(e.estimated_seconds_high)) << lanes;
+  }
+}
+
+TEST(RunCost, BurstsFlownInLanesAreTimedAsTheSweepFliesThem) {
+  const SweepPlan plan = OpenLoopPlan(1.0, 64);  // 1000 steps a run
   RunCostOptions options;
-  options.budget_s = 0.2;
+  options.budget_s = 0.3;
+  options.lanes = 4;
   const RunCostEstimate e = EstimateRunCost(plan, options);
-  // Had the deadline not reached inside the run, the run would have finished (as a warm-up) and the
-  // estimate would not be a bound.
-  EXPECT_TRUE(e.lower_bound);
-  EXPECT_EQ(e.timed_runs, 0);
+  EXPECT_FALSE(e.lower_bound);
+  EXPECT_GT(e.timed_runs, 0);
+  EXPECT_EQ(e.timed_runs % 8, 0) << "whole bursts of 8 runs, each run finished";
   EXPECT_GT(e.seconds_per_run, 0.0);
-  EXPECT_TRUE(std::isinf(e.estimated_seconds_high));
 }
 
 TEST(RunCost, AStopFlagEndsTheMeasurement) {

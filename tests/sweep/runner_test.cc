@@ -1,6 +1,6 @@
 // The runner: every run's results equal a direct call of the engine for its parameters; a failing
 // run is data and the sweep goes on; the results do not depend on the thread count; memory is a
-// fixed pool of batches.
+// fixed pool of batches; runs grouped in lanes (ExecuteRuns) equal runs alone (ExecuteRun).
 #include "engine/sweep/runner.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +11,8 @@
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <set>
+#include <stdexcept>
 #include <thread>
 
 #include "engine/analyses/analysis.h"
@@ -303,19 +305,23 @@ SweepPlan LongOpenLoopPlan(int chunk_runs) {
 
 TEST(Runner, CancelReachesInsideALongRunAndItsBatchIsNotWritten) {
   const SweepPlan plan = LongOpenLoopPlan(2);
-  std::atomic<bool> cancel{false};
-  // Cancels once the runs are under way (as SIGINT would); each needs seconds, so none can finish.
-  std::thread canceller([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    cancel.store(true);
-  });
-  MemorySink sink;
-  SweepProgress progress;
-  const SweepOutcome outcome = RunSweep(plan, {0, 1}, sink, RunnerOptions{2, &cancel, 1}, &progress);
-  canceller.join();
-  EXPECT_TRUE(outcome.cancelled);
-  EXPECT_EQ(sink.writes_, 0) << "a batch whose runs were stopped half-way must not be written";
-  EXPECT_EQ(progress.runs_done.load(), 0) << "a stopped run is not a completed one";
+  for (int lanes : {1, 2}) {  // one at a time, and the two runs of a batch flown in lanes
+    std::atomic<bool> cancel{false};
+    // Cancels once the runs are under way (as SIGINT would); each needs seconds, so none can finish.
+    std::thread canceller([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      cancel.store(true);
+    });
+    MemorySink sink;
+    SweepProgress progress;
+    RunnerOptions options{2, &cancel, 1};
+    options.lanes = lanes;
+    const SweepOutcome outcome = RunSweep(plan, {0, 1}, sink, options, &progress);
+    canceller.join();
+    EXPECT_TRUE(outcome.cancelled) << lanes;
+    EXPECT_EQ(sink.writes_, 0) << "a batch whose runs were stopped half-way must not be written";
+    EXPECT_EQ(progress.runs_done.load(), 0) << "a stopped run is not a completed one";
+  }
 }
 
 TEST(Runner, ExecuteRunLeavesACancelledRunPending) {
@@ -364,6 +370,182 @@ TEST(Runner, LandingRunsEqualDirectSimulationWithAndWithoutHDerivatives) {
     EXPECT_EQ(block.results[static_cast<std::size_t>(gain)][static_cast<std::size_t>(r * 9 + 3)],
               direct.design.gain[3]);
   }
+}
+
+}  // namespace
+}  // namespace gesweep
+
+// Runs in groups, flown in SIMD lanes (ExecuteRuns, Analysis::RunLanes): every run's row equals the
+// row ExecuteRun gives it alone -- design values, id, status, message and results, bit for bit --
+// for every lane width and however the runs are grouped, with open-loop runs that touch down, stall
+// and reach the time limit, several models in a group, and a second analysis that fails or throws
+// on some runs. The oracle is ExecuteRun, the one-at-a-time path the runner takes without lanes.
+namespace gesweep {
+namespace {
+
+const Aircraft& Ance() {
+  static const Aircraft aircraft = LoadAircraftFile(kAircraft);
+  return aircraft;
+}
+
+std::unique_ptr<Analysis> OpenLoop() {
+  toml::table settings;
+  settings.insert("input", "step");
+  settings.insert("duration_s", 12.0);
+  settings.insert("integrator", "rk4");
+  settings.insert("step_s", 0.015);
+  return MakeAnalysis("open_loop", TomlSection(settings, "<test>", "analyses.open_loop"), &Ance());
+}
+
+// Open-loop steps from near the ground to 13 m, from just above the stall, nose up and nose down,
+// on two models (scale.CMh), beside the flaky analysis (fails at x1 = 3 and 5): 3 x 3 x 3 x 2 x 3 = 162 runs.
+SweepPlan MixedPlan() {
+  Study study;
+  study.path = "<test>";
+  study.name = "lanes";
+  study.aircraft = Ance();
+  study.analyses.push_back(std::make_unique<FlakyAnalysis>());
+  study.analyses.push_back(OpenLoop());
+  study.chunk_runs = 256;
+  study.design.kind = DesignKind::kGrid;
+  study.design.parameters = {Axis("speed_mps", {25.2, 27.0, 34.0}), Axis("height_m", {1.3, 4.0, 13.0}),
+                             Axis("pulse_amplitude_deg", {-6.0, 0.5, 4.0}), Axis("scale.CMh", {1.0, 1.3}),
+                             Axis("x1", {1.0, 3.0, 5.0})};
+  return SweepPlan(std::move(study), ShardSpec{});
+}
+
+bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+// Every field of the two blocks' rows.
+void ExpectSameRows(const ResultBlock& lanes, const ResultBlock& alone, const std::string& what) {
+  ASSERT_EQ(lanes.rows, alone.rows);
+  const auto rows = static_cast<std::size_t>(alone.rows);
+  for (std::size_t r = 0; r < rows; ++r) {
+    EXPECT_EQ(lanes.design_index[r], alone.design_index[r]) << what << " row " << r;
+    EXPECT_EQ(lanes.run_id[r], alone.run_id[r]) << what << " row " << r;
+    EXPECT_EQ(lanes.status[r], alone.status[r]) << what << " row " << r;
+    EXPECT_EQ(lanes.message[r], alone.message[r]) << what << " row " << r;
+  }
+  for (std::size_t c = 0; c < alone.design.size(); ++c)
+    EXPECT_TRUE(SameBits(lanes.design[c], alone.design[c])) << what << " design column " << c;
+  for (std::size_t c = 0; c < alone.results.size(); ++c)
+    EXPECT_TRUE(SameBits(lanes.results[c], alone.results[c])) << what << " result column " << c;
+}
+
+ResultBlock OneAtATime(const SweepPlan& plan) {
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  for (int r = 0; r < block.rows; ++r)
+    ExecuteRun(plan, block.design_index[static_cast<std::size_t>(r)], workspace, block, r);
+  return block;
+}
+
+TEST(Lanes, GroupedRunsEqualEachRunAloneAtEveryWidthAndGrouping) {
+  const SweepPlan plan = MixedPlan();
+  ASSERT_TRUE(RunsInLanes(plan, 8));
+  EXPECT_FALSE(RunsInLanes(plan, 1));
+  const ResultBlock alone = OneAtATime(plan);
+  // The runs exercise what lanes do differently: ends before the others (touchdown, stall), at the
+  // time limit, and failed runs with their messages.
+  std::set<int> events;
+  const int end_event = ColumnIndex(plan, "results/open_loop/end_event");
+  for (int r = 0; r < alone.rows; ++r) {
+    events.insert(
+        static_cast<int>(alone.results[static_cast<std::size_t>(end_event)][static_cast<std::size_t>(r)]));
+  }
+  EXPECT_EQ(events, (std::set<int>{static_cast<int>(OpenLoopEndEvent::kTouchdown),
+                                   static_cast<int>(OpenLoopEndEvent::kStall),
+                                   static_cast<int>(OpenLoopEndEvent::kTimeLimit)}));
+  EXPECT_EQ(std::count(alone.status.begin(), alone.status.begin() + alone.rows,
+                       static_cast<std::int8_t>(RunStatus::kFailed)),
+            alone.rows * 2 / 3);
+  EXPECT_EQ(alone.message[1], "flaky: exception: boom at 3");
+  for (int width : kLaneWidths) {
+    for (int group : {alone.rows, 7, 1}) {
+      ResultBlock block;
+      block.Allocate(plan);
+      block.Reset(plan, 0);
+      RunWorkspace workspace(plan);
+      for (int first = 0; first < block.rows; first += group)
+        ExecuteRuns(plan, workspace, block, first, std::min(group, block.rows - first), width);
+      ExpectSameRows(block, alone, "width " + std::to_string(width) + ", groups of " + std::to_string(group));
+    }
+  }
+}
+
+TEST(Lanes, ACancelledGroupLeavesEveryRunPending) {
+  const SweepPlan plan = MixedPlan();
+  ResultBlock block;
+  block.Allocate(plan);
+  block.Reset(plan, 0);
+  RunWorkspace workspace(plan);
+  const std::atomic<bool> cancel{true};
+  ExecuteRuns(plan, workspace, block, 0, 24, 4, &cancel);
+  for (std::size_t r = 0; r < 24; ++r) {
+    EXPECT_EQ(block.status[r], static_cast<std::int8_t>(RunStatus::kPending)) << r;
+    EXPECT_EQ(block.message[r], "cancelled") << r;
+  }
+  EXPECT_EQ(block.status[24], static_cast<std::int8_t>(RunStatus::kPending))
+      << "outside the group: untouched";
+  EXPECT_EQ(block.message[24], "");
+}
+
+// A run SimulateOpenLoopBatch refuses (a start below the wheels, which a study's checks would refuse
+// before the sweep) makes the batch throw before any run flies: every run then gets what Run gives
+// it, the refused one its exception, the others their results.
+TEST(Lanes, ARefusedRunGetsItsOwnExceptionAndTheOthersTheirResults) {
+  const SweepPlan plan = MixedPlan();
+  const Analysis& open_loop = *plan.study().analyses[1];
+  ASSERT_EQ(open_loop.name(), "open_loop");
+  const LongitudinalModel model(Ance(), ModelOptions{});
+  const double heights[] = {5.0, 0.1, 2.0};  // the second below the wheel-contact height
+  std::vector<RunParameters> parameters(3, plan.base_parameters());
+  std::vector<RunContext> contexts;
+  for (std::size_t i = 0; i < 3; ++i) {
+    parameters[i][static_cast<std::size_t>(RequireParameter("height_m"))] = heights[i];
+    parameters[i][static_cast<std::size_t>(RequireParameter("speed_mps"))] = 32.0;
+    contexts.push_back(RunContext{parameters[i], &model, nullptr, i});
+  }
+  std::vector<std::vector<double>> lanes_columns;
+  for (const OutputColumn& column : plan.schema().columns)
+    lanes_columns.emplace_back(static_cast<std::size_t>(3 * column.doubles_per_run()));
+  std::vector<std::vector<double>> alone_columns = lanes_columns;
+  std::vector<OutputRow> lanes_rows, alone_rows;
+  std::vector<LaneRun> runs;
+  for (int i = 0; i < 3; ++i) {
+    lanes_rows.emplace_back(&lanes_columns, &plan.schema(), i);
+    alone_rows.emplace_back(&alone_columns, &plan.schema(), i);
+  }
+  for (std::size_t i = 0; i < 3; ++i) runs.push_back({&contexts[i], &lanes_rows[i], {}, {}});
+  open_loop.RunLanes(runs, 2);
+  for (std::size_t i = 0; i < 3; ++i) {
+    std::string thrown;
+    AnalysisOutcome outcome;
+    try {
+      outcome = open_loop.Run(contexts[i], alone_rows[i]);
+    } catch (const std::exception& e) {
+      thrown = e.what();
+    }
+    if (i == 1) {
+      ASSERT_FALSE(thrown.empty());
+      ASSERT_TRUE(runs[i].error);
+      try {
+        std::rethrow_exception(runs[i].error);
+      } catch (const std::exception& e) {
+        EXPECT_EQ(std::string(e.what()), thrown);
+      }
+      continue;
+    }
+    EXPECT_FALSE(runs[i].error) << i;
+    EXPECT_EQ(runs[i].outcome.ok, outcome.ok) << i;
+    EXPECT_EQ(runs[i].outcome.message, outcome.message) << i;
+  }
+  for (std::size_t c = 0; c < lanes_columns.size(); ++c)
+    EXPECT_TRUE(SameBits(lanes_columns[c], alone_columns[c])) << plan.schema().columns[c].path;
 }
 
 }  // namespace
