@@ -57,7 +57,7 @@ struct RunFlags {
   bool quiet = false;
   bool mpi = false;
   int ranks_per_node = 0;
-  int lanes = kDefaultLanes;
+  int lanes = DefaultLanes();
   std::string merge = "virtual";
   std::string format = "text";
   DescribedFlags described{{{"quiet", "-q"}}};
@@ -125,7 +125,7 @@ std::string Milliseconds(double seconds) {
 std::string CommandLine(const RunFlags& flags) {
   std::string line = "gesweep run " + flags.study + " -o " + flags.output;
   if (flags.threads) line += " --threads " + std::to_string(*flags.threads);
-  if (flags.lanes != kDefaultLanes) line += " --lanes " + std::to_string(flags.lanes);
+  if (flags.lanes != DefaultLanes()) line += " --lanes " + std::to_string(flags.lanes);
   if (!flags.shard.empty()) line += " --shard " + flags.shard;
   if (flags.resume) line += " --resume";
   if (flags.force) line += " --force";

@@ -41,7 +41,7 @@ struct MpiRunOptions {
   std::filesystem::path output;                     ///< the merged archive; the node shards go beside it
   ArchiveOpenMode mode = ArchiveOpenMode::kCreate;  ///< --force / --resume, as `gesweep run`
   int threads = 0;                                  ///< compute threads per rank; 0: the rank's cores
-  int lanes = kDefaultLanes;                        ///< RunnerOptions::lanes of every rank
+  int lanes = DefaultLanes();                       ///< RunnerOptions::lanes of every rank
   std::string command_line;                         ///< provenance (the archives' command_line attribute)
   /// Set (by a SIGINT/SIGTERM handler; mpirun forwards both to every rank) to stop: no more batches
   /// are handed out, every batch handed out is finished and written, the node shards stay resumable.

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "engine/common/errors.h"
+#include "engine/simulation/lanes_isa.h"
 
 namespace gesweep {
 namespace {
@@ -299,6 +300,13 @@ void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& bl
     if (live[static_cast<std::size_t>(i)])
       FinishRun(block, first_row + i, ok[static_cast<std::size_t>(i)] != 0);
   }
+}
+
+int DefaultLanes() {
+  static const int lanes = LanesIsaSupported(LanesIsa::kAvx512) ? 8
+                           : LanesIsaSupported(LanesIsa::kAvx2) ? 4
+                                                                : 1;
+  return lanes;
 }
 
 bool RunsInLanes(const SweepPlan& plan, int lanes) {

@@ -173,11 +173,12 @@ void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& bl
 /// analysis of the study takes lanes (Analysis::takes_lanes). Otherwise one at a time (ExecuteRun).
 bool RunsInLanes(const SweepPlan& plan, int lanes);
 
-/// The lane width of a sweep when none is asked for: one at a time. The archive is the same bit for
-/// bit whatever the width, so this is a matter of speed only, and on the generic x86-64 build (SSE2:
-/// two doubles per vector) every width was measured slower than one at a time (docs/performance.md,
-/// "The open loop in lanes"): make it the widest width that is faster once one is.
-inline constexpr int kDefaultLanes = 1;
+/// The lane width of a sweep when none is asked for: the width of the widest vector of doubles this
+/// CPU has with AVX2 or AVX-512 (4 or 8: the lanes then compute in whole vectors, lanes_isa.h), else
+/// one at a time (SSE2's pairs were measured slower than one at a time). The archive is the same bit
+/// for bit whatever the width, so this is a matter of speed only (docs/performance.md, "The open loop
+/// in lanes": 0.75x of the CPU per run at 8 and AVX-512, at load 1).
+int DefaultLanes();
 
 /// Counters the runner updates while it works (read them from any thread).
 struct SweepProgress {
@@ -198,7 +199,7 @@ struct RunnerOptions {
   int queue_batches = 4;  ///< capacity of the queue to the writer
   /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop),
   /// one of kLaneWidths; 1: one at a time. The archive is the same bit for bit whatever it is.
-  int lanes = kDefaultLanes;
+  int lanes = DefaultLanes();
 };
 
 /// What a sweep did.
