@@ -32,6 +32,7 @@
 #include "engine/dynamics/longitudinal_model.h"
 #include "engine/estimators/local_sensitivity.h"
 #include "engine/modal/boundary.h"
+#include "engine/simulation/open_loop.h"
 
 namespace gesweep {
 
@@ -138,16 +139,30 @@ void DesignRecord(const LandingDesign& d, Sink& s) {
   s.Complexes("closed_loop_eigenvalues_per_s", eigenvalues);
 }
 
+/// The model a run flew: the aircraft's name and the model options (ModelOptions::Describe).
+template <class Sink>
+void ModelRecord(const LongitudinalModel& model, Sink& s) {
+  s.Plain("aircraft", model.aircraft().name);
+  VisitOutputs(model.options(), s);
+}
+
+/// The settings an open-loop run flew (`gesweep simulate`'s run, gesweep.simulate's): OpenLoopConfig's
+/// output fields, the model, and the seed and run index of its turbulence.
+template <class Sink>
+void OpenLoopRunRecord(const OpenLoopConfig& c, const LongitudinalModel& model, Sink& s) {
+  VisitOutputs(c, s);
+  ModelRecord(model, s);
+  s.Plain("seed", c.seed);
+  s.Plain("run_index", c.run_index);
+}
+
 /// The settings a landing flew: the model, LandingConfig's output fields with the automatic ones as
 /// used (SettingsUsed), the output weights by state, σ_w in force, and the names earlier versions
 /// wrote (integrator, rtol, atol, plant_reference_height_m).
 template <class Sink>
 void LandingRunRecord(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model,
                       Sink& s) {
-  s.Plain("aircraft", model.aircraft().name);
-  s.Plain("h_derivatives", model.options().h_derivatives);
-  s.Plain("cdh", std::string(ToString(model.options().cdh)));
-  s.Plain("interpolation", std::string(ToString(model.options().interpolation)));
+  ModelRecord(model, s);
   VisitOutputs(SettingsUsed(c, r), s);
   s.NamedNumbers("q_weights", LandingStateNames(), c.q_weights);
   s.Number("turbulence_sigma_w_mps", EffectiveSigmaW(c.disturbance));

@@ -8,11 +8,13 @@
 #include <numbers>
 #include <string>
 
+#include "engine/analyses/records.h"
 #include "engine/cli/command.h"
 #include "engine/cli/described_flags.h"
 #include "engine/cli/described_output.h"
 #include "engine/cli/json_util.h"
 #include "engine/cli/model_flags.h"
+#include "engine/cli/record_json.h"
 #include "engine/cli/series_output.h"
 #include "engine/cli/signals.h"
 #include "engine/common/errors.h"
@@ -94,13 +96,7 @@ int RunSimulate(const SimulateFlags& flags) {
     nlohmann::json series = nullptr;
     if (!flags.summary_only) series = SeriesJson<nlohmann::json>(result.series, result.series.contents());
     // The settings under their keys (OpenLoopConfig::Describe), in the keys' units, and the model.
-    nlohmann::json run = FieldsJson(config);
-    run["aircraft"] = model.aircraft().name;
-    run["h_derivatives"] = model.options().h_derivatives;
-    run["cdh"] = std::string(ToString(model.options().cdh));
-    run["interpolation"] = std::string(ToString(model.options().interpolation));
-    run["seed"] = config.seed;
-    run["run_index"] = config.run_index;
+    const auto run = RecordJson<nlohmann::json>([&](auto& sink) { OpenLoopRunRecord(config, model, sink); });
     std::cout
         << nlohmann::json{{"run", run}, {"summary", FieldsJson(result.summary)}, {"series", series}}.dump(1)
         << "\n";

@@ -44,13 +44,7 @@ py::tuple Simulate(const PyAircraft& aircraft, const py::object& height_m, const
   OpenLoopResult result;
   RunInterruptible(
       [&](const std::atomic<bool>* cancel) { result = SimulateOpenLoop(*model, config, cancel); });
-  py::dict run = FieldsDict(config);
-  run["aircraft"] = model->aircraft().name;
-  run["h_derivatives"] = model->options().h_derivatives;
-  run["cdh"] = std::string(ToString(model->options().cdh));
-  run["interpolation"] = std::string(ToString(model->options().interpolation));
-  run["seed"] = config.seed;
-  run["run_index"] = config.run_index;
+  const py::dict run = RecordDict([&](auto& sink) { OpenLoopRunRecord(config, *model, sink); });
   py::object series = py::none();
   if (!summary_only) series = SeriesDict(result.series, result.series.contents());
   return py::make_tuple(run, FieldsDict(result.summary), series);

@@ -67,7 +67,7 @@ class Land(unittest.TestCase):
         self.assertEqual(out.returncode, 0, out.stderr)
         rows = list(csv.DictReader(io.StringIO(out.stdout)))
         self.assertGreater(len(rows), 40)
-        self.assertIn("elevator_deg", rows[0])
+        self.assertIn("elevator_rad", rows[0])  # SI, as the archive's series/landing/ (LandingSample::DescribeSeries)
         self.assertEqual(rows[0]["phase"], "glide_slope")
         self.assertAlmostEqual(float(rows[-1]["height_m"]), 0.788, places=6)
 

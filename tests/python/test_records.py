@@ -86,14 +86,19 @@ def frame_as_json(frame):
     (("--wind-20ft-mps", -7.7, "--turbulence", "dryden", "--pitch-rate-gust", "--seed", 3),
      {"wind_20ft_mps": -7.7, "turbulence": "dryden", "pitch_rate_gust": True, "seed": 3}),
 ])
-def test_open_loop_series_is_one_description(gesweep, ance, flags, kwargs):
+def test_open_loop_run_and_series_are_one_description(gesweep, ance, flags, kwargs):
     """simulate's CSV header, its JSON series and gesweep.simulate's series: the same quantities, in the
     same order (CSV and module), with the same values, exactly."""
     common = ("simulate", "--aircraft", ANCE, "--height-m", 2.5, "--speed-mps", SPEED, "--duration-s", 3,
               "--output-dt-s", 0.05, *flags)
-    theirs = cli_json(*common)["series"]
+    both = cli_json(*common)
+    theirs = both["series"]
     header = cli(*common)[1].splitlines()[0].split(",")
-    mine = gesweep.simulate(ance, 2.5, SPEED, duration_s=3, output_dt_s=0.05, **kwargs).series
+    response = gesweep.simulate(ance, 2.5, SPEED, duration_s=3, output_dt_s=0.05, **kwargs)
+    # The settings flown (OpenLoopRunRecord): the config, the model options, seed and run index.
+    assert_same_record(as_json(response.run), both["run"], "run")
+    assert {"h_derivatives", "cdh", "interpolation", "cg_shift_over_chord", "seed"} <= set(both["run"])
+    mine = response.series
     assert list(mine.columns) == header
     assert_same_record(frame_as_json(mine), theirs, "series")
     # The archive's names: the state's components as the summary's final_* columns have them.

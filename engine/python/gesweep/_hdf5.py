@@ -158,7 +158,20 @@ def field(entry, name, kind="datasets"):
     raise LayoutError(f"{entry['path'] or entry['name']} has no {kind[:-1]} '{name}' in the archive layout")
 
 
-class SweepArchive:
+class _OpenFile:
+    """An archive open read-only in `self.file`, closed by close() or on leaving a with block."""
+
+    def close(self):
+        self.file.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class SweepArchive(_OpenFile):
     """A sweep's archive (schemas/archive.md), opened after the engine's check: attributes, parameters
     per run, result columns, series and the /analysis products. runs/status is read first, before any
     value (a snapshot's complete runs are those whose status was written, after their values)."""
@@ -187,15 +200,6 @@ class SweepArchive:
         self.unswept = dict(zip(self.design_attrs.get("unswept_parameter_names", []),
                                 self.design_attrs.get("unswept_parameter_values", [])))
         self._cache = {}  # whole datasets already read (each is read once)
-
-    def close(self):
-        self.file.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def has(self, path):
         return path in self.file
@@ -322,7 +326,7 @@ class SweepArchive:
         return None if product is None else product["datasets"]
 
 
-class RiskArchive:
+class RiskArchive(_OpenFile):
     """A subset-simulation archive of `gesweep risk` (docs/dispersion.md, "Landing risk by subset
     simulation"; schemas/archive.md, "Subset-simulation archives"): its estimates (result_json), the
     evaluations and the design points' series. The engine's check (its kind, version, equal lengths of
@@ -366,15 +370,6 @@ class RiskArchive:
             if int(rows.sum()) != int(limit["runs"]):
                 raise ValueError(f"{self.path}: {limit['limit']} counts {limit['runs']} runs, its rows are "
                                  f"{int(rows.sum())}")
-
-    def close(self):
-        self.file.close()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def limit_index(self, limit):
         """The limit's index among its cell's limits (its order in result_json within the cell)."""
