@@ -6,7 +6,9 @@
 1. Every symbol that open_loop_lanes_avx2.cc.o or open_loop_lanes_avx512.cc.o defines for the linker
    (global or weak) names its own architecture (xsimd::avx2, xsimd::avx512f). A weak symbol that does
    not, an inline function compiled with -mavx2 say, could be the copy the linker keeps for the whole
-   program, and fault on a CPU without AVX2.
+   program, and fault on a CPU without AVX2. Except DW.ref.__gxx_personality_v0, the compiler's
+   pointer to the C++ exception personality routine (data, the same in every object; the sanitized
+   build emits it).
 2. No object of the library holds a fused multiply-add (vfmadd..., vfmsub..., vfnmadd..., vfnmsub...):
    the lanes are bit for bit the scalar code only without them.
 3. Each architecture's object uses its registers (ymm, zmm): its flags took effect.
@@ -32,6 +34,8 @@ for line in nm.stdout.splitlines():
         continue
     kind, _, name = rest.partition(" ")
     if kind not in "TWVDBRuvwi" or kind == "":  # local symbols (t, d, b, r) stay in their object
+        continue
+    if name == "DW.ref.__gxx_personality_v0":  # a pointer to libstdc++'s routine: data, no code of ours
         continue
     seen[member] += 1
     arch = architectures[member][0]
