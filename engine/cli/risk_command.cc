@@ -97,22 +97,23 @@ const char* StatusName(rare::SubsetResult::Status status) {
                                                            : "too_many_failed_runs";
 }
 
-// The chains of a level: N p0.
-long long Chains(const risk::RiskSpec& spec) {
-  return std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
+// A run of more than two levels whose last level descends from fewer than a tenth of the chains
+// (N p0 of them).
+bool Collapsed(const risk::RiskSpec& spec, const rare::SubsetResult& run) {
+  const long long chains = std::llround(spec.subset.samples_per_level * spec.subset.level_probability);
+  return run.levels.size() > 2 && run.levels.back().ancestors * 10 < chains;
 }
 
-// A run of more than two levels whose last level descends from fewer than a tenth of the chains.
-bool Collapsed(const rare::SubsetResult& run, long long chains) {
-  return run.levels.size() > 2 && run.levels.back().ancestors * 10 < chains;
+// How many of a limit's K repetitions collapsed.
+int CollapsedRuns(const risk::RiskSpec& spec, const risk::LimitRisk& r) {
+  int count = Collapsed(spec, r.subset) ? 1 : 0;
+  for (const auto& other : r.other_repetitions) count += Collapsed(spec, other) ? 1 : 0;
+  return count;
 }
 
 // The K repetitions of one estimate: each run's seed, status, estimate and lineage.
 ordered_json RepetitionsJson(const risk::RiskSpec& spec, const risk::LimitRisk& r) {
-  const auto& s = r.subset;
   const auto& pooled = r.pooled;
-  const long long chains = Chains(spec);
-  const auto collapsed = [&](const rare::SubsetResult& run) { return Collapsed(run, chains); };
   ordered_json repetitions;
   repetitions["count"] = pooled.repetitions;
   repetitions["measured_coefficient_of_variation_one_run"] =
@@ -129,9 +130,9 @@ ordered_json RepetitionsJson(const risk::RiskSpec& spec, const risk::LimitRisk& 
                          {"levels", run.levels.size()},
                          {"runs", run.evaluations},
                          {"last_level_ancestors", run.levels.empty() ? 0 : run.levels.back().ancestors},
-                         {"collapsed", collapsed(run)}});
+                         {"collapsed", Collapsed(spec, run)}});
   };
-  estimate(0, s);
+  estimate(0, r.subset);
   for (std::size_t k = 0; k < r.other_repetitions.size(); ++k)
     estimate(static_cast<int>(k + 1), r.other_repetitions[k]);
   repetitions["estimates"] = estimates;
@@ -214,8 +215,6 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   const auto& limit = spec.limits[static_cast<std::size_t>(r.limit)];
   const auto& s = r.subset;
   const auto& pooled = r.pooled;
-  const long long chains = Chains(spec);
-  const auto collapsed = [&](const rare::SubsetResult& run) { return Collapsed(run, chains); };
   ordered_json j;
   j["cell"] = r.cell;
   j["cell_label"] = risk::CellLabel(plan, r.cell);
@@ -237,9 +236,7 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
   j["runs"] = pooled.evaluations;
   j["failed_runs"] = pooled.failed_evaluations;
   j["dimension"] = r.dimension;
-  int collapsed_runs = collapsed(s) ? 1 : 0;
-  for (const auto& other : r.other_repetitions) collapsed_runs += collapsed(other) ? 1 : 0;
-  j["collapsed_runs"] = collapsed_runs;
+  j["collapsed_runs"] = CollapsedRuns(spec, r);
   j["repetitions"] = RepetitionsJson(spec, r);
   AddLevels(j, r, limit);
   j["design_point"] = DesignPointJson(plan, run, r, limit);

@@ -87,21 +87,36 @@ struct FieldAttributes {
   std::string_view component_prefix;  ///< CSV and archive name of component c: prefix + components[c]
 };
 
+/// What every described item (a Field here, a SeriesField in series.h) has: a key, a unit and a
+/// line of description, set in a chain (Self: the item's class; Attributes: its attributes, which
+/// have key, unit and doc).
+template <class Self, class Attributes>
+class DescribedItem {
+ public:
+  Self& Unit(std::string_view unit) {
+    attributes_.unit = unit;
+    return static_cast<Self&>(*this);
+  }
+  Self& Doc(std::string_view doc) {
+    attributes_.doc = doc;
+    return static_cast<Self&>(*this);
+  }
+  const Attributes& attributes() const { return attributes_; }
+
+ protected:
+  explicit DescribedItem(std::string_view key) { attributes_.key = key; }
+  Attributes attributes_;
+};
+
 /// One field: its attributes and a pointer to its value. Built in a chain inside Describe:
 /// `v(Field("duration_s", &duration_s).Unit("s").Limit("open_loop.duration_s").Doc("..."))`.
 template <class T>
-class Field {
- public:
-  Field(std::string_view key, T* value) : value_(value) { attributes_.key = key; }
+class Field : public DescribedItem<Field<T>, FieldAttributes> {
+  using DescribedItem<Field<T>, FieldAttributes>::attributes_;
 
-  Field& Unit(std::string_view unit) {
-    attributes_.unit = unit;
-    return *this;
-  }
-  Field& Doc(std::string_view doc) {
-    attributes_.doc = doc;
-    return *this;
-  }
+ public:
+  Field(std::string_view key, T* value) : DescribedItem<Field<T>, FieldAttributes>(key), value_(value) {}
+
   /// The range of the limits table's entry `name` (and its unit must be this field's).
   Field& Limit(std::string_view name) {
     attributes_.limit = name;
@@ -153,11 +168,9 @@ class Field {
   }
 
   T* value() const { return value_; }
-  const FieldAttributes& attributes() const { return attributes_; }
 
  private:
   T* value_;
-  FieldAttributes attributes_;
 };
 
 // ---------------------------------------------------------------- kinds of field values

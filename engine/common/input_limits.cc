@@ -22,13 +22,7 @@ constexpr double kMaximumExactInteger = 9007199254740992.0;  // 2^53
 
 InputLimit Closed(std::string_view name, std::string_view units, double minimum, double maximum,
                   std::string_view reason) {
-  InputLimit limit;
-  limit.name = name;
-  limit.units = units;
-  limit.minimum = minimum;
-  limit.maximum = maximum;
-  limit.reason = reason;
-  return limit;
+  return {.name = name, .units = units, .minimum = minimum, .maximum = maximum, .reason = reason};
 }
 
 // (minimum, maximum]: a quantity that must be positive.

@@ -25,6 +25,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "engine/common/describe.h"  // DescribedItem
 #include "engine/common/enum_names.h"
 
 namespace gesweep {
@@ -67,18 +68,13 @@ struct SeriesAttributes {
 /// One quantity: its attributes and the member that holds it (Member: the class of which it is a
 /// member; T: its type). Built in a chain inside DescribeSeries.
 template <class Member, class T>
-class SeriesField {
- public:
-  SeriesField(std::string_view key, T Member::*member) : member_(member) { attributes_.key = key; }
+class SeriesField : public DescribedItem<SeriesField<Member, T>, SeriesAttributes> {
+  using DescribedItem<SeriesField<Member, T>, SeriesAttributes>::attributes_;
 
-  SeriesField& Unit(std::string_view unit) {
-    attributes_.unit = unit;
-    return *this;
-  }
-  SeriesField& Doc(std::string_view doc) {
-    attributes_.doc = doc;
-    return *this;
-  }
+ public:
+  SeriesField(std::string_view key, T Member::*member)
+      : DescribedItem<SeriesField<Member, T>, SeriesAttributes>(key), member_(member) {}
+
   SeriesField& Only(SeriesPresence presence) {
     attributes_.presence = presence;
     return *this;
@@ -95,7 +91,6 @@ class SeriesField {
     return *this;
   }
 
-  const SeriesAttributes& attributes() const { return attributes_; }
   T Member::*member() const { return member_; }
 
   /// Sample i of the quantity as a number (an enum's code) in `data`: the series (column members) or
@@ -115,7 +110,6 @@ class SeriesField {
 
  private:
   T Member::*member_;
-  SeriesAttributes attributes_;
 };
 
 /// A named enum quantity (a choice): its name at sample i, for CSV, JSON and Python.
