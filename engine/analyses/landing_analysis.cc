@@ -60,9 +60,6 @@ class LandingAnalysis final : public Analysis {
   explicit LandingAnalysis(const LandingStudySettings& settings)
       : settings_(settings), config_(settings.config), series_duration_s_(settings.series_duration_s) {
     for (const auto& [name, setting] : kStartCondition) start_.emplace_back(RequireParameter(name), setting);
-    for (std::string_view state : LandingStateNames()) {
-      q_.push_back(RequireParameter("q_weights." + std::string(state)));
-    }
   }
 
   std::string_view name() const override { return "landing"; }
@@ -71,7 +68,6 @@ class LandingAnalysis final : public Analysis {
     for (const auto& [id, setting] : start_) ids.push_back(id);
     const std::vector<ParameterId> own = LandingParameterIds();
     ids.insert(ids.end(), own.begin(), own.end());
-    ids.insert(ids.end(), q_.begin(), q_.end());
     const std::vector<ParameterId>& disturbance = DisturbanceParameterIds();
     ids.insert(ids.end(), disturbance.begin(), disturbance.end());
     return ids;
@@ -140,10 +136,7 @@ class LandingAnalysis final : public Analysis {
     auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
     LandingConfig config = config_;
     for (const auto& [id, setting] : start_) config.*setting = at(id);
-    ApplyRunParameters(p, config);  // its own and the moving atmosphere's
-    for (int i = 0; i < kLandingStateCount; ++i) {
-      config.q_weights[static_cast<std::size_t>(i)] = at(q_[static_cast<std::size_t>(i)]);
-    }
+    ApplyRunParameters(p, config);  // its own (the Q weights too) and the moving atmosphere's
     config.seed = static_cast<std::uint64_t>(at(DisturbanceParameterIds().back()));
     return config;
   }
@@ -152,7 +145,6 @@ class LandingAnalysis final : public Analysis {
   LandingConfig config_;           // with the storage's series interval
   double series_duration_s_;
   std::vector<std::pair<ParameterId, double LandingConfig::*>> start_;  // kStartCondition
-  std::vector<ParameterId> q_;
   DescribedColumns<LandingResult> summary_;
   int gain_ = 0;
   DescribedSeries<std::vector<LandingSample>> series_;

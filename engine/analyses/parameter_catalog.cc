@@ -68,7 +68,25 @@ ParameterInfo FromField(const FieldRecord& field, ParameterGroup group) {
                     static_cast<double>(code - field.levels.begin()), field.levels);
     }
     default:
-      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool or a named enum
+      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool, a named enum or a setting's array
+  }
+}
+
+// The entries of a setting's array (named_components): one number per component, `<key>.<name>`,
+// with the field's unit and range; "<component>" in its description is the component's name.
+void AppendComponents(std::vector<ParameterInfo>& c, const FieldRecord& field, ParameterGroup group) {
+  const FieldAttributes& a = field.attributes;
+  const auto described = [&](std::string_view name) {
+    std::string doc(a.doc);
+    const std::string_view placeholder = "<component>";
+    const std::size_t at = doc.find(placeholder);
+    if (at != std::string::npos) doc.replace(at, placeholder.size(), name);
+    return doc;
+  };
+  GESWEEP_DEMAND(a.named_components && field.values.size() == a.components.size());
+  for (std::size_t i = 0; i < a.components.size(); ++i) {
+    c.push_back(Real(ComponentKey(a, i), std::string(a.unit), described(a.components[i].name), group,
+                     field.values[i], std::string(a.limit.empty() ? a.key : a.limit)));
   }
 }
 
@@ -94,7 +112,11 @@ void AppendDescribed(std::vector<ParameterInfo>& c, const T& object, ParameterGr
       continue;
     }
     if (std::find(elsewhere.begin(), elsewhere.end(), key) != elsewhere.end()) continue;
-    c.push_back(FromField(field, group));
+    if (field.kind == FieldKind::kArray) {
+      AppendComponents(c, field, group);
+    } else {
+      c.push_back(FromField(field, group));
+    }
   }
   GESWEEP_DEMAND(by_hand.empty());  // `by_hand_before` is one of the run parameters
 }
@@ -116,19 +138,6 @@ std::vector<ParameterInfo> ModelEntriesByHand() {
   c.push_back(Real("pitch_inertia_kgm2", "kg m^2",
                    "Pitching moment of inertia Iy (default: the aircraft file's)", G::kModel, std::nullopt,
                    "pitch_inertia_kgm2"));
-  return c;
-}
-
-// The landing's Q weights by hand (LandingConfig::q_weights, an array of nine keyed by state name):
-// q_weights.<state>.
-std::vector<ParameterInfo> QWeightEntries() {
-  std::vector<ParameterInfo> c;
-  for (std::string_view state : LandingStateNames()) {
-    c.push_back(Real("q_weights." + std::string(state), "1",
-                     "LQR weight on the state " + std::string(state) +
-                         " of the paper's Eq. (14) (diagonal of Q; the paper: identity)",
-                     ParameterGroup::kLanding, 1.0, "q_weights"));
-  }
   return c;
 }
 
@@ -155,7 +164,7 @@ std::vector<ParameterInfo> BuildCatalog() {
   // The open-loop perturbation (docs/model.md §7) and the landing controller (docs/model.md §8,
   // docs/landing.md); a NaN default means "automatic": the controller's own rule.
   AppendDescribed(c, OpenLoopConfig{}, G::kOpenLoop, atmosphere);
-  AppendDescribed(c, LandingConfig{}, G::kLanding, atmosphere, QWeightEntries(), "r_weight");
+  AppendDescribed(c, LandingConfig{}, G::kLanding, atmosphere);
   // The moving atmosphere (docs/model.md §9), read by open_loop and landing, and the seed of the
   // run's turbulence (RunNoise(seed, run index), docs/disturbance.md).
   AppendDescribed(c, DisturbanceOptions{}, G::kFlight, {});

@@ -136,8 +136,17 @@ struct RunParameterSetter {
       *field.value() = EnumAt<U>(value);  // a choice's level code is the enum's code
     } else if constexpr (std::floating_point<U>) {
       *field.value() = value * field.attributes().scale;
+    } else if constexpr (DoubleArray<U>) {
+      // A setting's array: one run parameter per component, the first read above.
+      const FieldAttributes& a = field.attributes();
+      GESWEEP_DEMAND(a.named_components);
+      (*field.value())[0] = value * a.scale;
+      for (std::size_t c = 1; c < a.components.size(); ++c) {
+        (*field.value())[static_cast<int>(c)] =
+            (*parameters)[static_cast<std::size_t>((*ids)[next++])] * a.scale;
+      }
     } else {
-      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool or a named enum (FromField)
+      GESWEEP_UNREACHABLE();  // a run parameter is a number, a bool, a named enum or a setting's array
     }
   }
 };
@@ -151,7 +160,13 @@ const std::vector<ParameterId>& RunParameterIds() {
   static const std::vector<ParameterId> ids = [] {
     std::vector<ParameterId> list;
     for (const FieldRecord& field : ListFields(T{})) {
-      if (field.attributes.run_parameter) list.push_back(RequireParameter(field.attributes.key));
+      if (!field.attributes.run_parameter) continue;
+      if (field.kind != FieldKind::kArray) {
+        list.push_back(RequireParameter(field.attributes.key));
+        continue;
+      }
+      for (std::size_t c = 0; c < field.attributes.components.size(); ++c)
+        list.push_back(RequireParameter(ComponentKey(field.attributes, c)));
     }
     return list;
   }();

@@ -157,14 +157,13 @@ void OpenLoopRunRecord(const OpenLoopConfig& c, const LongitudinalModel& model, 
 }
 
 /// The settings a landing flew: the model, LandingConfig's output fields with the automatic ones as
-/// used (SettingsUsed), the output weights by state, σ_w in force, and the names earlier versions
+/// used (SettingsUsed) and the output weights by state, σ_w in force, and the names earlier versions
 /// wrote (integrator, rtol, atol, plant_reference_height_m).
 template <class Sink>
 void LandingRunRecord(const LandingConfig& c, const LandingResult& r, const LongitudinalModel& model,
                       Sink& s) {
   ModelRecord(model, s);
-  VisitOutputs(SettingsUsed(c, r), s);
-  s.NamedNumbers("q_weights", LandingStateNames(), c.q_weights);
+  VisitOutputs(SettingsUsed(c, r), s);  // with q_weights, keyed by state
   s.Number("turbulence_sigma_w_mps", EffectiveSigmaW(c.disturbance));
   s.Plain("integrator", std::string("dopri5"));
   s.Number("rtol", c.integrator.relative_tolerance);

@@ -81,6 +81,36 @@ CLI::Option* DescribedFlags::AddChoice(CLI::App& app, const std::string& flag, s
   return option;
 }
 
+void DescribedFlags::AddNamedArray(CLI::App& app, const FieldAttributes& a, double* values) {
+  const std::size_t count = a.components.size();
+  std::string order, defaults;
+  for (std::size_t c = 0; c < count; ++c) {
+    order += (c ? "," : "") + std::string(a.components[c].name);
+    defaults += (c ? "," : "") + FieldNumberText(values[c] / a.scale);
+  }
+  std::string doc(a.doc);
+  const std::string_view placeholder = "<component>";
+  if (const std::size_t at = doc.find(placeholder); at != std::string::npos)
+    doc.replace(at, placeholder.size(), "<name>");
+  const std::string help = std::to_string(count) + " comma-separated numbers, one per <name> in the order " +
+                           order + ": " + doc + "; default " + defaults;
+  Entry& entry = NewEntry(a.key);
+  const std::string flag = FlagName(a.key);
+  std::string& slot = texts_.emplace_back();
+  entry.options.push_back(app.add_option(flag, slot, help));
+  entry.names.push_back(flag);
+  appliers_.push_back([values, count, order, flag, scale = a.scale, &slot] {
+    if (slot.empty()) return;
+    const std::vector<double> numbers = ParseNumberList(slot, flag, false);
+    if (numbers.size() != count) {
+      throw InputError(
+          "command line", flag, "'" + slot + "'",
+          "expected " + std::to_string(count) + " comma-separated numbers in the order " + order);
+    }
+    for (std::size_t c = 0; c < count; ++c) values[c] = numbers[c] * scale;
+  });
+}
+
 void DescribedFlags::Apply() const {
   for (const auto& apply : appliers_) apply();
 }

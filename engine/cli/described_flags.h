@@ -79,6 +79,10 @@ class DescribedFlags {
   CLI::Option* AddChoice(CLI::App& app, const std::string& flag, std::string& slot, const std::string& help,
                          const std::function<bool(const std::string&)>& known, const std::string& choices);
   static std::string Help(const FieldAttributes& attributes, const std::string& default_text, bool required);
+  /// The flag of a setting's array (named_components): its numbers comma-separated in component
+  /// order, written into `values` (as many as components, in the struct's unit) by Apply. Each is
+  /// checked against the field's range by the command's validation, under its component's key.
+  void AddNamedArray(CLI::App& app, const FieldAttributes& attributes, double* values);
   static std::string ListText(const std::vector<std::string>& values);
   static std::string ListText(const std::vector<double>& values);
 
@@ -97,7 +101,12 @@ class DescribedFlags {
     template <class U>
     void operator()(const Field<U>& field) {
       // A result's array or text: none.
-      if constexpr (SettingValue<U> || ListValue<U>) Visit(field, field.attributes());
+      if constexpr (SettingValue<U> || ListValue<U>) {
+        Visit(field, field.attributes());
+      } else if constexpr (DoubleArray<U>) {
+        if (field.attributes().named_components && InScope(field.attributes(), false))
+          self->AddNamedArray(*app, field.attributes(), field.value()->data());
+      }
     }
     template <class U>
     void Visit(const Field<U>& field, const FieldAttributes& a) {

@@ -41,7 +41,6 @@ struct LandFlags {
   ModelFlags model;
   LandingConfig config;  // its fields are flags (LandingConfig::Describe); defaults as the struct's
   DescribedFlags described{LandAliases()};
-  std::string q_weights;
   bool summary_only = false;
   std::string format = "csv";
 };
@@ -67,16 +66,6 @@ std::string FlagOf(const DescribedFlags& described, const std::string& key) {
 
 LandingConfig BuildConfig(const LandFlags& flags, const LongitudinalModel& model) {
   LandingConfig config = flags.config;
-  if (!flags.q_weights.empty()) {
-    const std::vector<double> weights = ParseNumberList(flags.q_weights, "--q-weights", false);
-    if (weights.size() != static_cast<std::size_t>(kLandingStateCount)) {
-      std::string names;
-      for (auto name : LandingStateNames()) names += (names.empty() ? "" : ",") + std::string(name);
-      throw InputError("command line", "--q-weights", "'" + flags.q_weights + "'",
-                       "expected 9 comma-separated weights >= 0 in the order " + names);
-    }
-    for (int i = 0; i < kLandingStateCount; ++i) config.q_weights[i] = weights[i];
-  }
   if (flags.summary_only) config.output_interval_s = 0.0;
   try {
     ValidateLandingConfig(config, model.aircraft(), "command line");
@@ -153,9 +142,6 @@ const CommandRegistrar kRegistrar{Command{
       auto flags = std::make_shared<LandFlags>();
       flags->model.AddTo(app);
       flags->described.Add(app, flags->config);
-      app.add_option("--q-weights", flags->q_weights,
-                     "9 comma-separated LQR output weights on delta_u,delta_w,pitch_rate,delta_theta,delta_h,"
-                     "elevator,deviation,compensator,error_integral (SI units, rad); default all 1");
       auto* summary =
           app.add_flag("--summary-only", flags->summary_only, "Write the summary only, no series");
       for (CLI::Option* output_dt : flags->described.OptionsOf("output_interval_s"))

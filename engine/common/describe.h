@@ -85,7 +85,16 @@ struct FieldAttributes {
   /// An array field: the components stored in the archive, in archive order (empty: all)
   std::span<const int> stored_components;
   std::string_view component_prefix;  ///< CSV and archive name of component c: prefix + components[c]
+  /// A setting's array (NamedComponents): a number per component, each with the key
+  /// `<key>.<component>` (ComponentKey) in the parameter catalogue, archives and messages, and the
+  /// field's unit, scale and limits-table range. Its flag takes the numbers comma-separated in
+  /// component order, its keyword argument a sequence, and its output is an object keyed by
+  /// component name.
+  bool named_components = false;
 };
+
+/// The key of component `c` of a setting's array (FieldAttributes::named_components): "q_weights.delta_u".
+std::string ComponentKey(const FieldAttributes& attributes, std::size_t c);
 
 /// What every described item (a Field here, a SeriesField in series.h) has: a key, a unit and a
 /// line of description, set in a chain (Self: the item's class; Attributes: its attributes, which
@@ -93,18 +102,18 @@ struct FieldAttributes {
 template <class Self, class Attributes>
 class DescribedItem {
  public:
-  Self& Unit(std::string_view unit) {
-    attributes_.unit = unit;
-    return static_cast<Self&>(*this);
-  }
-  Self& Doc(std::string_view doc) {
-    attributes_.doc = doc;
-    return static_cast<Self&>(*this);
-  }
+  Self& Unit(std::string_view unit) { return Set(&Attributes::unit, unit); }
+  Self& Doc(std::string_view doc) { return Set(&Attributes::doc, doc); }
   const Attributes& attributes() const { return attributes_; }
 
  protected:
   explicit DescribedItem(std::string_view key) { attributes_.key = key; }
+  /// Sets one attribute and returns the item, for the chain.
+  template <class A, class U>
+  Self& Set(A Attributes::*attribute, U value) {
+    attributes_.*attribute = value;
+    return static_cast<Self&>(*this);
+  }
   Attributes attributes_;
 };
 
@@ -112,59 +121,41 @@ class DescribedItem {
 /// `v(Field("duration_s", &duration_s).Unit("s").Limit("open_loop.duration_s").Doc("..."))`.
 template <class T>
 class Field : public DescribedItem<Field<T>, FieldAttributes> {
-  using DescribedItem<Field<T>, FieldAttributes>::attributes_;
+  using Item = DescribedItem<Field<T>, FieldAttributes>;
+  using Item::attributes_;
+  using Item::Set;
+  using A = FieldAttributes;
 
  public:
-  Field(std::string_view key, T* value) : DescribedItem<Field<T>, FieldAttributes>(key), value_(value) {}
+  Field(std::string_view key, T* value) : Item(key), value_(value) {}
 
   /// The range of the limits table's entry `name` (and its unit must be this field's).
-  Field& Limit(std::string_view name) {
-    attributes_.limit = name;
-    return *this;
-  }
+  Field& Limit(std::string_view name) { return Set(&A::limit, name); }
   /// Struct value = key value × scale.
-  Field& Scale(double scale) {
-    attributes_.scale = scale;
-    return *this;
-  }
+  Field& Scale(double scale) { return Set(&A::scale, scale); }
   /// NaN means "automatic" (FieldAttributes::automatic).
-  Field& Automatic() {
-    attributes_.automatic = true;
-    return *this;
-  }
-  Field& CommandLineOnly() {
-    attributes_.scope = FieldScope::kCommandLineOnly;
-    return *this;
-  }
+  Field& Automatic() { return Set(&A::automatic, true); }
+  Field& CommandLineOnly() { return Set(&A::scope, FieldScope::kCommandLineOnly); }
   /// A sweep's run parameter of the same key (FieldAttributes::run_parameter); a flag only.
-  Field& RunParameter() {
-    attributes_.run_parameter = true;
-    return CommandLineOnly();
-  }
-  Field& StudyOnly() {
-    attributes_.scope = FieldScope::kStudyOnly;
-    return *this;
-  }
+  Field& RunParameter() { return Set(&A::run_parameter, true).CommandLineOnly(); }
+  Field& StudyOnly() { return Set(&A::scope, FieldScope::kStudyOnly); }
   /// A result's archive column type (default float64).
-  Field& Stored(StoredAs stored) {
-    attributes_.stored = stored;
-    return *this;
-  }
+  Field& Stored(StoredAs stored) { return Set(&A::stored, stored); }
   /// A result field that has no archive column.
   Field& NotStored() { return Stored(StoredAs::kNotStored); }
   /// A result field that is stored but not printed.
-  Field& NotInOutput() {
-    attributes_.in_output = false;
-    return *this;
-  }
-  /// An array field: component names (static storage), the prefix of their column names and the
-  /// components the archive stores (static storage; empty: all).
+  Field& NotInOutput() { return Set(&A::in_output, false); }
+  /// A result's array field: component names (static storage), the prefix of their column names and
+  /// the components the archive stores (static storage; empty: all).
   Field& Components(std::span<const FieldComponent> names, std::string_view prefix,
                     std::span<const int> stored = {}) {
-    attributes_.components = names;
-    attributes_.component_prefix = prefix;
-    attributes_.stored_components = stored;
-    return *this;
+    Set(&A::components, names).Set(&A::component_prefix, prefix);
+    return Set(&A::stored_components, stored);
+  }
+  /// A setting's array (a std::array of numbers): one number per named component (static storage),
+  /// each component's key `<key>.<name>` (FieldAttributes::named_components).
+  Field& NamedComponents(std::span<const FieldComponent> names) {
+    return Set(&A::components, names).Set(&A::named_components, true);
   }
 
   T* value() const { return value_; }
@@ -241,6 +232,7 @@ struct FieldRecord {
   std::optional<double> number;      ///< kNumber, kInteger: the current value in the key's unit
   std::vector<std::string> choices;  ///< kChoice: names in table order
   std::vector<std::string> levels;   ///< kChoice: names by code (0, 1, ...)
+  std::vector<double> values;        ///< kArray of a setting (named_components): in the key's unit
 };
 
 /// A number in the key's unit as a study file or help text would write it.
@@ -282,6 +274,10 @@ struct Recorder {
       static_assert(DoubleArray<U>,
                     "a described field is a number, integer, bool, named enum, string or array");
       r.kind = FieldKind::kArray;
+      if (r.attributes.named_components) {
+        for (std::size_t c = 0; c < r.attributes.components.size(); ++c)
+          r.values.push_back(v[static_cast<int>(c)] / r.attributes.scale);
+      }
     }
     records->push_back(std::move(r));
   }
@@ -318,10 +314,18 @@ struct RangeChecker {
   const std::string* source;
   template <class U>
   void operator()(const Field<U>& field) {
+    const FieldAttributes& a = field.attributes();
     if constexpr (std::floating_point<U>) {
-      const FieldAttributes& a = field.attributes();
       if (a.automatic && std::isnan(*field.value())) return;  // unset: computed
       if (!a.limit.empty()) CheckFieldLimit(a, *field.value(), *source);
+    } else if constexpr (DoubleArray<U>) {
+      if (!a.named_components || a.limit.empty()) return;
+      for (std::size_t c = 0; c < a.components.size(); ++c) {
+        const std::string key = ComponentKey(a, c);
+        FieldAttributes component = a;
+        component.key = key;
+        CheckFieldLimit(component, (*field.value())[static_cast<int>(c)], *source);
+      }
     }
   }
 };

@@ -39,11 +39,15 @@ struct OutputVisitor {
       const int size = static_cast<int>(v.size());
       std::vector<double> values;
       values.reserve(static_cast<std::size_t>(size));
-      for (int c = 0; c < size; ++c) values.push_back(v[c]);
+      for (int c = 0; c < size; ++c) values.push_back(v[c] / a.scale);
       std::vector<std::string> names;
       names.reserve(a.components.size());
       for (const FieldComponent& component : a.components) names.emplace_back(component.name);
-      sink->Array(key, values, names);
+      if (a.named_components) {
+        sink->NamedNumbers(key, names, values);  // a setting's array: keyed by component
+      } else {
+        sink->Array(key, values, names);
+      }
     }
   }
 };
@@ -53,7 +57,8 @@ struct OutputVisitor {
 /// Calls, for each output field of `object` (in_output) in order, with the field's key:
 /// - `sink.Plain(key, value)`: a bool, an integer or a text as it is, an enum as its name (std::string);
 /// - `sink.Number(key, value)`: a number in the key's unit (struct value / scale);
-/// - `sink.Array(key, values, names)`: an array's values and its components' names.
+/// - `sink.Array(key, values, names)`: a result's array: its values and its components' names;
+/// - `sink.NamedNumbers(key, names, values)`: a setting's array (named_components), keyed by name.
 template <class T, class Sink>
 void VisitOutputs(const T& object, Sink& sink) {
   describe_detail::OutputVisitor<Sink> visitor{&sink};

@@ -75,21 +75,11 @@ class SeriesField : public DescribedItem<SeriesField<Member, T>, SeriesAttribute
   SeriesField(std::string_view key, T Member::*member)
       : DescribedItem<SeriesField<Member, T>, SeriesAttributes>(key), member_(member) {}
 
-  SeriesField& Only(SeriesPresence presence) {
-    attributes_.presence = presence;
-    return *this;
-  }
+  SeriesField& Only(SeriesPresence presence) { return this->Set(&SeriesAttributes::presence, presence); }
   /// In CSV, JSON and Python, not in the archive (it follows from stored quantities).
-  SeriesField& NotStored() {
-    attributes_.stored = false;
-    return *this;
-  }
+  SeriesField& NotStored() { return this->Set(&SeriesAttributes::stored, false); }
   /// The time axis.
-  SeriesField& Axis() {
-    attributes_.axis = true;
-    attributes_.stored = false;
-    return *this;
-  }
+  SeriesField& Axis() { return this->Set(&SeriesAttributes::axis, true).NotStored(); }
 
   T Member::*member() const { return member_; }
 

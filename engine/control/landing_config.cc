@@ -16,9 +16,11 @@ std::string Text(double value) { return ShortNumber(value); }
 }  // namespace
 
 const std::array<std::string_view, kLandingStateCount>& LandingStateNames() {
-  static const std::array<std::string_view, kLandingStateCount> kNames = {
-      "delta_u",  "delta_w",   "pitch_rate",  "delta_theta",   "delta_h",
-      "elevator", "deviation", "compensator", "error_integral"};
+  static const std::array<std::string_view, kLandingStateCount> kNames = [] {
+    std::array<std::string_view, kLandingStateCount> names;
+    for (int i = 0; i < kLandingStateCount; ++i) names[static_cast<std::size_t>(i)] = kLandingStates[i].name;
+    return names;
+  }();
   return kNames;
 }
 

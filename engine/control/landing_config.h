@@ -20,9 +20,20 @@ namespace gesweep {
 /// Number of states of the paper's augmented glide-slope system, Eq. (14).
 inline constexpr int kLandingStateCount = 9;
 
-/// Names of the states of Eq. (14) in order, as used for weights and gains:
-/// delta_u, delta_w, pitch_rate, delta_theta, delta_h, elevator, deviation, compensator,
-/// error_integral. (Units: m/s, m/s, rad/s, rad, m, rad, m, m·s, m·s.)
+/// The states of Eq. (14) in order, as used for weights and gains, with their units.
+inline constexpr FieldComponent kLandingStates[kLandingStateCount] = {
+    {"delta_u", "m/s", "Speed perturbation"},
+    {"delta_w", "m/s", "Normal-velocity perturbation, positive down"},
+    {"pitch_rate", "rad/s", "Pitch rate q"},
+    {"delta_theta", "rad", "Pitch-angle perturbation"},
+    {"delta_h", "m", "Height perturbation"},
+    {"elevator", "rad", "Elevator deflection (actuator state)"},
+    {"deviation", "m", "Deviation d from the reference path, positive above"},
+    {"compensator", "m s", "Compensator state x_d"},
+    {"error_integral", "m s", "Integral eps_d of the path error r_d - d"}};
+
+/// The names of kLandingStates in order: delta_u, delta_w, pitch_rate, delta_theta, delta_h,
+/// elevator, deviation, compensator, error_integral.
 const std::array<std::string_view, kLandingStateCount>& LandingStateNames();
 
 /// What the ΔH that multiplies Xh, Zh, Mh in the plant is measured from (docs/landing.md §3).
@@ -134,10 +145,9 @@ struct LandingConfig {
   /// The settings a person gives (describe.h): [analyses.landing], the flags of `gesweep land` and
   /// the keywords of gesweep.land, under the keys ValidateLandingConfig names. The glide slope, the
   /// flare and the LQR weights are a sweep's run parameters of the same keys (RunParameter: their
-  /// catalogue entries are these fields; q_weights.<state> by hand), and the start condition is the
-  /// run parameters height_m and speed_mps, so they are flags only; so are the series interval (a
-  /// study's [storage]) and the turbulence's seed and run index.
-  /// q_weights, an array of 9, is read by each front end itself (--q-weights, q_weights=[...]).
+  /// catalogue entries are these fields; q_weights, a setting's array, one q_weights.<state> per
+  /// state), and the start condition is the run parameters height_m and speed_mps, so they are flags
+  /// only; so are the series interval (a study's [storage]) and the turbulence's seed and run index.
   template <class V>
   void Describe(V& v) {
     v(Field("start_height_m", &start_height_m)
@@ -175,7 +185,12 @@ struct LandingConfig {
           .RunParameter()
           .Doc("Time constant tau of the exponential flare command; default (left out): automatic, "
                "Ho/(u0 sin gamma), so the commanded sink rate is continuous at Ho"));
-    // The Q weights, an array keyed by state name, are by hand (run parameters q_weights.<state>).
+    v(Field("q_weights", &q_weights)
+          .NamedComponents(kLandingStates)
+          .Limit("q_weights")
+          .RunParameter()
+          .Doc("LQR weight on the state <component> of the paper's Eq. (14) (diagonal of Q; the paper: "
+               "identity)"));
     v(Field("r_weight", &r_weight)
           .Unit("rad^2")
           .Limit("r_weight")

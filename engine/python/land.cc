@@ -6,41 +6,6 @@ namespace gesweep::python {
 
 // ---------------------------------------------------------------- land
 
-/// gesweep.land's settings for its signature and docstring: LandingConfig's (Describe) and q_weights,
-/// the one array, which each front end reads itself.
-py::list LandingSettingsList() {
-  const LandingConfig defaults;
-  py::list out = SettingsList(defaults, {});
-  py::dict q;
-  q["key"] = "q_weights";
-  q["unit"] = "SI";
-  std::string names;
-  for (auto name : LandingStateNames()) {
-    if (!names.empty()) names += ", ";
-    names += name;
-  }
-  q["doc"] = "9 LQR output weights >= 0 on " + names;
-  q["default"] = py::cast(std::vector<double>(defaults.q_weights.begin(), defaults.q_weights.end()));
-  out.append(q);
-  return out;
-}
-
-/// q_weights: a sequence of 9 numbers.
-void TakeQWeights(py::dict& options, LandingConfig& config) {
-  if (!options.contains("q_weights")) return;
-  py::object value = options["q_weights"];
-  PyDict_DelItemString(options.ptr(), "q_weights");
-  if (value.is_none()) return;
-  const std::string expected = "expected a sequence of 9 weights >= 0";
-  if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value) ||
-      py::len(value) != kLandingStateCount)
-    throw InputError(kArguments, "q_weights", Repr(value), expected);
-  const auto weights = value.cast<py::sequence>();
-  for (int i = 0; i < kLandingStateCount; ++i)
-    config.q_weights[static_cast<std::size_t>(i)] =
-        ToNumber(weights[static_cast<std::size_t>(i)], "q_weights." + std::string(LandingStateNames()[i]));
-}
-
 py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, const py::kwargs& kwargs) {
   py::dict options = kwargs;
   const auto model = ModelOf(aircraft, options);
@@ -49,8 +14,6 @@ py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, c
   std::vector<std::string> keys;
   KwargsReader reader{&options, &keys};
   config.Describe(reader);
-  TakeQWeights(options, config);
-  keys.push_back("q_weights");
   keys.insert(keys.end(), ModelOptionKeys().begin(), ModelOptionKeys().end());
   RefuseLeftovers(options, keys);
   if (summary_only) config.output_interval_s = 0.0;

@@ -141,7 +141,7 @@ PYBIND11_MODULE(_gesweep, m) {
   m.def("_bench_boundary_search", &BenchBoundarySearch, py::arg("aircraft"), py::arg("speed_mps"),
         py::arg("repetitions"));
   m.def("simulate_settings", [] { return SettingsList(OpenLoopConfig{}, {"height_m", "speed_mps"}); });
-  m.def("land_settings", &LandingSettingsList);
+  m.def("land_settings", [] { return SettingsList(LandingConfig{}, {}); });
   m.def("model_options", &ModelOptionSettings);
   m.def("classification_levels", [] {
     std::vector<std::string> levels;

@@ -285,7 +285,28 @@ struct KwargsReader {
         }
         *field.value() = number * a.scale;
       }
+    } else if constexpr (DoubleArray<U>) {
+      if (a.named_components && InScope(a, false)) TakeNamedArray(a, field.value()->data());
     }
+  }
+
+  /// A setting's array (named_components): a sequence of one number per component, in order.
+  void TakeNamedArray(const FieldAttributes& a, double* values) {
+    const std::string key(a.key);
+    keys->push_back(key);
+    if (!kwargs->contains(key)) return;
+    py::object value = (*kwargs)[key.c_str()];
+    PyDict_DelItemString(kwargs->ptr(), key.c_str());
+    if (value.is_none()) return;
+    const std::size_t count = a.components.size();
+    if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value) || py::len(value) != count) {
+      std::string order;
+      for (std::size_t c = 0; c < count; ++c) order += (c ? ", " : "") + std::string(a.components[c].name);
+      throw InputError(kArguments, key, Repr(value),
+                       "expected a sequence of " + std::to_string(count) + " numbers in the order " + order);
+    }
+    const auto numbers = value.cast<py::sequence>();
+    for (std::size_t c = 0; c < count; ++c) values[c] = ToNumber(numbers[c], ComponentKey(a, c)) * a.scale;
   }
 };
 
@@ -305,7 +326,7 @@ inline py::list SettingsList(const T& object, const std::set<std::string>& leave
   for (const FieldRecord& r : ListFields(object)) {
     const FieldAttributes& a = r.attributes;
     if (!InScope(a, false) || leave_out.count(std::string(a.key))) continue;
-    if (r.kind == FieldKind::kText || r.kind == FieldKind::kArray) continue;
+    if (r.kind == FieldKind::kText || (r.kind == FieldKind::kArray && !a.named_components)) continue;
     py::dict entry;
     entry["key"] = std::string(a.key);
     entry["unit"] = std::string(a.unit);
@@ -318,6 +339,13 @@ inline py::list SettingsList(const T& object, const std::set<std::string>& leave
       entry["default"] = static_cast<std::int64_t>(*r.number);
     } else if (r.kind == FieldKind::kBoolean) {
       entry["default"] = r.default_text == "true";
+    } else if (r.kind == FieldKind::kArray) {  // a setting's array: a sequence, one per component
+      std::string names;
+      for (const FieldComponent& component : a.components)
+        names += (names.empty() ? "" : ", ") + std::string(component.name);
+      entry["default"] = r.values;
+      entry["doc"] = std::to_string(a.components.size()) + " numbers, one per <component> (" + names +
+                     "): " + std::string(a.doc);
     } else {
       entry["default"] = r.default_text;
       entry["choices"] = r.choices;
@@ -444,7 +472,6 @@ py::dict Boundary(const PyAircraft& aircraft, const py::object& speed_arg, const
 py::tuple Simulate(const PyAircraft& aircraft, const py::object& height_m, const py::object& speed_mps,
                    const py::object& summary_only_arg, const py::object& output_dt_arg,
                    const py::kwargs& kwargs);  // simulate.cc
-py::list LandingSettingsList();                // land.cc
 py::tuple Land(const PyAircraft& aircraft, const py::object& summary_only_arg, const py::kwargs& kwargs);
 py::dict Run(const std::string& study_path, const std::string& archive_path, int threads, py::object progress,
              bool resume, bool force, const std::string& shard_text);  // run.cc

@@ -5,10 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "engine/aircraft/aircraft.h"
 #include "engine/common/describe_toml.h"
@@ -90,6 +92,26 @@ TEST(LandingConfigDescription, StudyTableIsReadFromTheDescription) {
   } catch (const InputError& error) {
     EXPECT_EQ(error.key(), "analyses.landing.max_step_s");
     EXPECT_EQ(error.value(), "-1");
+  }
+}
+
+TEST(LandingConfigDescription, QWeightsAreOneNumberPerStateInEveryVisitor) {
+  LandingConfig c;
+  c.q_weights[3] = 4.0;
+  const auto fields = ListFields(c);
+  const auto q = std::find_if(fields.begin(), fields.end(),
+                              [](const FieldRecord& f) { return f.attributes.key == "q_weights"; });
+  ASSERT_NE(q, fields.end());
+  EXPECT_EQ(q->kind, FieldKind::kArray);
+  EXPECT_EQ(q->values, (std::vector<double>{1, 1, 1, 4, 1, 1, 1, 1, 1}));
+  EXPECT_EQ(ComponentKey(q->attributes, 3), "q_weights.delta_theta");
+  // The range check names the component.
+  c.q_weights[3] = -1.0;
+  try {
+    CheckFieldRanges(c, "test");
+    ADD_FAILURE() << "a negative weight passed";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.key(), "q_weights.delta_theta");
   }
 }
 

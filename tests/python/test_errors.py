@@ -101,7 +101,7 @@ def test_land_setting_outside_its_range_same_as_cli(gesweep, ance):
     (lambda g, a: g.land(a, wind_20ft="3"), "argument: wind_20ft = '3': unknown option; expected one of: "),
     (lambda g, a: g.land(a, seed=-1), "argument: seed = -1: expected a whole number in [0, 9007199254740992] written in digits"),
     (lambda g, a: g.land(a, seed="x"), "argument: seed = 'x': expected an int, a whole number in [0, 9007199254740992]"),
-    (lambda g, a: g.land(a, q_weights=[1, 2]), "argument: q_weights = [1, 2]: expected a sequence of 9 weights"),
+    (lambda g, a: g.land(a, q_weights=[1, 2]), "argument: q_weights = [1, 2]: expected a sequence of 9 numbers in the order delta_u, delta_w"),
     (lambda g, a: g.land(a, q_weights=[1] * 8 + ["x"]), "argument: q_weights.error_integral = 'x': expected a number"),
     (lambda g, a: g.land(a, plant_height_reference=1), "argument: plant_height_reference = 1: expected a string"),
     (lambda g, a: g.simulate(a, "3", 32.0), "argument: height_m = '3': expected a number"),

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -26,6 +27,22 @@ std::set<std::string> ExpectEntriesFromFields() {
   for (const FieldRecord& field : ListFields(T{})) {
     const FieldAttributes& a = field.attributes;
     if (!a.run_parameter) continue;
+    if (field.kind == FieldKind::kArray) {  // a setting's array: one entry per component
+      for (std::size_t c = 0; c < a.components.size(); ++c) {
+        const std::string key = ComponentKey(a, c);
+        keys.insert(key);
+        const auto id = FindParameter(key);
+        if (!id) {
+          ADD_FAILURE() << key << " is described as a run parameter but is not in the catalogue";
+          continue;
+        }
+        const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(*id)];
+        EXPECT_EQ(info.units, a.unit) << key;
+        EXPECT_EQ(info.kind, ParameterKind::kReal) << key;
+        EXPECT_EQ(info.default_value, field.values[c]) << key;
+      }
+      continue;
+    }
     const std::string key(a.key);
     keys.insert(key);
     const auto id = FindParameter(key);
@@ -105,11 +122,37 @@ TEST(ParameterCatalog, LandingEntriesAreTheirDescription) {
   const auto& catalog = ParameterCatalog();
   EXPECT_EQ(catalog[static_cast<std::size_t>(RequireParameter("r_weight"))].units, "rad^2");
   EXPECT_EQ(catalog[static_cast<std::size_t>(RequireParameter("r_weight"))].group, ParameterGroup::kLanding);
-  // The Q weights by hand, one per state of Eq. (14), between the flare and R as the struct has them.
+  // The Q weights (a setting's array), one per state of Eq. (14), between the flare and R as the struct
+  // has them, with the field's unit, range and description (its <component> the state).
   const ParameterId first = RequireParameter("q_weights.delta_u");
   EXPECT_EQ(first, RequireParameter("flare_time_constant_s") + 1);
   EXPECT_EQ(RequireParameter("q_weights.error_integral"), first + 8);
   EXPECT_EQ(RequireParameter("r_weight"), first + 9);
+  const ParameterInfo& theta = catalog[static_cast<std::size_t>(RequireParameter("q_weights.delta_theta"))];
+  EXPECT_EQ(theta.units, "1");
+  EXPECT_EQ(theta.limit, "q_weights");
+  EXPECT_EQ(theta.default_value, 1.0);
+  EXPECT_EQ(
+      theta.description,
+      "LQR weight on the state delta_theta of the paper's Eq. (14) (diagonal of Q; the paper: identity)");
+}
+
+TEST(ParameterCatalog, ARunsQWeightsAreWrittenIntoTheArrayByState) {
+  const std::vector<ParameterId>& ids = RunParameterIds<LandingConfig>();
+  std::vector<double> run(ParameterCatalog().size(), 0.0);
+  for (ParameterId id : ids)  // every other run parameter at its default (a choice: its level)
+    run[static_cast<std::size_t>(id)] =
+        ParameterCatalog()[static_cast<std::size_t>(id)].default_value.value_or(2.0);
+  for (int i = 0; i < kLandingStateCount; ++i) {
+    const std::string key = "q_weights." + std::string(LandingStateNames()[static_cast<std::size_t>(i)]);
+    ASSERT_NE(std::find(ids.begin(), ids.end(), RequireParameter(key)), ids.end()) << key;
+    run[static_cast<std::size_t>(RequireParameter(key))] = 10.0 + i;
+  }
+  LandingConfig config;
+  ApplyRunParameters(run, config);
+  for (int i = 0; i < kLandingStateCount; ++i)
+    EXPECT_EQ(config.q_weights[static_cast<std::size_t>(i)], 10.0 + i);
+  EXPECT_EQ(config.r_weight, 1.0);
 }
 
 TEST(ParameterCatalog, DisturbanceEntriesAreTheirDescription) {
