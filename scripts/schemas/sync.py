@@ -19,6 +19,8 @@ not read from a file of the repository. This script writes from it:
   schemas/products.json): between `<!-- BEGIN product layout NAME ...` and `<!-- END product layout
   NAME -->`, its path, writer and description and a table of its attributes and one of its datasets,
   then the same for each subgroup. What the document says beyond them is written by hand around them.
+  Before it writes them, it checks that the manifest's layouts are those of schemas/products.json
+  (read here with Python's JSON reader: an oracle for the build's generator, product_fields.cmake).
 
 After adding or changing an analysis (docs/sweep.md, "Adding an analysis"), with gesweep built:
 
@@ -39,6 +41,7 @@ import columns  # noqa: E402  (scripts/lib/columns.py: asks gesweep for the mani
 
 SCHEMA = os.path.join(ROOT, "schemas", "study.schema.json")
 ARCHIVE_DOC = os.path.join(ROOT, "schemas", "archive.md")
+PRODUCTS = os.path.join(ROOT, "schemas", "products.json")
 REGENERATE = "python3 scripts/schemas/sync.py"
 NO_SETTINGS = " No settings."
 # The generated part of schemas/archive.md lies between these two lines (each a whole line).
@@ -216,8 +219,29 @@ def product_layouts(manifest):
     return blocks
 
 
+def check_products_file(manifest):
+    """Exits naming the first product whose layout in the manifest is not schemas/products.json's (the
+    build generates it from the file: a stale build, or a generator that lost something)."""
+    with open(PRODUCTS, encoding="utf-8") as f:
+        described = json.load(f)
+    shared = {field["name"]: field for field in described["shared_attributes"]}
+
+    def expanded(layout):
+        return dict(layout, attributes=[shared[a] if isinstance(a, str) else a for a in layout["attributes"]],
+                    groups=[expanded(group) for group in layout["groups"]])
+
+    for mine, built in zip(described["products"] + [described["subset_archive"]],
+                           manifest["products"] + [manifest["subset_archive"]]):
+        if expanded(mine) != built:
+            raise SystemExit(f"the manifest's layout of {built['name']} is not schemas/products.json's "
+                             f"{mine['name']}: rebuild gesweep (its configure step generates the layouts)")
+    if len(described["products"]) != len(manifest["products"]):
+        raise SystemExit("the manifest lists another number of products than schemas/products.json: rebuild")
+
+
 def archive_products(manifest, text):
     """(new text of schemas/archive.md with every product's block regenerated, what differs or None)."""
+    check_products_file(manifest)
     changed, missing = [], []
     for name, block in product_layouts(manifest).items():
         begin_line = product_begin(name).split(",")[0]  # "<!-- BEGIN product layout NAME"
