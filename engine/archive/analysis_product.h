@@ -1,10 +1,11 @@
 #pragma once
 /// Derived products of an archive under /analysis (schemas/archive.md): the stability boundary
-/// (`gesweep boundary --archive`), sensitivity indices (`gesweep sensitivity`), and whatever comes
-/// next (a dispersion product...). One way to write them, so that every product is written the same
+/// (`gesweep boundary --archive`), sensitivity indices (`gesweep sensitivity`), the dispersion
+/// (`gesweep dispersion`). One way to write them, so that every product is written the same
 /// safe way: the archive opened for writing (one line naming it when another program holds it),
 /// the product built under a temporary name and moved over the old one only when complete
-/// (hdf5::ReplaceGroup), the file closed with errors reported. The callers describe their product
+/// (hdf5::ReplaceGroup), the file closed with errors reported. The callers write their product's
+/// fields, described in schemas/products.json (engine/archive/product_fields.h, generated from it),
 /// with the small API below and never see HDF5.
 
 #include <cstddef>
