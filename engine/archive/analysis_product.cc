@@ -1,8 +1,11 @@
 #include "engine/archive/analysis_product.h"
 
+#include <algorithm>
 #include <type_traits>
 
 #include "engine/archive/hdf5_util.h"
+#include "engine/archive/product_fields.h"
+#include "engine/archive/provenance.h"
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
 
@@ -170,6 +173,19 @@ ProductGroup ProductGroup::Group(const std::string& name) {
   const hid_t id = H5Gcreate2(id_, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   Check(id, "create group " + name);
   return ProductGroup(id);
+}
+
+void WriteProvenance(ProductGroup& group, const ProductLayout& layout, const std::string& command_line) {
+  namespace shared = product::shared::attribute;
+  const auto listed = [&layout](const ProductField& field) {
+    return std::any_of(layout.attributes.begin(), layout.attributes.end(),
+                       [&field](const ProductField& f) { return f.name == field.name; });
+  };
+  GESWEEP_DEMAND(listed(shared::kEngineVersion) && listed(shared::kCreated) && listed(shared::kCommandLine));
+  group.Attribute(shared::kEngineVersion, EngineVersion());
+  if (listed(shared::kGitCommit)) group.Attribute(shared::kGitCommit, EngineGitCommit());
+  group.Attribute(shared::kCreated, UtcTimestamp());
+  group.Attribute(shared::kCommandLine, command_line);
 }
 
 void WriteAnalysisProduct(const std::filesystem::path& archive, const std::string& path,

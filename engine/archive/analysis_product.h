@@ -1,10 +1,11 @@
 #pragma once
 /// Derived products of an archive under /analysis (schemas/archive.md): the stability boundary
-/// (`gesweep boundary --archive`), sensitivity indices (`gesweep sensitivity`), and whatever comes
-/// next (a dispersion product...). One way to write them, so that every product is written the same
+/// (`gesweep boundary --archive`), sensitivity indices (`gesweep sensitivity`), the dispersion
+/// (`gesweep dispersion`). One way to write them, so that every product is written the same
 /// safe way: the archive opened for writing (one line naming it when another program holds it),
 /// the product built under a temporary name and moved over the old one only when complete
-/// (hdf5::ReplaceGroup), the file closed with errors reported. The callers describe their product
+/// (hdf5::ReplaceGroup), the file closed with errors reported. The callers write their product's
+/// fields, described in schemas/products.json (engine/archive/product_fields.h, generated from it),
 /// with the small API below and never see HDF5.
 
 #include <cstddef>
@@ -19,7 +20,9 @@
 
 namespace gesweep {
 
-/// One dataset or attribute of a product (or of a subset-simulation archive), described once: its
+/// One dataset or attribute of a product (or of a subset-simulation archive), described once in
+/// schemas/products.json, from which the build generates one constant per field
+/// (engine/archive/product_fields.h: product::<product>::attribute::k..., ::dataset::k...): its
 /// writer stores it under this name with these units and this description (ProductGroup::Numbers and
 /// Strings below), and the column manifest lists it (`gesweep columns --json`, "products" and
 /// "subset_archive"), which the Python reader of archives reads its layout from. A name in
@@ -45,13 +48,6 @@ struct ProductLayout {
 
 /// `text` (a field's name, units or description) with its `placeholder` ("<level>") replaced by `value`.
 std::string Filled(std::string_view text, std::string_view placeholder, const std::string& value);
-
-/// The attributes a product group records of itself and its writing (each writer stores those it has).
-inline constexpr ProductField kProductDescription{"description", "string", "", "", "What the group holds"};
-inline constexpr ProductField kEngineVersion{"engine_version", "string", "", "", "The gesweep that wrote it"};
-inline constexpr ProductField kGitCommit{"git_commit", "string", "", "", "Its commit"};
-inline constexpr ProductField kCreated{"created", "string", "", "", "When it was written (UTC, ISO 8601)"};
-inline constexpr ProductField kCommandLine{"command_line", "string", "", "", "The command that wrote it"};
 
 /// An HDF5 object of a product being written (a dataset or a group): its attributes.
 class ProductObject {
@@ -111,6 +107,11 @@ class ProductGroup : public ProductObject {
   explicit ProductGroup(std::int64_t id) : ProductObject(id) {}
   std::vector<std::int64_t> datasets_;  // datasets made here, closed with the group
 };
+
+/// Stores in `group` the provenance attributes of product `layout` (product::shared::attribute of
+/// engine/archive/product_fields.h): engine_version (this engine's), created (now), command_line, and
+/// git_commit (this engine's commit) when the layout lists it. The layout must list the other three.
+void WriteProvenance(ProductGroup& group, const ProductLayout& layout, const std::string& command_line);
 
 /// Writes the product `path` (e.g. "analysis/boundary", "analysis/sensitivity/H_m") of `archive`:
 /// `write` fills a fresh group, which then replaces the old product whole (a failure leaves the old

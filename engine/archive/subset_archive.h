@@ -14,8 +14,6 @@
 #include <tuple>
 #include <vector>
 
-#include "engine/archive/analysis_product.h"
-
 namespace gesweep::risk {
 
 inline constexpr const char* kRiskArchiveKind = "subset_simulation";
@@ -71,12 +69,9 @@ struct RiskArchive {
   std::vector<DesignPoint> design_points;
 };
 
-/// The archive's layout, described once (the writer and the reader name its fields through it; the
-/// column manifest lists it, "subset_archive"). Paths are from the root; a <placeholder> names a
-/// family of groups.
-const ProductLayout& SubsetArchiveLayout();
-
-/// Writes `archive` to `path` + ".partial" and renames it onto `path`. Throws ArchiveError.
+/// Writes `archive` to `path` + ".partial" and renames it onto `path`. Throws ArchiveError. The
+/// file's layout is product::subset_archive of engine/archive/product_fields.h (generated from
+/// schemas/products.json), which this writer and the reader below name every field through.
 void WriteRiskArchive(const std::filesystem::path& path, const RiskArchive& archive);
 
 /// Whether `path` is a subset-simulation archive (an HDF5 file whose root says so). False for any

@@ -6,10 +6,9 @@
 #include <map>
 #include <sstream>
 
-#include "engine/archive/analysis_product.h"
 #include "engine/archive/archive_format.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/provenance.h"
+#include "engine/archive/product_fields.h"
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
 #include "engine/modal/modal_analysis.h"
@@ -295,71 +294,23 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
 
 namespace {
 
-// The group attributes and datasets of /analysis/boundary (BoundaryProduct), each described once.
-constexpr ProductField kBoundaryMethod{"method", "string", "", "", "How H* was found"};
-constexpr ProductField kBoundaryKeys{"keys", "list of string", "", "key",
-                                     "Names of the key datasets (the swept parameters other than height_m), "
-                                     "in sort order; empty when there is none"};
-constexpr ProductField kSourceDataset{"source_dataset", "string", "", "", "The stability margin read"};
-constexpr ProductField kAlong{"along", "string", "", "", "The design column searched along"};
-constexpr ProductField kToleranceM{"tolerance_m", "float64", "", "",
-                                   "Width of the final bracket the refinement asks for, m"};
-constexpr ProductField kWingspanM{"wingspan_m", "float64", "", "", "b of the archive's aircraft, m"};
-constexpr ProductField kAircraftName{"aircraft_name", "string", "", "", "The archive's aircraft"};
-constexpr ProductField kRunsUsed{"runs_used", "int64", "", "",
-                                 "Complete ok runs with a finite sigma and height"};
-constexpr ProductField kRunsSkipped{"runs_skipped", "int64", "", "",
-                                    "Every other run: pending, failed, or sigma not finite"};
-constexpr ProductField kKeyValue{"<key>", "float64", "the parameter's", "point",
-                                 "Value of the swept parameter <key> of this boundary point (a choice or "
-                                 "boolean: the index of its level; levels attribute)"};
-constexpr ProductField kHeight{
-    "height_m", "float64", "m", "point",
-    "Boundary height H*, refined on the continuous model: unstable below, stable above; NaN when none"};
-constexpr ProductField kHeightOverSpan{
-    "height_over_span", "float64", "1", "point",
-    "H*/b (b: the aircraft's wingspan, attribute wingspan_m); NaN when none"};
-constexpr ProductField kFound{"found", "int8", "1", "point", "1 when a boundary was found"};
-constexpr ProductField kGridLower{"grid_lower_height_m", "float64", "m", "point",
-                                  "Grid height just below the sign change (sigma >= 0); NaN when none"};
-constexpr ProductField kGridUpper{"grid_upper_height_m", "float64", "m", "point",
-                                  "Grid height just above the sign change (sigma < 0); NaN when none"};
-constexpr ProductField kBracketWidth{
-    "bracket_width_m", "float64", "m", "point",
-    "Width of the refinement's final TOMS 748 bracket (on Delta4 or a5); NaN when none"};
-constexpr ProductField kGridCrossings{
-    "grid_crossings", "int32", "1", "point",
-    "Sign changes of sigma between neighbouring grid heights of this point"};
-constexpr ProductField kHeights{"heights", "int32", "1", "point",
-                                "Grid heights with a finite sigma (complete ok runs) of this point"};
-constexpr ProductField kReason{"reason", "string", "1", "point",
-                               "Why there is no boundary (empty when there is one)"};
+// The fields of /analysis/boundary and /analysis/boundary_curve (schemas/products.json).
+namespace attribute = product::boundary::attribute;
+namespace dataset = product::boundary::dataset;
+namespace curve_attribute = product::boundary_curve::attribute;
+namespace curve_dataset = product::boundary_curve::dataset;
 
-// /analysis/boundary_curve (BoundaryCurveProduct).
-constexpr ProductField kCurveSpeed{"speed_mps", "float64", "m/s", "point",
-                                   "Reference speed u0 of each traced point"};
-constexpr ProductField kCurveHeight{"height_m", "float64", "m", "point", "Boundary height H* at that speed"};
-constexpr ProductField kCurveRatio{"height_over_span", "float64", "1", "point", "H*/b"};
-constexpr ProductField kCurveSlope{"height_speed_derivative", "float64", "m/(m/s)", "point",
-                                   "dH*/du0 by the implicit-function theorem on the crossing criterion"};
-constexpr ProductField kCurveBranch{"branch", "int32", "1", "point",
-                                    "Branch of each point (a new one after each event)"};
-constexpr ProductField kCurveEventSpeed{
-    "event_speed_mps", "float64", "m/s", "event",
-    "Speeds where the boundary appears, ends or jumps to another crossing"};
-constexpr ProductField kCurveEventWhat{"event_what", "string", "1", "event",
-                                       "What happens at each event: appears, ends, jumps"};
-
-// The key datasets, one per swept parameter other than height_m.
+// The key datasets, one per swept parameter other than height_m (dataset::kKey, named and described
+// by the key).
 void WriteBoundaryKeys(ProductGroup& g, const ArchiveBoundary& boundary) {
   for (std::size_t k = 0; k < boundary.key_names.size(); ++k) {
     std::vector<double> values;
     for (const auto& p : boundary.points) values.push_back(p.key_values[k]);
-    ProductDataset dataset =
+    ProductDataset key_dataset =
         g.Numbers(boundary.key_names[k], values, boundary.key_units[k],
                   "Value of the swept parameter " + boundary.key_names[k] + " of this boundary point" +
                       (boundary.key_levels[k].empty() ? "" : " (index of its level; levels attribute)"));
-    if (!boundary.key_levels[k].empty()) dataset.Attribute("levels", boundary.key_levels[k]);
+    if (!boundary.key_levels[k].empty()) key_dataset.Attribute("levels", boundary.key_levels[k]);
   }
 }
 
@@ -381,77 +332,48 @@ void WriteBoundaryPoints(ProductGroup& g, const ArchiveBoundary& boundary) {
     heights.push_back(static_cast<std::int32_t>(p.heights));
     reasons.push_back(p.reason);
   }
-  g.Numbers(kHeight, height);
-  g.Numbers(kHeightOverSpan, ratio);
-  ProductDataset found_dataset = g.Numbers(kFound, found);
+  g.Numbers(dataset::kHeightM, height);
+  g.Numbers(dataset::kHeightOverSpan, ratio);
+  ProductDataset found_dataset = g.Numbers(dataset::kFound, found);
   found_dataset.Attribute("levels", std::vector<std::string>{"false", "true"});
   // The archive's convention for integer codes (schemas/archive.md): never stored here, every
   // point is 0 or 1.
   found_dataset.Attribute("fill", std::int64_t{-1});
-  g.Numbers(kGridLower, lower);
-  g.Numbers(kGridUpper, upper);
-  g.Numbers(kBracketWidth, width);
-  g.Numbers(kGridCrossings, crossings);
-  g.Numbers(kHeights, heights);
-  g.Strings(kReason, reasons);
+  g.Numbers(dataset::kGridLowerHeightM, lower);
+  g.Numbers(dataset::kGridUpperHeightM, upper);
+  g.Numbers(dataset::kBracketWidthM, width);
+  g.Numbers(dataset::kGridCrossings, crossings);
+  g.Numbers(dataset::kHeights, heights);
+  g.Strings(dataset::kReason, reasons);
 }
 
 }  // namespace
-
-const ProductLayout& BoundaryProduct() {
-  static const ProductLayout layout{
-      "boundary",
-      kBoundaryGroup,
-      "gesweep boundary",
-      "The stability boundary H* of a sweep's results, per combination of the other swept parameters",
-      {kProductDescription, kBoundaryMethod, kBoundaryKeys, kSourceDataset, kAlong, kToleranceM, kWingspanM,
-       kAircraftName, kRunsUsed, kRunsSkipped, kEngineVersion, kGitCommit, kCreated, kCommandLine},
-      {kKeyValue, kHeight, kHeightOverSpan, kFound, kGridLower, kGridUpper, kBracketWidth, kGridCrossings,
-       kHeights, kReason},
-      {}};
-  return layout;
-}
-
-const ProductLayout& BoundaryCurveProduct() {
-  static const ProductLayout layout{
-      "boundary_curve",
-      kBoundaryCurveGroup,
-      "gesweep boundary",
-      "The boundary H*(u0) traced by continuation over the archive's speed range",
-      {kProductDescription, kWingspanM, kEngineVersion, kCreated, kCommandLine},
-      {kCurveSpeed, kCurveHeight, kCurveRatio, kCurveSlope, kCurveBranch, kCurveEventSpeed, kCurveEventWhat},
-      {}};
-  return layout;
-}
 
 void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBoundary& boundary,
                         const std::string& command_line) {
   WriteAnalysisProduct(archive, kBoundaryGroup, "the boundary", [&](ProductGroup& g) {
     std::string keys_text;
     for (const auto& name : boundary.key_names) keys_text += (keys_text.empty() ? "" : ", ") + name;
-    g.Attribute(kProductDescription,
+    g.Attribute(attribute::kDescription,
                 "Stability boundary H*: for each combination of the swept parameters other than height_m (" +
                     (keys_text.empty() ? std::string("none: one boundary") : keys_text) +
                     "), the highest sign change of results/modes/stability_margin_per_s along "
                     "design/height_m with unstable below and stable above, refined on the run's continuous "
                     "model (docs/report.md)");
     g.Attribute(
-        kBoundaryMethod,
+        attribute::kMethod,
         "grid bracket from the archived sigma; FindBoundary (the certified Hurwitz finder: roots of Delta4 "
         "and a5, refined by TOMS 748) on the model rebuilt from the archive's aircraft_text and the run's "
         "parameters, inside the bracket");
-    g.Attribute(kBoundaryKeys, boundary.key_names);
-    g.Attribute(kSourceDataset, kMarginPath);
-    g.Attribute(kAlong, kHeightPath);
-    g.Attribute(kToleranceM, boundary.tolerance_m);
-    g.Attribute(kWingspanM, boundary.wingspan_m);
-    g.Attribute(kAircraftName, boundary.aircraft_name);
-    g.Attribute(kRunsUsed, boundary.runs_used);
-    g.Attribute(kRunsSkipped, boundary.runs_skipped);
-    g.Attribute(kEngineVersion, EngineVersion());
-    g.Attribute(kGitCommit, EngineGitCommit());
-    g.Attribute(kCreated, UtcTimestamp());
-    g.Attribute(kCommandLine, command_line);
+    g.Attribute(attribute::kKeys, boundary.key_names);
+    g.Attribute(attribute::kSourceDataset, kMarginPath);
+    g.Attribute(attribute::kAlong, kHeightPath);
+    g.Attribute(attribute::kToleranceM, boundary.tolerance_m);
+    g.Attribute(attribute::kWingspanM, boundary.wingspan_m);
+    g.Attribute(attribute::kAircraftName, boundary.aircraft_name);
+    g.Attribute(attribute::kRunsUsed, boundary.runs_used);
+    g.Attribute(attribute::kRunsSkipped, boundary.runs_skipped);
+    WriteProvenance(g, product::boundary::Layout(), command_line);
     WriteBoundaryKeys(g, boundary);
     WriteBoundaryPoints(g, boundary);
   });
@@ -460,21 +382,19 @@ void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBound
 void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
                              const std::string& command_line) {
   WriteAnalysisProduct(archive, kBoundaryCurveGroup, "", [&](ProductGroup& g) {
-    g.Attribute(kProductDescription,
+    g.Attribute(curve_attribute::kDescription,
                 "The boundary H*(u0) traced by continuation on the crossing criterion (Delta4 or a5) of "
                 "the continuous model over the archive's speed range, every point confirmed by the "
                 "certified Hurwitz finder (docs/model.md, 'The boundary by the Hurwitz criterion')");
-    g.Attribute(kWingspanM, curve.wingspan_m);
-    g.Attribute(kEngineVersion, EngineVersion());
-    g.Attribute(kCreated, UtcTimestamp());
-    g.Attribute(kCommandLine, command_line);
-    g.Numbers(kCurveSpeed, curve.speed_mps);
-    g.Numbers(kCurveHeight, curve.height_m);
-    g.Numbers(kCurveRatio, curve.height_over_span);
-    g.Numbers(kCurveSlope, curve.height_speed_derivative);
-    g.Numbers(kCurveBranch, curve.branch);
-    g.Numbers(kCurveEventSpeed, curve.event_speed_mps);
-    g.Strings(kCurveEventWhat, curve.event_what);
+    g.Attribute(curve_attribute::kWingspanM, curve.wingspan_m);
+    WriteProvenance(g, product::boundary_curve::Layout(), command_line);
+    g.Numbers(curve_dataset::kSpeedMps, curve.speed_mps);
+    g.Numbers(curve_dataset::kHeightM, curve.height_m);
+    g.Numbers(curve_dataset::kHeightOverSpan, curve.height_over_span);
+    g.Numbers(curve_dataset::kHeightSpeedDerivative, curve.height_speed_derivative);
+    g.Numbers(curve_dataset::kBranch, curve.branch);
+    g.Numbers(curve_dataset::kEventSpeedMps, curve.event_speed_mps);
+    g.Strings(curve_dataset::kEventWhat, curve.event_what);
   });
 }
 

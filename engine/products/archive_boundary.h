@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "engine/analyses/analysis.h"
-#include "engine/archive/analysis_product.h"
+#include "engine/archive/product_fields.h"
 #include "engine/modal/boundary.h"
 
 namespace gesweep {
@@ -78,8 +78,9 @@ ArchiveBoundary ExtractBoundary(const ArchiveReader& archive, const ColumnCatalo
 void WriteBoundaryGroup(const std::filesystem::path& archive, const ArchiveBoundary& boundary,
                         const std::string& command_line);
 
-/// The path of the group: "analysis/boundary".
-inline constexpr const char* kBoundaryGroup = "analysis/boundary";
+/// The path of the group: "analysis/boundary". What it holds is product::boundary of
+/// engine/archive/product_fields.h, generated from schemas/products.json.
+inline constexpr const char* kBoundaryGroup = product::boundary::kPath;
 
 /// A boundary curve H*(u0) traced by continuation on the continuous model (engine/estimators/
 /// boundary_curve.h), as plain arrays in ascending speed, to store beside /analysis/boundary.
@@ -96,12 +97,7 @@ struct BoundaryCurveRecord {
 void WriteBoundaryCurveGroup(const std::filesystem::path& archive, const BoundaryCurveRecord& curve,
                              const std::string& command_line);
 
-/// The path of the group: "analysis/boundary_curve".
-inline constexpr const char* kBoundaryCurveGroup = "analysis/boundary_curve";
-
-/// What WriteBoundaryGroup and WriteBoundaryCurveGroup write, described once (the writers store
-/// these fields; the column manifest lists them, "products").
-const ProductLayout& BoundaryProduct();
-const ProductLayout& BoundaryCurveProduct();
+/// The path of the group: "analysis/boundary_curve" (product::boundary_curve).
+inline constexpr const char* kBoundaryCurveGroup = product::boundary_curve::kPath;
 
 }  // namespace gesweep

@@ -11,7 +11,7 @@
 
 #include "engine/archive/analysis_product.h"
 #include "engine/archive/archive_reader.h"
-#include "engine/archive/provenance.h"
+#include "engine/archive/product_fields.h"
 #include "engine/common/errors.h"
 #include "engine/common/request_error.h"
 #include "engine/query/run_columns.h"
@@ -745,183 +745,35 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
   return d;
 }
 
-namespace {
-
-constexpr const char* kDispersionGroup = "analysis/dispersion";
-
-// The attributes of /analysis/dispersion (DispersionProduct), each described once.
-constexpr ProductField kStudyName{"study_name", "string", "", "", "The archive's study"};
-constexpr ProductField kColumns{"columns", "list of string", "", "column", "The columns' display names"};
-constexpr ProductField kColumnPaths{"column_paths", "list of string", "", "column", "Their dataset paths"};
-constexpr ProductField kColumnUnits{"column_units", "list of string", "", "column", "Their units"};
-constexpr ProductField kGroupBy{"group_by", "string", "", "", "The grouping column; empty without grouping"};
-constexpr ProductField kGroupPath{"group_path", "string", "", "", "Its dataset path; empty without grouping"};
-constexpr ProductField kGroupUnits{"group_units", "string", "", "", "Its units; empty without grouping"};
-constexpr ProductField kPercentiles{"percentiles", "list of float64", "", "percentile",
-                                    "The percentiles, 0 to 100"};
-constexpr ProductField kTailProbabilities{"tail_probabilities", "list of float64", "", "p",
-                                          "The tail probabilities of the fitted quantiles"};
-constexpr ProductField kConfidence{"confidence_level", "float64", "", "",
-                                   "Two-sided level of the limits' intervals"};
-constexpr ProductField kRunCount{"run_count", "int64", "", "", "Rows of the archive"};
-
-// Its datasets ("see column_units": each column has its own units). <fit> and <law>: a tail law
-// (normal, gumbel_max, gev_max, gumbel_min) as named in the dataset and as described.
-constexpr std::string_view kColumnUnitsText = "see column_units";
-constexpr ProductField kGroupLabel{"group_label", "string", "1", "group",
-                                   "The grouping value as shown, one per group (\"all\" without grouping)"};
-constexpr ProductField kGroupValue{
-    "group_value", "float64", "<group units>", "group",
-    "The grouping value, one per group (NaN without grouping, or for runs without one)"};
-constexpr ProductField kRuns{"runs", "int64", "1", "group, column", "Runs of the group [group, column]"};
-constexpr ProductField kValues{"values", "int64", "1", "group, column",
-                               "Complete runs with a finite value: the sample [group, column]"};
-constexpr ProductField kFailed{"failed", "int64", "1", "group, column",
-                               "Failed runs (status failed) [group, column]"};
-constexpr ProductField kWithoutValue{"without_value", "int64", "1", "group, column",
-                                     "Complete runs whose value is not finite [group, column]"};
-constexpr ProductField kPending{"pending", "int64", "1", "group, column", "Runs not run yet [group, column]"};
-constexpr ProductField kMean{"mean", "float64", kColumnUnitsText, "group, column", "Mean [group, column]"};
-constexpr ProductField kStandardDeviation{"standard_deviation", "float64", kColumnUnitsText, "group, column",
-                                          "Standard deviation (divisor n - 1) [group, column]"};
-constexpr ProductField kNoSpread{
-    "no_spread", "int64", "1", "group, column",
-    "1: every value of the sample is the same (standard deviation 0, no tail law fitted: the fits' "
-    "parameters and quantiles are NaN); 0 otherwise [group, column]"};
-constexpr ProductField kMinimum{"minimum", "float64", kColumnUnitsText, "group, column",
-                                "Smallest value [group, column]"};
-constexpr ProductField kMaximum{"maximum", "float64", kColumnUnitsText, "group, column",
-                                "Largest value [group, column]"};
-constexpr ProductField kPercentileValues{
-    "percentile_values", "float64", kColumnUnitsText, "group, column, percentile",
-    "Percentiles (linear interpolation, NumPy's default) at the attribute "
-    "percentiles [group, column, percentile]"};
-constexpr ProductField kFitLocation{"<fit>_location", "float64", kColumnUnitsText, "group, column",
-                                    "<law> fit: location [group, column]"};
-constexpr ProductField kFitScale{"<fit>_scale", "float64", kColumnUnitsText, "group, column",
-                                 "<law> fit: scale [group, column]"};
-constexpr ProductField kFitAndersonDarling{"<fit>_anderson_darling", "float64", "1", "group, column",
-                                           "<law> fit: Anderson-Darling statistic A2 [group, column]"};
-constexpr ProductField kFitRejected{
-    "<fit>_rejected_at_percent", "float64", "%", "group, column",
-    "<law> fit: smallest significance level (of Stephens' table) at which A2 rejects it; 0: not rejected "
-    "at any [group, column]"};
-constexpr ProductField kFitUpperQuantiles{"<fit>_upper_quantiles", "float64", kColumnUnitsText,
-                                          "group, column, p",
-                                          "<law> fit: the value exceeded with probability p, p the attribute "
-                                          "tail_probabilities [group, column, p]"};
-constexpr ProductField kFitLowerQuantiles{"<fit>_lower_quantiles", "float64", kColumnUnitsText,
-                                          "group, column, p",
-                                          "<law> fit: the value not reached with probability p, p the "
-                                          "attribute tail_probabilities [group, column, p]"};
-constexpr ProductField kGevShape{
-    "gev_max_shape", "float64", "1", "group, column",
-    "Generalised extreme value fit: shape xi (scipy's genextreme c = -xi) [group, column]"};
-
-// The subgroup limits.
-constexpr ProductField kLimitsDescription{
-    "description", "string", "", "",
-    "Probability of exceeding each limit, per group: empirical with Wilson and Clopper-Pearson "
-    "intervals at the parent's confidence_level, and the fitted tails'"};
-constexpr ProductField kLimitText{"limit", "string", "1", "limit", "The limit as given, one per limit"};
-constexpr ProductField kLimitColumn{"column", "string", "1", "limit", "Its column"};
-constexpr ProductField kLimitValue{"value", "float64", "see column", "limit",
-                                   "Its value, in its column's units"};
-constexpr ProductField kLimitAbove{"above", "int64", "1", "limit",
-                                   "1: P(value > limit); 0: P(value < limit)"};
-constexpr ProductField kExceed{"exceed", "int64", "1", "group, limit",
-                               "Values beyond the limit [group, limit]"};
-constexpr ProductField kLimitValues{"values", "int64", "1", "group, limit",
-                                    "The sample (finite values) [group, limit]"};
-constexpr ProductField kLimitFailed{"failed", "int64", "1", "group, limit",
-                                    "Failed runs and runs without a value: not in the sample [group, limit]"};
-constexpr ProductField kProbability{"probability", "float64", "1", "group, limit",
-                                    "exceed / values [group, limit]"};
-constexpr ProductField kWilsonLower{"wilson_lower", "float64", "1", "group, limit",
-                                    "Wilson interval, lower end [group, limit]"};
-constexpr ProductField kWilsonUpper{"wilson_upper", "float64", "1", "group, limit",
-                                    "Wilson interval, upper end [group, limit]"};
-constexpr ProductField kClopperLower{"clopper_pearson_lower", "float64", "1", "group, limit",
-                                     "Clopper-Pearson interval, lower end [group, limit]"};
-constexpr ProductField kClopperUpper{"clopper_pearson_upper", "float64", "1", "group, limit",
-                                     "Clopper-Pearson interval, upper end [group, limit]"};
-constexpr ProductField kNormalProbability{"normal_probability", "float64", "1", "group, limit",
-                                          "Of the normal fit [group, limit]"};
-constexpr ProductField kGumbelProbability{"gumbel_probability", "float64", "1", "group, limit",
-                                          "Of the Gumbel fit of the same tail [group, limit]"};
-constexpr ProductField kGevProbability{
-    "gev_probability", "float64", "1", "group, limit",
-    "Of the generalised extreme value fit of the largest values (NaN for <) [group, limit]"};
-
-}  // namespace
-
-std::string DispersionGroupPath() { return kDispersionGroup; }
-
-const ProductLayout& DispersionProduct() {
-  static const ProductLayout layout{
-      "dispersion",
-      kDispersionGroup,
-      "gesweep dispersion",
-      "The dispersion of per-run result columns over the runs, per group of a grouping column",
-      {kProductDescription, kCommandLine, kEngineVersion, kGitCommit, kCreated, kStudyName, kColumns,
-       kColumnPaths, kColumnUnits, kGroupBy, kGroupPath, kGroupUnits, kPercentiles, kTailProbabilities,
-       kConfidence, kRunCount},
-      {kGroupLabel,
-       kGroupValue,
-       kRuns,
-       kValues,
-       kFailed,
-       kWithoutValue,
-       kPending,
-       kMean,
-       kStandardDeviation,
-       kNoSpread,
-       kMinimum,
-       kMaximum,
-       kPercentileValues,
-       kFitLocation,
-       kFitScale,
-       kFitAndersonDarling,
-       kFitRejected,
-       kFitUpperQuantiles,
-       kFitLowerQuantiles,
-       kGevShape},
-      {{"limits",
-        "limits",
-        "gesweep dispersion",
-        "The exceedance of each limit, per group",
-        {kLimitsDescription},
-        {kLimitText, kLimitColumn, kLimitValue, kLimitAbove, kExceed, kLimitValues, kLimitFailed,
-         kProbability, kWilsonLower, kWilsonUpper, kClopperLower, kClopperUpper, kNormalProbability,
-         kGumbelProbability, kGevProbability},
-        {}}}};
-  return layout;
-}
+std::string DispersionGroupPath() { return product::dispersion::kPath; }
 
 namespace {
+
+// The fields of /analysis/dispersion and of its subgroup limits (schemas/products.json).
+namespace attribute = product::dispersion::attribute;
+namespace dataset = product::dispersion::dataset;
+namespace limits_attribute = product::dispersion::limits::attribute;
+namespace limits_dataset = product::dispersion::limits::dataset;
 
 // The product's attributes: what it is, where it comes from and the options it was computed with.
 void WriteDispersionAttributes(ProductGroup& group, const Dispersion& d, const std::string& command_line) {
-  group.Attribute(kProductDescription,
+  group.Attribute(attribute::kDescription,
                   "Dispersion of per-run result columns over the runs of a sweep, per group of a grouping "
                   "column (docs/dispersion.md): counts, moments, percentiles, normal and Gumbel tail fits "
                   "with Anderson-Darling statistics, and limit exceedance probabilities with Wilson and "
                   "Clopper-Pearson intervals");
-  group.Attribute(kCommandLine, command_line);
-  group.Attribute(kEngineVersion, EngineVersion());
-  group.Attribute(kGitCommit, EngineGitCommit());
-  group.Attribute(kCreated, UtcTimestamp());
-  group.Attribute(kStudyName, d.study_name);
-  group.Attribute(kColumns, d.columns);
-  group.Attribute(kColumnPaths, d.column_paths);
-  group.Attribute(kColumnUnits, d.column_units);
-  group.Attribute(kGroupBy, d.group_by);
-  group.Attribute(kGroupPath, d.group_path);
-  group.Attribute(kGroupUnits, d.group_units);
-  group.Attribute(kPercentiles, d.options.percentiles);
-  group.Attribute(kTailProbabilities, d.options.tail_probabilities);
-  group.Attribute(kConfidence, d.options.confidence_level);
-  group.Attribute(kRunCount, d.run_count);
+  WriteProvenance(group, product::dispersion::Layout(), command_line);
+  group.Attribute(attribute::kStudyName, d.study_name);
+  group.Attribute(attribute::kColumns, d.columns);
+  group.Attribute(attribute::kColumnPaths, d.column_paths);
+  group.Attribute(attribute::kColumnUnits, d.column_units);
+  group.Attribute(attribute::kGroupBy, d.group_by);
+  group.Attribute(attribute::kGroupPath, d.group_path);
+  group.Attribute(attribute::kGroupUnits, d.group_units);
+  group.Attribute(attribute::kPercentiles, d.options.percentiles);
+  group.Attribute(attribute::kTailProbabilities, d.options.tail_probabilities);
+  group.Attribute(attribute::kConfidenceLevel, d.options.confidence_level);
+  group.Attribute(attribute::kRunCount, d.run_count);
 }
 
 // The groups' labels and grouping values, one per group.
@@ -932,9 +784,9 @@ void WriteGroupKeys(ProductGroup& group, const Dispersion& d) {
     labels.push_back(g.label);
     keys.push_back(g.value);
   }
-  group.Strings(kGroupLabel, labels);
-  group.Numbers(std::string(kGroupValue.name), keys, d.group_units.empty() ? "1" : d.group_units,
-                std::string(kGroupValue.description));
+  group.Strings(dataset::kGroupLabel, labels);
+  group.Numbers(std::string(dataset::kGroupValue.name), keys, d.group_units.empty() ? "1" : d.group_units,
+                std::string(dataset::kGroupValue.description));
 }
 
 // A per (group, column) table of `field`'s type, shape [G, C]; a <fit> and <law> in the field are
@@ -953,22 +805,22 @@ void WritePerColumn(ProductGroup& group, const Dispersion& d, const ProductField
 void WriteSampleTables(ProductGroup& group, const Dispersion& d) {
   const std::size_t G = d.groups.size(), C = d.columns.size(), P = d.options.percentiles.size();
   using E = const ColumnDispersion&;
-  WritePerColumn<std::int64_t>(group, d, kRuns, [](E c) { return c.runs; });
-  WritePerColumn<std::int64_t>(group, d, kValues, [](E c) { return c.values; });
-  WritePerColumn<std::int64_t>(group, d, kFailed, [](E c) { return c.failed; });
-  WritePerColumn<std::int64_t>(group, d, kWithoutValue, [](E c) { return c.without_value; });
-  WritePerColumn<std::int64_t>(group, d, kPending, [](E c) { return c.pending; });
-  WritePerColumn<double>(group, d, kMean, [](E c) { return c.mean; });
-  WritePerColumn<double>(group, d, kStandardDeviation, [](E c) { return c.standard_deviation; });
-  WritePerColumn<std::int64_t>(group, d, kNoSpread,
+  WritePerColumn<std::int64_t>(group, d, dataset::kRuns, [](E c) { return c.runs; });
+  WritePerColumn<std::int64_t>(group, d, dataset::kValues, [](E c) { return c.values; });
+  WritePerColumn<std::int64_t>(group, d, dataset::kFailed, [](E c) { return c.failed; });
+  WritePerColumn<std::int64_t>(group, d, dataset::kWithoutValue, [](E c) { return c.without_value; });
+  WritePerColumn<std::int64_t>(group, d, dataset::kPending, [](E c) { return c.pending; });
+  WritePerColumn<double>(group, d, dataset::kMean, [](E c) { return c.mean; });
+  WritePerColumn<double>(group, d, dataset::kStandardDeviation, [](E c) { return c.standard_deviation; });
+  WritePerColumn<std::int64_t>(group, d, dataset::kNoSpread,
                                [](E c) { return static_cast<std::int64_t>(c.no_spread ? 1 : 0); });
-  WritePerColumn<double>(group, d, kMinimum, [](E c) { return c.minimum; });
-  WritePerColumn<double>(group, d, kMaximum, [](E c) { return c.maximum; });
+  WritePerColumn<double>(group, d, dataset::kMinimum, [](E c) { return c.minimum; });
+  WritePerColumn<double>(group, d, dataset::kMaximum, [](E c) { return c.maximum; });
   std::vector<double> percentiles;
   for (const auto& g : d.groups)
     for (const auto& c : g.columns)
       percentiles.insert(percentiles.end(), c.percentiles.begin(), c.percentiles.end());
-  group.Numbers(kPercentileValues, percentiles, {G, C, P});
+  group.Numbers(dataset::kPercentileValues, percentiles, {G, C, P});
 }
 
 // One tail law's fits: location, scale, A2 and its rejection level, and the quantiles of the tails
@@ -979,13 +831,14 @@ void WriteTailFit(ProductGroup& group, const Dispersion& d, const std::string& f
   const std::size_t G = d.groups.size(), C = d.columns.size(), T = d.options.tail_probabilities.size();
   using E = const ColumnDispersion&;
   WritePerColumn<double>(
-      group, d, kFitLocation, [&](E c) { return tail_of(c).fit.location; }, fit, law);
+      group, d, dataset::kFitLocation, [&](E c) { return tail_of(c).fit.location; }, fit, law);
   WritePerColumn<double>(
-      group, d, kFitScale, [&](E c) { return tail_of(c).fit.scale; }, fit, law);
+      group, d, dataset::kFitScale, [&](E c) { return tail_of(c).fit.scale; }, fit, law);
   WritePerColumn<double>(
-      group, d, kFitAndersonDarling, [&](E c) { return tail_of(c).goodness.statistic; }, fit, law);
+      group, d, dataset::kFitAndersonDarling, [&](E c) { return tail_of(c).goodness.statistic; }, fit, law);
   WritePerColumn<double>(
-      group, d, kFitRejected, [&](E c) { return tail_of(c).goodness.rejected_at_percent(); }, fit, law);
+      group, d, dataset::kFitRejectedAtPercent,
+      [&](E c) { return tail_of(c).goodness.rejected_at_percent(); }, fit, law);
   for (int side = 0; side < 2; ++side) {
     if ((side == 0 && !upper) || (side == 1 && !lower)) continue;
     std::vector<double> values;
@@ -994,7 +847,7 @@ void WriteTailFit(ProductGroup& group, const Dispersion& d, const std::string& f
         const auto& q = side == 0 ? tail_of(c).upper_quantiles : tail_of(c).lower_quantiles;
         values.insert(values.end(), q.begin(), q.end());
       }
-    const ProductField& field = side == 0 ? kFitUpperQuantiles : kFitLowerQuantiles;
+    const ProductField& field = side == 0 ? dataset::kFitUpperQuantiles : dataset::kFitLowerQuantiles;
     group.Numbers(Filled(field.name, "<fit>", fit), values, std::string(field.units),
                   Filled(field.description, "<law>", law), {G, C, T});
   }
@@ -1011,7 +864,8 @@ void WriteTailFits(ProductGroup& group, const Dispersion& d) {
   WriteTailFit(
       group, d, "gev_max", "Generalised extreme value (largest values; A2 without a table)",
       [](const ColumnDispersion& c) -> const TailFit& { return c.gev_max; }, true, false);
-  WritePerColumn<double>(group, d, kGevShape, [](const ColumnDispersion& c) { return c.gev_max.shape; });
+  WritePerColumn<double>(group, d, dataset::kGevMaxShape,
+                         [](const ColumnDispersion& c) { return c.gev_max.shape; });
   WriteTailFit(
       group, d, "gumbel_min",
       "Gumbel of the smallest values (CDF 1 - exp(-exp((x - location)/scale)), scipy's gumbel_l)",
@@ -1038,24 +892,28 @@ void WriteLimitTables(ProductGroup& group, const Dispersion& d) {
     limit_values.push_back(l.value);
     above.push_back(l.above ? 1 : 0);
   }
-  ProductGroup limits = group.Group(std::string(DispersionProduct().groups.at(0).path));
-  limits.Attribute(kLimitsDescription, std::string(kLimitsDescription.description));
-  limits.Strings(kLimitText, texts);
-  limits.Strings(kLimitColumn, limit_columns);
-  limits.Numbers(kLimitValue, limit_values);
-  limits.Numbers(kLimitAbove, above);
+  ProductGroup limits = group.Group(product::dispersion::limits::kPath);
+  limits.Attribute(limits_attribute::kDescription, std::string(limits_attribute::kDescription.description));
+  limits.Strings(limits_dataset::kLimit, texts);
+  limits.Strings(limits_dataset::kColumn, limit_columns);
+  limits.Numbers(limits_dataset::kValue, limit_values);
+  limits.Numbers(limits_dataset::kAbove, above);
   using E = const LimitExceedance&;
-  WritePerLimit<std::int64_t>(limits, d, kExceed, [](E e) { return e.exceed; });
-  WritePerLimit<std::int64_t>(limits, d, kLimitValues, [](E e) { return e.values; });
-  WritePerLimit<std::int64_t>(limits, d, kLimitFailed, [](E e) { return e.failed; });
-  WritePerLimit<double>(limits, d, kProbability, [](E e) { return e.probability; });
-  WritePerLimit<double>(limits, d, kWilsonLower, [](E e) { return e.wilson.lower; });
-  WritePerLimit<double>(limits, d, kWilsonUpper, [](E e) { return e.wilson.upper; });
-  WritePerLimit<double>(limits, d, kClopperLower, [](E e) { return e.clopper_pearson.lower; });
-  WritePerLimit<double>(limits, d, kClopperUpper, [](E e) { return e.clopper_pearson.upper; });
-  WritePerLimit<double>(limits, d, kNormalProbability, [](E e) { return e.normal_probability; });
-  WritePerLimit<double>(limits, d, kGumbelProbability, [](E e) { return e.gumbel_probability; });
-  WritePerLimit<double>(limits, d, kGevProbability, [](E e) { return e.gev_probability; });
+  WritePerLimit<std::int64_t>(limits, d, limits_dataset::kExceed, [](E e) { return e.exceed; });
+  WritePerLimit<std::int64_t>(limits, d, limits_dataset::kValues, [](E e) { return e.values; });
+  WritePerLimit<std::int64_t>(limits, d, limits_dataset::kFailed, [](E e) { return e.failed; });
+  WritePerLimit<double>(limits, d, limits_dataset::kProbability, [](E e) { return e.probability; });
+  WritePerLimit<double>(limits, d, limits_dataset::kWilsonLower, [](E e) { return e.wilson.lower; });
+  WritePerLimit<double>(limits, d, limits_dataset::kWilsonUpper, [](E e) { return e.wilson.upper; });
+  WritePerLimit<double>(limits, d, limits_dataset::kClopperPearsonLower,
+                        [](E e) { return e.clopper_pearson.lower; });
+  WritePerLimit<double>(limits, d, limits_dataset::kClopperPearsonUpper,
+                        [](E e) { return e.clopper_pearson.upper; });
+  WritePerLimit<double>(limits, d, limits_dataset::kNormalProbability,
+                        [](E e) { return e.normal_probability; });
+  WritePerLimit<double>(limits, d, limits_dataset::kGumbelProbability,
+                        [](E e) { return e.gumbel_probability; });
+  WritePerLimit<double>(limits, d, limits_dataset::kGevProbability, [](E e) { return e.gev_probability; });
 }
 
 }  // namespace

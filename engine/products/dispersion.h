@@ -205,11 +205,8 @@ Dispersion ComputeDispersion(const ArchiveReader& archive, const ColumnCatalog& 
 void WriteDispersionGroup(const std::filesystem::path& archive, const Dispersion& dispersion,
                           const std::string& command_line);
 
-/// "analysis/dispersion".
+/// "analysis/dispersion". What the group holds (its attributes, datasets and the subgroup `limits`)
+/// is product::dispersion of engine/archive/product_fields.h, generated from schemas/products.json.
 std::string DispersionGroupPath();
-
-/// What WriteDispersionGroup writes, described once (the writer stores these fields; the column
-/// manifest lists them, "products"): its attributes, datasets and the subgroup `limits`.
-const ProductLayout& DispersionProduct();
 
 }  // namespace gesweep

@@ -2,13 +2,9 @@
 
 #include <string>
 
-#include "engine/archive/analysis_product.h"
 #include "engine/archive/archive_format.h"
-#include "engine/archive/subset_archive.h"
+#include "engine/archive/product_fields.h"
 #include "engine/common/enum_names.h"
-#include "engine/products/archive_boundary.h"
-#include "engine/products/dispersion.h"
-#include "engine/products/sensitivity_group.h"
 #include "engine/sweep/runner.h"
 #include "engine/sweep/sweep_plan.h"
 
@@ -101,10 +97,7 @@ Json RunStatusJson() {
 
 nlohmann::ordered_json ArchiveLayoutJson() {
   Json products = Json::array();
-  for (const ProductLayout* layout :
-       {&BoundaryProduct(), &BoundaryCurveProduct(), &SensitivityProduct(), &DispersionProduct()}) {
-    products.push_back(LayoutJson(*layout));
-  }
+  for (const ProductLayout* layout : product::AnalysisProducts()) products.push_back(LayoutJson(*layout));
   const Json groups = {{"runs", archive::kRunsGroup},
                        {"design", archive::kDesignGroup},
                        {"results", archive::kResultsGroup},
@@ -114,7 +107,7 @@ nlohmann::ordered_json ArchiveLayoutJson() {
           {"runs", RunsJson()},
           {"run_status", RunStatusJson()},
           {"products", products},
-          {"subset_archive", LayoutJson(risk::SubsetArchiveLayout())}};
+          {"subset_archive", LayoutJson(product::subset_archive::Layout())}};
 }
 
 }  // namespace gesweep

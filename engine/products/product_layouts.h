@@ -3,7 +3,8 @@
 /// schemas/archive.md, "The column manifest") and the Python module carries it (gesweep._gesweep.
 /// _archive_layout): the archive's groups, the bookkeeping datasets under runs/, the run-status levels,
 /// every /analysis product and the subset-simulation archive, each from the description its writer
-/// stores (ProductLayout beside each writer; RunStatus's names table). The Python reader of archives
+/// stores (the ProductLayouts generated from schemas/products.json, engine/archive/product_fields.h;
+/// RunStatus's names table). The Python reader of archives
 /// (engine/python/gesweep/_hdf5.py) finds every path there and spells none.
 
 #include <nlohmann/json.hpp>

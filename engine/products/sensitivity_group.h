@@ -15,11 +15,6 @@ namespace gesweep {
 /// "analysis/sensitivity/boundary/height_m" for results/boundary/height_m.
 std::string SensitivityGroupPath(const ArchiveOutput& output);
 
-/// What WriteSensitivityGroup writes, described once (the writer stores these fields; the column
-/// manifest lists them, "products"). The Sobol' and Morris attributes and datasets are both listed:
-/// a group holds those of its method.
-const ProductLayout& SensitivityProduct();
-
 /// Writes `result` (status kOk) into the archive at SensitivityGroupPath(result.output), replacing a
 /// previous result for the same output: the new group is written under a temporary name and moved
 /// into place only when complete, so a failure leaves the previous result untouched. Records the
@@ -27,6 +22,8 @@ const ProductLayout& SensitivityProduct();
 /// blocks used and dropped, the parameter names, the method and `command_line`. Preconditions: the
 /// caller holds ArchiveLock on the archive and has no handle open on it. Throws InputError when
 /// the archive cannot be opened for writing (open elsewhere), ArchiveError on an I/O failure.
+/// The group's fields are product::sensitivity of engine/archive/product_fields.h (generated from
+/// schemas/products.json), which lists the Sobol' and the Morris ones: a group holds its method's.
 void WriteSensitivityGroup(const std::filesystem::path& archive, const ArchiveSensitivity& result,
                            const std::string& command_line);
 
