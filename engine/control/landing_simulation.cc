@@ -868,7 +868,9 @@ class LandingLanes {
       SetLane(a_.f, i, step.f_new);
       lane.g_previous = g_new;
       if (lane.next_breakpoint < lane.breakpoints.size() && lane.breakpoints[lane.next_breakpoint] <= lane.t) {
-        return StartRestart(i);
+        // The restart's event values are g_new: the same time, state and phase, and the events do not
+        // read the segment (DisturbanceField::Motion does not; the held noise enters derivatives only).
+        return StartRestart(i, /*events_known=*/true);
       }
       if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
       return;
@@ -882,11 +884,12 @@ class LandingLanes {
       lane.result.stopping_event = cut_event;
       return Finish(i, IntegrationStatus::kStoppedByEvent);
     }
-    StartRestart(i);
+    StartRestart(i, /*events_known=*/false);
   }
 
   // restart_here up to its derivative: the segment at the lane's time, the phase and the noise there.
-  void StartRestart(int i) {
+  // events_known: g_previous already holds the event values there.
+  void StartRestart(int i, bool events_known) {
     Run& lane = lane_[i];
     while (lane.next_breakpoint < lane.breakpoints.size() && lane.breakpoints[lane.next_breakpoint] <= lane.t) {
       ++lane.next_breakpoint;
@@ -896,6 +899,7 @@ class LandingLanes {
     SetNoise(i);
     a_.t[i] = lane.t;
     restart_[i] = true;
+    restart_events_known_[i] = events_known;
   }
 
   // restart_here after its derivative (the kernel's, in f_new): the event values, the finiteness
@@ -906,7 +910,7 @@ class LandingLanes {
     State f;
     for (int c = 0; c < N; ++c) f[static_cast<std::size_t>(c)] = a_.f_new[c][i];
     SetLane(a_.f, i, f);
-    lane.problem->EventValues(lane.t, Lane(a_.x, i), lane.segment, lane.g_previous);
+    if (!restart_events_known_[i]) lane.problem->EventValues(lane.t, Lane(a_.x, i), lane.segment, lane.g_previous);
     if (!integrator_detail::AllFinite<N>(f)) return Finish(i, IntegrationStatus::kNonFinite);
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
   }
@@ -940,6 +944,7 @@ class LandingLanes {
   std::array<Run, W> lane_;
   std::array<bool, W> active_{};
   std::array<bool, W> restart_{};
+  std::array<bool, W> restart_events_known_{};
   lanes::LandingStepArrays<W> a_;
 };
 
