@@ -37,112 +37,125 @@ template <class Arch, class V>
   }
 }
 
-// The closed loop's right-hand side on the chunk of lanes [k, k + width of V) of `a`, at the lanes'
-// times t (flare phase only) and states x; gathered: the chunk's table values of an earlier call of
-// this step, or default-constructed.
+// The reference and the controller's states of the chunk of lanes [k, k + width of V): LandingProblem's
+// ReferenceHeight (the glide path over the ground position, or per lane in the flare its exponential)
+// and Command's compensator and integral (per lane with the reset, the free response from the flare
+// switch removed). t: the lanes' times (read in the flare only).
+template <class Arch, class V>
+struct LaneReference {
+  V reference, compensator, integral;
+};
 template <class Arch, class V, int W>
-[[gnu::always_inline]] inline void ChunkLandingDerivative(LandingStepArrays<W>& a, int k, const double* t,
-                                                          const V* x, V* dxdt,
-                                                          LinearDerivativeTable::LanesGathered<Arch, V>& gathered) {
+[[gnu::always_inline]] inline LaneReference<Arch, V> ChunkReference(const LandingStepArrays<W>& a, int k,
+                                                                     const double* t, const V* x) {
   constexpr int kWidth = kChunkWidth<V>;
-  using T = LinearDerivativeTable;
-  const V du = x[0], dw = x[1], q = x[2], dtheta = x[3], height_m = x[4];
-  const V elevator = x[5], compensator_state = x[6], integral_state = x[7], ground = x[8];
+  LaneReference<Arch, V> r{Load<Arch, V>(&a.path_start[k]) + Load<Arch, V>(&a.gamma_r[k]) * x[8], x[6], x[7]};
+  bool any_flare = false;
+  for (int i = 0; i < kWidth; ++i) any_flare = any_flare || a.flare[k + i];
+  if (!any_flare) return r;
+  alignas(64) double ref[kWidth], comp[kWidth], integ[kWidth];
+  Store<Arch>(r.reference, ref);
+  Store<Arch>(r.compensator, comp);
+  Store<Arch>(r.integral, integ);
+  for (int i = 0; i < kWidth; ++i) {
+    const int l = k + i;
+    if (!a.flare[l]) continue;
+    ref[i] = a.flare_asymptote[l] +
+             (a.flare_height[l] - a.flare_asymptote[l]) * std::exp(-(t[i] - a.flare_start[l]) / a.tau[l]);
+    if (a.reset_at_flare[l]) {
+      const double settled = a.integral_at_flare[l] / a.compensator_pole[l];
+      comp[i] -= settled + (a.compensator_at_flare[l] - settled) *
+                               std::exp(-a.compensator_pole[l] * (t[i] - a.flare_start[l]));
+      integ[i] -= a.integral_at_flare[l];
+    }
+  }
+  r.reference = Load<Arch, V>(ref);
+  r.compensator = Load<Arch, V>(comp);
+  r.integral = Load<Arch, V>(integ);
+  return r;
+}
+
+// ΔH of the plant: the tracking error e, or per lane H − the fixed reference height.
+template <class Arch, class V, int W>
+[[gnu::always_inline]] inline V ChunkDeltaH(const LandingStepArrays<W>& a, int k, const V& e,
+                                            const double* height) {
+  constexpr int kWidth = kChunkWidth<V>;
+  bool any_fixed = false;
+  for (int i = 0; i < kWidth; ++i) any_fixed = any_fixed || a.fixed_reference[k + i];
+  if (!any_fixed) return e;
+  alignas(64) double dh[kWidth];
+  Store<Arch>(e, dh);
+  for (int i = 0; i < kWidth; ++i) {
+    if (a.fixed_reference[k + i]) dh[i] = height[i] - a.fixed_reference_height[k + i];
+  }
+  return Load<Arch, V>(dh);
+}
+
+// The air motion at the airplane and the field's derivatives: DisturbanceField::Motion and Evaluate
+// without a discrete gust (the height's terms per lane, the rest on the chunk).
+template <class Arch, class V>
+struct LaneAir {
+  V u_g, w_g, q_g, w_g_dot, airspeed;
+  V dz, dx1, dx2, dlag;  // the field's state derivatives
+};
+template <class Arch, class V, int W>
+[[gnu::always_inline]] inline LaneAir<Arch, V> ChunkAir(const LandingStepArrays<W>& a, int k, const V* x,
+                                                        const double* height, const V& speed_mps) {
+  constexpr int kWidth = kChunkWidth<V>;
   const V z = x[9], x1 = x[10], x2 = x[11], lag = x[12];
-  const V u0 = Load<Arch, V>(&a.u0[k]);
-  const V speed_mps = u0 + du;
-
-  // ReferenceHeight: the glide path over the ground position, or the flare's exponential (per lane).
-  V reference = Load<Arch, V>(&a.path_start[k]) + Load<Arch, V>(&a.gamma_r[k]) * ground;
-  // Command's compensator and integral with the free response from the flare switch removed.
-  V compensator = compensator_state;
-  V integral = integral_state;
-  alignas(64) double height[kWidth];
-  Store<Arch>(height_m, height);
-  {
-    bool any_flare = false;
-    for (int i = 0; i < kWidth; ++i) any_flare = any_flare || a.flare[k + i];
-    if (any_flare) {
-      alignas(64) double ref[kWidth], comp[kWidth], integ[kWidth];
-      Store<Arch>(reference, ref);
-      Store<Arch>(compensator, comp);
-      Store<Arch>(integral, integ);
-      for (int i = 0; i < kWidth; ++i) {
-        const int l = k + i;
-        if (!a.flare[l]) continue;
-        ref[i] = a.flare_asymptote[l] + (a.flare_height[l] - a.flare_asymptote[l]) *
-                                            std::exp(-(t[i] - a.flare_start[l]) / a.tau[l]);
-        if (a.reset_at_flare[l]) {
-          const double settled = a.integral_at_flare[l] / a.compensator_pole[l];
-          comp[i] -= settled + (a.compensator_at_flare[l] - settled) *
-                                   std::exp(-a.compensator_pole[l] * (t[i] - a.flare_start[l]));
-          integ[i] -= a.integral_at_flare[l];
-        }
-      }
-      reference = Load<Arch, V>(ref);
-      compensator = Load<Arch, V>(comp);
-      integral = Load<Arch, V>(integ);
-    }
-  }
-  const V e = height_m - reference;
-  V delta_h = e;
-  {
-    bool any_fixed = false;
-    for (int i = 0; i < kWidth; ++i) any_fixed = any_fixed || a.fixed_reference[k + i];
-    if (any_fixed) {
-      alignas(64) double dh[kWidth];
-      Store<Arch>(e, dh);
-      for (int i = 0; i < kWidth; ++i) {
-        if (a.fixed_reference[k + i]) dh[i] = height[i] - a.fixed_reference_height[k + i];
-      }
-      delta_h = Load<Arch, V>(dh);
-    }
-  }
-
-  // DisturbanceField::Motion: the height's terms per lane, the rest on the chunk.
   alignas(64) double mean_wind[kWidth], sigma_u[kWidth], length_u[kWidth], length_w[kWidth];
   for (int i = 0; i < kWidth; ++i) {
     LaneHeightTerms(a.field[k + i], height[i], mean_wind[i], sigma_u[i], length_u[i], length_w[i]);
   }
+  const V zero(0.0);
   const V sigma_w = Load<Arch, V>(&a.sigma_w[k]);
+  LaneAir<Arch, V> air;
   const V turbulence_u = Load<Arch, V>(sigma_u) * z;
   const V turbulence_w = sigma_w * (V(kSqrt3) * x1 + V(1.0 - kSqrt3) * x2);
   // Without a discrete gust its term is + 0.0 on whichever axis.
-  const V u_g = (Load<Arch, V>(mean_wind) + turbulence_u) + V(0.0);
-  const V w_g = turbulence_w + V(0.0);
-  const V airspeed = speed_mps - u_g;
-  bool any_gust = false;
-  for (int i = 0; i < kWidth; ++i) any_gust = any_gust || a.pitch_rate_gust[k + i];
-  const V pitch_k = Load<Arch, V>(&a.pitch_rate_k[k]);
-  V q_g(0.0);
-  // DisturbanceField::Evaluate: the filters' rates, their derivatives and ẇ_g.
-  const V zero(0.0);
-  const V v = Select<Arch, V>(airspeed > zero, airspeed, zero);
+  air.u_g = (Load<Arch, V>(mean_wind) + turbulence_u) + zero;
+  air.w_g = turbulence_w + zero;
+  air.airspeed = speed_mps - air.u_g;
+  // The filters' rates (DrydenRates: a negative airspeed counts as 0), their derivatives and ẇ_g.
+  const V v = Select<Arch, V>(air.airspeed > zero, air.airspeed, zero);
   const V a_u = v / Load<Arch, V>(length_u);
   const V a_w = v / Load<Arch, V>(length_w);
   const V gain_u = Sqrt<Arch, V>(V(2.0) * a_u);
   const V gain_w = Sqrt<Arch, V>(a_w);
-  const V dz = -a_u * z + gain_u * Load<Arch, V>(&a.noise_u[k]);
-  const V dx1 = -a_w * x1 + gain_w * Load<Arch, V>(&a.noise_w[k]);
-  const V dx2 = a_w * (x1 - x2);
-  const V w_g_dot = sigma_w * (V(kSqrt3) * dx1 + V(1.0 - kSqrt3) * dx2);
-  V dlag(0.0);
-  if (any_gust) {
-    const auto gust = [&] {
-      alignas(64) double m[kWidth];
-      for (int i = 0; i < kWidth; ++i) m[i] = a.pitch_rate_gust[k + i] ? 1.0 : 0.0;
-      return Load<Arch, V>(m) != zero;
-    }();
-    q_g = Select<Arch, V>(gust, -(w_g - lag) * pitch_k, zero);
-    const V lead = w_g - lag;
-    dlag = Select<Arch, V>(gust, lead * pitch_k * Select<Arch, V>(airspeed < zero, zero, airspeed), zero);
+  air.dz = -a_u * z + gain_u * Load<Arch, V>(&a.noise_u[k]);
+  air.dx1 = -a_w * x1 + gain_w * Load<Arch, V>(&a.noise_w[k]);
+  air.dx2 = a_w * (x1 - x2);
+  air.w_g_dot = sigma_w * (V(kSqrt3) * air.dx1 + V(1.0 - kSqrt3) * air.dx2);
+  air.q_g = zero;
+  air.dlag = zero;
+  bool any_gust = false;
+  for (int i = 0; i < kWidth; ++i) any_gust = any_gust || a.pitch_rate_gust[k + i];
+  if (any_gust) {  // the pitch-rate gust, per lane
+    alignas(64) double on[kWidth];
+    for (int i = 0; i < kWidth; ++i) on[i] = a.pitch_rate_gust[k + i] ? 1.0 : 0.0;
+    const auto gust = Load<Arch, V>(on) != zero;
+    const V pitch_k = Load<Arch, V>(&a.pitch_rate_k[k]);
+    const V lead = air.w_g - lag;
+    air.q_g = Select<Arch, V>(gust, -(air.w_g - lag) * pitch_k, zero);
+    air.dlag =
+        Select<Arch, V>(gust, lead * pitch_k * Select<Arch, V>(air.airspeed < zero, zero, air.airspeed), zero);
   }
+  return air;
+}
 
-  // LinearDerivativeTable::DerivativesAt at (H, airspeed), then AirRelativeDerivative.
+// Rows Δu, Δw, q, Δθ, H of the plant: LinearDerivativeTable::DerivativesAt at (H, airspeed), then
+// AirRelativeDerivative.
+template <class Arch, class V, int W>
+[[gnu::always_inline]] inline void ChunkPlant(LandingStepArrays<W>& a, int k, const V* x, const double* height,
+                                              const V& delta_h, const LaneAir<Arch, V>& air,
+                                              LinearDerivativeTable::LanesGathered<Arch, V>& gathered, V* dxdt) {
+  using T = LinearDerivativeTable;
+  const V du = x[0], dw = x[1], q = x[2], dtheta = x[3], elevator = x[5];
+  const V u0 = Load<Arch, V>(&a.u0[k]);
   V d[T::kReducedCount];
-  T::DerivativesLanes<Arch, V>(&a.table[k], height_m, height, airspeed, &a.hint[k], gathered, d);
-  const V du_a = du - u_g;
-  const V dw_a = dw - w_g;
+  T::DerivativesLanes<Arch, V>(&a.table[k], x[4], height, air.airspeed, &a.hint[k], gathered, d);
+  const V du_a = du - air.u_g;
+  const V dw_a = dw - air.w_g;
   const V m_u = d[T::kMu] + d[T::kMwDot] * d[T::kZu];
   const V m_w = d[T::kMw] + d[T::kMwDot] * d[T::kZw];
   const V m_q = d[T::kMq] + d[T::kMwDot] * u0;
@@ -152,26 +165,46 @@ template <class Arch, class V, int W>
             d[T::kXde] * elevator;
   dxdt[1] = d[T::kZu] * du_a + d[T::kZw] * dw_a + u0 * q + d[T::kZh] * delta_h + d[T::kZde] * elevator;
   const V pitch = m_u * du_a + m_w * dw_a + m_q * q + m_h * delta_h + m_de * elevator;
-  dxdt[2] = Select<Arch, V>((q_g == zero) & (w_g_dot == zero), pitch,
-                          pitch - (d[T::kMq] * q_g + d[T::kMwDot] * w_g_dot));
+  // The gust terms of row q only where present (q_g ≠ 0 or ẇ_g ≠ 0, NaN included).
+  const V zero(0.0);
+  dxdt[2] = Select<Arch, V>((air.q_g == zero) & (air.w_g_dot == zero), pitch,
+                            pitch - (d[T::kMq] * air.q_g + d[T::kMwDot] * air.w_g_dot));
   dxdt[3] = q;
   dxdt[4] = -dw + u0 * dtheta;
-  dxdt[8] = speed_mps;
-  dxdt[9] = dz;
-  dxdt[10] = dx1;
-  dxdt[11] = dx2;
-  dxdt[12] = dlag;
-  dxdt[13] = zero;
+}
 
-  // The command −K·z on the air-relative Δu and Δw, clamped to the elevator's limits.
+// The closed loop's right-hand side (LandingProblem<true>::Derivative) on the chunk of lanes
+// [k, k + width of V) of `a`, at the lanes' times t (read in the flare only) and states x; gathered:
+// the chunk's table values of an earlier call of this step, or default-constructed.
+template <class Arch, class V, int W>
+[[gnu::always_inline]] inline void ChunkLandingDerivative(LandingStepArrays<W>& a, int k, const double* t,
+                                                          const V* x, V* dxdt,
+                                                          LinearDerivativeTable::LanesGathered<Arch, V>& gathered) {
+  constexpr int kWidth = kChunkWidth<V>;
+  const V height_m = x[4], elevator = x[5];
+  alignas(64) double height[kWidth];
+  Store<Arch>(height_m, height);
+  const V speed_mps = Load<Arch, V>(&a.u0[k]) + x[0];
+  const LaneReference<Arch, V> r = ChunkReference<Arch, V>(a, k, t, x);
+  const V e = height_m - r.reference;
+  const LaneAir<Arch, V> air = ChunkAir<Arch, V>(a, k, x, height, speed_mps);
+  ChunkPlant<Arch, V>(a, k, x, height, ChunkDeltaH<Arch, V>(a, k, e, height), air, gathered, dxdt);
+  dxdt[8] = speed_mps;  // the ground speed, to first order
+  dxdt[9] = air.dz;
+  dxdt[10] = air.dx1;
+  dxdt[11] = air.dx2;
+  dxdt[12] = air.dlag;
+  dxdt[13] = V(0.0);
+  // The command −K·z on the air-relative Δu and Δw, clamped to the elevator's limits (std::clamp).
   auto gain = [&](int j) { return Load<Arch, V>(&a.gain[j][k]); };
-  const V command = -(gain(0) * du_a + gain(1) * dw_a + gain(2) * q + gain(3) * dtheta + gain(5) * elevator +
-                      gain(6) * e + gain(7) * compensator + gain(8) * integral);
+  const V command = -(gain(0) * (x[0] - air.u_g) + gain(1) * (x[1] - air.w_g) + gain(2) * x[2] +
+                      gain(3) * x[3] + gain(5) * elevator + gain(6) * e + gain(7) * r.compensator +
+                      gain(8) * r.integral);
   const V low = Load<Arch, V>(&a.elevator_min[k]);
   const V high = Load<Arch, V>(&a.elevator_max[k]);
   const V clamped = Select<Arch, V>(command < low, low, Select<Arch, V>(high < command, high, command));
   dxdt[5] = Load<Arch, V>(&a.actuator_pole[k]) * (clamped - elevator);
-  dxdt[6] = -Load<Arch, V>(&a.compensator_pole[k]) * compensator_state + integral_state;
+  dxdt[6] = -Load<Arch, V>(&a.compensator_pole[k]) * x[6] + x[7];
   dxdt[7] = -e;
 }
 

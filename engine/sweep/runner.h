@@ -197,7 +197,7 @@ struct RunnerOptions {
   /// pending for --resume). Batches finished before are written, so the archive stays resumable.
   const std::atomic<bool>* cancel = nullptr;
   int queue_batches = 4;  ///< capacity of the queue to the writer
-  /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop),
+  /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop, landing),
   /// one of kLaneWidths; 1: one at a time. The archive is the same bit for bit whatever it is.
   int lanes = DefaultLanes();
 };
