@@ -110,7 +110,8 @@ class LandingAnalysis final : public Analysis {
   }
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
-    const LandingResult r = SimulateLanding(*context.model, ConfigOf(context), context.cancel, context.noise_point);
+    const LandingResult r =
+        SimulateLanding(*context.model, ConfigOf(context), context.cancel, context.noise_point);
     return Record(r, row);
   }
 

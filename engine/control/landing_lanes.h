@@ -38,22 +38,22 @@ struct LandingStepArrays {
   alignas(64) double h[W]{}, half_h[W]{}, sixth_h[W]{};
 
   // Each lane's landing.
-  alignas(64) double u0[W]{};                ///< the reference (start) speed, m/s
-  alignas(64) double gamma_r[W]{};           ///< −γ, rad
-  alignas(64) double path_start[W]{};        ///< H0 − d0, m
-  alignas(64) double flare_height[W]{};      ///< Ho, m
-  alignas(64) double flare_asymptote[W]{};   ///< m
-  alignas(64) double tau[W]{};               ///< the flare's time constant, s
-  alignas(64) double elevator_min[W]{};      ///< rad
-  alignas(64) double elevator_max[W]{};      ///< rad
-  alignas(64) double actuator_pole[W]{};     ///< 1/s
-  alignas(64) double compensator_pole[W]{};  ///< 1/s
+  alignas(64) double u0[W]{};                      ///< the reference (start) speed, m/s
+  alignas(64) double gamma_r[W]{};                 ///< −γ, rad
+  alignas(64) double path_start[W]{};              ///< H0 − d0, m
+  alignas(64) double flare_height[W]{};            ///< Ho, m
+  alignas(64) double flare_asymptote[W]{};         ///< m
+  alignas(64) double tau[W]{};                     ///< the flare's time constant, s
+  alignas(64) double elevator_min[W]{};            ///< rad
+  alignas(64) double elevator_max[W]{};            ///< rad
+  alignas(64) double actuator_pole[W]{};           ///< 1/s
+  alignas(64) double compensator_pole[W]{};        ///< 1/s
   alignas(64) double fixed_reference_height[W]{};  ///< m
-  alignas(64) double gain[9][W]{};           ///< K
-  alignas(64) double sigma_w[W]{};           ///< σ_w, m/s
-  alignas(64) double pitch_rate_k[W]{};      ///< π/(4b), 1/m (with the pitch-rate gust)
-  bool fixed_reference[W]{};                 ///< ΔH from the fixed reference height
-  bool reset_at_flare[W]{};                  ///< the compensator's free response removed in the flare
+  alignas(64) double gain[9][W]{};                 ///< K
+  alignas(64) double sigma_w[W]{};                 ///< σ_w, m/s
+  alignas(64) double pitch_rate_k[W]{};            ///< π/(4b), 1/m (with the pitch-rate gust)
+  bool fixed_reference[W]{};                       ///< ΔH from the fixed reference height
+  bool reset_at_flare[W]{};                        ///< the compensator's free response removed in the flare
   bool pitch_rate_gust[W]{};
   // Each lane's phase.
   bool flare[W]{};

@@ -47,7 +47,7 @@ struct LaneReference {
 };
 template <class Arch, class V, int W>
 [[gnu::always_inline]] inline LaneReference<Arch, V> ChunkReference(const LandingStepArrays<W>& a, int k,
-                                                                     const double* t, const V* x) {
+                                                                    const double* t, const V* x) {
   constexpr int kWidth = kChunkWidth<V>;
   LaneReference<Arch, V> r{Load<Arch, V>(&a.path_start[k]) + Load<Arch, V>(&a.gamma_r[k]) * x[8], x[6], x[7]};
   bool any_flare = false;
@@ -137,8 +137,8 @@ template <class Arch, class V, int W>
     const V pitch_k = Load<Arch, V>(&a.pitch_rate_k[k]);
     const V lead = air.w_g - lag;
     air.q_g = Select<Arch, V>(gust, -(air.w_g - lag) * pitch_k, zero);
-    air.dlag =
-        Select<Arch, V>(gust, lead * pitch_k * Select<Arch, V>(air.airspeed < zero, zero, air.airspeed), zero);
+    air.dlag = Select<Arch, V>(
+        gust, lead * pitch_k * Select<Arch, V>(air.airspeed < zero, zero, air.airspeed), zero);
   }
   return air;
 }
@@ -146,9 +146,11 @@ template <class Arch, class V, int W>
 // Rows Δu, Δw, q, Δθ, H of the plant: LinearDerivativeTable::DerivativesAt at (H, airspeed), then
 // AirRelativeDerivative.
 template <class Arch, class V, int W>
-[[gnu::always_inline]] inline void ChunkPlant(LandingStepArrays<W>& a, int k, const V* x, const double* height,
-                                              const V& delta_h, const LaneAir<Arch, V>& air,
-                                              LinearDerivativeTable::LanesGathered<Arch, V>& gathered, V* dxdt) {
+[[gnu::always_inline]] inline void ChunkPlant(LandingStepArrays<W>& a, int k, const V* x,
+                                              const double* height, const V& delta_h,
+                                              const LaneAir<Arch, V>& air,
+                                              LinearDerivativeTable::LanesGathered<Arch, V>& gathered,
+                                              V* dxdt) {
   using T = LinearDerivativeTable;
   const V du = x[0], dw = x[1], q = x[2], dtheta = x[3], elevator = x[5];
   const V u0 = Load<Arch, V>(&a.u0[k]);
@@ -177,9 +179,9 @@ template <class Arch, class V, int W>
 // [k, k + width of V) of `a`, at the lanes' times t (read in the flare only) and states x; gathered:
 // the chunk's table values of an earlier call of this step, or default-constructed.
 template <class Arch, class V, int W>
-[[gnu::always_inline]] inline void ChunkLandingDerivative(LandingStepArrays<W>& a, int k, const double* t,
-                                                          const V* x, V* dxdt,
-                                                          LinearDerivativeTable::LanesGathered<Arch, V>& gathered) {
+[[gnu::always_inline]] inline void ChunkLandingDerivative(
+    LandingStepArrays<W>& a, int k, const double* t, const V* x, V* dxdt,
+    LinearDerivativeTable::LanesGathered<Arch, V>& gathered) {
   constexpr int kWidth = kChunkWidth<V>;
   const V height_m = x[4], elevator = x[5];
   alignas(64) double height[kWidth];
@@ -197,9 +199,9 @@ template <class Arch, class V, int W>
   dxdt[13] = V(0.0);
   // The command −K·z on the air-relative Δu and Δw, clamped to the elevator's limits (std::clamp).
   auto gain = [&](int j) { return Load<Arch, V>(&a.gain[j][k]); };
-  const V command = -(gain(0) * (x[0] - air.u_g) + gain(1) * (x[1] - air.w_g) + gain(2) * x[2] +
-                      gain(3) * x[3] + gain(5) * elevator + gain(6) * e + gain(7) * r.compensator +
-                      gain(8) * r.integral);
+  const V command =
+      -(gain(0) * (x[0] - air.u_g) + gain(1) * (x[1] - air.w_g) + gain(2) * x[2] + gain(3) * x[3] +
+        gain(5) * elevator + gain(6) * e + gain(7) * r.compensator + gain(8) * r.integral);
   const V low = Load<Arch, V>(&a.elevator_min[k]);
   const V high = Load<Arch, V>(&a.elevator_max[k]);
   const V clamped = Select<Arch, V>(command < low, low, Select<Arch, V>(high < command, high, command));
@@ -254,15 +256,15 @@ void LandingDerivatives(LandingStepArrays<W>& a) {
 }  // namespace gesweep::lanes
 
 /// Instantiates the landing kernels of architecture ARCH for the widths 1, 2, 4 and 8.
-#define GESWEEP_INSTANTIATE_LANDING_LANE_KERNELS(ARCH)                \
-  namespace gesweep::lanes {                                          \
-  template void LandingRk4Stages<ARCH, 1>(LandingStepArrays<1>&);     \
-  template void LandingRk4Stages<ARCH, 2>(LandingStepArrays<2>&);     \
-  template void LandingRk4Stages<ARCH, 4>(LandingStepArrays<4>&);     \
-  template void LandingRk4Stages<ARCH, 8>(LandingStepArrays<8>&);     \
-  template void LandingDerivatives<ARCH, 1>(LandingStepArrays<1>&);   \
-  template void LandingDerivatives<ARCH, 2>(LandingStepArrays<2>&);   \
-  template void LandingDerivatives<ARCH, 4>(LandingStepArrays<4>&);   \
-  template void LandingDerivatives<ARCH, 8>(LandingStepArrays<8>&);   \
-  }                                                                   \
+#define GESWEEP_INSTANTIATE_LANDING_LANE_KERNELS(ARCH)              \
+  namespace gesweep::lanes {                                        \
+  template void LandingRk4Stages<ARCH, 1>(LandingStepArrays<1>&);   \
+  template void LandingRk4Stages<ARCH, 2>(LandingStepArrays<2>&);   \
+  template void LandingRk4Stages<ARCH, 4>(LandingStepArrays<4>&);   \
+  template void LandingRk4Stages<ARCH, 8>(LandingStepArrays<8>&);   \
+  template void LandingDerivatives<ARCH, 1>(LandingStepArrays<1>&); \
+  template void LandingDerivatives<ARCH, 2>(LandingStepArrays<2>&); \
+  template void LandingDerivatives<ARCH, 4>(LandingStepArrays<4>&); \
+  template void LandingDerivatives<ARCH, 8>(LandingStepArrays<8>&); \
+  }                                                                 \
   static_assert(true)

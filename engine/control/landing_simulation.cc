@@ -834,15 +834,15 @@ class LandingLanes {
     const int segment = lane.segment;
     Run::Events g_new;
     problem.EventValues(step.t_new, step.x_new, segment, g_new);
-    const auto fired = integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
-                                                       lane.options.event_time_tolerance_s,
-                                                       [&](int e, double tau) {
-                                                         State xs;
-                                                         interpolate(tau, xs);
-                                                         Run::Events values;
-                                                         problem.EventValues(tau, xs, segment, values);
-                                                         return values[static_cast<std::size_t>(e)];
-                                                       });
+    const auto fired =
+        integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
+                                        lane.options.event_time_tolerance_s, [&](int e, double tau) {
+                                          State xs;
+                                          interpolate(tau, xs);
+                                          Run::Events values;
+                                          problem.EventValues(tau, xs, segment, values);
+                                          return values[static_cast<std::size_t>(e)];
+                                        });
     EventAction cut_action = EventAction::kContinue;
     double t_cut = step.t_new;
     State x_event{};
@@ -867,7 +867,8 @@ class LandingLanes {
       SetLane(a_.x, i, step.x_new);
       SetLane(a_.f, i, step.f_new);
       lane.g_previous = g_new;
-      if (lane.next_breakpoint < lane.breakpoints.size() && lane.breakpoints[lane.next_breakpoint] <= lane.t) {
+      if (lane.next_breakpoint < lane.breakpoints.size() &&
+          lane.breakpoints[lane.next_breakpoint] <= lane.t) {
         // The restart's event values are g_new: the same time, state and phase, and the events do not
         // read the segment (DisturbanceField::Motion does not; the held noise enters derivatives only).
         return StartRestart(i, /*events_known=*/true);
@@ -891,7 +892,8 @@ class LandingLanes {
   // events_known: g_previous already holds the event values there.
   void StartRestart(int i, bool events_known) {
     Run& lane = lane_[i];
-    while (lane.next_breakpoint < lane.breakpoints.size() && lane.breakpoints[lane.next_breakpoint] <= lane.t) {
+    while (lane.next_breakpoint < lane.breakpoints.size() &&
+           lane.breakpoints[lane.next_breakpoint] <= lane.t) {
       ++lane.next_breakpoint;
       ++lane.segment;
     }
@@ -910,7 +912,8 @@ class LandingLanes {
     State f;
     for (int c = 0; c < N; ++c) f[static_cast<std::size_t>(c)] = a_.f_new[c][i];
     SetLane(a_.f, i, f);
-    if (!restart_events_known_[i]) lane.problem->EventValues(lane.t, Lane(a_.x, i), lane.segment, lane.g_previous);
+    if (!restart_events_known_[i])
+      lane.problem->EventValues(lane.t, Lane(a_.x, i), lane.segment, lane.g_previous);
     if (!integrator_detail::AllFinite<N>(f)) return Finish(i, IntegrationStatus::kNonFinite);
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
   }
@@ -1004,7 +1007,8 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
 }
 
 bool LandingRunUsesLanes(const LongitudinalModel& plant, const LandingConfig& config) {
-  if (config.turbulent_integrator != IntegratorKind::kRk4 || !config.integrator.honour_breakpoints) return false;
+  if (config.turbulent_integrator != IntegratorKind::kRk4 || !config.integrator.honour_breakpoints)
+    return false;
   if (plant.options().interpolation != Interpolation::kLinear) return false;
   const DisturbanceOptions& d = config.disturbance;
   if (d.turbulence != TurbulenceModel::kDryden || d.gust_amplitude_mps != 0.0) return false;
@@ -1014,7 +1018,8 @@ bool LandingRunUsesLanes(const LongitudinalModel& plant, const LandingConfig& co
 }
 
 std::vector<LandingResult> SimulateLandingBatch(std::span<const LandingBatchRun> runs, int width,
-                                                const std::atomic<bool>* cancel, std::optional<LanesIsa> isa) {
+                                                const std::atomic<bool>* cancel,
+                                                std::optional<LanesIsa> isa) {
   GESWEEP_DEMAND(width == 1 || width == 2 || width == 4 || width == 8);
   GESWEEP_DEMAND(!isa || LanesIsaSupported(*isa));
   const LanesIsa lanes_isa = isa ? *isa : ChooseLanesIsa(width);

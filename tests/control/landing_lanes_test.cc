@@ -31,8 +31,9 @@ namespace {
 // Bit-for-bit equality of two doubles (NaN equal to the same NaN, +0 and -0 different).
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-#define EXPECT_SAME_BITS(field, what) \
-  EXPECT_TRUE(SameBits(batch.field, one.field)) << (what) << ": " #field " " << batch.field << " vs " << one.field
+#define EXPECT_SAME_BITS(field, what)           \
+  EXPECT_TRUE(SameBits(batch.field, one.field)) \
+      << (what) << ": " #field " " << batch.field << " vs " << one.field
 
 void ExpectSameSample(const LandingSample& batch, const LandingSample& one, const std::string& what) {
   EXPECT_SAME_BITS(time_s, what);
@@ -163,7 +164,8 @@ class LandingLanesTest : public ::testing::Test {
       LandingConfig c = Turbulent(30.0, -15.433333, 2027, 11);
       c.glide_slope_deg = 3.0;
       point_.assign(LandingNoiseDimension(with_.aircraft(), c), 0.0);
-      for (std::size_t j = 0; j < point_.size(); ++j) point_[j] = std::sin(0.37 * static_cast<double>(j) + 0.1);
+      for (std::size_t j = 0; j < point_.size(); ++j)
+        point_[j] = std::sin(0.37 * static_cast<double>(j) + 0.1);
       runs.push_back({&with_, c, point_});
     }
     {  // not in lanes: turbulence flown by dopri5, and still air
@@ -243,7 +245,8 @@ TEST_P(LandingLanesIsaTest, EveryWidthGivesEveryLandingsScalarResultBitForBit) {
   }
   for (std::size_t i = 0; i < runs.size(); i += 3) {
     const std::vector<LandingResult> batch = SimulateLandingBatch({&runs[i], 1}, 8, nullptr, GetParam());
-    ExpectSameResult(batch[0], one[i], std::string(ToString(GetParam())) + " alone, landing " + std::to_string(i));
+    ExpectSameResult(batch[0], one[i],
+                     std::string(ToString(GetParam())) + " alone, landing " + std::to_string(i));
   }
 }
 
