@@ -13,12 +13,11 @@ conversion to radians differs in the last bit between x * pi / 180, which the sw
 until 2026-12-07, and x * (pi / 180), simulate's flag's: both now use the latter.) A width the lanes
 do not have is refused with one line, exit 2.
 
-Turbulent landings (SimulateLandingBatch) likewise: a study of 36 short landings in Dryden turbulence
-(three winds, one of them 0 m/s, which is still air and flown by dopri5 one at a time inside the
-batch; two speeds and slopes; with and without h-derivatives; one run a design the LQR refuses), its
-archive at every width and on two threads against `--lanes 1`, its series too, and rows of a
-lanes-flown archive replayed by `gesweep land --seed S --run-index I`, whose summary must equal the row
-to the bit.
+Turbulent landings (SimulateLandingBatch) likewise: a study of 36 short landings from 32 m in Dryden
+turbulence (three winds, one of them 0 m/s, which is still air and flown by dopri5 one at a time inside
+the batch; three speeds, two slopes, with and without h-derivatives), its archive at every width on
+one and two threads against `--lanes 1`, its series too, and rows of a lanes-flown archive replayed by
+`gesweep land --seed S --run-index I`, whose summary (and gain) must equal the row to the bit.
 
 Usage: lanes_test.py BUILD/gesweep
 """
