@@ -166,8 +166,8 @@ struct LaneRun {
 };
 
 /// The lane widths a sweep takes (`gesweep run --lanes`, docs/sweep.md): runs computed W at a time in
-/// the lanes of SIMD vectors, W = 1 being one at a time. Those of the open loop's lanes
-/// (kOpenLoopBatchWidths, engine/simulation/open_loop.h; open_loop_analysis.cc checks it).
+/// the lanes of SIMD vectors, W = 1 being one at a time: the open loop's and the landing's lanes
+/// (kOpenLoopBatchWidths, open_loop_analysis.cc checks it; SimulateLandingBatch takes the same).
 inline constexpr int kLaneWidths[] = {1, 2, 4, 8};
 
 /// What a study says about storage that analyses need when declaring their columns.

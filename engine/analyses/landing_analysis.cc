@@ -3,8 +3,10 @@
 // LQR weights, on the run's plant (h-derivatives on or off as its model says). Summary scalars and
 // the gain always; time series when the study stores them.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -104,9 +106,55 @@ class LandingAnalysis final : public Analysis {
   }
 
   AnalysisOutcome Run(const RunContext& context, OutputRow& row) const override {
+    const LandingResult r =
+        SimulateLanding(*context.model, ConfigOf(context), context.cancel, context.noise_point);
+    return Record(r, row);
+  }
+
+  bool takes_lanes() const override { return true; }
+
+  // The landings flown together by SimulateLandingBatch, each result bit for bit its SimulateLanding
+  // landing's (those the lanes do not take, still air among them, are flown one at a time inside it).
+  // A landing it refuses (it validates every one before flying any) makes it throw: every landing of
+  // the group is then given to Run, one at a time, so that each gets its own outcome or exception, as
+  // without lanes.
+  void RunLanes(std::span<LaneRun> runs, int lanes) const override {
+    if (runs.empty()) return;
+    const std::atomic<bool>* cancel = runs.front().context->cancel;
+    std::vector<LandingBatchRun> batch;
+    batch.reserve(runs.size());
+    for (const LaneRun& run : runs) {
+      GESWEEP_DEMAND(run.context->cancel == cancel);
+      batch.push_back({run.context->model, ConfigOf(*run.context), run.context->noise_point});
+    }
+    std::vector<LandingResult> results;
+    try {
+      results = SimulateLandingBatch(batch, lanes, cancel);
+    } catch (...) {
+      Analysis::RunLanes(runs, lanes);
+      return;
+    }
+    for (std::size_t i = 0; i < runs.size(); ++i) runs[i].outcome = Record(results[i], *runs[i].row);
+  }
+
+  std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const override {
+    return LandingNoiseDimension(aircraft, ConfigFor(parameters));
+  }
+
+  double NoiseSampleInterval(const RunParameters& parameters) const override {
+    return ConfigFor(parameters).disturbance.turbulence_sample_interval_s;
+  }
+
+ private:
+  // The run's settings: the study's with the run's parameters and index.
+  LandingConfig ConfigOf(const RunContext& context) const {
     LandingConfig config = ConfigFor(context.parameters);
     config.run_index = context.run_index;
-    const LandingResult r = SimulateLanding(*context.model, config, context.cancel, context.noise_point);
+    return config;
+  }
+
+  // The run's columns and outcome from its landing.
+  AnalysisOutcome Record(const LandingResult& r, OutputRow& row) const {
     if (r.cancelled) return AnalysisOutcome::Cancelled();
     summary_.Fill(r, row);
     if (r.design.ok()) {
@@ -123,15 +171,6 @@ class LandingAnalysis final : public Analysis {
     return AnalysisOutcome::Ok(r.outcome == LandingOutcome::kLanded && !truncated ? "" : note);
   }
 
-  std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const override {
-    return LandingNoiseDimension(aircraft, ConfigFor(parameters));
-  }
-
-  double NoiseSampleInterval(const RunParameters& parameters) const override {
-    return ConfigFor(parameters).disturbance.turbulence_sample_interval_s;
-  }
-
- private:
   LandingConfig ConfigFor(const RunParameters& p) const {
     auto at = [&](ParameterId id) { return p[static_cast<std::size_t>(id)]; };
     LandingConfig config = config_;

@@ -64,6 +64,7 @@ struct RiskFlags {
   bool force = false;
   bool quiet = false;
   bool mpi = false;
+  int lanes = DefaultLanes();
   DescribedFlags described{{{"quiet", "-q"}}};
 
   template <class V>
@@ -71,6 +72,10 @@ struct RiskFlags {
     v(Field("resume", &resume)
           .Doc("Continue an interrupted run from its journal (ARCHIVE.journal): the same estimate bit for "
                "bit"));
+    v(Field("lanes", &lanes)
+          .Limit("lanes")
+          .Doc("Landings of a batch flown at once in SIMD lanes (turbulent landings flown by RK4): 1, 2, 4 "
+               "or 8; 1 is one at a time. The archive is the same bit for bit whatever it is"));
     v(Field("force", &force)
           .Doc("Replace an existing archive (and discard the journal of an interrupted run)"));
     v(Field("quiet", &quiet).Doc("No progress lines"));
@@ -87,6 +92,7 @@ std::string CommandLine(const RiskFlags& flags) {
   if (flags.resume) line += " --resume";
   if (flags.force) line += " --force";
   if (flags.mpi) line += " --mpi";
+  if (flags.lanes != DefaultLanes()) line += " --lanes " + std::to_string(flags.lanes);
   return line;
 }
 
@@ -439,6 +445,9 @@ struct RiskSetup {
 // person's mistake) or ArchiveError.
 void SetUpRisk(const RiskFlags& flags, bool writes, RiskSetup& s) {
   CheckFormat(flags);
+  if (std::ranges::find(kLaneWidths, flags.lanes) == std::end(kLaneWidths)) {
+    throw InputError("command line", "--lanes", std::to_string(flags.lanes), "expected 1, 2, 4 or 8 lanes");
+  }
   if (flags.replay) {
     throw InputError("command line", "--mpi", "",
                      "not with --replay: a replay flies one landing, in one process (leave out --mpi)");
@@ -540,6 +549,7 @@ int FlyRisk(const RiskFlags& flags, RiskSetup& s, const RiskProcesses& processes
   }
   SignalCancellation signals;
   risk::RiskRunOptions options;
+  options.lanes = flags.lanes;
   options.cancel = signals.flag();
   options.cache = flags.resume ? &s.cache : nullptr;
   options.exchange = processes.exchange;

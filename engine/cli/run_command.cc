@@ -79,8 +79,8 @@ struct RunFlags {
     v(Field("lanes", &lanes)
           .Limit("lanes")
           .Doc("Runs computed at once in SIMD lanes by the analyses that take them (open_loop with RK4 in "
-               "still air): 1, 2, 4 or 8; 1 is one at a time. The archive is the same bit for bit whatever "
-               "it is"));
+               "still air, landing in turbulence with RK4): 1, 2, 4 or 8; 1 is one at a time. The archive "
+               "is the same bit for bit whatever it is"));
     v(Field("quiet", &quiet).Doc("No progress output"));
     v(Field("mpi", &mpi).Doc("Spread the runs over MPI ranks: mpirun -n R gesweep run ... --mpi"));
     v(Field("ranks_per_node", &ranks_per_node)

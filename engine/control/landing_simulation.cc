@@ -4,10 +4,13 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "engine/common/errors.h"
 #include "engine/common/units.h"
+#include "engine/control/landing_lanes.h"
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
@@ -299,6 +302,43 @@ class LandingProblem {
   double SinkRate(const State& x) const { return x[kSimDw] - u0_ * x[kSimTheta]; }
   LandingPhase phase() const { return phase_; }
 
+  /// Lane i of a batch (landing_lanes.h): this landing's constants, its table and its field.
+  template <int W>
+  void ToLane(lanes::LandingStepArrays<W>& a, int i) const {
+    static_assert(kAir);
+    a.u0[i] = u0_;
+    a.gamma_r[i] = gamma_r_rad_;
+    a.path_start[i] = path_start_m_;
+    a.flare_height[i] = flare_height_m_;
+    a.flare_asymptote[i] = flare_asymptote_m_;
+    a.tau[i] = tau_s_;
+    a.elevator_min[i] = elevator_min_rad_;
+    a.elevator_max[i] = elevator_max_rad_;
+    a.actuator_pole[i] = actuator_pole_;
+    a.compensator_pole[i] = compensator_pole_;
+    a.fixed_reference_height[i] = fixed_reference_height_m_;
+    for (int j = 0; j < kLandingStateCount; ++j) a.gain[j][i] = gain_[static_cast<std::size_t>(j)];
+    a.sigma_w[i] = field_->sigma_w_mps();
+    a.pitch_rate_gust[i] = field_->options().pitch_rate_gust;
+    // As DisturbanceField::Motion and Evaluate compute it.
+    a.pitch_rate_k[i] = a.pitch_rate_gust[i] ? std::numbers::pi / (4.0 * field_->options().wing_span_m) : 0.0;
+    a.fixed_reference[i] = fixed_reference_;
+    a.reset_at_flare[i] = reset_at_flare_;
+    a.table[i] = table_.get();
+    a.hint[i] = table_hint_;
+    a.field[i] = field_;
+    PhaseToLane(a, i);
+  }
+
+  /// The phase of lane i (after a flare switch).
+  template <int W>
+  void PhaseToLane(lanes::LandingStepArrays<W>& a, int i) const {
+    a.flare[i] = phase_ == LandingPhase::kFlare;
+    a.flare_start[i] = flare_start_s_;
+    a.compensator_at_flare[i] = compensator_at_flare_;
+    a.integral_at_flare[i] = integral_at_flare_;
+  }
+
  private:
   bool IsSaturated(double command) const {
     return command > elevator_max_rad_ || command < elevator_min_rad_;
@@ -375,6 +415,10 @@ std::string Format(double value, int precision = 4) {
 }
 
 template <bool kAir>
+void Conclude(LandingProblem<kAir>& problem, const IntegrationResult<LandingProblem<kAir>::kDimension>& run,
+              const LandingConfig& config, LandingResult& result);
+
+template <bool kAir>
 void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingResult& result,
          bool store_series, const DisturbanceField* field, const std::atomic<bool>* cancel) {
   std::vector<double> breakpoints;
@@ -414,6 +458,13 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
     }
   }
   const auto run = Integrate(problem, x0, 0.0, result.time_limit_s, breakpoints, options);
+  Conclude(problem, run, config, result);
+}
+
+// The result from how the integration ended (Fly's, and each lane's of a batch).
+template <bool kAir>
+void Conclude(LandingProblem<kAir>& problem, const IntegrationResult<LandingProblem<kAir>::kDimension>& run,
+              const LandingConfig& config, LandingResult& result) {
   problem.Finish(run.end_time_s);
 
   const auto& xf = run.final_state;
@@ -470,6 +521,443 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
   }
 }
 
+// The noise point's length (SimulateLanding checks it once the design succeeded).
+void CheckNoisePoint(const LongitudinalModel& plant, const LandingConfig& config,
+                     std::span<const double> noise_point) {
+  const Aircraft& aircraft = plant.aircraft();
+  if (!noise_point.empty()) {
+    const std::uint64_t needed = LandingNoiseDimension(aircraft, config);
+    if (noise_point.size() < needed) {
+      throw InputError("landing config", "noise point", std::to_string(noise_point.size()) + " values",
+                       "at least " + std::to_string(needed) + " (LandingNoiseDimension)");
+    }
+  }
+}
+
+// The result before the flight: what the run uses, the extremes' starting values, the gain (a failed
+// design's result is complete).
+LandingResult BeginLanding(const LongitudinalModel& plant, const LandingConfig& config) {
+  const Aircraft& aircraft = plant.aircraft();
+  LandingResult result;
+  result.flare_height_m = config.flare_height_m;
+  result.flare_time_constant_s = FlareTimeConstant(config);
+  result.glide_slope_deg = config.glide_slope_deg;
+  result.plant_fixed_reference_height_m =
+      SetOr(config.plant_fixed_reference_height_m, aircraft.table_heights_m.back());
+  result.plant_h_derivatives = plant.options().h_derivatives;
+  result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
+  for (double* field :
+       {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
+        &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
+        &result.touchdown_airspeed_mps, &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
+    *field = kNaN;
+  }
+  result.min_speed_mps = std::numeric_limits<double>::infinity();
+  result.max_speed_mps = -std::numeric_limits<double>::infinity();
+
+  result.design = DesignLandingController(plant, config);
+  if (!result.design.ok()) {
+    result.outcome = LandingOutcome::kDesignFailed;
+    result.message =
+        "LQR design failed (" + std::string(ToString(result.design.status)) + "): " + result.design.message;
+    result.final_height_m = config.start_height_m;
+    result.min_speed_mps = result.max_speed_mps = config.start_speed_mps;
+    return result;
+  }
+  if (config.output_interval_s > 0.0) {
+    result.series.reserve(static_cast<std::size_t>(result.time_limit_s / config.output_interval_s) + 2);
+  }
+  return result;
+}
+
+// The landing's moving atmosphere: its noise from (seed, run index), or the given point.
+DisturbanceField LandingField(const LongitudinalModel& plant, const LandingConfig& config,
+                              std::span<const double> noise_point) {
+  DisturbanceOptions disturbance = config.disturbance;
+  disturbance.wing_span_m = plant.aircraft().wingspan_m;
+  return noise_point.empty() ? DisturbanceField(disturbance, config.seed, config.run_index)
+                             : DisturbanceField(disturbance, noise_point);
+}
+
+// The result after the flight.
+void EndLanding(LandingResult& result) {
+  if (result.flare_start_time_s != result.flare_start_time_s) {  // NaN: no flare
+    result.flare_max_abs_elevator_deg = kNaN;
+    result.flare_max_abs_pitch_rate_degps = kNaN;
+  }
+}
+
+// ---------------------------------------------------------------- many landings in lockstep (SIMD lanes)
+
+// The settings of Integrate that Fly gives a turbulent landing flown by RK4 (LandingRunUsesLanes).
+IntegratorOptions LaneIntegratorOptions(const LandingConfig& config) {
+  IntegratorOptions options = config.integrator;
+  options.kind = IntegratorKind::kRk4;
+  options.step_s = config.disturbance.turbulence_sample_interval_s;
+  options.output_interval_s = config.output_interval_s > 0.0 ? config.output_interval_s : kMonitorInterval_s;
+  return options;
+}
+
+// A landing flown in a lane: its field, breakpoints and problem as Fly<true> makes them, and the
+// bookkeeping IntegrateWith keeps for one run with Rk4Method and honoured breakpoints, so that every
+// scalar decision below is the one Integrate takes for that landing.
+struct LandingLaneRun {
+  using Problem = LandingProblem<true>;
+  static constexpr int N = Problem::kDimension;
+  using State = Problem::State;
+  using Events = std::array<double, Problem::kEventCount>;
+  static_assert(N == lanes::kLandingLaneStates);
+
+  std::size_t run = 0;  // index in the batch's runs
+  const LandingConfig* config = nullptr;
+  std::unique_ptr<DisturbanceField> field;
+  std::vector<double> breakpoints;
+  std::vector<DisturbanceField::Segment> segments;
+  std::unique_ptr<Problem> problem;
+  IntegrationResult<N> result;
+  IntegratorOptions options;
+  double t = 0;
+  double end_s = 0;
+  long grid_index = 0;
+  std::size_t next_breakpoint = 0;
+  int segment = 0;
+  std::int64_t noise_index = -1;  // the held sample whose noise the lane's arrays hold
+  long next_output = 0;
+  double last_output_time = -std::numeric_limits<double>::infinity();
+  Events g_previous{};
+};
+
+// W lanes: the landings' states side by side (landing_lanes.h), component c of lane i at [c][i]. The
+// per-lane decisions are here, in scalar code, through each landing's own LandingProblem (events,
+// outputs, monitors, the flare switch); the RK4 stages and the restarts' derivatives of all lanes are
+// the kernels of the batch's instruction set.
+template <int W>
+class LandingLanes {
+ public:
+  using Run = LandingLaneRun;
+  using State = Run::State;
+  static constexpr int N = Run::N;
+
+  LandingLanes(std::span<const LandingBatchRun> runs, std::span<const std::size_t> order,
+               std::vector<LandingResult>& results, LanesIsa isa, const std::atomic<bool>* cancel)
+      : runs_(runs),
+        order_(order),
+        results_(results),
+        cancel_(cancel),
+        kernels_(lanes::LandingLaneKernelsFor<W>(isa)) {}
+
+  void FlyAll() {
+    for (int i = 0; i < W; ++i) Refill(i);
+    while (active_count_ > 0) {
+      if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) {
+        for (int i = 0; i < W; ++i) {
+          if (active_[i]) Finish(i, IntegrationStatus::kCancelled);
+        }
+        continue;
+      }
+      for (int i = 0; i < W; ++i) {
+        if (active_[i]) PrepareStep(i);
+      }
+      kernels_.rk4_stages(a_);
+      bool any_restart = false;
+      for (int i = 0; i < W; ++i) {
+        restart_[i] = false;
+        if (active_[i]) CompleteStep(i);
+        any_restart = any_restart || restart_[i];
+      }
+      if (!any_restart) continue;
+      // IntegrateWith's restart_here of every lane at a breakpoint or after the flare switch: the
+      // derivative at the new segment's start (its held noise) or in the new phase.
+      kernels_.derivatives(a_);
+      for (int i = 0; i < W; ++i) {
+        if (restart_[i]) CompleteRestart(i);
+      }
+    }
+  }
+
+ private:
+  struct Step {
+    double t, t_new;
+    State x, f, x_new, f_new;
+  };
+
+  static State Lane(const double (&v)[N][W], int i) {
+    State s;
+    for (int c = 0; c < N; ++c) s[static_cast<std::size_t>(c)] = v[c][i];
+    return s;
+  }
+  static void SetLane(double (&v)[N][W], int i, const State& s) {
+    for (int c = 0; c < N; ++c) v[c][i] = s[static_cast<std::size_t>(c)];
+  }
+
+  // The held noise of lane i's segment in its arrays (DisturbanceField::Evaluate's).
+  void SetNoise(int i) {
+    Run& lane = lane_[i];
+    const std::int64_t index = lane.segments[static_cast<std::size_t>(lane.segment)].sample_index;
+    if (index == lane.noise_index) return;
+    a_.noise_u[i] = lane.field->HeldNoise(NoiseStream::kTurbulenceU, index);
+    a_.noise_w[i] = lane.field->HeldNoise(NoiseStream::kTurbulenceW, index);
+    lane.noise_index = index;
+  }
+
+  // IntegrateWith's emit_outputs_through for lane i.
+  template <class Interpolate>
+  void EmitOutputsThrough(int i, double t_cut, Interpolate&& interpolate) {
+    Run& lane = lane_[i];
+    const double interval = lane.options.output_interval_s;
+    const double snap = integrator_detail::kSnapFraction * interval;
+    for (;;) {
+      const double t_out = 0.0 + static_cast<double>(lane.next_output) * interval;
+      if (t_out > t_cut + snap) break;
+      const double tau = std::min(t_out, t_cut);
+      State xo;
+      interpolate(tau, xo);
+      lane.problem->OnOutput(tau, xo, lane.segment);
+      lane.last_output_time = tau;
+      ++lane.next_output;
+    }
+  }
+
+  // Starts the next landing in lane i (SimulateLanding's and Fly<true>'s start, IntegrateWith's),
+  // or leaves the lane idle when none is left. A landing whose design fails is complete at once.
+  void Refill(int i) {
+    while (next_ < order_.size()) {
+      const std::size_t run = order_[next_++];
+      const LandingBatchRun& r = runs_[run];
+      LandingResult& result = results_[run];
+      result = BeginLanding(*r.plant, r.config);
+      if (!result.design.ok()) continue;
+      Run& lane = lane_[i];
+      lane = Run{};
+      lane.run = run;
+      lane.config = &r.config;
+      lane.field = std::make_unique<DisturbanceField>(LandingField(*r.plant, r.config, r.noise_point));
+      lane.breakpoints = lane.field->Breakpoints(0.0, result.time_limit_s, cancel_);
+      lane.segments = lane.field->SegmentTable(lane.breakpoints, 0.0, cancel_);
+      if (cancel_ != nullptr && cancel_->load()) lane.breakpoints.clear();
+      const bool store_series = r.config.output_interval_s > 0.0;
+      lane.problem = std::make_unique<Run::Problem>(*r.plant, r.config, result.design, result, store_series,
+                                                    lane.field.get(), &lane.segments);
+      State x0{};
+      x0[kSimTheta] = r.config.start_pitch_deg * kRadiansPerDegree;
+      x0[kSimH] = r.config.start_height_m;
+      const DisturbanceOptions& d = lane.field->options();
+      x0[kSimDu] = MeanWindAt(d.wind_20ft_mps, r.config.start_height_m, d.wind_shear);
+      const DisturbanceField::State field_start = lane.field->InitialState();
+      std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
+      lane.problem->Start(0.0, x0);
+      lane.options = LaneIntegratorOptions(r.config);
+      lane.end_s = result.time_limit_s;
+      lane.segment = integrator_detail::SegmentOf(lane.breakpoints, 0.0);
+      lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
+      lane.problem->ToLane(a_, i);
+      // IntegrateWith's start.
+      lane.problem->OnStep(0.0, x0, lane.segment);
+      lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
+      EmitOutputsThrough(i, 0.0, [&](double, State& out) { out = x0; });
+      State f0;
+      ++lane.result.rhs_calls;
+      lane.problem->Derivative(0.0, x0, lane.segment, f0);
+      SetLane(a_.x, i, x0);
+      SetLane(a_.f, i, f0);
+      active_[i] = true;
+      ++active_count_;
+      if (!integrator_detail::AllFinite<N>(f0) || !integrator_detail::AllFinite<N>(x0)) {
+        Finish(i, IntegrationStatus::kNonFinite);
+      }
+      return;
+    }
+    Idle(i);
+  }
+
+  // An idle lane flies zeros on another lane's table and field (its results are never read).
+  void Idle(int i) {
+    for (int c = 0; c < N; ++c) a_.x[c][i] = a_.f[c][i] = 0.0;
+    a_.h[i] = a_.half_h[i] = a_.sixth_h[i] = 0.0;
+    a_.flare[i] = false;
+    for (int j = 0; j < W; ++j) {
+      if (a_.table[j] != nullptr) {
+        if (a_.table[i] == nullptr) {
+          a_.table[i] = a_.table[j];
+          a_.field[i] = a_.field[j];
+        }
+        break;
+      }
+    }
+  }
+
+  // Rk4Method::Advance up to the stages: the step's end on the lane's grid n·Δt_n, or its limit.
+  void PrepareStep(int i) {
+    Run& lane = lane_[i];
+    const std::vector<double>& breakpoints = lane.breakpoints;
+    double t_limit = lane.end_s;
+    if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] < lane.end_s) {
+      t_limit = breakpoints[lane.next_breakpoint];
+    }
+    const double step_s = lane.options.step_s;
+    const double snap = integrator_detail::kSnapFraction * step_s;
+    auto grid_time = [&](long index) { return 0.0 + static_cast<double>(index) * step_s; };
+    while (grid_time(lane.grid_index + 1) <= lane.t + snap) ++lane.grid_index;
+    const double target = grid_time(lane.grid_index + 1);
+    const double t_to = t_limit <= target + snap ? t_limit : target;
+    const double h = t_to - lane.t;
+    const double half_h = 0.5 * h;
+    a_.t[i] = lane.t;
+    a_.t_to[i] = t_to;
+    a_.h[i] = h;
+    a_.half_h[i] = half_h;
+    a_.sixth_h[i] = h / 6.0;
+    a_.t_mid[i] = lane.t + half_h;
+    SetNoise(i);
+  }
+
+  void Interpolate(const Step& step, double tau, State& out) const {
+    if (tau == step.t_new) {
+      out = step.x_new;
+    } else if (tau == step.t) {
+      out = step.x;
+    } else {
+      hermite_.Interpolate(tau, step.t, step.x, step.f, step.t_new, step.x_new, step.f_new, out);
+    }
+  }
+
+  // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the
+  // step, the outputs, the step's record; a restart is left to CompleteRestart.
+  void CompleteStep(int i) {
+    Run& lane = lane_[i];
+    Run::Problem& problem = *lane.problem;
+    lane.result.rhs_calls += 4;
+    const Step step{lane.t, a_.t_to[i], Lane(a_.x, i), Lane(a_.f, i), Lane(a_.x_new, i), Lane(a_.f_new, i)};
+    if (!integrator_detail::AllFinite<N>(step.x_new)) return Finish(i, IntegrationStatus::kNonFinite);
+    ++lane.result.accepted_steps;
+    auto interpolate = [&](double tau, State& out) { Interpolate(step, tau, out); };
+    const int segment = lane.segment;
+    Run::Events g_new;
+    problem.EventValues(step.t_new, step.x_new, segment, g_new);
+    const auto fired =
+        integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
+                                        lane.options.event_time_tolerance_s, [&](int e, double tau) {
+                                          State xs;
+                                          interpolate(tau, xs);
+                                          Run::Events values;
+                                          problem.EventValues(tau, xs, segment, values);
+                                          return values[static_cast<std::size_t>(e)];
+                                        });
+    EventAction cut_action = EventAction::kContinue;
+    double t_cut = step.t_new;
+    State x_event{};
+    int cut_event = -1;
+    for (int k = 0; k < fired.count; ++k) {
+      const int e = fired.order[static_cast<std::size_t>(k)];
+      const double t_event = fired.time[static_cast<std::size_t>(e)];
+      interpolate(t_event, x_event);
+      EmitOutputsThrough(i, t_event, interpolate);
+      ++lane.result.events_fired;
+      const EventAction action = problem.OnEvent(e, t_event, x_event, segment);
+      if (action == EventAction::kContinue) continue;
+      cut_action = action;
+      t_cut = t_event;
+      cut_event = e;
+      break;
+    }
+    if (cut_action == EventAction::kContinue) {
+      EmitOutputsThrough(i, step.t_new, interpolate);
+      problem.OnStep(step.t_new, step.x_new, segment);
+      lane.t = step.t_new;
+      SetLane(a_.x, i, step.x_new);
+      SetLane(a_.f, i, step.f_new);
+      lane.g_previous = g_new;
+      if (lane.next_breakpoint < lane.breakpoints.size() &&
+          lane.breakpoints[lane.next_breakpoint] <= lane.t) {
+        // The restart's event values are g_new: the same time, state and phase, and the events do not
+        // read the segment (DisturbanceField::Motion does not; the held noise enters derivatives only).
+        return StartRestart(i, /*events_known=*/true);
+      }
+      if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
+      return;
+    }
+    // The step is cut at the event.
+    EmitOutputsThrough(i, t_cut, interpolate);
+    problem.OnStep(t_cut, x_event, segment);
+    lane.t = t_cut;
+    SetLane(a_.x, i, x_event);
+    if (cut_action == EventAction::kStop) {
+      lane.result.stopping_event = cut_event;
+      return Finish(i, IntegrationStatus::kStoppedByEvent);
+    }
+    StartRestart(i, /*events_known=*/false);
+  }
+
+  // restart_here up to its derivative: the segment at the lane's time, the phase and the noise there.
+  // events_known: g_previous already holds the event values there.
+  void StartRestart(int i, bool events_known) {
+    Run& lane = lane_[i];
+    while (lane.next_breakpoint < lane.breakpoints.size() &&
+           lane.breakpoints[lane.next_breakpoint] <= lane.t) {
+      ++lane.next_breakpoint;
+      ++lane.segment;
+    }
+    lane.problem->PhaseToLane(a_, i);
+    SetNoise(i);
+    a_.t[i] = lane.t;
+    restart_[i] = true;
+    restart_events_known_[i] = events_known;
+  }
+
+  // restart_here after its derivative (the kernel's, in f_new): the event values, the finiteness
+  // check, and the loop's test of the end time.
+  void CompleteRestart(int i) {
+    Run& lane = lane_[i];
+    ++lane.result.rhs_calls;
+    State f;
+    for (int c = 0; c < N; ++c) f[static_cast<std::size_t>(c)] = a_.f_new[c][i];
+    SetLane(a_.f, i, f);
+    if (!restart_events_known_[i])
+      lane.problem->EventValues(lane.t, Lane(a_.x, i), lane.segment, lane.g_previous);
+    if (!integrator_detail::AllFinite<N>(f)) return Finish(i, IntegrationStatus::kNonFinite);
+    if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
+  }
+
+  // IntegrateWith's finish, the landing's result (Conclude, EndLanding), and the lane's next landing.
+  void Finish(int i, IntegrationStatus status) {
+    Run& lane = lane_[i];
+    lane.result.status = status;
+    lane.result.end_time_s = lane.t;
+    lane.result.final_state = Lane(a_.x, i);
+    lane.result.final_segment = lane.segment;
+    if (lane.last_output_time < lane.t) lane.problem->OnOutput(lane.t, lane.result.final_state, lane.segment);
+    LandingResult& result = results_[lane.run];
+    Conclude(*lane.problem, lane.result, *lane.config, result);
+    EndLanding(result);
+    active_[i] = false;
+    restart_[i] = false;
+    --active_count_;
+    Refill(i);
+  }
+
+  std::span<const LandingBatchRun> runs_;
+  std::span<const std::size_t> order_;
+  std::vector<LandingResult>& results_;
+  const std::atomic<bool>* cancel_;
+  lanes::LandingLaneKernels<W> kernels_;
+  std::size_t next_ = 0;
+  int active_count_ = 0;
+  integrator_detail::Rk4Method<Run::N> hermite_{0.0, IntegratorOptions{}};  // its cubic Hermite interpolant
+
+  std::array<Run, W> lane_;
+  std::array<bool, W> active_{};
+  std::array<bool, W> restart_{};
+  std::array<bool, W> restart_events_known_{};
+  lanes::LandingStepArrays<W> a_;
+};
+
+template <int W>
+void FlyLandingsInLanes(std::span<const LandingBatchRun> runs, std::span<const std::size_t> order,
+                        std::vector<LandingResult>& results, LanesIsa isa, const std::atomic<bool>* cancel) {
+  auto lanes = std::make_unique<LandingLanes<W>>(runs, order, results, isa, cancel);
+  lanes->FlyAll();
+}
+
 }  // namespace
 
 SeriesContents LandingSeriesContents(const LandingConfig& config) {
@@ -503,62 +991,68 @@ std::uint64_t LandingNoiseDimension(const Aircraft& aircraft, const LandingConfi
 
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
                               const std::atomic<bool>* cancel, std::span<const double> noise_point) {
-  const Aircraft& aircraft = plant.aircraft();
-  ValidateLandingConfig(config, aircraft, "landing config");
-
-  LandingResult result;
-  result.flare_height_m = config.flare_height_m;
-  result.flare_time_constant_s = FlareTimeConstant(config);
-  result.glide_slope_deg = config.glide_slope_deg;
-  result.plant_fixed_reference_height_m =
-      SetOr(config.plant_fixed_reference_height_m, aircraft.table_heights_m.back());
-  result.plant_h_derivatives = plant.options().h_derivatives;
-  result.time_limit_s = LandingTimeLimit(config, aircraft.wheel_contact_height_m);
-  for (double* field :
-       {&result.touchdown_time_s, &result.touchdown_distance_past_transmitter_m,
-        &result.touchdown_sink_rate_mps, &result.touchdown_pitch_deg, &result.touchdown_speed_mps,
-        &result.touchdown_airspeed_mps, &result.flare_start_time_s, &result.glide_path_error_at_flare_m}) {
-    *field = kNaN;
-  }
-  result.min_speed_mps = std::numeric_limits<double>::infinity();
-  result.max_speed_mps = -std::numeric_limits<double>::infinity();
-
-  result.design = DesignLandingController(plant, config);
-  if (!result.design.ok()) {
-    result.outcome = LandingOutcome::kDesignFailed;
-    result.message =
-        "LQR design failed (" + std::string(ToString(result.design.status)) + "): " + result.design.message;
-    result.final_height_m = config.start_height_m;
-    result.min_speed_mps = result.max_speed_mps = config.start_speed_mps;
-    return result;
-  }
-
+  ValidateLandingConfig(config, plant.aircraft(), "landing config");
+  LandingResult result = BeginLanding(plant, config);
+  if (!result.design.ok()) return result;
+  CheckNoisePoint(plant, config, noise_point);
+  const DisturbanceField field = LandingField(plant, config, noise_point);
   const bool store_series = config.output_interval_s > 0.0;
-  if (store_series) {
-    result.series.reserve(static_cast<std::size_t>(result.time_limit_s / config.output_interval_s) + 2);
-  }
-  DisturbanceOptions disturbance = config.disturbance;
-  disturbance.wing_span_m = aircraft.wingspan_m;
-  if (!noise_point.empty()) {
-    const std::uint64_t needed = LandingNoiseDimension(aircraft, config);
-    if (noise_point.size() < needed) {
-      throw InputError("landing config", "noise point", std::to_string(noise_point.size()) + " values",
-                       "at least " + std::to_string(needed) + " (LandingNoiseDimension)");
-    }
-  }
-  const DisturbanceField field = noise_point.empty()
-                                     ? DisturbanceField(disturbance, config.seed, config.run_index)
-                                     : DisturbanceField(disturbance, noise_point);
   if (field.active()) {
     Fly<true>(plant, config, result, store_series, &field, cancel);
   } else {
     Fly<false>(plant, config, result, store_series, nullptr, cancel);
   }
-  if (result.flare_start_time_s != result.flare_start_time_s) {  // NaN: no flare
-    result.flare_max_abs_elevator_deg = kNaN;
-    result.flare_max_abs_pitch_rate_degps = kNaN;
-  }
+  EndLanding(result);
   return result;
+}
+
+bool LandingRunUsesLanes(const LongitudinalModel& plant, const LandingConfig& config) {
+  if (config.turbulent_integrator != IntegratorKind::kRk4 || !config.integrator.honour_breakpoints)
+    return false;
+  if (plant.options().interpolation != Interpolation::kLinear) return false;
+  const DisturbanceOptions& d = config.disturbance;
+  if (d.turbulence != TurbulenceModel::kDryden || d.gust_amplitude_mps != 0.0) return false;
+  DisturbanceOptions options = d;
+  options.wing_span_m = plant.aircraft().wingspan_m;
+  return EffectiveSigmaW(options) > 0.0;
+}
+
+std::vector<LandingResult> SimulateLandingBatch(std::span<const LandingBatchRun> runs, int width,
+                                                const std::atomic<bool>* cancel,
+                                                std::optional<LanesIsa> isa) {
+  GESWEEP_DEMAND(width == 1 || width == 2 || width == 4 || width == 8);
+  GESWEEP_DEMAND(!isa || LanesIsaSupported(*isa));
+  const LanesIsa lanes_isa = isa ? *isa : ChooseLanesIsa(width);
+  for (const LandingBatchRun& run : runs) {
+    GESWEEP_DEMAND(run.plant != nullptr);
+    ValidateLandingConfig(run.config, run.plant->aircraft(), "landing config");
+    CheckNoisePoint(*run.plant, run.config, run.noise_point);
+  }
+  std::vector<LandingResult> results(runs.size());
+  std::vector<std::size_t> in_lanes;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (LandingRunUsesLanes(*runs[i].plant, runs[i].config)) {
+      in_lanes.push_back(i);
+    } else {
+      results[i] = SimulateLanding(*runs[i].plant, runs[i].config, cancel, runs[i].noise_point);
+    }
+  }
+  if (in_lanes.empty()) return results;
+  switch (width) {
+    case 1:
+      FlyLandingsInLanes<1>(runs, in_lanes, results, lanes_isa, cancel);
+      break;
+    case 2:
+      FlyLandingsInLanes<2>(runs, in_lanes, results, lanes_isa, cancel);
+      break;
+    case 4:
+      FlyLandingsInLanes<4>(runs, in_lanes, results, lanes_isa, cancel);
+      break;
+    default:
+      FlyLandingsInLanes<8>(runs, in_lanes, results, lanes_isa, cancel);
+      break;
+  }
+  return results;
 }
 
 }  // namespace gesweep

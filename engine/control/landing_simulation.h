@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -18,6 +19,7 @@
 #include "engine/control/landing_config.h"
 #include "engine/control/landing_design.h"
 #include "engine/dynamics/longitudinal_model.h"
+#include "engine/simulation/lanes_isa.h"
 
 namespace gesweep {
 
@@ -241,5 +243,31 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
 /// landing's time limit (LandingTimeLimit) and one more; 0 without turbulence (the landing then draws
 /// no noise). Validates `config` as SimulateLanding does.
 std::uint64_t LandingNoiseDimension(const Aircraft& aircraft, const LandingConfig& config);
+
+/// One landing of a batch (SimulateLandingBatch): its plant (never null), settings and noise point
+/// (as SimulateLanding's; may be empty).
+struct LandingBatchRun {
+  const LongitudinalModel* plant = nullptr;
+  LandingConfig config;
+  std::span<const double> noise_point;
+};
+
+/// Whether SimulateLandingBatch flies `config` in its lanes: a landing in Dryden turbulence (σ_w > 0)
+/// flown by RK4 at the noise's sample interval (turbulent_integrator = rk4, breakpoints honoured), on
+/// a plant with linear interpolation, without a discrete gust.
+bool LandingRunUsesLanes(const LongitudinalModel& plant, const LandingConfig& config);
+
+/// The landings of `runs`, each result bit for bit SimulateLanding's for that run (every field and
+/// every sample of its series), whatever the width, the instruction set and whichever runs share the
+/// batch (tests/control/landing_batch_test.cc). The runs that LandingRunUsesLanes are flown `width` at
+/// a time in lockstep (docs/performance.md, "The turbulent landing in lanes"): one RK4 step of every
+/// lane at once, each lane's events, outputs and flare switch through its own landing's problem in
+/// scalar code, and a lane whose landing ended takes the next one; the others are flown by
+/// SimulateLanding in place. width: 1, 2, 4 or 8 (GESWEEP_DEMAND). isa: as SimulateOpenLoopBatch's
+/// (engine/simulation/open_loop.h). `cancel` as SimulateLanding's, read before every step of the
+/// batch. Throws SimulateLanding's InputError for the first run that has one, before any is flown.
+std::vector<LandingResult> SimulateLandingBatch(std::span<const LandingBatchRun> runs, int width,
+                                                const std::atomic<bool>* cancel = nullptr,
+                                                std::optional<LanesIsa> isa = std::nullopt);
 
 }  // namespace gesweep

@@ -51,6 +51,15 @@ void DisturbanceField::UpdateHeightTerms(double height_m) const {
   cached_height_m_ = height_m;
 }
 
+void DisturbanceField::HeightTerms(double height_m, double& mean_wind_mps, double& sigma_u_mps,
+                                   double& length_u_m, double& length_w_m) const {
+  UpdateHeightTerms(height_m);
+  mean_wind_mps = cached_mean_wind_mps_;
+  sigma_u_mps = cached_scales_.sigma_u_mps;
+  length_u_m = cached_scales_.length_u_m;
+  length_w_m = cached_scales_.length_w_m;
+}
+
 DisturbanceField::State DisturbanceField::InitialState() const {
   State x{};
   if (turbulent_) {

@@ -109,6 +109,12 @@ class DisturbanceField {
   /// (w_g_dot_mps2 is NaN): what a controller, an event or a monitor reads, at less cost.
   AirMotion Motion(const Segment& segment, double height_m, double inertial_speed_mps, const State& x) const;
 
+  /// What Motion and Evaluate take from the height alone, the same doubles: the mean wind W(h) (m/s)
+  /// and the Dryden σ_u (m/s), L_u and L_w (m) (zeros without turbulence). For a batch's lanes
+  /// (engine/control/landing_lanes.h), which compute the rest of the field's arithmetic on vectors.
+  void HeightTerms(double height_m, double& mean_wind_mps, double& sigma_u_mps, double& length_u_m,
+                   double& length_w_m) const;
+
  private:
   DisturbanceField(const DisturbanceOptions& options, const RunNoise& noise);
   DisturbanceOptions options_;

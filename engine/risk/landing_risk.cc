@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <bit>
@@ -410,34 +411,99 @@ RiskSpec ReadRiskSpec(const SweepPlan& plan) {
 
 namespace {
 
-/// A thread's run state: the runner's workspace and a result block of one row.
+// Landings per lane in a group of a batch flown in lanes: as the sweep's groups (16 per lane), so
+// that the lanes idle only at a group's end.
+constexpr int kGroupLandingsPerLane = 16;
+
+/// A thread's run state: the runner's workspace and a result block (one row, or a group's rows).
 struct FlightWorkspace {
   explicit FlightWorkspace(const SweepPlan& plan) : workspace(plan) { block.Allocate(plan); }
   RunWorkspace workspace;
   ResultBlock block;
 };
 
-Evaluation Fly(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int limit, const RiskSpec& spec,
-               std::span<const double> point, const std::atomic<bool>* cancel) {
-  ResultBlock& block = w.block;
-  block.rows = 1;
+// Rows [0, rows) of `block` ready for their runs: results NaN, status pending.
+void ClearRows(const SweepPlan& plan, ResultBlock& block, int rows) {
+  block.rows = rows;
   for (std::size_t c = 0; c < block.results.size(); ++c) {
-    const auto width = static_cast<std::size_t>(plan.schema().columns[c].doubles_per_run());
-    std::fill(block.results[c].begin(), block.results[c].begin() + static_cast<std::ptrdiff_t>(width), kNaN);
+    const auto width = static_cast<std::ptrdiff_t>(plan.schema().columns[c].doubles_per_run());
+    std::fill(block.results[c].begin(), block.results[c].begin() + width * rows, kNaN);
   }
-  block.status[0] = static_cast<std::int8_t>(RunStatus::kPending);
-  ExecuteCellRun(plan, cell, w.workspace, block, point, cancel);
+  for (int r = 0; r < rows; ++r)
+    block.status[static_cast<std::size_t>(r)] = static_cast<std::int8_t>(RunStatus::kPending);
+}
+
+// The evaluation of row `row` of `block` (a column's value of the row: its first double).
+Evaluation EvaluationOf(const SweepPlan& plan, const ResultBlock& block, int row, int limit,
+                        const RiskSpec& spec) {
+  const auto r = static_cast<std::size_t>(row);
   Evaluation e;
-  e.status = block.status[0];
-  e.message = block.message[0];
-  for (const int c : RiskColumns(plan)) e.values.push_back(block.results[static_cast<std::size_t>(c)][0]);
+  e.status = block.status[r];
+  e.message = block.message[r];
+  for (const int c : RiskColumns(plan)) {
+    const auto width =
+        static_cast<std::size_t>(plan.schema().columns[static_cast<std::size_t>(c)].doubles_per_run());
+    e.values.push_back(block.results[static_cast<std::size_t>(c)][r * width]);
+  }
   e.g = kNaN;
   if (limit >= 0 && e.status == static_cast<std::int8_t>(RunStatus::kOk)) {
     const RiskLimit& l = spec.limits[static_cast<std::size_t>(limit)];
-    const double x = block.results[static_cast<std::size_t>(l.column_index)][0];
+    const auto width = static_cast<std::size_t>(
+        plan.schema().columns[static_cast<std::size_t>(l.column_index)].doubles_per_run());
+    const double x = block.results[static_cast<std::size_t>(l.column_index)][r * width];
     if (std::isfinite(x)) e.g = l.above ? l.value - x : x - l.value;
   }
   return e;
+}
+
+Evaluation Fly(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int limit, const RiskSpec& spec,
+               std::span<const double> point, const std::atomic<bool>* cancel) {
+  ClearRows(plan, w.block, 1);
+  ExecuteCellRun(plan, cell, w.workspace, w.block, point, cancel);
+  return EvaluationOf(plan, w.block, 0, limit, spec);
+}
+
+// The block's rows made at least `rows` (a risk plan's chunk_runs is its cell count, often 1).
+void GrowRows(const SweepPlan& plan, ResultBlock& block, int rows) {
+  const auto n = static_cast<std::size_t>(rows);
+  if (block.status.size() >= n) return;
+  block.design_index.resize(n);
+  block.run_id.resize(n);
+  block.status.resize(n);
+  block.message.resize(n);
+  for (auto& column : block.design) column.resize(n);
+  for (std::size_t c = 0; c < block.results.size(); ++c) {
+    block.results[c].resize(n * static_cast<std::size_t>(plan.schema().columns[c].doubles_per_run()));
+  }
+}
+
+// The landings of `cell` at `points` flown as one group in `lanes` SIMD lanes (ExecuteRuns), each
+// evaluation bit for bit Fly's.
+std::vector<Evaluation> FlyGroup(const SweepPlan& plan, FlightWorkspace& w, std::int64_t cell, int limit,
+                                 const RiskSpec& spec, std::span<const std::span<const double>> points,
+                                 int lanes, const std::atomic<bool>* cancel) {
+  const int count = static_cast<int>(points.size());
+  GrowRows(plan, w.block, count);
+  ClearRows(plan, w.block, count);
+  const auto random = CellRandomParameters(plan);
+  // As ExecuteCellRun splits each point: its noise part, and the random parameters' values.
+  std::vector<std::span<const double>> noise(points.begin(), points.end());
+  std::vector<std::vector<double>> values;
+  std::vector<std::span<const double>> design;
+  if (!random.empty()) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      GESWEEP_DEMAND(points[i].size() >= random.size());
+      const std::size_t n = points[i].size() - random.size();
+      noise[i] = points[i].first(n);
+      values.push_back(RandomParameterValues(plan, points[i].subspan(n)));
+    }
+    design.assign(values.begin(), values.end());
+  }
+  for (int r = 0; r < count; ++r) w.block.design_index[static_cast<std::size_t>(r)] = cell;
+  ExecuteRuns(plan, w.workspace, w.block, 0, count, lanes, cancel, noise, design);
+  std::vector<Evaluation> made;
+  for (int r = 0; r < count; ++r) made.push_back(EvaluationOf(plan, w.block, r, limit, spec));
+  return made;
 }
 
 // What one batch of a (cell, limit, repetition) simulation is flown with.
@@ -544,6 +610,10 @@ FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::s
   c.dealt += uncached;
   std::atomic<bool> captured{false};
   std::vector<std::uint64_t> hashes(options.exchange != nullptr ? batch.size() : 0);
+  // This process's landings of the batch, flown one at a time or in groups of lanes (FlyGroup).
+  const int group =
+      options.lanes > 1 && RunsInLanes(c.plan, options.lanes) ? kGroupLandingsPerLane * options.lanes : 1;
+  std::vector<std::size_t> mine;
   tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
     const EvaluationKey key = KeyOf(c, batch.tags[i]);
     if (options.capture && key == *options.capture && options.captured_point != nullptr) {
@@ -554,13 +624,38 @@ FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::s
     if (!hashes.empty()) hashes[i] = PointHash(batch.point(i));
     if (cached[i] != nullptr) {
       out.made[i] = *cached[i];
-    } else if (owner[i] == rank) {
+    } else if (owner[i] == rank && group == 1) {
       out.made[i] =
           Fly(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, batch.point(i), options.cancel);
       out.made[i].key = key;
       out.fresh[i] = 1;
     }
   });
+  if (group > 1) {
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      if (cached[i] == nullptr && owner[i] == rank) mine.push_back(i);
+    }
+    // A group per thread at least (a level's batches are small: N·p0 chains), of a lane width or more.
+    const auto threads = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    const std::size_t size =
+        std::clamp((mine.size() + threads - 1) / threads, static_cast<std::size_t>(options.lanes),
+                   static_cast<std::size_t>(group));
+    const std::size_t groups = (mine.size() + size - 1) / size;
+    tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
+      const std::size_t begin = g * size;
+      const std::size_t end = std::min(mine.size(), begin + size);
+      std::vector<std::span<const double>> points;
+      for (std::size_t j = begin; j < end; ++j) points.push_back(batch.point(mine[j]));
+      std::vector<Evaluation> made = FlyGroup(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, points,
+                                              options.lanes, options.cancel);
+      for (std::size_t j = begin; j < end; ++j) {
+        const std::size_t i = mine[j];
+        out.made[i] = std::move(made[j - begin]);
+        out.made[i].key = KeyOf(c, batch.tags[i]);
+        out.fresh[i] = 1;
+      }
+    });
+  }
   out.captured = captured.load();
   for (std::size_t i = 0; i < batch.size(); ++i)
     out.flown_here += owner[i] == rank && out.made[i].status != static_cast<std::int8_t>(RunStatus::kPending);

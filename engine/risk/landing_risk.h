@@ -172,6 +172,9 @@ struct RiskRunOptions {
   /// and a batch stops on every process when any was asked to stop; `on_batch` and `progress` are
   /// given only on the process that journals and prints (its rank 0).
   BatchExchange* exchange = nullptr;
+  /// The landings of a batch flown `lanes` at a time in SIMD lanes (ExecuteRuns, one of kLaneWidths;
+  /// 1: one at a time, ExecuteCellRun). Every evaluation is the same bit for bit whatever it is.
+  int lanes = DefaultLanes();
 };
 
 /// Runs every (cell, limit) subset simulation of the plan's design. The threads are the calling

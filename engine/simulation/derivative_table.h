@@ -194,10 +194,54 @@ class LinearDerivativeTable {
     dxdt[4] = u0 * dtheta - dw;
   }
 
+  /// DerivativesAt for the lanes of one chunk on architecture Arch (lanes.h): derivative j of lane i
+  /// (in the order of Reduced, below: Xu, Xw, Xh, Xδe, Zu, Zw, Zh, Zδe, Mu, Mw, Mq, Mh, Mδe, Mẇ) is
+  /// that of tables[i]->DerivativesAt(height[i], speed[i], segment_hints[i]) bit for bit, with the same
+  /// operations in the same order. height: the chunk's heights as doubles (the same as height_m).
+  /// gathered as for Equation1Lanes.
+  template <class Arch, class V>
+  GESWEEP_ALWAYS_INLINE static void DerivativesLanes(const LinearDerivativeTable* const* tables,
+                                                     const V& height_m, const double* height,
+                                                     const V& speed_mps, int* segment_hints,
+                                                     LanesGathered<Arch, V>& gathered, V* derivatives) {
+    constexpr int kWidth = lanes::kChunkWidth<V>;
+    const Segment* seg[kWidth];
+    const DensityPolynomial* density[kWidth];
+    bool same = true;
+    for (int i = 0; i < kWidth; ++i) {
+      seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
+      density[i] = &tables[i]->density_;
+      same = same && seg[i] == gathered.segment[i];
+    }
+    if (!same) Gather(seg, density, gathered);
+    const V y = height_m - gathered.reference_m;
+    V r[kReducedCount];
+    for (int j = 0; j < kReducedCount; ++j) r[j] = gathered.slope[j] * y + gathered.value[j];
+    const V rho = DensityPolynomial::AtLanes<Arch, V>(density, height_m, height, gathered.density_center_m,
+                                                      gathered.density_coefficients);
+    const V rho_u = rho * speed_mps;
+    const V rho_u2 = rho_u * speed_mps;
+    derivatives[kXu] = rho_u * r[kXu];
+    derivatives[kXw] = rho_u * r[kXw];
+    derivatives[kXh] = rho_u2 * r[kXh];
+    derivatives[kXde] = rho_u2 * r[kXde];
+    derivatives[kZu] = rho_u * r[kZu];
+    derivatives[kZw] = rho_u * r[kZw];
+    derivatives[kZh] = rho_u2 * r[kZh];
+    derivatives[kZde] = rho_u2 * r[kZde];
+    derivatives[kMu] = rho_u * r[kMu];
+    derivatives[kMw] = rho_u * r[kMw];
+    derivatives[kMq] = rho_u * r[kMq];
+    derivatives[kMh] = rho_u2 * r[kMh];
+    derivatives[kMde] = rho_u2 * r[kMde];
+    derivatives[kMwDot] = rho * r[kMwDot];
+  }
+
   /// Number of segments: one below the first row, one per pair of rows, one above the last.
   int segment_count() const { return static_cast<int>(segments_.size()); }
 
- private:
+ public:
+  /// The derivatives per segment, divided by their speed and density factors (DerivativesLanes' order).
   enum Reduced : int {
     kXu,
     kXw,
@@ -215,6 +259,8 @@ class LinearDerivativeTable {
     kMwDot,
     kReducedCount
   };
+
+ private:
   /// One segment (low, high]: R(H) = value + slope·(H − reference).
   struct Segment {
     std::array<double, kReducedCount> value{};

@@ -249,9 +249,13 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
 }
 
 void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& block, int first_row, int count,
-                 int lanes, const std::atomic<bool>* cancel) {
+                 int lanes, const std::atomic<bool>* cancel,
+                 std::span<const std::span<const double>> noise_points,
+                 std::span<const std::span<const double>> design_values) {
   GESWEEP_DEMAND(std::ranges::find(kLaneWidths, lanes) != std::end(kLaneWidths));
   GESWEEP_DEMAND(count >= 0 && first_row >= 0 && first_row + count <= block.rows);
+  GESWEEP_DEMAND(noise_points.empty() || noise_points.size() == static_cast<std::size_t>(count));
+  GESWEEP_DEMAND(design_values.empty() || design_values.size() == static_cast<std::size_t>(count));
   workspace.StartGroup();
   if (workspace.group_parameters.size() < static_cast<std::size_t>(count)) {
     workspace.group_parameters.resize(static_cast<std::size_t>(count));
@@ -267,12 +271,14 @@ void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& bl
     const auto k = static_cast<std::size_t>(i);
     const std::int64_t design_index = block.design_index[static_cast<std::size_t>(row)];
     RunParameters& parameters = workspace.group_parameters[k];
-    PrepareRun(plan, design_index, parameters, workspace.group_rows[k], block, row, {});
+    PrepareRun(plan, design_index, parameters, workspace.group_rows[k], block, row,
+               design_values.empty() ? std::span<const double>() : design_values[k]);
     bool failed = false;
     const LongitudinalModel* model =
         ModelOrFail(plan, block, row, &failed,
                     [&]() -> const LongitudinalModel& { return workspace.GroupModel(plan, parameters); });
-    contexts.push_back(RunContext{parameters, model, cancel, static_cast<std::uint64_t>(design_index)});
+    contexts.push_back(RunContext{parameters, model, cancel, static_cast<std::uint64_t>(design_index),
+                                  noise_points.empty() ? std::span<const double>() : noise_points[k]});
     outputs.emplace_back(&block.results, &plan.schema(), row);
     live.push_back(failed ? 0 : 1);
     ok.push_back(1);

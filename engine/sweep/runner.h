@@ -166,8 +166,12 @@ void ExecuteRun(const SweepPlan& plan, std::int64_t design_index, RunWorkspace& 
 /// statuses, messages and results are bit for bit ExecuteRun's, whatever `lanes` (one of
 /// kLaneWidths) and whichever runs share the group. A run a cancellation stops keeps status
 /// kPending ("cancelled"); a run whose model cannot be built fails, the others go on.
+/// `noise_points` and `design_values` (empty in a sweep; else one per run of the group): ExecuteRun's
+/// of each run (a subset simulation's landings, engine/risk).
 void ExecuteRuns(const SweepPlan& plan, RunWorkspace& workspace, ResultBlock& block, int first_row, int count,
-                 int lanes, const std::atomic<bool>* cancel = nullptr);
+                 int lanes, const std::atomic<bool>* cancel = nullptr,
+                 std::span<const std::span<const double>> noise_points = {},
+                 std::span<const std::span<const double>> design_values = {});
 
 /// Whether a sweep of `plan` with `lanes` runs its runs in groups (ExecuteRuns): lanes > 1 and an
 /// analysis of the study takes lanes (Analysis::takes_lanes). Otherwise one at a time (ExecuteRun).
@@ -197,7 +201,7 @@ struct RunnerOptions {
   /// pending for --resume). Batches finished before are written, so the archive stays resumable.
   const std::atomic<bool>* cancel = nullptr;
   int queue_batches = 4;  ///< capacity of the queue to the writer
-  /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop),
+  /// Runs computed at once in the lanes of SIMD vectors by the analyses that take them (open_loop, landing),
   /// one of kLaneWidths; 1: one at a time. The archive is the same bit for bit whatever it is.
   int lanes = DefaultLanes();
 };

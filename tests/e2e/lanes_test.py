@@ -13,6 +13,12 @@ conversion to radians differs in the last bit between x * pi / 180, which the sw
 until 2026-12-07, and x * (pi / 180), simulate's flag's: both now use the latter.) A width the lanes
 do not have is refused with one line, exit 2.
 
+Turbulent landings (SimulateLandingBatch) likewise: a study of 36 short landings from 32 m in Dryden
+turbulence (three winds, one of them 0 m/s, which is still air and flown by dopri5 one at a time inside
+the batch; three speeds, two slopes, with and without h-derivatives), its archive at every width on
+one and two threads against `--lanes 1`, its series too, and rows of a lanes-flown archive replayed by
+`gesweep land --seed S --run-index I`, whose summary (and gain) must equal the row to the bit.
+
 Usage: lanes_test.py BUILD/gesweep
 """
 import json
@@ -65,6 +71,41 @@ name = "pulse_amplitude_deg"
 values = [-6.0, 0.5, 3.0]
 """
 
+LANDING_STUDY = """format_version = 1
+name = "landing_lanes"
+aircraft = "{aircraft}"
+
+[analyses.landing]
+time_limit_s = 40.0
+
+[parameters]
+height_m = 32.0
+turbulence = "dryden"
+seed = 7
+
+[output]
+chunk_runs = 16
+{output}
+
+[design]
+kind = "grid"
+[[design.parameter]]
+name = "h_derivatives"
+values = [true, false]
+[[design.parameter]]
+name = "wind_20ft_mps"
+values = [-7.717, 0.0, -15.433]
+[[design.parameter]]
+name = "speed_mps"
+values = [45.0, 52.21, 58.0]
+[[design.parameter]]
+name = "glide_slope_deg"
+values = [2.5, 3.2]
+"""
+
+LANDING_SUMMARY_STUDY = LANDING_STUDY.format(aircraft=ANCE, output="")
+LANDING_SERIES_STUDY = LANDING_STUDY.format(aircraft=ANCE, output="time_series = true\noutput_dt_s = 0.1")
+
 SUMMARY_STUDY = STUDY.format(aircraft=ANCE, mass=ANCE_MASS_KG, output="")
 SERIES_STUDY = STUDY.format(aircraft=ANCE, mass=ANCE_MASS_KG, output="time_series = true\noutput_dt_s = 0.1")
 
@@ -94,7 +135,8 @@ class Lanes(unittest.TestCase):
         cls.tmp = tempfile.TemporaryDirectory()
         cls.dir = cls.tmp.name
         cls.studies = {}
-        for name, text in (("summary", SUMMARY_STUDY), ("series", SERIES_STUDY)):
+        for name, text in (("summary", SUMMARY_STUDY), ("series", SERIES_STUDY), ("landing", LANDING_SUMMARY_STUDY),
+                           ("landing_series", LANDING_SERIES_STUDY)):
             path = os.path.join(cls.dir, name + ".toml")
             with open(path, "w") as f:
                 f.write(text)
@@ -106,8 +148,10 @@ class Lanes(unittest.TestCase):
 
     def run_study(self, study, archive, *flags):
         path = os.path.join(self.dir, archive)
-        # Exit 3: the runs of mass 1e-300 fail (their status and messages are compared too).
-        gesweep("run", self.studies[study], "-o", path, "--quiet", *flags, expect=3)
+        # Exit 3: the runs of mass 1e-300 fail (their status and messages are compared too); the
+        # landings all succeed.
+        gesweep("run", self.studies[study], "-o", path, "--quiet", *flags,
+                expect=0 if study.startswith("landing") else 3)
         return path
 
     def oracle(self, study):
@@ -182,6 +226,69 @@ class Lanes(unittest.TestCase):
                 compared += 1
         self.assertEqual(compared, len(results) * len(rows[::3]))
         self.assertGreaterEqual(len(results), 12)
+
+    def test_turbulent_landings_write_the_same_archive_in_lanes(self):
+        expected = self.oracle("landing")
+        with h5py.File(os.path.join(self.dir, "landing-oracle.h5"), "r") as f:
+            steps = f["results/landing/accepted_steps"][:]
+            outcome = f["results/landing/outcome"][:]
+            wind = f["design/wind_20ft_mps"][:]
+        # Landings that end at different steps, all touching down, the still-air ones among them.
+        self.assertEqual(len(steps), 36)
+        self.assertEqual(set(outcome.tolist()), {0})
+        self.assertGreater(len(set(steps[wind != 0].tolist())), 20)
+        for lanes in ("1", "2", "4", "8"):
+            for threads in ("1", "2"):
+                if lanes == "1" and threads == "1":
+                    continue
+                path = self.run_study("landing", f"landing-w{lanes}t{threads}.h5", "--lanes", lanes,
+                                      "--threads", threads)
+                self.assert_same(expected, path, f"landing, --lanes {lanes} --threads {threads}")
+
+    def test_turbulent_landing_series_are_the_same_in_lanes(self):
+        expected = self.oracle("landing_series")
+        self.assertIn("series/landing/height_m", expected)
+        self.assertIn("series/landing/w_g_mps", expected)
+        path = self.run_study("landing_series", "landing-series-w8.h5", "--lanes", "8", "--threads", "2")
+        self.assert_same(expected, path, "landing series, --lanes 8")
+
+    def test_a_landing_flown_in_lanes_replays_alone_to_the_bit(self):
+        archive = self.run_study("landing", "landing-replay.h5", "--lanes", "8", "--threads", "2")
+        with h5py.File(archive, "r") as f:
+            index = f["runs/index"][:]
+            design = {k: f["design/" + k][:] for k in f["design"]}
+            results = {k: f["results/landing/" + k][:] for k in f["results/landing"] if k not in f["design"]}
+            levels = [str(v, "utf-8") if isinstance(v, bytes) else str(v)
+                      for v in f["results/landing/outcome"].attrs["levels"]]
+        compared = 0
+        for row in range(0, len(index), 5):
+            flags = ["land", "--aircraft", ANCE, "--start-height-m", "32", "--time-limit-s", "40",
+                     "--speed-mps", repr(float(design["speed_mps"][row])),
+                     "--glide-slope-deg", repr(float(design["glide_slope_deg"][row])),
+                     "--wind-20ft-mps", repr(float(design["wind_20ft_mps"][row])), "--turbulence", "dryden",
+                     "--seed", "7", "--run-index", str(int(index[row])), "--summary-only", "--format", "json"]
+            if not design["h_derivatives"][row]:
+                flags.append("--no-h-derivatives")
+            document = json.loads(gesweep(*flags).stdout)
+            summary = dict(document["summary"])
+            summary.update({k: v for k, v in document["run"].items() if k not in summary})
+            summary.update({k: v for k, v in summary.get("design", {}).items() if k not in summary})
+            summary["accepted_steps"] = summary.get("steps")
+            # The design's largest closed-loop real part: land gives the eigenvalues ([re, im] each).
+            summary["closed_loop_max_real_per_s"] = max(e[0] for e in summary["design"]["closed_loop_eigenvalues_per_s"])
+            for key, column in results.items():
+                self.assertIn(key, summary, f"row {row}: {key} is not in land's JSON")
+                value = summary[key]
+                if key == "outcome":
+                    value = levels.index(value)
+                if key == "gain":  # by state name, in Eq. (14)'s order
+                    self.assertEqual(list(value.values()), list(column[row]), f"row {row}: gain")
+                elif value is None:  # NaN in JSON
+                    self.assertTrue(np.isnan(column[row]), f"row {row}: {key}")
+                else:
+                    self.assertEqual(value, column[row], f"row {row}: {key}")
+                compared += 1
+        self.assertGreaterEqual(compared, 8 * 20)
 
     def test_a_width_the_lanes_do_not_have_is_refused_with_one_line(self):
         for lanes in ("3", "0", "16"):

@@ -7,7 +7,7 @@
 The oracles are the engine's own uninterrupted, single-threaded run (an identity, not a number it
 produced): what is checked is that the estimate does not depend on how it was reached.
 1. Threads: the same study on 1 and on 2 threads writes the same estimate (result_json) and the same
-   evaluations, bit for bit.
+   evaluations, bit for bit; and so at --lanes 1, 2 and 4 (its landings one at a time or in SIMD lanes).
 2. Kill and resume: SIGTERM during a level (exit 143, no archive, a journal), then SIGKILL during a level
    of the resumed run; `--resume` twice finishes to the uninterrupted archive's estimate and evaluations,
    bit for bit.
@@ -187,6 +187,13 @@ def main():
         reference = contents(one)
         check(same(reference, contents(two)), "1 and 2 threads: the same estimate and evaluations, bit for bit")
         check(r1.stdout == r2.stdout.replace("two.h5", "one.h5"), "1 and 2 threads: the same table")
+        # Lanes: the landings one at a time (--lanes 1) and in 2 and 4 SIMD lanes (the default, the
+        # CPU's widest, above) write the same evaluations.
+        for lanes in (1, 2, 4):
+            other = tmp / f"lanes{lanes}.h5"
+            r = risk(study, "-o", other, "--threads", 2, "--lanes", lanes)
+            check(r.returncode == 0, f"risk at --lanes {lanes} exits 0: {r.returncode} {r.stderr}")
+            check(same(reference, contents(other)), f"--lanes {lanes}: the same estimate and evaluations, bit for bit")
 
         # 2. Kill and resume.
         cut = tmp / "cut.h5"

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""The objects of the open loop's lanes keep the instruction sets apart (engine/simulation/lanes.h):
+"""The objects of the open loop's (or the landing's) lanes keep the instruction sets apart
+(engine/simulation/lanes.h):
 
-  lanes_objects_test.py LIBRARY     (libgesweep_simulation.a)
+  lanes_objects_test.py LIBRARY [PREFIX]   (libgesweep_simulation.a, open_loop_lanes; or
+                                            libgesweep_control.a, landing_lanes: the landing's lanes)
 
 1. Every symbol that open_loop_lanes_avx2.cc.o or open_loop_lanes_avx512.cc.o defines for the linker
    (global or weak) names its own architecture (xsimd::avx2, xsimd::avx512f). A weak symbol that does
@@ -20,8 +22,9 @@ import subprocess
 import sys
 
 library = sys.argv[1]
-architectures = {"open_loop_lanes_avx2.cc.o": ("xsimd::avx2", "%ymm"),
-                 "open_loop_lanes_avx512.cc.o": ("xsimd::avx512f", "%zmm")}
+prefix = sys.argv[2] if len(sys.argv) > 2 else "open_loop_lanes"
+architectures = {f"{prefix}_avx2.cc.o": ("xsimd::avx2", "%ymm"),
+                 f"{prefix}_avx512.cc.o": ("xsimd::avx512f", "%zmm")}
 problems = []
 
 # nm -A: "library:member:address type name" (no address for undefined symbols, left out here).
