@@ -165,6 +165,32 @@ struct LaneRun {
   std::exception_ptr error;  ///< or what it threw (then `outcome` means nothing)
 };
 
+/// Analysis::RunLanes of an analysis whose simulation has a batch entry point: `make(context)` is a
+/// run's entry of the batch, `fly(batch, lanes, cancel)` flies them all (each result bit for bit its
+/// run's one at a time) and `record(result, row)` stores each. A batch that throws (it validates every
+/// run before flying any) gives every run to `one_at_a_time` (the base class's RunLanes), so that each
+/// gets its own outcome or exception, as without lanes.
+template <class Make, class Fly, class Record, class OneAtATime>
+void FlyInLanes(std::span<LaneRun> runs, int lanes, const Make& make, const Fly& fly, const Record& record,
+                const OneAtATime& one_at_a_time) {
+  if (runs.empty()) return;
+  const std::atomic<bool>* cancel = runs.front().context->cancel;
+  std::vector<decltype(make(*runs.front().context))> batch;
+  batch.reserve(runs.size());
+  for (const LaneRun& run : runs) {
+    GESWEEP_DEMAND(run.context->cancel == cancel);
+    batch.push_back(make(*run.context));
+  }
+  decltype(fly(batch, lanes, cancel)) results;
+  try {
+    results = fly(batch, lanes, cancel);
+  } catch (...) {
+    one_at_a_time();
+    return;
+  }
+  for (std::size_t i = 0; i < runs.size(); ++i) runs[i].outcome = record(results[i], *runs[i].row);
+}
+
 /// The lane widths a sweep takes (`gesweep run --lanes`, docs/sweep.md): runs computed W at a time in
 /// the lanes of SIMD vectors, W = 1 being one at a time: the open loop's and the landing's lanes
 /// (kOpenLoopBatchWidths, open_loop_analysis.cc checks it; SimulateLandingBatch takes the same).

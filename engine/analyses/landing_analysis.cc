@@ -119,22 +119,16 @@ class LandingAnalysis final : public Analysis {
   // the group is then given to Run, one at a time, so that each gets its own outcome or exception, as
   // without lanes.
   void RunLanes(std::span<LaneRun> runs, int lanes) const override {
-    if (runs.empty()) return;
-    const std::atomic<bool>* cancel = runs.front().context->cancel;
-    std::vector<LandingBatchRun> batch;
-    batch.reserve(runs.size());
-    for (const LaneRun& run : runs) {
-      GESWEEP_DEMAND(run.context->cancel == cancel);
-      batch.push_back({run.context->model, ConfigOf(*run.context), run.context->noise_point});
-    }
-    std::vector<LandingResult> results;
-    try {
-      results = SimulateLandingBatch(batch, lanes, cancel);
-    } catch (...) {
-      Analysis::RunLanes(runs, lanes);
-      return;
-    }
-    for (std::size_t i = 0; i < runs.size(); ++i) runs[i].outcome = Record(results[i], *runs[i].row);
+    FlyInLanes(
+        runs, lanes,
+        [&](const RunContext& c) {
+          return LandingBatchRun{c.model, ConfigOf(c), c.noise_point};
+        },
+        [](const auto& batch, int width, const auto* cancel) {
+          return SimulateLandingBatch(batch, width, cancel);
+        },
+        [&](const LandingResult& r, OutputRow& row) { return Record(r, row); },
+        [&] { Analysis::RunLanes(runs, lanes); });
   }
 
   std::uint64_t NoiseDimension(const RunParameters& parameters, const Aircraft& aircraft) const override {

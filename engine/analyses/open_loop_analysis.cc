@@ -86,22 +86,16 @@ class OpenLoopAnalysis final : public Analysis {
   // validates every run before flying any) makes it throw: every run of the group is then given to
   // Run, one at a time, so that each gets its own outcome or exception, as without lanes.
   void RunLanes(std::span<LaneRun> runs, int lanes) const override {
-    if (runs.empty()) return;
-    const std::atomic<bool>* cancel = runs.front().context->cancel;
-    std::vector<OpenLoopBatchRun> batch;
-    batch.reserve(runs.size());
-    for (const LaneRun& run : runs) {
-      GESWEEP_DEMAND(run.context->cancel == cancel);
-      batch.push_back({run.context->model, ConfigOf(*run.context)});
-    }
-    std::vector<OpenLoopResult> results;
-    try {
-      results = SimulateOpenLoopBatch(batch, lanes, cancel);
-    } catch (...) {
-      Analysis::RunLanes(runs, lanes);
-      return;
-    }
-    for (std::size_t i = 0; i < runs.size(); ++i) runs[i].outcome = Record(results[i], *runs[i].row);
+    FlyInLanes(
+        runs, lanes,
+        [&](const RunContext& c) {
+          return OpenLoopBatchRun{c.model, ConfigOf(c)};
+        },
+        [](const auto& batch, int width, const auto* cancel) {
+          return SimulateOpenLoopBatch(batch, width, cancel);
+        },
+        [&](const OpenLoopResult& r, OutputRow& row) { return Record(r, row); },
+        [&] { Analysis::RunLanes(runs, lanes); });
   }
 
  private:

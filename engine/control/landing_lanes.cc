@@ -2,25 +2,16 @@
 // instantiation (made in landing_lanes_<isa>.cc) without instantiating it.
 #include "engine/control/landing_lanes.h"
 
-#include <xsimd/xsimd.hpp>
-
-#include "engine/common/errors.h"
 #include "engine/disturbance/disturbance_field.h"
+#include "engine/simulation/lanes.h"
 
 namespace gesweep::lanes {
 
 template <int W>
 LandingLaneKernels<W> LandingLaneKernelsFor(LanesIsa isa) {
-  GESWEEP_DEMAND(LanesIsaSupported(isa));
-  switch (isa) {
-    case LanesIsa::kSse2:
-      return {&LandingRk4Stages<xsimd::sse2, W>, &LandingDerivatives<xsimd::sse2, W>};
-    case LanesIsa::kAvx2:
-      return {&LandingRk4Stages<xsimd::avx2, W>, &LandingDerivatives<xsimd::avx2, W>};
-    case LanesIsa::kAvx512:
-      return {&LandingRk4Stages<xsimd::avx512f, W>, &LandingDerivatives<xsimd::avx512f, W>};
-  }
-  GESWEEP_UNREACHABLE();
+  return PickForIsa(isa, []<class Arch>() {
+    return LandingLaneKernels<W>{&LandingRk4Stages<Arch, W>, &LandingDerivatives<Arch, W>};
+  });
 }
 
 template LandingLaneKernels<1> LandingLaneKernelsFor<1>(LanesIsa);

@@ -15,6 +15,7 @@
 #include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
 #include "engine/simulation/integrator.h"
+#include "engine/simulation/lane_loop.h"
 
 namespace gesweep {
 namespace {
@@ -646,49 +647,17 @@ class LandingLanes {
         cancel_(cancel),
         kernels_(lanes::LandingLaneKernelsFor<W>(isa)) {}
 
-  void FlyAll() {
-    for (int i = 0; i < W; ++i) Refill(i);
-    while (active_count_ > 0) {
-      if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) {
-        for (int i = 0; i < W; ++i) {
-          if (active_[i]) Finish(i, IntegrationStatus::kCancelled);
-        }
-        continue;
-      }
-      for (int i = 0; i < W; ++i) {
-        if (active_[i]) PrepareStep(i);
-      }
-      kernels_.rk4_stages(a_);
-      bool any_restart = false;
-      for (int i = 0; i < W; ++i) {
-        restart_[i] = false;
-        if (active_[i]) CompleteStep(i);
-        any_restart = any_restart || restart_[i];
-      }
-      if (!any_restart) continue;
-      // IntegrateWith's restart_here of every lane at a breakpoint or after the flare switch: the
-      // derivative at the new segment's start (its held noise) or in the new phase.
-      kernels_.derivatives(a_);
-      for (int i = 0; i < W; ++i) {
-        if (restart_[i]) CompleteRestart(i);
-      }
-    }
-  }
+  void FlyAll() { lanes::FlyLanes<W>(*this, active_, active_count_, cancel_); }
 
  private:
-  struct Step {
-    double t, t_new;
-    State x, f, x_new, f_new;
-  };
+  template <int V, class L>
+  friend void lanes::FlyLanes(L& lanes, const std::array<bool, V>& active, const int& active_count,
+                              const std::atomic<bool>* cancel);
 
-  static State Lane(const double (&v)[N][W], int i) {
-    State s;
-    for (int c = 0; c < N; ++c) s[static_cast<std::size_t>(c)] = v[c][i];
-    return s;
-  }
-  static void SetLane(double (&v)[N][W], int i, const State& s) {
-    for (int c = 0; c < N; ++c) v[c][i] = s[static_cast<std::size_t>(c)];
-  }
+  using Step = lanes::LaneStep<State>;
+  // The lane's state as one run's, and back.
+  static State Lane(const auto& v, int i) { return lanes::LaneOf<State>(v, i); }
+  static void SetLane(auto& v, int i, const State& s) { lanes::SetLaneOf(v, i, s); }
 
   // The held noise of lane i's segment in its arrays (DisturbanceField::Evaluate's).
   void SetNoise(int i) {
@@ -818,6 +787,24 @@ class LandingLanes {
       out = step.x;
     } else {
       hermite_.Interpolate(tau, step.t, step.x, step.f, step.t_new, step.x_new, step.f_new, out);
+    }
+  }
+
+  // For FlyLanes: one step of every lane at once.
+  void StepAll() {
+    kernels_.rk4_stages(a_);
+    bool any_restart = false;
+    for (int i = 0; i < W; ++i) {
+      restart_[i] = false;
+      if (active_[i]) CompleteStep(i);
+      any_restart = any_restart || restart_[i];
+    }
+    if (!any_restart) return;
+    // IntegrateWith's restart_here of every lane at a breakpoint or after the flare switch: the
+    // derivative at the new segment's start (its held noise) or in the new phase.
+    kernels_.derivatives(a_);
+    for (int i = 0; i < W; ++i) {
+      if (restart_[i]) CompleteRestart(i);
     }
   }
 

@@ -257,10 +257,7 @@ struct KwargsReader {
     if constexpr (SettingValue<U>) {
       if (!InScope(a, false)) return;
       const std::string key(a.key);
-      keys->push_back(key);
-      if (!kwargs->contains(key)) return;
-      py::object value = (*kwargs)[key.c_str()];
-      PyDict_DelItemString(kwargs->ptr(), key.c_str());
+      const py::object value = Take(key);
       if (value.is_none()) return;
       if constexpr (std::same_as<U, bool>) {
         *field.value() = ToBool(value, key);
@@ -290,13 +287,19 @@ struct KwargsReader {
     }
   }
 
+  /// The argument `key` (None when it was not given), removed from the arguments; `key` is known.
+  py::object Take(const std::string& key) {
+    keys->push_back(key);
+    if (!kwargs->contains(key)) return py::none();
+    py::object value = (*kwargs)[key.c_str()];
+    PyDict_DelItemString(kwargs->ptr(), key.c_str());
+    return value;
+  }
+
   /// A setting's array (named_components): a sequence of one number per component, in order.
   void TakeNamedArray(const FieldAttributes& a, double* values) {
     const std::string key(a.key);
-    keys->push_back(key);
-    if (!kwargs->contains(key)) return;
-    py::object value = (*kwargs)[key.c_str()];
-    PyDict_DelItemString(kwargs->ptr(), key.c_str());
+    const py::object value = Take(key);
     if (value.is_none()) return;
     const std::size_t count = a.components.size();
     if (py::isinstance<py::str>(value) || !py::isinstance<py::sequence>(value) || py::len(value) != count) {

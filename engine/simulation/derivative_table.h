@@ -165,15 +165,8 @@ class LinearDerivativeTable {
     const V speed_mps = u0 + du;
     alignas(64) double height[kWidth];
     lanes::Store<Arch>(height_m, height);
-    const Segment* seg[kWidth];
     const DensityPolynomial* density[kWidth];
-    bool same = true;
-    for (int i = 0; i < kWidth; ++i) {
-      seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
-      density[i] = &tables[i]->density_;
-      same = same && seg[i] == gathered.segment[i];
-    }
-    if (!same) Gather(seg, density, gathered);
+    GatherSegments(tables, height, segment_hints, gathered, density);
     const V y = height_m - gathered.reference_m;
     auto r = [&](int j) { return gathered.slope[j] * y + gathered.value[j]; };
     const V x_1 = r(kXu) * du + r(kXw) * dw;
@@ -205,15 +198,8 @@ class LinearDerivativeTable {
                                                      const V& speed_mps, int* segment_hints,
                                                      LanesGathered<Arch, V>& gathered, V* derivatives) {
     constexpr int kWidth = lanes::kChunkWidth<V>;
-    const Segment* seg[kWidth];
     const DensityPolynomial* density[kWidth];
-    bool same = true;
-    for (int i = 0; i < kWidth; ++i) {
-      seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
-      density[i] = &tables[i]->density_;
-      same = same && seg[i] == gathered.segment[i];
-    }
-    if (!same) Gather(seg, density, gathered);
+    GatherSegments(tables, height, segment_hints, gathered, density);
     const V y = height_m - gathered.reference_m;
     V r[kReducedCount];
     for (int j = 0; j < kReducedCount; ++j) r[j] = gathered.slope[j] * y + gathered.value[j];
@@ -291,6 +277,25 @@ class LinearDerivativeTable {
     return segments_[s];
   }
   static std::array<double, kReducedCount> Reduce(const DimensionalDerivatives& d);
+  // The segments of one chunk's lanes at their heights (each table's SegmentFor, with its hint),
+  // gathered into `gathered` unless they are the ones already there; `density` gets each lane's
+  // density polynomial.
+  template <class Arch, class V>
+  GESWEEP_ALWAYS_INLINE static void GatherSegments(const LinearDerivativeTable* const* tables,
+                                                   const double* height, int* segment_hints,
+                                                   LanesGathered<Arch, V>& gathered,
+                                                   const DensityPolynomial** density) {
+    constexpr int kWidth = lanes::kChunkWidth<V>;
+    const Segment* seg[kWidth];
+    bool same = true;
+    for (int i = 0; i < kWidth; ++i) {
+      seg[i] = &tables[i]->SegmentFor(height[i], segment_hints[i]);
+      density[i] = &tables[i]->density_;
+      same = same && seg[i] == gathered.segment[i];
+    }
+    if (!same) Gather(seg, density, gathered);
+  }
+
   // The lanes' segments and polynomials as chunks (out of line: taken a few times per run).
   template <class Arch, class V>
   [[gnu::noinline]] static void Gather(const Segment* const* seg, const DensityPolynomial* const* density,

@@ -16,6 +16,9 @@
 #include <type_traits>
 #include <xsimd/xsimd.hpp>
 
+#include "engine/common/errors.h"
+#include "engine/simulation/lanes_isa.h"
+
 namespace gesweep::lanes {
 
 /// The vector of doubles of architecture Arch (xsimd::sse2: 2 lanes, xsimd::avx2: 4, xsimd::avx512f: 8).
@@ -60,6 +63,24 @@ template <class Arch, class V, class F>
   alignas(64) double lanes[kChunkWidth<V>];
   for (int i = 0; i < kChunkWidth<V>; ++i) lanes[i] = value(i);
   return Load<Arch, V>(lanes);
+}
+
+/// `pick.template operator()<Arch>()` for the xsimd architecture of `isa`: the kernels of one
+/// instruction set, named (not instantiated) by the generic dispatch code (open_loop_lanes.cc,
+/// control/landing_lanes.cc); each instance is made in its instruction set's own translation unit.
+/// Precondition: LanesIsaSupported(isa) (GESWEEP_DEMAND).
+template <class Pick>
+auto PickForIsa(LanesIsa isa, const Pick& pick) {
+  GESWEEP_DEMAND(LanesIsaSupported(isa));
+  switch (isa) {
+    case LanesIsa::kSse2:
+      return pick.template operator()<xsimd::sse2>();
+    case LanesIsa::kAvx2:
+      return pick.template operator()<xsimd::avx2>();
+    case LanesIsa::kAvx512:
+      return pick.template operator()<xsimd::avx512f>();
+  }
+  GESWEEP_UNREACHABLE();
 }
 
 }  // namespace gesweep::lanes

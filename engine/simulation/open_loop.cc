@@ -11,6 +11,7 @@
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/disturbance/mean_wind.h"
 #include "engine/simulation/derivative_kernel.h"
+#include "engine/simulation/lane_loop.h"
 #include "engine/simulation/open_loop_lanes.h"
 
 namespace gesweep {
@@ -447,41 +448,17 @@ class OpenLoopLanes {
     for (int i = 0; i < W; ++i) a_.table[i] = tables[order.front()];  // idle lanes fly zeros on a valid table
   }
 
-  void FlyAll() {
-    for (int i = 0; i < W; ++i) Refill(i);
-    while (active_count_ > 0) {
-      if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) {
-        for (int i = 0; i < W; ++i) {
-          if (active_[i]) Finish(i, IntegrationStatus::kCancelled);
-        }
-        continue;
-      }
-      for (int i = 0; i < W; ++i) {
-        if (active_[i]) PrepareStep(i);
-      }
-      kernels_.rk4_stages(a_);
-      for (int i = 0; i < W; ++i) {
-        if (active_[i]) CompleteStep(i);
-      }
-    }
-  }
+  void FlyAll() { lanes::FlyLanes<W>(*this, active_, active_count_, cancel_); }
 
  private:
-  // One lane's step: its ends and the states and derivatives there.
-  struct Step {
-    double t, t_new;
-    State x, f, x_new, f_new;
-  };
+  template <int V, class L>
+  friend void lanes::FlyLanes(L& lanes, const std::array<bool, V>& active, const int& active_count,
+                              const std::atomic<bool>* cancel);
 
-  // The lane's state as one run's.
-  static State Lane(const double (&v)[5][W], int i) {
-    State s;
-    for (int c = 0; c < 5; ++c) s[static_cast<std::size_t>(c)] = v[c][i];
-    return s;
-  }
-  static void SetLane(double (&v)[5][W], int i, const State& s) {
-    for (int c = 0; c < 5; ++c) v[c][i] = s[static_cast<std::size_t>(c)];
-  }
+  using Step = lanes::LaneStep<State>;
+  // The lane's state as one run's, and back.
+  static State Lane(const auto& v, int i) { return lanes::LaneOf<State>(v, i); }
+  static void SetLane(auto& v, int i, const State& s) { lanes::SetLaneOf(v, i, s); }
 
   // The derivative of lane i alone, through its problem (what Integrate's rhs calls).
   void LaneDerivative(int i, const State& x, State& dxdt) {
@@ -555,6 +532,14 @@ class OpenLoopLanes {
     a_.half_h[i] = 0.5 * a_.h[i];
     a_.sixth_h[i] = a_.h[i] / 6.0;
     a_.elevator[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
+  }
+
+  // For FlyLanes: one step of every lane at once.
+  void StepAll() {
+    kernels_.rk4_stages(a_);
+    for (int i = 0; i < W; ++i) {
+      if (active_[i]) CompleteStep(i);
+    }
   }
 
   // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the

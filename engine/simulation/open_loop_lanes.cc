@@ -2,24 +2,15 @@
 // instantiation (made in open_loop_lanes_<isa>.cc) without instantiating it.
 #include "engine/simulation/open_loop_lanes.h"
 
-#include <xsimd/xsimd.hpp>
-
-#include "engine/common/errors.h"
+#include "engine/simulation/lanes.h"
 
 namespace gesweep::lanes {
 
 template <int W>
 LaneKernels<W> LaneKernelsFor(LanesIsa isa) {
-  GESWEEP_DEMAND(LanesIsaSupported(isa));
-  switch (isa) {
-    case LanesIsa::kSse2:
-      return {&Rk4Stages<xsimd::sse2, W>, &Derivatives<xsimd::sse2, W>};
-    case LanesIsa::kAvx2:
-      return {&Rk4Stages<xsimd::avx2, W>, &Derivatives<xsimd::avx2, W>};
-    case LanesIsa::kAvx512:
-      return {&Rk4Stages<xsimd::avx512f, W>, &Derivatives<xsimd::avx512f, W>};
-  }
-  GESWEEP_UNREACHABLE();
+  return PickForIsa(isa, []<class Arch>() {
+    return LaneKernels<W>{&Rk4Stages<Arch, W>, &Derivatives<Arch, W>};
+  });
 }
 
 template LaneKernels<1> LaneKernelsFor<1>(LanesIsa);
