@@ -24,34 +24,35 @@ namespace {
 template <class T>
 std::set<std::string> ExpectEntriesFromFields() {
   std::set<std::string> keys;
+  // The catalogue entry of `key`, whose unit must be the field's; null (a failure) when there is none.
+  const auto entry = [&](const std::string& key, const FieldAttributes& a) -> const ParameterInfo* {
+    keys.insert(key);
+    const auto id = FindParameter(key);
+    if (!id) {
+      ADD_FAILURE() << key << " is described as a run parameter but is not in the catalogue";
+      return nullptr;
+    }
+    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(*id)];
+    EXPECT_EQ(info.units, a.unit) << key;
+    return &info;
+  };
   for (const FieldRecord& field : ListFields(T{})) {
     const FieldAttributes& a = field.attributes;
     if (!a.run_parameter) continue;
     if (field.kind == FieldKind::kArray) {  // a setting's array: one entry per component
       for (std::size_t c = 0; c < a.components.size(); ++c) {
         const std::string key = ComponentKey(a, c);
-        keys.insert(key);
-        const auto id = FindParameter(key);
-        if (!id) {
-          ADD_FAILURE() << key << " is described as a run parameter but is not in the catalogue";
-          continue;
-        }
-        const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(*id)];
-        EXPECT_EQ(info.units, a.unit) << key;
-        EXPECT_EQ(info.kind, ParameterKind::kReal) << key;
-        EXPECT_EQ(info.default_value, field.values[c]) << key;
+        const ParameterInfo* info = entry(key, a);
+        if (info == nullptr) continue;
+        EXPECT_EQ(info->kind, ParameterKind::kReal) << key;
+        EXPECT_EQ(info->default_value, field.values[c]) << key;
       }
       continue;
     }
     const std::string key(a.key);
-    keys.insert(key);
-    const auto id = FindParameter(key);
-    if (!id) {
-      ADD_FAILURE() << key << " is described as a run parameter but is not in the catalogue";
-      continue;
-    }
-    const ParameterInfo& info = ParameterCatalog()[static_cast<std::size_t>(*id)];
-    EXPECT_EQ(info.units, a.unit) << key;
+    const ParameterInfo* found = entry(key, a);
+    if (found == nullptr) continue;
+    const ParameterInfo& info = *found;
     EXPECT_EQ(a.scope, FieldScope::kCommandLineOnly) << key << ": a run parameter is no [analyses] key";
     switch (field.kind) {
       case FieldKind::kNumber: {
