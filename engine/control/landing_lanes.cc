@@ -5,19 +5,9 @@
 #include "engine/disturbance/disturbance_field.h"
 #include "engine/simulation/lanes.h"
 
+GESWEEP_INSTANTIATE_KERNELS_FOR(gesweep::lanes::LandingKernels);
+
 namespace gesweep::lanes {
-
-template <int W>
-LandingLaneKernels<W> LandingLaneKernelsFor(LanesIsa isa) {
-  return PickForIsa(isa, []<class Arch>() {
-    return LandingLaneKernels<W>{&LandingRk4Stages<Arch, W>, &LandingDerivatives<Arch, W>};
-  });
-}
-
-template LandingLaneKernels<1> LandingLaneKernelsFor<1>(LanesIsa);
-template LandingLaneKernels<2> LandingLaneKernelsFor<2>(LanesIsa);
-template LandingLaneKernels<4> LandingLaneKernelsFor<4>(LanesIsa);
-template LandingLaneKernels<8> LandingLaneKernelsFor<8>(LanesIsa);
 
 void LaneHeightTerms(const DisturbanceField* field, double height_m, double& mean_wind_mps,
                      double& sigma_u_mps, double& length_u_m, double& length_w_m) {

@@ -69,26 +69,22 @@ struct LandingStepArrays {
   const DisturbanceField* field[W]{};       ///< never null (idle lanes: another lane's)
 };
 
-/// Rk4Method::Advance's stages for every lane, lane i bit for bit what the scalar landing's step
-/// computes: x_new and f_new = ẋ(t_to, x_new) from x, f, h, half_h, sixth_h, t, t_mid, t_to.
-template <class Arch, int W>
-void LandingRk4Stages(LandingStepArrays<W>& lanes);
+/// The landing's kernels (definitions in landing_lanes_kernel.h; KernelsFor<LandingKernels, W>
+/// picks an instruction set's).
+struct LandingKernels {
+  template <int W>
+  using Arrays = LandingStepArrays<W>;
 
-/// f_new = ẋ(t, x) for every lane (a restart's derivative; f, the step's, is left as it is): lane i is
-/// its LandingProblem's Derivative bit for bit.
-template <class Arch, int W>
-void LandingDerivatives(LandingStepArrays<W>& lanes);
+  /// Rk4Method::Advance's stages for every lane, lane i bit for bit what the scalar landing's step
+  /// computes: x_new and f_new = ẋ(t_to, x_new) from x, f, h, half_h, sixth_h, t, t_mid, t_to.
+  template <class Arch, int W>
+  static void Rk4Stages(LandingStepArrays<W>& lanes);
 
-/// The kernels of one instruction set and width.
-template <int W>
-struct LandingLaneKernels {
-  void (*rk4_stages)(LandingStepArrays<W>&) = nullptr;
-  void (*derivatives)(LandingStepArrays<W>&) = nullptr;
+  /// f_new = ẋ(t, x) for every lane (a restart's derivative; f, the step's, is left as it is): lane
+  /// i is its LandingProblem's Derivative bit for bit.
+  template <class Arch, int W>
+  static void Derivatives(LandingStepArrays<W>& lanes);
 };
-
-/// The kernels of `isa` for W lanes. Precondition: LanesIsaSupported(isa) (GESWEEP_DEMAND).
-template <int W>
-LandingLaneKernels<W> LandingLaneKernelsFor(LanesIsa isa);
 
 /// DisturbanceField::HeightTerms of `field` (out of line: the kernels call it per lane).
 void LaneHeightTerms(const DisturbanceField* field, double height_m, double& mean_wind_mps,

@@ -8,5 +8,5 @@
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #include "engine/control/landing_lanes_kernel.h"
 
-GESWEEP_INSTANTIATE_LANDING_LANE_KERNELS(xsimd::avx512f);
+GESWEEP_INSTANTIATE_RK_KERNELS(gesweep::lanes::LandingKernels, xsimd::avx512f);
 #pragma GCC diagnostic pop

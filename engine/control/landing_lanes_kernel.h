@@ -211,7 +211,7 @@ template <class Arch, class V, int W>
 }
 
 template <class Arch, int W>
-void LandingRk4Stages(LandingStepArrays<W>& a) {
+void LandingKernels::Rk4Stages(LandingStepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   constexpr int N = kLandingLaneStates;
   for (int k = 0; k < W; k += kChunkWidth<V>) {
@@ -241,7 +241,7 @@ void LandingRk4Stages(LandingStepArrays<W>& a) {
 }
 
 template <class Arch, int W>
-void LandingDerivatives(LandingStepArrays<W>& a) {
+void LandingKernels::Derivatives(LandingStepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   constexpr int N = kLandingLaneStates;
   for (int k = 0; k < W; k += kChunkWidth<V>) {
@@ -254,17 +254,3 @@ void LandingDerivatives(LandingStepArrays<W>& a) {
 }
 
 }  // namespace gesweep::lanes
-
-/// Instantiates the landing kernels of architecture ARCH for the widths 1, 2, 4 and 8.
-#define GESWEEP_INSTANTIATE_LANDING_LANE_KERNELS(ARCH)              \
-  namespace gesweep::lanes {                                        \
-  template void LandingRk4Stages<ARCH, 1>(LandingStepArrays<1>&);   \
-  template void LandingRk4Stages<ARCH, 2>(LandingStepArrays<2>&);   \
-  template void LandingRk4Stages<ARCH, 4>(LandingStepArrays<4>&);   \
-  template void LandingRk4Stages<ARCH, 8>(LandingStepArrays<8>&);   \
-  template void LandingDerivatives<ARCH, 1>(LandingStepArrays<1>&); \
-  template void LandingDerivatives<ARCH, 2>(LandingStepArrays<2>&); \
-  template void LandingDerivatives<ARCH, 4>(LandingStepArrays<4>&); \
-  template void LandingDerivatives<ARCH, 8>(LandingStepArrays<8>&); \
-  }                                                                 \
-  static_assert(true)

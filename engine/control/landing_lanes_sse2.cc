@@ -3,4 +3,4 @@
 // carries the architecture in its name (engine/simulation/lanes.h).
 #include "engine/control/landing_lanes_kernel.h"
 
-GESWEEP_INSTANTIATE_LANDING_LANE_KERNELS(xsimd::sse2);
+GESWEEP_INSTANTIATE_RK_KERNELS(gesweep::lanes::LandingKernels, xsimd::sse2);

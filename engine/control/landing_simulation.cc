@@ -599,33 +599,19 @@ IntegratorOptions LaneIntegratorOptions(const LandingConfig& config) {
   return options;
 }
 
-// A landing flown in a lane: its field, breakpoints and problem as Fly<true> makes them, and the
-// bookkeeping IntegrateWith keeps for one run with Rk4Method and honoured breakpoints, so that every
-// scalar decision below is the one Integrate takes for that landing.
-struct LandingLaneRun {
-  using Problem = LandingProblem<true>;
-  static constexpr int N = Problem::kDimension;
-  using State = Problem::State;
-  using Events = std::array<double, Problem::kEventCount>;
+// A landing flown in a lane: its field, breakpoints and problem as Fly<true> makes them, its
+// integrator's settings and output grid, and IntegrateWith's bookkeeping (LaneRunBase).
+struct LandingLaneRun : lanes::LaneRunBase<LandingProblem<true>, LandingConfig> {
   static_assert(N == lanes::kLandingLaneStates);
 
-  std::size_t run = 0;  // index in the batch's runs
-  const LandingConfig* config = nullptr;
   std::unique_ptr<DisturbanceField> field;
   std::vector<double> breakpoints;
   std::vector<DisturbanceField::Segment> segments;
   std::unique_ptr<Problem> problem;
-  IntegrationResult<N> result;
   IntegratorOptions options;
-  double t = 0;
-  double end_s = 0;
-  long grid_index = 0;
-  std::size_t next_breakpoint = 0;
-  int segment = 0;
   std::int64_t noise_index = -1;  // the held sample whose noise the lane's arrays hold
   long next_output = 0;
   double last_output_time = -std::numeric_limits<double>::infinity();
-  Events g_previous{};
 };
 
 // W lanes: the landings' states side by side (landing_lanes.h), component c of lane i at [c][i]. The
@@ -633,32 +619,33 @@ struct LandingLaneRun {
 // outputs, monitors, the flare switch); the RK4 stages and the restarts' derivatives of all lanes are
 // the kernels of the batch's instruction set.
 template <int W>
-class LandingLanes {
- public:
+class LandingLanes : public lanes::LaneFleet<LandingLanes<W>, W, LandingLaneRun, LandingResult,
+                                             lanes::LandingStepArrays<W>> {
+  using Fleet =
+      lanes::LaneFleet<LandingLanes<W>, W, LandingLaneRun, LandingResult, lanes::LandingStepArrays<W>>;
+  friend Fleet;
   using Run = LandingLaneRun;
-  using State = Run::State;
+  using typename Fleet::State;
+  using typename Fleet::Step;
   static constexpr int N = Run::N;
+  using Fleet::a_;
+  using Fleet::active_;
+  using Fleet::cancel_;
+  using Fleet::Finish;
+  using Fleet::Interpolate;
+  using Fleet::Lane;
+  using Fleet::lane_;
+  using Fleet::results_;
+  using Fleet::SetLane;
 
+ public:
   LandingLanes(std::span<const LandingBatchRun> runs, std::span<const std::size_t> order,
                std::vector<LandingResult>& results, LanesIsa isa, const std::atomic<bool>* cancel)
-      : runs_(runs),
-        order_(order),
-        results_(results),
-        cancel_(cancel),
-        kernels_(lanes::LandingLaneKernelsFor<W>(isa)) {}
-
-  void FlyAll() { lanes::FlyLanes<W>(*this, active_, active_count_, cancel_); }
+      : Fleet(order, results, cancel),
+        runs_(runs),
+        kernels_(lanes::KernelsFor<lanes::LandingKernels, W>(isa)) {}
 
  private:
-  template <int V, class L>
-  friend void lanes::FlyLanes(L& lanes, const std::array<bool, V>& active, const int& active_count,
-                              const std::atomic<bool>* cancel);
-
-  using Step = lanes::LaneStep<State>;
-  // The lane's state as one run's, and back.
-  static State Lane(const auto& v, int i) { return lanes::LaneOf<State>(v, i); }
-  static void SetLane(auto& v, int i, const State& s) { lanes::SetLaneOf(v, i, s); }
-
   // The held noise of lane i's segment in its arrays (DisturbanceField::Evaluate's).
   void SetNoise(int i) {
     Run& lane = lane_[i];
@@ -687,59 +674,50 @@ class LandingLanes {
     }
   }
 
-  // Starts the next landing in lane i (SimulateLanding's and Fly<true>'s start, IntegrateWith's),
-  // or leaves the lane idle when none is left. A landing whose design fails is complete at once.
-  void Refill(int i) {
-    while (next_ < order_.size()) {
-      const std::size_t run = order_[next_++];
-      const LandingBatchRun& r = runs_[run];
-      LandingResult& result = results_[run];
-      result = BeginLanding(*r.plant, r.config);
-      if (!result.design.ok()) continue;
-      Run& lane = lane_[i];
-      lane = Run{};
-      lane.run = run;
-      lane.config = &r.config;
-      lane.field = std::make_unique<DisturbanceField>(LandingField(*r.plant, r.config, r.noise_point));
-      lane.breakpoints = lane.field->Breakpoints(0.0, result.time_limit_s, cancel_);
-      lane.segments = lane.field->SegmentTable(lane.breakpoints, 0.0, cancel_);
-      if (cancel_ != nullptr && cancel_->load()) lane.breakpoints.clear();
-      const bool store_series = r.config.output_interval_s > 0.0;
-      lane.problem = std::make_unique<Run::Problem>(*r.plant, r.config, result.design, result, store_series,
-                                                    lane.field.get(), &lane.segments);
-      State x0{};
-      x0[kSimTheta] = r.config.start_pitch_deg * kRadiansPerDegree;
-      x0[kSimH] = r.config.start_height_m;
-      const DisturbanceOptions& d = lane.field->options();
-      x0[kSimDu] = MeanWindAt(d.wind_20ft_mps, r.config.start_height_m, d.wind_shear);
-      const DisturbanceField::State field_start = lane.field->InitialState();
-      std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
-      lane.problem->Start(0.0, x0);
-      lane.options = LaneIntegratorOptions(r.config);
-      lane.end_s = result.time_limit_s;
-      lane.segment = integrator_detail::SegmentOf(lane.breakpoints, 0.0);
-      lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
-      lane.problem->ToLane(a_, i);
-      // IntegrateWith's start.
-      lane.problem->OnStep(0.0, x0, lane.segment);
-      lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
-      EmitOutputsThrough(i, 0.0, [&](double, State& out) { out = x0; });
-      State f0;
-      ++lane.result.rhs_calls;
-      lane.problem->Derivative(0.0, x0, lane.segment, f0);
-      SetLane(a_.x, i, x0);
-      SetLane(a_.f, i, f0);
-      active_[i] = true;
-      ++active_count_;
-      if (!integrator_detail::AllFinite<N>(f0) || !integrator_detail::AllFinite<N>(x0)) {
-        Finish(i, IntegrationStatus::kNonFinite);
-      }
-      return;
-    }
-    Idle(i);
+  // For LaneFleet: starts `run` in lane i (SimulateLanding's and Fly<true>'s start, IntegrateWith's);
+  // a landing whose design fails is complete at once (false).
+  bool Start(int i, std::size_t run) {
+    const LandingBatchRun& r = runs_[run];
+    LandingResult& result = results_[run];
+    result = BeginLanding(*r.plant, r.config);
+    if (!result.design.ok()) return false;
+    Run& lane = lane_[i];
+    lane = Run{};
+    lane.run = run;
+    lane.config = &r.config;
+    lane.field = std::make_unique<DisturbanceField>(LandingField(*r.plant, r.config, r.noise_point));
+    lane.breakpoints = lane.field->Breakpoints(0.0, result.time_limit_s, cancel_);
+    lane.segments = lane.field->SegmentTable(lane.breakpoints, 0.0, cancel_);
+    if (cancel_ != nullptr && cancel_->load()) lane.breakpoints.clear();
+    const bool store_series = r.config.output_interval_s > 0.0;
+    lane.problem = std::make_unique<Run::Problem>(*r.plant, r.config, result.design, result, store_series,
+                                                  lane.field.get(), &lane.segments);
+    State x0{};
+    x0[kSimTheta] = r.config.start_pitch_deg * kRadiansPerDegree;
+    x0[kSimH] = r.config.start_height_m;
+    const DisturbanceOptions& d = lane.field->options();
+    x0[kSimDu] = MeanWindAt(d.wind_20ft_mps, r.config.start_height_m, d.wind_shear);
+    const DisturbanceField::State field_start = lane.field->InitialState();
+    std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
+    lane.problem->Start(0.0, x0);
+    lane.options = LaneIntegratorOptions(r.config);
+    lane.end_s = result.time_limit_s;
+    lane.segment = integrator_detail::SegmentOf(lane.breakpoints, 0.0);
+    lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
+    lane.problem->ToLane(a_, i);
+    // IntegrateWith's start.
+    lane.problem->OnStep(0.0, x0, lane.segment);
+    lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
+    EmitOutputsThrough(i, 0.0, [&](double, State& out) { out = x0; });
+    State f0;
+    ++lane.result.rhs_calls;
+    lane.problem->Derivative(0.0, x0, lane.segment, f0);
+    SetLane(a_.x, i, x0);
+    SetLane(a_.f, i, f0);
+    return true;
   }
 
-  // An idle lane flies zeros on another lane's table and field (its results are never read).
+  // For LaneFleet: an idle lane flies zeros on another lane's table and field (its results are never read).
   void Idle(int i) {
     for (int c = 0; c < N; ++c) a_.x[c][i] = a_.f[c][i] = 0.0;
     a_.h[i] = a_.half_h[i] = a_.sixth_h[i] = 0.0;
@@ -755,20 +733,10 @@ class LandingLanes {
     }
   }
 
-  // Rk4Method::Advance up to the stages: the step's end on the lane's grid n·Δt_n, or its limit.
+  // For LaneFleet: Rk4Method::Advance up to the stages.
   void PrepareStep(int i) {
     Run& lane = lane_[i];
-    const std::vector<double>& breakpoints = lane.breakpoints;
-    double t_limit = lane.end_s;
-    if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] < lane.end_s) {
-      t_limit = breakpoints[lane.next_breakpoint];
-    }
-    const double step_s = lane.options.step_s;
-    const double snap = integrator_detail::kSnapFraction * step_s;
-    auto grid_time = [&](long index) { return 0.0 + static_cast<double>(index) * step_s; };
-    while (grid_time(lane.grid_index + 1) <= lane.t + snap) ++lane.grid_index;
-    const double target = grid_time(lane.grid_index + 1);
-    const double t_to = t_limit <= target + snap ? t_limit : target;
+    const double t_to = this->StepEnd(i, lane.breakpoints, lane.options.step_s);
     const double h = t_to - lane.t;
     const double half_h = 0.5 * h;
     a_.t[i] = lane.t;
@@ -780,17 +748,7 @@ class LandingLanes {
     SetNoise(i);
   }
 
-  void Interpolate(const Step& step, double tau, State& out) const {
-    if (tau == step.t_new) {
-      out = step.x_new;
-    } else if (tau == step.t) {
-      out = step.x;
-    } else {
-      hermite_.Interpolate(tau, step.t, step.x, step.f, step.t_new, step.x_new, step.f_new, out);
-    }
-  }
-
-  // For FlyLanes: one step of every lane at once.
+  // For LaneFleet: one step of every lane at once.
   void StepAll() {
     kernels_.rk4_stages(a_);
     bool any_restart = false;
@@ -821,33 +779,12 @@ class LandingLanes {
     const int segment = lane.segment;
     Run::Events g_new;
     problem.EventValues(step.t_new, step.x_new, segment, g_new);
-    const auto fired =
-        integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
-                                        lane.options.event_time_tolerance_s, [&](int e, double tau) {
-                                          State xs;
-                                          interpolate(tau, xs);
-                                          Run::Events values;
-                                          problem.EventValues(tau, xs, segment, values);
-                                          return values[static_cast<std::size_t>(e)];
-                                        });
-    EventAction cut_action = EventAction::kContinue;
-    double t_cut = step.t_new;
-    State x_event{};
-    int cut_event = -1;
-    for (int k = 0; k < fired.count; ++k) {
-      const int e = fired.order[static_cast<std::size_t>(k)];
-      const double t_event = fired.time[static_cast<std::size_t>(e)];
-      interpolate(t_event, x_event);
-      EmitOutputsThrough(i, t_event, interpolate);
-      ++lane.result.events_fired;
-      const EventAction action = problem.OnEvent(e, t_event, x_event, segment);
-      if (action == EventAction::kContinue) continue;
-      cut_action = action;
-      t_cut = t_event;
-      cut_event = e;
-      break;
-    }
-    if (cut_action == EventAction::kContinue) {
+    const auto cut = integrator_detail::FireEvents<N>(
+        problem, lane.g_previous, g_new, step.t, step.t_new, lane.options.event_time_tolerance_s, interpolate,
+        [segment](double) { return segment; },
+        [&](double t_through, auto&& through) { EmitOutputsThrough(i, t_through, through); },
+        lane.result.events_fired);
+    if (cut.action == EventAction::kContinue) {
       EmitOutputsThrough(i, step.t_new, interpolate);
       problem.OnStep(step.t_new, step.x_new, segment);
       lane.t = step.t_new;
@@ -864,12 +801,12 @@ class LandingLanes {
       return;
     }
     // The step is cut at the event.
-    EmitOutputsThrough(i, t_cut, interpolate);
-    problem.OnStep(t_cut, x_event, segment);
-    lane.t = t_cut;
-    SetLane(a_.x, i, x_event);
-    if (cut_action == EventAction::kStop) {
-      lane.result.stopping_event = cut_event;
+    EmitOutputsThrough(i, cut.t, interpolate);
+    problem.OnStep(cut.t, cut.x, segment);
+    lane.t = cut.t;
+    SetLane(a_.x, i, cut.x);
+    if (cut.action == EventAction::kStop) {
+      lane.result.stopping_event = cut.event;
       return Finish(i, IntegrationStatus::kStoppedByEvent);
     }
     StartRestart(i, /*events_known=*/false);
@@ -905,37 +842,20 @@ class LandingLanes {
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
   }
 
-  // IntegrateWith's finish, the landing's result (Conclude, EndLanding), and the lane's next landing.
-  void Finish(int i, IntegrationStatus status) {
+  // For LaneFleet: the landing's result (Conclude, EndLanding).
+  void Record(int i) {
     Run& lane = lane_[i];
-    lane.result.status = status;
-    lane.result.end_time_s = lane.t;
-    lane.result.final_state = Lane(a_.x, i);
-    lane.result.final_segment = lane.segment;
     if (lane.last_output_time < lane.t) lane.problem->OnOutput(lane.t, lane.result.final_state, lane.segment);
     LandingResult& result = results_[lane.run];
     Conclude(*lane.problem, lane.result, *lane.config, result);
     EndLanding(result);
-    active_[i] = false;
     restart_[i] = false;
-    --active_count_;
-    Refill(i);
   }
 
   std::span<const LandingBatchRun> runs_;
-  std::span<const std::size_t> order_;
-  std::vector<LandingResult>& results_;
-  const std::atomic<bool>* cancel_;
-  lanes::LandingLaneKernels<W> kernels_;
-  std::size_t next_ = 0;
-  int active_count_ = 0;
-  integrator_detail::Rk4Method<Run::N> hermite_{0.0, IntegratorOptions{}};  // its cubic Hermite interpolant
-
-  std::array<Run, W> lane_;
-  std::array<bool, W> active_{};
+  lanes::RkKernels<lanes::LandingStepArrays<W>> kernels_;
   std::array<bool, W> restart_{};
   std::array<bool, W> restart_events_known_{};
-  lanes::LandingStepArrays<W> a_;
 };
 
 template <int W>

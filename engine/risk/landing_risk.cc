@@ -587,6 +587,38 @@ void ShareBatch(const BatchContext& c, const rare::PointBatch& batch, const std:
   if (!out.diverged.empty()) out.stop = true;
 }
 
+// FlyBatch's landings in groups of lanes: this process's uncached points of `batch` (owner `rank`),
+// a group per thread at least (a level's batches are small: N·p0 chains), of a lane width or more
+// and at most `group` landings, each group flown by FlyGroup.
+void FlyOwnInGroups(const BatchContext& c, const rare::PointBatch& batch,
+                    std::span<const Evaluation* const> cached, std::span<const int> owner, int rank,
+                    int group, FlownBatch& out) {
+  const RiskRunOptions& options = c.options;
+  std::vector<std::size_t> mine;
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    if (cached[i] == nullptr && owner[i] == rank) mine.push_back(i);
+  }
+  const auto threads = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const std::size_t size =
+      std::clamp((mine.size() + threads - 1) / threads, static_cast<std::size_t>(options.lanes),
+                 static_cast<std::size_t>(group));
+  const std::size_t groups = (mine.size() + size - 1) / size;
+  tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
+    const std::size_t begin = g * size;
+    const std::size_t end = std::min(mine.size(), begin + size);
+    std::vector<std::span<const double>> points;
+    for (std::size_t j = begin; j < end; ++j) points.push_back(batch.point(mine[j]));
+    std::vector<Evaluation> made = FlyGroup(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, points,
+                                            options.lanes, options.cancel);
+    for (std::size_t j = begin; j < end; ++j) {
+      const std::size_t i = mine[j];
+      out.made[i] = std::move(made[j - begin]);
+      out.made[i].key = KeyOf(c, batch.tags[i]);
+      out.fresh[i] = 1;
+    }
+  });
+}
+
 // Flies (or takes from the cache) every point of `batch` in parallel, writing each g into `values`.
 // With an exchange this process flies only its share of the points not in the cache (the k-th on
 // process (dealt + k) mod ranks) and receives the others' (ShareBatch).
@@ -613,7 +645,6 @@ FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::s
   // This process's landings of the batch, flown one at a time or in groups of lanes (FlyGroup).
   const int group =
       options.lanes > 1 && RunsInLanes(c.plan, options.lanes) ? kGroupLandingsPerLane * options.lanes : 1;
-  std::vector<std::size_t> mine;
   tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
     const EvaluationKey key = KeyOf(c, batch.tags[i]);
     if (options.capture && key == *options.capture && options.captured_point != nullptr) {
@@ -631,31 +662,7 @@ FlownBatch FlyBatch(const BatchContext& c, const rare::PointBatch& batch, std::s
       out.fresh[i] = 1;
     }
   });
-  if (group > 1) {
-    for (std::size_t i = 0; i < batch.size(); ++i) {
-      if (cached[i] == nullptr && owner[i] == rank) mine.push_back(i);
-    }
-    // A group per thread at least (a level's batches are small: N·p0 chains), of a lane width or more.
-    const auto threads = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-    const std::size_t size =
-        std::clamp((mine.size() + threads - 1) / threads, static_cast<std::size_t>(options.lanes),
-                   static_cast<std::size_t>(group));
-    const std::size_t groups = (mine.size() + size - 1) / size;
-    tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
-      const std::size_t begin = g * size;
-      const std::size_t end = std::min(mine.size(), begin + size);
-      std::vector<std::span<const double>> points;
-      for (std::size_t j = begin; j < end; ++j) points.push_back(batch.point(mine[j]));
-      std::vector<Evaluation> made = FlyGroup(c.plan, c.workspaces.local(), c.cell, c.limit, c.spec, points,
-                                              options.lanes, options.cancel);
-      for (std::size_t j = begin; j < end; ++j) {
-        const std::size_t i = mine[j];
-        out.made[i] = std::move(made[j - begin]);
-        out.made[i].key = KeyOf(c, batch.tags[i]);
-        out.fresh[i] = 1;
-      }
-    });
-  }
+  if (group > 1) FlyOwnInGroups(c, batch, cached, owner, rank, group, out);
   out.captured = captured.load();
   for (std::size_t i = 0; i < batch.size(); ++i)
     out.flown_here += owner[i] == rank && out.made[i].status != static_cast<std::int8_t>(RunStatus::kPending);

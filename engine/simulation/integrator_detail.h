@@ -84,6 +84,49 @@ FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::
   return fired;
 }
 
+/// Where a step ends after its events: at its end (action kContinue), or cut at the first event
+/// whose OnEvent did not continue.
+template <int N>
+struct StepCut {
+  EventAction action = EventAction::kContinue;
+  double t = 0;     ///< the cut's time: the event's, or the step's end
+  OdeState<N> x{};  ///< the state at the cut (an event's)
+  int event = -1;   ///< the event that cut the step
+};
+
+/// The events that fired in the step from t to t_new (values g_previous at t, g_new at t_new),
+/// located on the step's interpolant within `tolerance` and taken in time order: before each, the
+/// outputs through its time (emit_outputs_through), then OnEvent at the interpolated state, until
+/// one does not continue. IntegrateWith's events, and every lane's (simulation/lane_loop.h).
+template <int N, class P, class Events, class Interpolate, class SegmentAt, class EmitThrough>
+StepCut<N> FireEvents(P& problem, const Events& g_previous, const Events& g_new, double t, double t_new,
+                      double tolerance, Interpolate&& interpolate, SegmentAt&& segment_at,
+                      EmitThrough&& emit_outputs_through, long& events_fired) {
+  StepCut<N> cut;
+  cut.t = t_new;
+  const auto fired = LocateEvents(g_previous, g_new, t, t_new, tolerance, [&](int i, double tau) {
+    OdeState<N> xs;
+    interpolate(tau, xs);
+    Events values;
+    problem.EventValues(tau, xs, segment_at(tau), values);
+    return values[static_cast<std::size_t>(i)];
+  });
+  for (int k = 0; k < fired.count; ++k) {
+    const int i = fired.order[static_cast<std::size_t>(k)];
+    const double t_event = fired.time[static_cast<std::size_t>(i)];
+    interpolate(t_event, cut.x);
+    emit_outputs_through(t_event, interpolate);
+    ++events_fired;
+    const EventAction action = problem.OnEvent(i, t_event, cut.x, segment_at(t_event));
+    if (action == EventAction::kContinue) continue;
+    cut.action = action;
+    cut.t = t_event;
+    cut.event = i;
+    break;
+  }
+  return cut;
+}
+
 enum class StepOutcome { kAccepted, kNonFinite, kUnderflow };
 
 /// Fixed-step classical RK4 on the grid t0 + n·h. The derivative at the step start is given, so a
@@ -100,14 +143,7 @@ class Rk4Method {
   template <class Rhs>
   StepOutcome Advance(Rhs& rhs, double t, const State& x, const State& f, double t_limit, double& t_new,
                       State& x_new, State& f_new, long& /*rejected*/) {
-    const double snap = kSnapFraction * step_s_;
-    // grid_index_: the last grid point at or before t. Updated here only, so that a step cut
-    // short by an event does not advance it.
-    while (GridTime(grid_index_ + 1) <= t + snap) ++grid_index_;
-    const double target = GridTime(grid_index_ + 1);
-    // Stop at t_limit when it comes before the next grid point, or lands exactly on the breakpoint or
-    // end time that coincides with the grid (within the snap of it).
-    const double t_to = t_limit <= target + snap ? t_limit : target;
+    const double t_to = StepEnd(grid_start_s_, step_s_, grid_index_, t, t_limit);
     // The classical tableau (Kutta 1901) written out on local arrays rather than through odeint's
     // runge_kutta4: the compiler then keeps the stages in registers. Measured on the 30 s paper run
     // with re-evaluation (tests/bench, before double buffering): 205 µs with odeint's stepper,
@@ -130,10 +166,23 @@ class Rk4Method {
     return StepOutcome::kAccepted;
   }
 
+  /// The end of a step from t on the grid grid_start + n·step: the next grid point, or t_limit when
+  /// it comes before it or lands on it (within the snap of it: a breakpoint or end time that
+  /// coincides with the grid). grid_index, the last grid point at or before t, is advanced here
+  /// only, so that a step cut short by an event does not advance it. (Advance's, and every lane's:
+  /// simulation/lane_loop.h.)
+  static double StepEnd(double grid_start_s, double step_s, long& grid_index, double t, double t_limit) {
+    const double snap = kSnapFraction * step_s;
+    auto grid_time = [&](long index) { return grid_start_s + static_cast<double>(index) * step_s; };
+    while (grid_time(grid_index + 1) <= t + snap) ++grid_index;
+    const double target = grid_time(grid_index + 1);
+    return t_limit <= target + snap ? t_limit : target;
+  }
+
   /// Cubic Hermite through (t0, x0, f0) and (t1, x1, f1) at t0 < tau < t1: 4th-order accurate
   /// locally (the step's ends are IntegrateWith's).
-  void Interpolate(double tau, double t0, const State& x0, const State& f0, double t1, const State& x1,
-                   const State& f1, State& out) const {
+  static void Interpolate(double tau, double t0, const State& x0, const State& f0, double t1, const State& x1,
+                          const State& f1, State& out) {
     const double h = t1 - t0;
     const double s = (tau - t0) / h;
     const double s2 = s * s;
@@ -146,8 +195,6 @@ class Rk4Method {
   }
 
  private:
-  double GridTime(long index) const { return grid_start_s_ + static_cast<double>(index) * step_s_; }
-
   double grid_start_s_;
   double step_s_;
   long grid_index_ = 0;
@@ -332,35 +379,14 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
         method.Interpolate(tau, t, *x, *f, t_new, *x_new, *f_new, out);
       }
     };
-    EventAction cut_action = EventAction::kContinue;
-    double t_cut = t_new;
-    State x_event{};
-    int cut_event = -1;
+    StepCut<N> cut;
+    cut.t = t_new;
     if constexpr (E > 0) {
       problem.EventValues(t_new, *x_new, segment_at(t_new), g_new);
-      const auto fired =
-          LocateEvents(g_previous, g_new, t, t_new, options.event_time_tolerance_s, [&](int i, double tau) {
-            State xs;
-            interpolate(tau, xs);
-            Events values;
-            problem.EventValues(tau, xs, segment_at(tau), values);
-            return values[i];
-          });
-      for (int k = 0; k < fired.count; ++k) {
-        const int i = fired.order[k];
-        const double t_event = fired.time[i];
-        interpolate(t_event, x_event);
-        emit_outputs_through(t_event, interpolate);
-        ++result.events_fired;
-        const EventAction action = problem.OnEvent(i, t_event, x_event, segment_at(t_event));
-        if (action == EventAction::kContinue) continue;
-        cut_action = action;
-        t_cut = t_event;
-        cut_event = i;
-        break;
-      }
+      cut = FireEvents<N>(problem, g_previous, g_new, t, t_new, options.event_time_tolerance_s, interpolate,
+                          segment_at, emit_outputs_through, result.events_fired);
     }
-    if (cut_action == EventAction::kContinue) {
+    if (cut.action == EventAction::kContinue) {
       emit_outputs_through(t_new, interpolate);
       problem.OnStep(t_new, *x_new, segment_at(t_new));
       t = t_new;
@@ -377,13 +403,13 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
       continue;
     }
     // The step is cut at the event.
-    emit_outputs_through(t_cut, interpolate);
-    problem.OnStep(t_cut, x_event, segment_at(t_cut));
-    t = t_cut;
-    *x = x_event;
-    if (cut_action == EventAction::kStop) {
+    emit_outputs_through(cut.t, interpolate);
+    problem.OnStep(cut.t, cut.x, segment_at(cut.t));
+    t = cut.t;
+    *x = cut.x;
+    if (cut.action == EventAction::kStop) {
       if (!honour) segment = SegmentOf(breakpoints_s, t);
-      result.stopping_event = cut_event;
+      result.stopping_event = cut.event;
       return finish(IntegrationStatus::kStoppedByEvent);
     }
     if (!restart_here()) return finish(IntegrationStatus::kNonFinite);

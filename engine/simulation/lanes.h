@@ -83,4 +83,37 @@ auto PickForIsa(LanesIsa isa, const Pick& pick) {
   GESWEEP_UNREACHABLE();
 }
 
+template <class Kind, int W>
+RkKernels<typename Kind::template Arrays<W>> KernelsFor(LanesIsa isa) {
+  return PickForIsa(isa, []<class Arch>() {
+    return RkKernels<typename Kind::template Arrays<W>>{&Kind::template Rk4Stages<Arch, W>,
+                                                        &Kind::template Derivatives<Arch, W>};
+  });
+}
+
 }  // namespace gesweep::lanes
+
+/// Instantiates KernelsFor<KIND, W> (the dispatch of KIND's kernels) for the widths 1, 2, 4 and 8.
+#define GESWEEP_INSTANTIATE_KERNELS_FOR(KIND)                                              \
+  template gesweep::lanes::RkKernels<KIND::Arrays<1>> gesweep::lanes::KernelsFor<KIND, 1>( \
+      gesweep::LanesIsa);                                                                  \
+  template gesweep::lanes::RkKernels<KIND::Arrays<2>> gesweep::lanes::KernelsFor<KIND, 2>( \
+      gesweep::LanesIsa);                                                                  \
+  template gesweep::lanes::RkKernels<KIND::Arrays<4>> gesweep::lanes::KernelsFor<KIND, 4>( \
+      gesweep::LanesIsa);                                                                  \
+  template gesweep::lanes::RkKernels<KIND::Arrays<8>> gesweep::lanes::KernelsFor<KIND, 8>( \
+      gesweep::LanesIsa);                                                                  \
+  static_assert(true)
+
+/// Instantiates KIND's kernels (Rk4Stages, Derivatives) of architecture ARCH for the widths 1, 2, 4
+/// and 8, in ARCH's own translation unit.
+#define GESWEEP_INSTANTIATE_RK_KERNELS(KIND, ARCH)            \
+  template void KIND::Rk4Stages<ARCH, 1>(KIND::Arrays<1>&);   \
+  template void KIND::Rk4Stages<ARCH, 2>(KIND::Arrays<2>&);   \
+  template void KIND::Rk4Stages<ARCH, 4>(KIND::Arrays<4>&);   \
+  template void KIND::Rk4Stages<ARCH, 8>(KIND::Arrays<8>&);   \
+  template void KIND::Derivatives<ARCH, 1>(KIND::Arrays<1>&); \
+  template void KIND::Derivatives<ARCH, 2>(KIND::Arrays<2>&); \
+  template void KIND::Derivatives<ARCH, 4>(KIND::Arrays<4>&); \
+  template void KIND::Derivatives<ARCH, 8>(KIND::Arrays<8>&); \
+  static_assert(true)

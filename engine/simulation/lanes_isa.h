@@ -42,4 +42,22 @@ std::vector<LanesIsa> SupportedLanesIsas();
 /// one this CPU lacks.
 LanesIsa ChooseLanesIsa(int width);
 
+namespace lanes {
+
+/// The kernels of one kind of lane (OpenLoopKernels, LandingKernels) for one instruction set and W
+/// lanes: the RK4 stages of a step of every lane, and the derivatives at the lanes' states. Arrays is
+/// the kind's arrays of W lanes (StepArrays<W>, LandingStepArrays<W>).
+template <class Arrays>
+struct RkKernels {
+  void (*rk4_stages)(Arrays&) = nullptr;
+  void (*derivatives)(Arrays&) = nullptr;
+};
+
+/// The kernels of Kind for W lanes on `isa`. Defined in lanes.h and instantiated for each kind and
+/// width in the kind's dispatch file (GESWEEP_INSTANTIATE_KERNELS_FOR), which names each instruction
+/// set's kernels without instantiating them. Precondition: LanesIsaSupported(isa) (GESWEEP_DEMAND).
+template <class Kind, int W>
+RkKernels<typename Kind::template Arrays<W>> KernelsFor(LanesIsa isa);
+
+}  // namespace lanes
 }  // namespace gesweep

@@ -406,60 +406,44 @@ OpenLoopResult RunDisturbed(Derivatives derivatives, const DisturbanceField& fie
 
 // ---------------------------------------------------------------- many runs in lockstep (SIMD lanes)
 
-// A run flown in a lane: the scalar problem (its recorder: events, lowest height, largest |q|) and
-// the bookkeeping IntegrateWith keeps for one run with Rk4Method, honoured breakpoints and no
-// output, so that every scalar decision below is the one Integrate takes for that run.
-struct LaneRun {
-  using Problem = OpenLoopProblem<TableSource>;
-  using State = Problem::State;
-  using Events = std::array<double, Problem::kEventCount>;
-
-  std::size_t run = 0;  // index in the batch's runs
-  const OpenLoopConfig* config = nullptr;
+// A run flown in a lane: the scalar problem (its recorder: events, lowest height, largest |q|), its
+// elevator schedule and step, and IntegrateWith's bookkeeping (LaneRunBase; no output).
+struct LaneRun : lanes::LaneRunBase<OpenLoopProblem<TableSource>, OpenLoopConfig> {
   ElevatorSchedule schedule;
   std::optional<Problem> problem;
-  IntegrationResult<5> result;
-  double t = 0;
-  double end_s = 0;
   double step_s = 0;
-  long grid_index = 0;
-  std::size_t next_breakpoint = 0;
-  int segment = 0;
-  Events g_previous{};
 };
 
 // W lanes: the runs' states side by side (open_loop_lanes.h), component c of lane i at [c][i]. The
 // per-lane decisions are here, in scalar code; the RK4 stages of all lanes are the kernel of the
 // batch's instruction set.
 template <int W>
-class OpenLoopLanes {
- public:
-  using State = LaneRun::State;
+class OpenLoopLanes
+    : public lanes::LaneFleet<OpenLoopLanes<W>, W, LaneRun, OpenLoopResult, lanes::StepArrays<W>> {
+  using Fleet = lanes::LaneFleet<OpenLoopLanes<W>, W, LaneRun, OpenLoopResult, lanes::StepArrays<W>>;
+  friend Fleet;
+  using Fleet::a_;
+  using Fleet::active_;
+  using Fleet::Finish;
+  using Fleet::Interpolate;
+  using Fleet::Lane;
+  using Fleet::lane_;
+  using Fleet::SetLane;
+  using typename Fleet::State;
+  using typename Fleet::Step;
 
+ public:
   OpenLoopLanes(std::span<const OpenLoopBatchRun> runs, std::span<const std::size_t> order,
                 const std::vector<const LinearDerivativeTable*>& tables, std::vector<OpenLoopResult>& results,
                 LanesIsa isa, const std::atomic<bool>* cancel)
-      : runs_(runs),
-        order_(order),
+      : Fleet(order, results, cancel),
+        runs_(runs),
         run_tables_(tables),
-        results_(results),
-        cancel_(cancel),
-        kernels_(lanes::LaneKernelsFor<W>(isa)) {
+        kernels_(lanes::KernelsFor<lanes::OpenLoopKernels, W>(isa)) {
     for (int i = 0; i < W; ++i) a_.table[i] = tables[order.front()];  // idle lanes fly zeros on a valid table
   }
 
-  void FlyAll() { lanes::FlyLanes<W>(*this, active_, active_count_, cancel_); }
-
  private:
-  template <int V, class L>
-  friend void lanes::FlyLanes(L& lanes, const std::array<bool, V>& active, const int& active_count,
-                              const std::atomic<bool>* cancel);
-
-  using Step = lanes::LaneStep<State>;
-  // The lane's state as one run's, and back.
-  static State Lane(const auto& v, int i) { return lanes::LaneOf<State>(v, i); }
-  static void SetLane(auto& v, int i, const State& s) { lanes::SetLaneOf(v, i, s); }
-
   // The derivative of lane i alone, through its problem (what Integrate's rhs calls).
   void LaneDerivative(int i, const State& x, State& dxdt) {
     LaneRun& lane = lane_[i];
@@ -467,74 +451,56 @@ class OpenLoopLanes {
     lane.problem->Derivative(lane.t, x, lane.segment, dxdt);
   }
 
-  // Starts the next run in lane i, or leaves it idle when none is left. IntegrateWith's start: the
-  // initial step record and event values, the derivative at t = 0.
-  void Refill(int i) {
-    while (next_ < order_.size()) {
-      const std::size_t run = order_[next_++];
-      const OpenLoopBatchRun& r = runs_[run];
-      LaneRun& lane = lane_[i];
-      lane = LaneRun{};
-      lane.run = run;
-      lane.config = &r.config;
-      lane.schedule = MakeElevatorSchedule(r.config.elevator);
-      const LinearDerivativeTable* table = run_tables_[run];
-      lane.problem.emplace(TableSource{table, table->SegmentOf(r.config.start_height_m)},
-                           r.config.start_height_m, r.config.reference_speed_mps, lane.schedule.elevator_rad,
-                           TouchdownHeight(*r.model, r.config), StallSpeed(*r.model, r.config), nullptr);
-      lane.end_s = r.config.duration_s;
-      lane.step_s = r.config.integrator.step_s;
-      lane.segment = integrator_detail::SegmentOf(lane.schedule.breakpoints_s, 0.0);
-      lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
-      a_.table[i] = table;
-      a_.hint[i] = table->SegmentOf(r.config.start_height_m);
-      a_.h0[i] = r.config.start_height_m;
-      a_.u0[i] = r.config.reference_speed_mps;
-      const InitialOffsets& o = r.config.initial_offsets;
-      const State x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
-                        o.delta_height_m};
-      lane.problem->OnStep(0.0, x0, lane.segment);
-      lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
-      State f0;
-      LaneDerivative(i, x0, f0);
-      SetLane(a_.x, i, x0);
-      SetLane(a_.f, i, f0);
-      active_[i] = true;
-      ++active_count_;
-      if (!integrator_detail::AllFinite<5>(f0) || !integrator_detail::AllFinite<5>(x0)) {
-        Finish(i, IntegrationStatus::kNonFinite);
-        return;  // Finish refilled the lane
-      }
-      return;
-    }
-    Idle(i);
+  // For LaneFleet: starts `run` in lane i. IntegrateWith's start: the initial step record and event
+  // values, the derivative at t = 0.
+  bool Start(int i, std::size_t run) {
+    const OpenLoopBatchRun& r = runs_[run];
+    LaneRun& lane = lane_[i];
+    lane = LaneRun{};
+    lane.run = run;
+    lane.config = &r.config;
+    lane.schedule = MakeElevatorSchedule(r.config.elevator);
+    const LinearDerivativeTable* table = run_tables_[run];
+    lane.problem.emplace(TableSource{table, table->SegmentOf(r.config.start_height_m)},
+                         r.config.start_height_m, r.config.reference_speed_mps, lane.schedule.elevator_rad,
+                         TouchdownHeight(*r.model, r.config), StallSpeed(*r.model, r.config), nullptr);
+    lane.end_s = r.config.duration_s;
+    lane.step_s = r.config.integrator.step_s;
+    lane.segment = integrator_detail::SegmentOf(lane.schedule.breakpoints_s, 0.0);
+    lane.next_breakpoint = static_cast<std::size_t>(lane.segment);
+    a_.table[i] = table;
+    a_.hint[i] = table->SegmentOf(r.config.start_height_m);
+    a_.h0[i] = r.config.start_height_m;
+    a_.u0[i] = r.config.reference_speed_mps;
+    const InitialOffsets& o = r.config.initial_offsets;
+    const State x0 = {o.delta_speed_mps, o.delta_normal_velocity_mps, o.pitch_rate_radps, o.delta_pitch_rad,
+                      o.delta_height_m};
+    lane.problem->OnStep(0.0, x0, lane.segment);
+    lane.problem->EventValues(0.0, x0, lane.segment, lane.g_previous);
+    State f0;
+    LaneDerivative(i, x0, f0);
+    SetLane(a_.x, i, x0);
+    SetLane(a_.f, i, f0);
+    return true;
   }
 
+  // For LaneFleet: an idle lane flies zeros.
   void Idle(int i) {
     for (int c = 0; c < 5; ++c) a_.x[c][i] = a_.f[c][i] = 0.0;
     a_.h[i] = a_.half_h[i] = a_.sixth_h[i] = a_.elevator[i] = 0.0;
   }
 
-  // Rk4Method::Advance up to the stages: the step's end on the lane's grid t0 + n·h, or its limit.
+  // For LaneFleet: Rk4Method::Advance up to the stages.
   void PrepareStep(int i) {
     LaneRun& lane = lane_[i];
-    const std::vector<double>& breakpoints = lane.schedule.breakpoints_s;
-    double t_limit = lane.end_s;
-    if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] < lane.end_s) {
-      t_limit = breakpoints[lane.next_breakpoint];
-    }
-    const double snap = integrator_detail::kSnapFraction * lane.step_s;
-    auto grid_time = [&](long index) { return 0.0 + static_cast<double>(index) * lane.step_s; };
-    while (grid_time(lane.grid_index + 1) <= lane.t + snap) ++lane.grid_index;
-    const double target = grid_time(lane.grid_index + 1);
-    t_to_[i] = t_limit <= target + snap ? t_limit : target;
+    t_to_[i] = this->StepEnd(i, lane.schedule.breakpoints_s, lane.step_s);
     a_.h[i] = t_to_[i] - lane.t;
     a_.half_h[i] = 0.5 * a_.h[i];
     a_.sixth_h[i] = a_.h[i] / 6.0;
     a_.elevator[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
   }
 
-  // For FlyLanes: one step of every lane at once.
+  // For LaneFleet: one step of every lane at once.
   void StepAll() {
     kernels_.rk4_stages(a_);
     for (int i = 0; i < W; ++i) {
@@ -556,50 +522,24 @@ class OpenLoopLanes {
     AcceptStep(i, step, g_new);
   }
 
-  // The state at tau in [t, t_new]: exactly the step's end states at its ends, the cubic Hermite
-  // interpolant between them.
-  void Interpolate(const Step& step, double tau, State& out) const {
-    if (tau == step.t_new) {
-      out = step.x_new;
-    } else if (tau == step.t) {
-      out = step.x;
-    } else {
-      hermite_.Interpolate(tau, step.t, step.x, step.f, step.t_new, step.x_new, step.f_new, out);
-    }
-  }
-
   // The events fired in lane i's step, in time order: one that records is recorded; one that stops
   // ends the run at its time (true).
   bool StopAtEvent(int i, const Step& step, const LaneRun::Events& g_new) {
     LaneRun& lane = lane_[i];
     LaneRun::Problem& problem = *lane.problem;
     const int segment = lane.segment;
-    const auto fired = integrator_detail::LocateEvents(lane.g_previous, g_new, step.t, step.t_new,
-                                                       lane.config->integrator.event_time_tolerance_s,
-                                                       [&](int e, double tau) {
-                                                         State xs;
-                                                         Interpolate(step, tau, xs);
-                                                         LaneRun::Events values;
-                                                         problem.EventValues(tau, xs, segment, values);
-                                                         return values[e];
-                                                       });
-    for (int k = 0; k < fired.count; ++k) {
-      const int e = fired.order[k];
-      const double t_event = fired.time[e];
-      State x_event;
-      Interpolate(step, t_event, x_event);
-      ++lane.result.events_fired;
-      const EventAction action = problem.OnEvent(e, t_event, x_event, segment);
-      if (action == EventAction::kContinue) continue;
-      GESWEEP_DEMAND(action == EventAction::kStop);  // the open loop only records or stops
-      problem.OnStep(t_event, x_event, segment);
-      lane.t = t_event;
-      SetLane(a_.x, i, x_event);
-      lane.result.stopping_event = e;
-      Finish(i, IntegrationStatus::kStoppedByEvent);
-      return true;
-    }
-    return false;
+    const auto cut = integrator_detail::FireEvents<5>(
+        problem, lane.g_previous, g_new, step.t, step.t_new, lane.config->integrator.event_time_tolerance_s,
+        [&](double tau, State& out) { Interpolate(step, tau, out); }, [segment](double) { return segment; },
+        [](double, auto&&) {}, lane.result.events_fired);
+    if (cut.action == EventAction::kContinue) return false;
+    GESWEEP_DEMAND(cut.action == EventAction::kStop);  // the open loop only records or stops
+    problem.OnStep(cut.t, cut.x, segment);
+    lane.t = cut.t;
+    SetLane(a_.x, i, cut.x);
+    lane.result.stopping_event = cut.event;
+    Finish(i, IntegrationStatus::kStoppedByEvent);
+    return true;
   }
 
   // Lane i's step recorded and taken; at a breakpoint, the next segment's start.
@@ -625,32 +565,15 @@ class OpenLoopLanes {
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
   }
 
-  // IntegrateWith's finish, the run's summary, and the lane's next run.
-  void Finish(int i, IntegrationStatus status) {
+  // For LaneFleet: the run's summary.
+  void Record(int i) {
     LaneRun& lane = lane_[i];
-    lane.result.status = status;
-    lane.result.end_time_s = lane.t;
-    lane.result.final_state = Lane(a_.x, i);
-    lane.result.final_segment = lane.segment;
-    FillSummary(results_[lane.run].summary, lane.result, *lane.problem, *lane.config);
-    active_[i] = false;
-    --active_count_;
-    Refill(i);
+    FillSummary(this->results_[lane.run].summary, lane.result, *lane.problem, *lane.config);
   }
 
   std::span<const OpenLoopBatchRun> runs_;
-  std::span<const std::size_t> order_;
   const std::vector<const LinearDerivativeTable*>& run_tables_;
-  std::vector<OpenLoopResult>& results_;
-  const std::atomic<bool>* cancel_;
-  lanes::LaneKernels<W> kernels_;
-  std::size_t next_ = 0;
-  int active_count_ = 0;
-  integrator_detail::Rk4Method<5> hermite_{0.0, IntegratorOptions{}};  // its cubic Hermite interpolant
-
-  std::array<LaneRun, W> lane_;
-  std::array<bool, W> active_{};
-  lanes::StepArrays<W> a_;
+  lanes::RkKernels<lanes::StepArrays<W>> kernels_;
   double t_to_[W]{};
 };
 

@@ -4,7 +4,7 @@
 /// definitions are in open_loop_lanes_kernel.h, instantiated for xsimd::sse2, xsimd::avx2 and
 /// xsimd::avx512f in open_loop_lanes_sse2.cc, _avx2.cc and _avx512.cc, each built with its own -m
 /// flags (engine/simulation/CMakeLists.txt); this header declares them for the generic code, which
-/// calls the one LaneKernelsFor picks and never instantiates them itself.
+/// calls the one KernelsFor<OpenLoopKernels, W> picks and never instantiates them itself.
 
 #include "engine/simulation/lanes_isa.h"
 
@@ -28,26 +28,22 @@ struct StepArrays {
   int hint[W]{};                                         ///< each lane's segment hint
 };
 
-/// Rk4Method::Advance's stages for every lane: from x, f, h, half_h, sixth_h and elevator, x_new and
-/// f_new = ẋ(x_new), lane i bit for bit what the scalar step of that lane's run computes.
-template <class Arch, int W>
-void Rk4Stages(StepArrays<W>& lanes);
+/// The open loop's kernels (definitions in open_loop_lanes_kernel.h; KernelsFor<OpenLoopKernels, W>
+/// picks an instruction set's).
+struct OpenLoopKernels {
+  template <int W>
+  using Arrays = StepArrays<W>;
 
-/// f = ẋ(x) for every lane: lane i is table[i]->Equation1(h0[i], u0[i], x_i, elevator[i], f_i,
-/// hint[i]) bit for bit.
-template <class Arch, int W>
-void Derivatives(StepArrays<W>& lanes);
+  /// Rk4Method::Advance's stages for every lane: from x, f, h, half_h, sixth_h and elevator, x_new
+  /// and f_new = ẋ(x_new), lane i bit for bit what the scalar step of that lane's run computes.
+  template <class Arch, int W>
+  static void Rk4Stages(StepArrays<W>& lanes);
 
-/// The kernels of one instruction set and width.
-template <int W>
-struct LaneKernels {
-  void (*rk4_stages)(StepArrays<W>&) = nullptr;
-  void (*derivatives)(StepArrays<W>&) = nullptr;
+  /// f = ẋ(x) for every lane: lane i is table[i]->Equation1(h0[i], u0[i], x_i, elevator[i], f_i,
+  /// hint[i]) bit for bit.
+  template <class Arch, int W>
+  static void Derivatives(StepArrays<W>& lanes);
 };
-
-/// The kernels of `isa` for W lanes. Precondition: LanesIsaSupported(isa) (GESWEEP_DEMAND).
-template <int W>
-LaneKernels<W> LaneKernelsFor(LanesIsa isa);
 
 }  // namespace lanes
 }  // namespace gesweep

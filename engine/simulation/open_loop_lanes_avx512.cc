@@ -3,4 +3,4 @@
 // instantiates carries the architecture in its name (lanes.h).
 #include "engine/simulation/open_loop_lanes_kernel.h"
 
-GESWEEP_INSTANTIATE_LANE_KERNELS(xsimd::avx512f);
+GESWEEP_INSTANTIATE_RK_KERNELS(gesweep::lanes::OpenLoopKernels, xsimd::avx512f);

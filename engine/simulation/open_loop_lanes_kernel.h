@@ -21,7 +21,7 @@ template <class Arch, class V, int W>
 }
 
 template <class Arch, int W>
-void Rk4Stages(StepArrays<W>& a) {
+void OpenLoopKernels::Rk4Stages(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   for (int k = 0; k < W; k += kChunkWidth<V>) {
     V x[5], f[5], stage[5], k2[5], k3[5], k4[5], x_new[5], f_new[5];
@@ -51,7 +51,7 @@ void Rk4Stages(StepArrays<W>& a) {
 }
 
 template <class Arch, int W>
-void Derivatives(StepArrays<W>& a) {
+void OpenLoopKernels::Derivatives(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   for (int k = 0; k < W; k += kChunkWidth<V>) {
     V x[5], f[5];
@@ -63,17 +63,3 @@ void Derivatives(StepArrays<W>& a) {
 }
 
 }  // namespace gesweep::lanes
-
-/// Instantiates the kernels of architecture ARCH for every width of kOpenLoopBatchWidths.
-#define GESWEEP_INSTANTIATE_LANE_KERNELS(ARCH)        \
-  namespace gesweep::lanes {                          \
-  template void Rk4Stages<ARCH, 1>(StepArrays<1>&);   \
-  template void Rk4Stages<ARCH, 2>(StepArrays<2>&);   \
-  template void Rk4Stages<ARCH, 4>(StepArrays<4>&);   \
-  template void Rk4Stages<ARCH, 8>(StepArrays<8>&);   \
-  template void Derivatives<ARCH, 1>(StepArrays<1>&); \
-  template void Derivatives<ARCH, 2>(StepArrays<2>&); \
-  template void Derivatives<ARCH, 4>(StepArrays<4>&); \
-  template void Derivatives<ARCH, 8>(StepArrays<8>&); \
-  }                                                   \
-  static_assert(true)

@@ -3,4 +3,4 @@
 // carries the architecture in its name (lanes.h).
 #include "engine/simulation/open_loop_lanes_kernel.h"
 
-GESWEEP_INSTANTIATE_LANE_KERNELS(xsimd::sse2);
+GESWEEP_INSTANTIATE_RK_KERNELS(gesweep::lanes::OpenLoopKernels, xsimd::sse2);

@@ -164,7 +164,7 @@ TEST_P(OpenLoopBatchIsaTest, ARunsResultDoesNotDependOnTheRunsBesideIt) {
 template <int W>
 void ExpectKernelLanesAreTheScalarKernel(LanesIsa isa, const LinearDerivativeTable& a,
                                          const LinearDerivativeTable& b) {
-  const lanes::LaneKernels<W> kernels = lanes::LaneKernelsFor<W>(isa);
+  const lanes::RkKernels<lanes::StepArrays<W>> kernels = lanes::KernelsFor<lanes::OpenLoopKernels, W>(isa);
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
