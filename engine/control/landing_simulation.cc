@@ -779,12 +779,13 @@ class LandingLanes : public lanes::LaneFleet<LandingLanes<W>, W, LandingLaneRun,
     const int segment = lane.segment;
     Run::Events g_new;
     problem.EventValues(step.t_new, step.x_new, segment, g_new);
-    const auto cut = integrator_detail::FireEvents<N>(
+    integrator_detail::StepCut<N> cut;
+    const bool cut_here = integrator_detail::FireEvents<N>(
         problem, lane.g_previous, g_new, step.t, step.t_new, lane.options.event_time_tolerance_s, interpolate,
         [segment](double) { return segment; },
         [&](double t_through, auto&& through) { EmitOutputsThrough(i, t_through, through); },
-        lane.result.events_fired);
-    if (cut.action == EventAction::kContinue) {
+        lane.result.events_fired, cut);
+    if (!cut_here) {
       EmitOutputsThrough(i, step.t_new, interpolate);
       problem.OnStep(step.t_new, step.x_new, segment);
       lane.t = step.t_new;

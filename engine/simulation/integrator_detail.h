@@ -84,26 +84,24 @@ FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::
   return fired;
 }
 
-/// Where a step ends after its events: at its end (action kContinue), or cut at the first event
-/// whose OnEvent did not continue.
+/// Where an event cut a step: the first event whose OnEvent did not continue.
 template <int N>
 struct StepCut {
   EventAction action = EventAction::kContinue;
-  double t = 0;     ///< the cut's time: the event's, or the step's end
-  OdeState<N> x{};  ///< the state at the cut (an event's)
-  int event = -1;   ///< the event that cut the step
+  double t = 0;    ///< the event's time
+  OdeState<N> x;   ///< the state there (set by FireEvents)
+  int event = -1;  ///< the event
 };
 
 /// The events that fired in the step from t to t_new (values g_previous at t, g_new at t_new),
 /// located on the step's interpolant within `tolerance` and taken in time order: before each, the
 /// outputs through its time (emit_outputs_through), then OnEvent at the interpolated state, until
-/// one does not continue. IntegrateWith's events, and every lane's (simulation/lane_loop.h).
+/// one does not continue. Returns whether one cut the step, and then `cut` says where. IntegrateWith's
+/// events, and every lane's (simulation/lane_loop.h).
 template <int N, class P, class Events, class Interpolate, class SegmentAt, class EmitThrough>
-StepCut<N> FireEvents(P& problem, const Events& g_previous, const Events& g_new, double t, double t_new,
-                      double tolerance, Interpolate&& interpolate, SegmentAt&& segment_at,
-                      EmitThrough&& emit_outputs_through, long& events_fired) {
-  StepCut<N> cut;
-  cut.t = t_new;
+bool FireEvents(P& problem, const Events& g_previous, const Events& g_new, double t, double t_new,
+                double tolerance, Interpolate&& interpolate, SegmentAt&& segment_at,
+                EmitThrough&& emit_outputs_through, long& events_fired, StepCut<N>& cut) {
   const auto fired = LocateEvents(g_previous, g_new, t, t_new, tolerance, [&](int i, double tau) {
     OdeState<N> xs;
     interpolate(tau, xs);
@@ -122,9 +120,9 @@ StepCut<N> FireEvents(P& problem, const Events& g_previous, const Events& g_new,
     cut.action = action;
     cut.t = t_event;
     cut.event = i;
-    break;
+    return true;
   }
-  return cut;
+  return false;
 }
 
 enum class StepOutcome { kAccepted, kNonFinite, kUnderflow };
@@ -354,6 +352,7 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
   };
 
   const std::atomic<bool>* cancel = options.cancel;
+  StepCut<N> cut;
   while (t < end_time_s) {
     if (cancel != nullptr && cancel->load(std::memory_order_relaxed))
       return finish(IntegrationStatus::kCancelled);
@@ -379,14 +378,13 @@ IntegrationResult<P::kDimension> IntegrateWith(P& problem, const OdeState<P::kDi
         method.Interpolate(tau, t, *x, *f, t_new, *x_new, *f_new, out);
       }
     };
-    StepCut<N> cut;
-    cut.t = t_new;
+    bool cut_here = false;
     if constexpr (E > 0) {
       problem.EventValues(t_new, *x_new, segment_at(t_new), g_new);
-      cut = FireEvents<N>(problem, g_previous, g_new, t, t_new, options.event_time_tolerance_s, interpolate,
-                          segment_at, emit_outputs_through, result.events_fired);
+      cut_here = FireEvents<N>(problem, g_previous, g_new, t, t_new, options.event_time_tolerance_s,
+                               interpolate, segment_at, emit_outputs_through, result.events_fired, cut);
     }
-    if (cut.action == EventAction::kContinue) {
+    if (!cut_here) {
       emit_outputs_through(t_new, interpolate);
       problem.OnStep(t_new, *x_new, segment_at(t_new));
       t = t_new;

@@ -528,11 +528,14 @@ class OpenLoopLanes
     LaneRun& lane = lane_[i];
     LaneRun::Problem& problem = *lane.problem;
     const int segment = lane.segment;
-    const auto cut = integrator_detail::FireEvents<5>(
-        problem, lane.g_previous, g_new, step.t, step.t_new, lane.config->integrator.event_time_tolerance_s,
-        [&](double tau, State& out) { Interpolate(step, tau, out); }, [segment](double) { return segment; },
-        [](double, auto&&) {}, lane.result.events_fired);
-    if (cut.action == EventAction::kContinue) return false;
+    integrator_detail::StepCut<5> cut;
+    if (!integrator_detail::FireEvents<5>(
+            problem, lane.g_previous, g_new, step.t, step.t_new,
+            lane.config->integrator.event_time_tolerance_s,
+            [&](double tau, State& out) { Interpolate(step, tau, out); },
+            [segment](double) { return segment; }, [](double, auto&&) {}, lane.result.events_fired, cut)) {
+      return false;
+    }
     GESWEEP_DEMAND(cut.action == EventAction::kStop);  // the open loop only records or stops
     problem.OnStep(cut.t, cut.x, segment);
     lane.t = cut.t;
