@@ -254,15 +254,13 @@ ordered_json LimitJson(const SweepPlan& plan, const risk::RiskSpec& spec, const 
 ordered_json ResultJson(const SweepPlan& plan, const risk::RiskSpec& spec, const risk::RiskRun& run) {
   ordered_json j;
   j["study"] = plan.study().name;
-  j["method"] = {
-      {"name", "subset_simulation"},
-      {"sampler", spec.subset.sampler == rare::ConditionalSampler::kCrankNicolson ? "crank_nicolson"
-                                                                                  : "modified_metropolis"},
-      {"level_probability", spec.subset.level_probability},
-      {"samples_per_level", spec.subset.samples_per_level},
-      {"max_levels", spec.subset.max_levels},
-      {"seed", spec.subset.seed},
-      {"repetitions", spec.repetitions}};
+  j["method"] = {{"name", "subset_simulation"},
+                 {"sampler", std::string(ToString(spec.subset.sampler))},
+                 {"level_probability", spec.subset.level_probability},
+                 {"samples_per_level", spec.subset.samples_per_level},
+                 {"max_levels", spec.subset.max_levels},
+                 {"seed", spec.subset.seed},
+                 {"repetitions", spec.repetitions}};
   j["runs"] = static_cast<std::int64_t>(run.evaluations.size());
   ordered_json limits = ordered_json::array();
   for (const auto& r : run.results) limits.push_back(LimitJson(plan, spec, run, r));

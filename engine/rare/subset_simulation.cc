@@ -142,10 +142,11 @@ void ValidateSubsetOptions(const SubsetOptions& options, const std::string& sour
     throw InputError(source, "max_levels", std::to_string(options.max_levels),
                      "an integer from 1 to " + std::to_string(kMaxLevels));
   }
-  if (options.sampler != ConditionalSampler::kCrankNicolson &&
-      options.sampler != ConditionalSampler::kModifiedMetropolis) {
+  const auto& names = EnumNames<ConditionalSampler>::kTable;
+  if (std::none_of(std::begin(names), std::end(names),
+                   [&](const auto& entry) { return entry.value == options.sampler; })) {
     throw InputError(source, "sampler", std::to_string(static_cast<int>(options.sampler)),
-                     "crank_nicolson (0) or modified_metropolis (1)");
+                     EnumChoices<ConditionalSampler>());
   }
   if (!(std::isfinite(options.initial_scale) && options.initial_scale > 0 && options.initial_scale <= 1)) {
     throw InputError(source, "initial_scale", ShortNumber(options.initial_scale), "a number in (0, 1]");

@@ -36,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/common/enum_names.h"
+
 namespace gesweep::rare {
 
 /// Conditional sampler of the levels after the first.
@@ -151,3 +153,9 @@ SubsetResult RunSubsetSimulation(const LimitStateBatch& limit_state, int dimensi
 void LognormalInterval95(double p, double cov, double& low, double& high);
 
 }  // namespace gesweep::rare
+
+namespace gesweep {
+/// The samplers' names in a study's [subset] table and in the archive.
+GESWEEP_ENUM_NAMES(rare::ConditionalSampler, {kCrankNicolson, "crank_nicolson"},
+                   {kModifiedMetropolis, "modified_metropolis"});
+}  // namespace gesweep

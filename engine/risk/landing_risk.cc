@@ -115,13 +115,11 @@ rare::SubsetOptions ReadSubsetOptions(const TomlSection& section) {
   integer("seed", 0, kMaxSeed, options.seed);
   integer("adaptation_groups", 1, 10'000'000, options.adaptation_groups);
   if (const auto sampler = section.OptionalString("sampler")) {
-    if (*sampler == "crank_nicolson") {
-      options.sampler = rare::ConditionalSampler::kCrankNicolson;
-    } else if (*sampler == "modified_metropolis") {
-      options.sampler = rare::ConditionalSampler::kModifiedMetropolis;
+    if (const auto named = ParseEnum<rare::ConditionalSampler>(*sampler)) {
+      options.sampler = *named;
     } else {
       section.Fail("sampler", "\"" + *sampler + "\"",
-                   "\"crank_nicolson\" (the default) or \"modified_metropolis\"");
+                   EnumChoices<rare::ConditionalSampler>() + " (default: crank_nicolson)");
     }
   }
   if (const auto scale = section.OptionalNumber("initial_scale")) options.initial_scale = *scale;
