@@ -1,0 +1,190 @@
+// An estimate of one limit's probability of a risk study by importance sampling at a linearised
+// design point, independent of subset simulation (docs/dispersion.md, "A check by importance
+// sampling"). Not a test: minutes of CPU; scripts/risk_importance runs it.
+//
+//   risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED
+//
+// 1. The still-air landing (u = 0) of the study's first cell: its limit state g0 and touchdown time.
+// 2. The gradient of g over the noise held in the last WINDOW_S seconds before that touchdown (both
+//    streams, every sample), by central differences of +-DELTA per coordinate: 4 landings per sample
+//    held. The coordinates outside the window are taken as having no effect (their gradient 0).
+// 3. FORM: with g linear, g(u) = g0 + a.u, P = Phi(-beta), beta = g0 / |a| (the first-order
+//    reliability estimate), at the design point u* = -g0 a / |a|^2; then ITERATIONS steps of
+//    Hasofer-Lind-Rackwitz-Fiessler, each a new gradient (as in 2, around the current point u) and
+//    u <- ((a.u - g(u)) / |a|^2) a, so that u* is the point of g = 0 nearest the origin of the
+//    linearised state there.
+// 4. Importance sampling with the density N(u*, I): N landings u = u* + z, z ~ N(0, I) from
+//    std::mt19937_64 seeded by (SEED, i), weight w = phi(u) / phi(u - u*) = exp(-u*.z - |u*|^2 / 2);
+//    P = mean(1{g <= 0} w), its standard error from the sample, and the effective sample size
+//    (sum w)^2 / sum w^2 of the failures. Unbiased for any u*; the window and the linearisation only
+//    decide its variance. A failed landing (NaN g) counts as no failure and is reported.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "engine/disturbance/run_noise.h"
+#include "engine/risk/landing_risk.h"
+#include "engine/sweep/study.h"
+#include "engine/sweep/sweep_plan.h"
+
+namespace {
+
+using gesweep::NoisePointIndex;
+using gesweep::NoiseStream;
+
+double Phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 8) {
+    std::fprintf(stderr, "usage: risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED\n");
+    return 2;
+  }
+  const std::string study_path = argv[1];
+  const int limit = std::atoi(argv[2]);
+  const double window_s = std::atof(argv[3]);
+  const double delta = std::atof(argv[4]);
+  const int iterations = std::atoi(argv[5]);
+  const long n = std::atol(argv[6]);
+  const std::uint64_t seed = std::strtoull(argv[7], nullptr, 10);
+
+  gesweep::Study study = gesweep::LoadStudy(study_path);
+  const gesweep::SweepPlan plan(std::move(study), gesweep::ShardSpec{});
+  const gesweep::risk::RiskSpec spec = gesweep::risk::ReadRiskSpec(plan);
+  const std::int64_t cell = 0;
+  const auto d = static_cast<std::size_t>(gesweep::risk::CellDimension(plan, cell));
+  const double dt = gesweep::risk::CellSampleInterval(plan, cell);
+  const std::vector<int> columns = gesweep::risk::RiskColumns(plan);
+  int final_time = -1;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    const std::string& path = plan.schema().columns[static_cast<std::size_t>(columns[i])].path;
+    if (path.size() >= 12 && path.compare(path.size() - 12, 12, "final_time_s") == 0)
+      final_time = static_cast<int>(i);
+  }
+  if (final_time < 0) {
+    std::fprintf(stderr, "%s: no final_time_s column\n", study_path.c_str());
+    return 2;
+  }
+  auto fly = [&](const std::vector<double>& u) {
+    return gesweep::risk::FlyPoint(plan, cell, limit, spec, u);
+  };
+
+  // 1. The still-air landing.
+  const std::vector<double> origin(d, 0.0);
+  const auto still = fly(origin);
+  const double g0 = still.g;
+  const double touchdown_s = still.values[static_cast<std::size_t>(final_time)];
+  std::printf("dimension %zu, sample interval %g s; u = 0: g0 = %.6g, touchdown at %.3f s\n", d, dt, g0,
+              touchdown_s);
+
+  // 2. The gradient over the window.
+  const auto last = static_cast<std::uint64_t>(std::floor(touchdown_s / dt));
+  const auto first = static_cast<std::uint64_t>(std::max(0.0, std::floor((touchdown_s - window_s) / dt)));
+  std::vector<std::size_t> coordinates;
+  for (std::uint64_t k = first; k <= last; ++k) {
+    for (const NoiseStream s : {NoiseStream::kTurbulenceU, NoiseStream::kTurbulenceW}) {
+      const auto c = static_cast<std::size_t>(NoisePointIndex(s, k));
+      if (c < d) coordinates.push_back(c);
+    }
+  }
+  // The gradient of g around `at` over the window's coordinates.
+  auto gradient_at = [&](const std::vector<double>& at, std::vector<double>& gradient) {
+    gradient.assign(d, 0.0);
+    std::atomic<long> failed{0};
+    tbb::parallel_for(std::size_t{0}, coordinates.size(), [&](std::size_t j) {
+      std::vector<double> u(at);
+      const std::size_t c = coordinates[j];
+      u[c] = at[c] + delta;
+      const double plus = fly(u).g;
+      u[c] = at[c] - delta;
+      const double minus = fly(u).g;
+      if (std::isfinite(plus) && std::isfinite(minus)) {
+        gradient[c] = (plus - minus) / (2 * delta);
+      } else {
+        ++failed;
+      }
+    });
+    return failed.load();
+  };
+  std::vector<double> gradient;
+  long failed_gradient = gradient_at(origin, gradient);
+  double norm2 = 0;
+  for (const double a : gradient) norm2 += a * a;
+  double beta = g0 / std::sqrt(norm2);
+  std::printf(
+      "gradient over %zu coordinates (samples %llu..%llu, %.2f s), delta %g: |a| = %.6g, %ld failed\n",
+      coordinates.size(), static_cast<unsigned long long>(first), static_cast<unsigned long long>(last),
+      window_s, delta, std::sqrt(norm2), failed_gradient);
+  std::printf("FORM at u = 0: beta = %.4f, P = Phi(-beta) = %.4g\n", beta, Phi(-beta));
+
+  // 3. The design point: the linearised one, then HL-RF steps.
+  std::vector<double> shift(d, 0.0);
+  for (std::size_t c = 0; c < d; ++c) shift[c] = -g0 * gradient[c] / norm2;
+  for (int it = 0; it < iterations; ++it) {
+    const double g = fly(shift).g;
+    failed_gradient = gradient_at(shift, gradient);
+    norm2 = 0;
+    double a_dot_u = 0;
+    for (std::size_t c = 0; c < d; ++c) {
+      norm2 += gradient[c] * gradient[c];
+      a_dot_u += gradient[c] * shift[c];
+    }
+    const double scale = (a_dot_u - g) / norm2;
+    for (std::size_t c = 0; c < d; ++c) shift[c] = scale * gradient[c];
+    beta = std::sqrt(scale * scale * norm2);
+    std::printf(
+        "HL-RF step %d: g at the point %.4g, |a| %.4g (%ld failed), new beta %.4f (Phi(-beta) = %.4g)\n",
+        it + 1, g, std::sqrt(norm2), failed_gradient, beta, Phi(-beta));
+  }
+  std::printf("design point: g there %.4g\n", fly(shift).g);
+  double shift2 = 0;
+  for (const double v : shift) shift2 += v * v;
+
+  // 4. Importance sampling around it.
+  std::vector<double> weight(static_cast<std::size_t>(n), 0.0);
+  std::vector<char> failed(static_cast<std::size_t>(n), 0);
+  tbb::parallel_for(long{0}, n, [&](long i) {
+    std::mt19937_64 engine(seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(i));
+    std::normal_distribution<double> normal;
+    std::vector<double> u(d);
+    double dot = 0;
+    for (std::size_t c = 0; c < d; ++c) {
+      const double z = normal(engine);
+      u[c] = shift[c] + z;
+      dot += shift[c] * z;
+    }
+    const double g = fly(u).g;
+    if (!std::isfinite(g)) {
+      failed[static_cast<std::size_t>(i)] = 1;
+      return;
+    }
+    if (g <= 0) weight[static_cast<std::size_t>(i)] = std::exp(-dot - 0.5 * shift2);
+  });
+  double sum = 0, sum2 = 0;
+  long hits = 0, failures = 0;
+  for (long i = 0; i < n; ++i) {
+    const double w = weight[static_cast<std::size_t>(i)];
+    sum += w;
+    sum2 += w * w;
+    hits += w > 0 ? 1 : 0;
+    failures += failed[static_cast<std::size_t>(i)];
+  }
+  const double p = sum / static_cast<double>(n);
+  const double variance = (sum2 / static_cast<double>(n) - p * p) / static_cast<double>(n - 1);
+  const double se = std::sqrt(std::max(0.0, variance));
+  const double ess = sum2 > 0 ? sum * sum / sum2 : 0;
+  std::printf(
+      "importance sampling: %ld landings, %ld past the limit, %ld failed; P = %.4g, standard error %.3g "
+      "(CoV %.3f), 95 %% [%.4g, %.4g]; effective sample size of the failures %.1f\n",
+      n, hits, failures, p, se, p > 0 ? se / p : 0.0, p - 1.96 * se, p + 1.96 * se, ess);
+  return 0;
+}
