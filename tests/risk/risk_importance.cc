@@ -2,7 +2,7 @@
 // design point, independent of subset simulation (docs/dispersion.md, "A check by importance
 // sampling"). Not a test: minutes of CPU; scripts/risk_importance runs it.
 //
-//   risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED
+//   risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED [SCALE [SHIFTS STEP_S]]
 //
 // 1. The still-air landing (u = 0) of the study's first cell: its limit state g0 and touchdown time.
 // 2. The gradient of g over the noise held in the last WINDOW_S seconds before that touchdown (both
@@ -18,6 +18,10 @@
 //    P = mean(1{g <= 0} w), its standard error from the sample, and the effective sample size
 //    (sum w)^2 / sum w^2 of the failures. Unbiased for any u*; the window and the linearisation only
 //    decide its variance. A failed landing (NaN g) counts as no failure and is reported.
+//    SCALE (default 1) multiplies u*. SHIFTS > 0 makes the density an equal mixture of N(u*_s, I),
+//    s = -SHIFTS..SHIFTS, u*_s being u* moved by s * STEP_S in time (its held samples renumbered),
+//    since a gust that changes the sink rate also moves the touchdown (a first passage); the weight
+//    is then phi(u) / sum_s (phi(u - u*_s) / (2 SHIFTS + 1)).
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -45,8 +49,10 @@ double Phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 8) {
-    std::fprintf(stderr, "usage: risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED\n");
+  if (argc != 8 && argc != 9 && argc != 11) {
+    std::fprintf(
+        stderr,
+        "usage: risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED [SCALE [SHIFTS STEP_S]]\n");
     return 2;
   }
   const std::string study_path = argv[1];
@@ -56,6 +62,9 @@ int main(int argc, char** argv) {
   const int iterations = std::atoi(argv[5]);
   const long n = std::atol(argv[6]);
   const std::uint64_t seed = std::strtoull(argv[7], nullptr, 10);
+  const double scale_factor = argc >= 9 ? std::atof(argv[8]) : 1.0;
+  const int shifts = argc == 11 ? std::atoi(argv[9]) : 0;
+  const double step_s = argc == 11 ? std::atof(argv[10]) : 0.0;
 
   gesweep::Study study = gesweep::LoadStudy(study_path);
   const gesweep::SweepPlan plan(std::move(study), gesweep::ShardSpec{});
@@ -145,29 +154,68 @@ int main(int argc, char** argv) {
         "HL-RF step %d: g at the point %.4g, |a| %.4g (%ld failed), new beta %.4f (Phi(-beta) = %.4g)\n",
         it + 1, g, std::sqrt(norm2), failed_gradient, beta, Phi(-beta));
   }
-  std::printf("design point: g there %.4g\n", fly(shift).g);
-  double shift2 = 0;
-  for (const double v : shift) shift2 += v * v;
+  for (double& v : shift) v *= scale_factor;
+  std::printf("design point (x %g): g there %.4g\n", scale_factor, fly(shift).g);
 
-  // 4. Importance sampling around it.
+  // The mixture's components: u* moved by s samples of `step` (sparse: u* is zero outside the window).
+  const auto step = static_cast<std::int64_t>(std::llround(step_s / dt));
+  struct Entry {
+    std::size_t c;
+    double v;
+  };
+  std::vector<std::vector<Entry>> components;
+  for (int s = -shifts; s <= shifts; ++s) {
+    std::vector<Entry> component;
+    for (std::uint64_t k = first; k <= last; ++k) {
+      const std::int64_t moved = static_cast<std::int64_t>(k) + s * step;
+      if (moved < 0) continue;
+      for (const NoiseStream stream : {NoiseStream::kTurbulenceU, NoiseStream::kTurbulenceW}) {
+        const auto from = static_cast<std::size_t>(NoisePointIndex(stream, k));
+        const auto to = static_cast<std::size_t>(NoisePointIndex(stream, static_cast<std::uint64_t>(moved)));
+        if (from < d && to < d && shift[from] != 0) component.push_back({to, shift[from]});
+      }
+    }
+    components.push_back(std::move(component));
+  }
+  std::vector<double> component_norm2;
+  for (const auto& component : components) {
+    double norm = 0;
+    for (const Entry& e : component) norm += e.v * e.v;
+    component_norm2.push_back(norm);
+  }
+  std::printf("mixture of %zu components, %g s apart; |u*| = %.4f\n", components.size(), step_s,
+              std::sqrt(component_norm2[static_cast<std::size_t>(shifts)]));
+
+  // 4. Importance sampling from the mixture.
   std::vector<double> weight(static_cast<std::size_t>(n), 0.0);
   std::vector<char> failed(static_cast<std::size_t>(n), 0);
+  std::vector<std::size_t> component_of(static_cast<std::size_t>(n), 0);
   tbb::parallel_for(long{0}, n, [&](long i) {
     std::mt19937_64 engine(seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(i));
     std::normal_distribution<double> normal;
+    const auto picked = static_cast<std::size_t>(engine() % components.size());
+    component_of[static_cast<std::size_t>(i)] = picked;
     std::vector<double> u(d);
-    double dot = 0;
-    for (std::size_t c = 0; c < d; ++c) {
-      const double z = normal(engine);
-      u[c] = shift[c] + z;
-      dot += shift[c] * z;
-    }
+    for (std::size_t c = 0; c < d; ++c) u[c] = normal(engine);
+    for (const Entry& e : components[picked]) u[e.c] += e.v;
     const double g = fly(u).g;
     if (!std::isfinite(g)) {
       failed[static_cast<std::size_t>(i)] = 1;
       return;
     }
-    if (g <= 0) weight[static_cast<std::size_t>(i)] = std::exp(-dot - 0.5 * shift2);
+    if (g > 0) return;
+    // phi(u) / q(u) = 1 / mean_s exp(u*_s . u - |u*_s|^2 / 2), summed from the largest exponent.
+    std::vector<double> exponents;
+    for (std::size_t s = 0; s < components.size(); ++s) {
+      double dot = 0;
+      for (const Entry& e : components[s]) dot += e.v * u[e.c];
+      exponents.push_back(dot - 0.5 * component_norm2[s]);
+    }
+    const double top = *std::max_element(exponents.begin(), exponents.end());
+    double mean = 0;
+    for (const double x : exponents) mean += std::exp(x - top);
+    mean /= static_cast<double>(exponents.size());
+    weight[static_cast<std::size_t>(i)] = std::exp(-top) / mean;
   });
   double sum = 0, sum2 = 0;
   long hits = 0, failures = 0;
@@ -177,6 +225,20 @@ int main(int argc, char** argv) {
     sum2 += w * w;
     hits += w > 0 ? 1 : 0;
     failures += failed[static_cast<std::size_t>(i)];
+  }
+  // Where the estimate comes from: failures and weight by the component drawn.
+  std::vector<long> hits_by(components.size(), 0);
+  std::vector<double> weight_by(components.size(), 0.0);
+  for (long i = 0; i < n; ++i) {
+    if (weight[static_cast<std::size_t>(i)] > 0) {
+      ++hits_by[component_of[static_cast<std::size_t>(i)]];
+      weight_by[component_of[static_cast<std::size_t>(i)]] += weight[static_cast<std::size_t>(i)];
+    }
+  }
+  for (std::size_t s = 0; s < components.size(); ++s) {
+    std::printf("  shift %+.2f s: %ld past the limit, %.1f %% of the weight\n",
+                (static_cast<double>(s) - shifts) * step_s, hits_by[s],
+                sum > 0 ? 100 * weight_by[s] / sum : 0.0);
   }
   const double p = sum / static_cast<double>(n);
   const double variance = (sum2 / static_cast<double>(n) - p * p) / static_cast<double>(n - 1);
