@@ -1,6 +1,6 @@
 // An estimate of one limit's probability of a risk study by importance sampling at a linearised
 // design point, independent of subset simulation (docs/dispersion.md, "A check by importance
-// sampling"). Not a test: minutes of CPU; scripts/risk_importance runs it.
+// sampling at a linearised design point", which has the commands). Not a test: minutes of CPU.
 //
 //   risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED [SCALE [SHIFTS STEP_S]]
 //
@@ -48,6 +48,9 @@ double Phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
 }  // namespace
 
+int Run(const std::string& study_path, int limit, double window_s, double delta, int iterations, long n,
+        std::uint64_t seed, double scale_factor, int shifts, double step_s);
+
 int main(int argc, char** argv) {
   if (argc != 8 && argc != 9 && argc != 11) {
     std::fprintf(
@@ -55,7 +58,6 @@ int main(int argc, char** argv) {
         "usage: risk_importance STUDY LIMIT WINDOW_S DELTA ITERATIONS N SEED [SCALE [SHIFTS STEP_S]]\n");
     return 2;
   }
-  const std::string study_path = argv[1];
   const int limit = std::atoi(argv[2]);
   const double window_s = std::atof(argv[3]);
   const double delta = std::atof(argv[4]);
@@ -65,7 +67,23 @@ int main(int argc, char** argv) {
   const double scale_factor = argc >= 9 ? std::atof(argv[8]) : 1.0;
   const int shifts = argc == 11 ? std::atoi(argv[9]) : 0;
   const double step_s = argc == 11 ? std::atof(argv[10]) : 0.0;
+  if (!(window_s > 0) || !(delta > 0) || iterations < 0 || n < 2 || !(scale_factor > 0) || shifts < 0 ||
+      !(step_s >= 0) || (shifts > 0 && !(step_s > 0))) {
+    std::fprintf(stderr,
+                 "risk_importance: expected WINDOW_S > 0, DELTA > 0, ITERATIONS >= 0, N >= 2, SCALE > 0, "
+                 "SHIFTS >= 0 and STEP_S > 0 with SHIFTS > 0\n");
+    return 2;
+  }
+  try {
+    return Run(argv[1], limit, window_s, delta, iterations, n, seed, scale_factor, shifts, step_s);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "risk_importance: %s\n", e.what());
+    return 2;
+  }
+}
 
+int Run(const std::string& study_path, int limit, double window_s, double delta, int iterations, long n,
+        std::uint64_t seed, double scale_factor, int shifts, double step_s) {
   gesweep::Study study = gesweep::LoadStudy(study_path);
   const gesweep::SweepPlan plan(std::move(study), gesweep::ShardSpec{});
   const gesweep::risk::RiskSpec spec = gesweep::risk::ReadRiskSpec(plan);
