@@ -295,12 +295,14 @@ def main():
             "column": write_study(tmp, "col.toml", limits='"touchdown_sink_mps > 3.05"'),
             "operator": write_study(tmp, "op.toml", limits='"touchdown_sink_rate_mps >= 3.05"'),
             "still_air": write_study(tmp, "still.toml", turbulence="none"),
+            "sampler": write_study(tmp, "sampler.toml", subset='sampler = "gibbs"'),
         }
         expect = {
             "p0": ("level_probability", "1.5"), "p0_zero": ("level_probability", "0"),
             "n_fraction": ("samples_per_level", "105"), "n_small": ("samples_per_level", "10"),
             "column": ("limits", "touchdown_sink_mps"), "operator": ("limits", ">="),
             "still_air": ("turbulence", ""),
+            "sampler": ("sampler", "gibbs"),
         }
         for name, path in bad.items():
             out = tmp / f"bad_{name}.h5"
@@ -311,6 +313,9 @@ def main():
             check(len(lines) == 1 and path.name in lines[0] and key in lines[0] and value in lines[0],
                   f"{name}: one line naming the file, {key} and {value!r}: {lines}")
             check(not out.exists() and not pathlib.Path(str(out) + ".journal").exists(), f"{name}: nothing written")
+            if name == "sampler":  # the choices, from the samplers' names table
+                check("crank_nicolson" in lines[0] and "modified_metropolis" in lines[0],
+                      f"sampler: the line names the samplers: {lines}")
         # An existing archive is never overwritten.
         r = risk(study, "-o", one)
         check(r.returncode == 2 and "exists" in r.stderr, f"an existing -o is refused: {r.returncode} {r.stderr}")
