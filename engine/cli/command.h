@@ -23,6 +23,7 @@
 #include "engine/archive/archive_reader.h"
 #include "engine/cli/described_flags.h"
 #include "engine/cli/request_names.h"
+#include "engine/common/enum_names.h"
 
 namespace gesweep::cli {
 
@@ -79,7 +80,25 @@ Command CommandWith(std::string name, std::string description, void (*add)(CLI::
                  }};
 }
 
-/// Refuses a --format value that is not one of `choices` (exit 2):
+/// The --format of a command that prints a table for a person or JSON for a program: a described
+/// choice (`Field("format", &format)`), so its flag, its help and its one-line refusal come from the
+/// names table below, as every enum flag's do.
+enum class TableOrJson { kAligned, kJson };
+
+/// The --format of a command that prints a text report or JSON (a described choice, as TableOrJson).
+enum class TextOrJson { kText, kJson };
+
+}  // namespace gesweep::cli
+
+namespace gesweep {
+GESWEEP_ENUM_NAMES(cli::TableOrJson, {kAligned, "table"}, {kJson, "json"});
+GESWEEP_ENUM_NAMES(cli::TextOrJson, {kText, "text"}, {kJson, "json"});
+}  // namespace gesweep
+
+namespace gesweep::cli {
+
+/// Refuses a --format value that is not one of `choices` (exit 2), for the commands whose flags are
+/// added by hand:
 /// "command line: --format = 'xml': expected table, csv or json".
 void RequireFormat(const std::string& format, std::initializer_list<std::string_view> choices);
 

@@ -41,12 +41,12 @@ namespace {
 struct DispersionFlags {
   std::string archive;
   DispersionOptions options;  // its fields are the flags (defaults as the struct's)
-  std::string format = "table";
+  TableOrJson format = TableOrJson::kAligned;
   bool no_write = false;
   DescribedFlags described;
 
   /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the archive,
-  /// the limits, the grouping column and the format are added by hand.
+  /// the limits and the grouping column are added by hand.
   template <class V>
   void Describe(V& v) {
     v(Field("columns", &options.columns)
@@ -61,6 +61,7 @@ struct DispersionFlags {
           .Doc("Level of the intervals"));
     v(Field("max_groups", &options.max_groups).Limit("max_groups").Doc("Most groups accepted"));
     v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
+    v(Field("format", &format).Doc("Output: a table for a person, JSON for a program"));
   }
 };
 
@@ -229,9 +230,6 @@ void PrintTable(const Dispersion& d) {
 }
 
 int RunDispersion(const DispersionFlags& flags) {
-  if (flags.format != "table" && flags.format != "json") {
-    throw InputError("command line", "--format", flags.format, "expected table or json");
-  }
   if (flags.options.max_groups < 1) {
     throw InputError("command line", "--max-groups", std::to_string(flags.options.max_groups),
                      "expected >= 1");
@@ -261,7 +259,7 @@ int RunDispersion(const DispersionFlags& flags) {
     archive.reader.Close();
     const bool written = archive.lock.has_value();
     if (written) WriteDispersionGroup(flags.archive, result, CommandLine(flags));
-    if (flags.format == "json") {
+    if (flags.format == TableOrJson::kJson) {
       std::cout << ToJson(result, written).dump(2) << "\n";
     } else {
       PrintTable(result);
@@ -279,7 +277,6 @@ void AddDispersionFlags(CLI::App& app, DispersionFlags& flags) {
                  "the probability of exceeding it");
   app.add_option("--group-by", options.group_by,
                  "A column (e.g. a design parameter) whose values split the runs into groups");
-  app.add_option("--format", flags.format, "table (default) or json");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<DispersionFlags>(

@@ -34,7 +34,7 @@ struct QueryFlags {
   std::string sort;
   bool descending = false;
   long long limit = -1;
-  std::string format = "table";
+  QueryFormat format = QueryFormat::kAligned;
   bool describe = false;
   std::vector<std::string> group_by;
   std::vector<std::string> aggregates;
@@ -54,6 +54,7 @@ struct QueryFlags {
                "--aggregate"));
     v(Field("descending", &descending).Doc("Sort largest first"));
     v(Field("describe", &describe).Doc("List the columns with units, run counts by status, provenance"));
+    v(Field("format", &format).Doc("Output: an aligned table for a person, CSV or JSON for a program"));
   }
 };
 
@@ -169,7 +170,7 @@ int Describe(const ArchiveReader& archive, const ColumnCatalog& catalog, QueryFo
 }
 
 int RunQueryCommand(const QueryFlags& flags) {
-  const QueryFormat format = ParseQueryFormat(flags.format, "--format");
+  const QueryFormat format = flags.format;
   if (flags.limit < -1) {
     throw InputError("command line", "--limit", std::to_string(flags.limit), "expected a count >= 0");
   }
@@ -248,7 +249,6 @@ void AddQueryFlags(CLI::App& app, QueryFlags& flags) {
                  "Show at most this many rows (with --sort: the best n); with --aggregate, groups")
       ->check(ExactIntegerValidator("--limit", "query.limit",
                                     static_cast<double>(std::numeric_limits<long long>::max())));
-  app.add_option("--format", flags.format, "table (default), csv or json");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<QueryFlags>(

@@ -59,7 +59,7 @@ struct RiskFlags {
   std::string output;
   std::optional<int> threads;
   std::optional<long long> replay;
-  std::string format = "table";
+  TableOrJson format = TableOrJson::kAligned;
   bool resume = false;
   bool force = false;
   bool quiet = false;
@@ -82,6 +82,7 @@ struct RiskFlags {
     v(Field("mpi", &mpi)
           .Doc("Spread each batch of landings over MPI ranks: mpirun -n R gesweep risk ... --mpi (the same "
                "archive as one process, bit for bit)"));
+    v(Field("format", &format).Doc("Output: the estimates as a table, or the archive's result JSON"));
   }
 };
 
@@ -321,8 +322,6 @@ std::vector<risk::DesignPoint> DesignPoints(const SweepPlan& plan, const risk::R
 }
 
 // --threads is checked against the limits table by its validator (AddRiskFlags).
-void CheckFormat(const RiskFlags& flags) { RequireFormat(flags.format, {"table", "json"}); }
-
 int Replay(const RiskFlags& flags) {
   if (!flags.output.empty() || flags.resume || flags.force) {
     throw InputError("command line", "--replay", std::to_string(*flags.replay),
@@ -386,7 +385,7 @@ int Replay(const RiskFlags& flags) {
       values[path.substr(path.rfind('/') + 1)] = Num(flown.values[k]);
     }
     j["values"] = values;
-    if (flags.format == "json") {
+    if (flags.format == TableOrJson::kJson) {
       std::cout << j.dump(2) << "\n";
     } else {
       std::cout << "row " << *flags.replay << " (cell " << stored.key.cell << ", limit " << stored.key.limit
@@ -442,7 +441,6 @@ struct RiskSetup {
 // --force against the files there, takes the lock and opens the journal. Throws InputError (a
 // person's mistake) or ArchiveError.
 void SetUpRisk(const RiskFlags& flags, bool writes, RiskSetup& s) {
-  CheckFormat(flags);
   if (std::ranges::find(kLaneWidths, flags.lanes) == std::end(kLaneWidths)) {
     throw InputError("command line", "--lanes", std::to_string(flags.lanes), "expected 1, 2, 4 or 8 lanes");
   }
@@ -508,7 +506,7 @@ void WriteRiskOutputs(const RiskFlags& flags, const RiskSetup& s, risk::RiskRun&
   archive.design_points = DesignPoints(plan, s.spec, run);
   risk::WriteRiskArchive(output, archive);
   std::filesystem::remove(risk::JournalPath(output));
-  if (flags.format == "json") {
+  if (flags.format == TableOrJson::kJson) {
     std::cout << WithArchive(archive.result_json, output) << "\n";
   } else {
     PrintRiskTable(archive.result_json);
@@ -644,7 +642,6 @@ int RunRiskMpi(const RiskFlags& flags) {
 
 int RunRiskCommand(const RiskFlags& flags) {
   if (flags.mpi) return RunRiskMpi(flags);
-  CheckFormat(flags);
   if (flags.replay) return Replay(flags);
   return GuardArchive([&] {
     RiskSetup setup;
@@ -666,7 +663,6 @@ void AddRiskFlags(CLI::App& app, RiskFlags& flags) {
          "Fly row ROW of the archive's evaluations again from the archive alone and compare bit for bit")
       ->check(ExactIntegerValidator("--replay", "run_index",
                                     static_cast<double>(std::numeric_limits<long long>::max())));
-  app.add_option("--format", flags.format, "table (default) or json");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<RiskFlags>(
@@ -733,10 +729,10 @@ void PrintRiskTable(const std::string& result_json) {
   }
 }
 
-int PrintRiskArchive(const std::filesystem::path& path, const std::string& format) {
+int PrintRiskArchive(const std::filesystem::path& path, TableOrJson format) {
   return GuardArchive([&] {
     const risk::RiskArchive archive = risk::ReadRiskArchive(path, false);
-    if (format == "json") {
+    if (format == TableOrJson::kJson) {
       std::cout << WithArchive(archive.result_json, path) << "\n";
     } else {
       PrintRiskTable(archive.result_json);

@@ -4,11 +4,13 @@
 #include <filesystem>
 #include <string>
 
+#include "engine/cli/command.h"
+
 namespace gesweep::cli {
 
-/// Reads the archive (risk::ReadRiskArchive's checks) and prints its estimates in `format` ("table"
-/// or "json") to stdout; returns the exit code (0).
-int PrintRiskArchive(const std::filesystem::path& archive, const std::string& format);
+/// Reads the archive (risk::ReadRiskArchive's checks) and prints its estimates in `format` to stdout;
+/// returns the exit code (0).
+int PrintRiskArchive(const std::filesystem::path& archive, TableOrJson format);
 
 /// A result_json document as printed: "archive" (the file read or written) first, then the document.
 std::string WithArchive(const std::string& result_json, const std::filesystem::path& archive);

@@ -59,7 +59,7 @@ struct RunFlags {
   int ranks_per_node = 0;
   int lanes = DefaultLanes();
   std::string merge = "virtual";
-  std::string format = "text";
+  TextOrJson format = TextOrJson::kText;
   DescribedFlags described{{{"quiet", "-q"}}};
 
   /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the study,
@@ -87,6 +87,7 @@ struct RunFlags {
           .Limit("ranks_per_node")
           .Doc("With --mpi: ranks per node, one shard writer each (0: $GESWEEP_RANKS_PER_NODE, else the "
                "ranks sharing a machine)"));
+    v(Field("format", &format).Doc("Dry-run output: text for a person, JSON for a program"));
   }
 };
 
@@ -356,7 +357,7 @@ int DryRun(SweepPlan& plan, int threads, const RunFlags& flags) {
   int exit_code = 0;
   const std::optional<DryRunEstimate> estimate = EstimateSweep(plan, threads, flags, exit_code);
   if (!estimate) return exit_code;
-  if (flags.format == "json") {
+  if (flags.format == TextOrJson::kJson) {
     PrintDryRunJson(plan, threads, flags, *estimate);
   } else {
     PrintDryRunText(plan, threads, flags, *estimate);
@@ -519,7 +520,6 @@ int RunMpi(const RunFlags& flags, const SweepPlan& plan) {
 
 // The checks of the flags among themselves, before the study is read.
 void CheckRunFlags(const RunFlags& flags) {
-  RequireFormat(flags.format, {"text", "json"});
   if (flags.resume && flags.force) {
     throw InputError("command line", "--force", "", "cannot be combined with --resume (choose one)");
   }
@@ -685,7 +685,6 @@ void AddRunFlags(CLI::App& app, RunFlags& flags) {
       ->check(ExactIntegerValidator("--threads", "threads", std::numeric_limits<int>::max()));
   app.add_option("--shard", flags.shard,
                  "Run only shard i of N (i/N, 0 <= i < N): a contiguous block of the design");
-  app.add_option("--format", flags.format, "Dry-run output: text (default) or json");
   app.add_option("--merge", flags.merge,
                  "With --mpi: how the node shards become the archive: virtual (default; they stay beside it) "
                  "or copy (self-contained)");

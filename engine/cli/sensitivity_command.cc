@@ -35,14 +35,13 @@ struct SensitivityFlags {
   int bootstrap = BootstrapOptions{}.resamples;
   std::uint64_t seed = BootstrapOptions{}.seed;
   double confidence_level = BootstrapOptions{}.confidence_level;
-  std::string failed_runs = "drop_blocks";
-  std::string format = "table";
+  FailedRunPolicy failed_runs = FailedRunPolicy::kDropBlocks;
+  TableOrJson format = TableOrJson::kAligned;
   bool no_write = false;
   DescribedFlags described;
 
   /// The settings whose flag is their key's name (DescribedFlags, added by CommandWith); the archive,
-  /// the output, the method, the failed-runs policy and the format are added by hand (a described
-  /// choice's message would quote the value, these never did).
+  /// the output and the method (none: the design's own) are added by hand.
   template <class V>
   void Describe(V& v) {
     v(Field("bootstrap", &bootstrap)
@@ -51,6 +50,10 @@ struct SensitivityFlags {
     v(Field("seed", &seed).Limit("seed").Doc("Seed of the bootstrap: same seed, same intervals"));
     v(Field("confidence_level", &confidence_level).Limit("confidence_level").Doc("Level of the intervals"));
     v(Field("no_write", &no_write).Doc("Print only; leave the archive untouched"));
+    v(Field("failed_runs", &failed_runs)
+          .Doc("Runs without a value (failed, or NaN such as no boundary): drop_blocks leaves out every "
+               "Saltelli block / Morris trajectory that holds one, error stops (exit 3)"));
+    v(Field("format", &format).Doc("Output: a table for a person, JSON for a program"));
   }
 };
 
@@ -59,7 +62,7 @@ std::string CommandLine(const SensitivityFlags& flags) {
   line << "gesweep sensitivity " << flags.archive << " --output " << flags.output;
   if (!flags.method.empty()) line << " --method " << flags.method;
   line << " --bootstrap " << flags.bootstrap << " --seed " << flags.seed << " --confidence-level "
-       << ShortNumber(flags.confidence_level) << " --failed-runs " << flags.failed_runs;
+       << ShortNumber(flags.confidence_level) << " --failed-runs " << ToString(flags.failed_runs);
   return line.str();
 }
 
@@ -239,19 +242,13 @@ void PrintMorris(const ArchiveSensitivity& r) {
 }
 
 int Sensitivity(const SensitivityFlags& flags) {
-  if (flags.format != "table" && flags.format != "json") {
-    throw InputError("command line", "--format", flags.format, "expected table or json");
-  }
   ArchiveSensitivityOptions options;
   if (!flags.method.empty()) {
     options.method = ParseSensitivityMethod(flags.method);
     if (!options.method)
       throw InputError("command line", "--method", flags.method, "expected sobol or morris");
   }
-  const auto policy = ParseFailedRunPolicy(flags.failed_runs);
-  if (!policy)
-    throw InputError("command line", "--failed-runs", flags.failed_runs, "expected drop_blocks or error");
-  options.failed_runs = *policy;
+  options.failed_runs = flags.failed_runs;
   // --seed and --bootstrap are within their whole entries of the limits table (parsed exactly).
   options.bootstrap.resamples = flags.bootstrap;
   options.bootstrap.seed = flags.seed;
@@ -273,7 +270,7 @@ int Sensitivity(const SensitivityFlags& flags) {
     }
     const bool written = archive.lock.has_value();
     if (written) WriteSensitivityGroup(flags.archive, result, CommandLine(flags));
-    if (flags.format == "json") {
+    if (flags.format == TableOrJson::kJson) {
       std::cout << ToJson(result, written).dump(2) << "\n";
     } else {
       if (result.method == SensitivityMethod::kSobol) {
@@ -296,10 +293,6 @@ void AddSensitivityFlags(CLI::App& app, SensitivityFlags& flags) {
          "full path (results/boundary/height_m)")
       ->required();
   app.add_option("--method", flags.method, "sobol or morris (default: the one the design was made for)");
-  app.add_option("--failed-runs", flags.failed_runs,
-                 "Runs without a value (failed, or NaN such as no boundary): drop_blocks (default; leave out "
-                 "every Saltelli block / Morris trajectory that holds one) or error (stop, exit 3)");
-  app.add_option("--format", flags.format, "table (default) or json");
 }
 
 const CommandRegistrar kRegistrar{CommandWith<SensitivityFlags>(

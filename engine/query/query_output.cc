@@ -186,17 +186,10 @@ class JsonWriter final : public QueryRowSink {
 
 }  // namespace
 
-QueryFormat ParseQueryFormat(const std::string& text, const std::string& flag) {
-  if (text == "table") return QueryFormat::kTable;
-  if (text == "csv") return QueryFormat::kCsv;
-  if (text == "json") return QueryFormat::kJson;
-  throw InputError("command line", flag, "'" + text + "'", "expected table, csv or json");
-}
-
 std::unique_ptr<QueryRowSink> MakeQueryWriter(QueryFormat format, std::ostream& out,
                                               const std::string& archive) {
   switch (format) {
-    case QueryFormat::kTable:
+    case QueryFormat::kAligned:
       return std::make_unique<TableWriter>(out, archive);
     case QueryFormat::kCsv:
       return std::make_unique<CsvWriter>(out);

@@ -8,15 +8,14 @@
 #include <ostream>
 #include <string>
 
+#include "engine/common/enum_names.h"
 #include "engine/query/query.h"
 
 namespace gesweep {
 
-/// Output formats.
-enum class QueryFormat { kTable, kCsv, kJson };
-
-/// Parses "table", "csv", "json"; throws InputError naming `flag` otherwise.
-QueryFormat ParseQueryFormat(const std::string& text, const std::string& flag);
+/// Output formats (the names of `gesweep query --format`).
+enum class QueryFormat { kAligned, kCsv, kJson };
+GESWEEP_ENUM_NAMES(QueryFormat, {kAligned, "table"}, {kCsv, "csv"}, {kJson, "json"});
 
 /// A sink that writes a query's rows in `format` to `out`. `archive` names the archive in the JSON
 /// output and the table's closing comment.
