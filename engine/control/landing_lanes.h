@@ -67,6 +67,11 @@ struct LandingStepArrays {
   const LinearDerivativeTable* table[W]{};  ///< never null (idle lanes: another lane's)
   int hint[W]{};                            ///< each lane's segment hint
   const DisturbanceField* field[W]{};       ///< never null (idle lanes: another lane's)
+
+  /// The kernels' table values of the lanes' segments, kept across steps (lanes::KeptChunks); the
+  /// generic code never reads them.
+  alignas(64) unsigned char gathered[kGatheredBytesPerLane * W]{};
+  bool gathered_made = false;
 };
 
 /// The landing's kernels (definitions in landing_lanes_kernel.h; KernelsFor<LandingKernels, W>

@@ -767,30 +767,44 @@ class LandingLanes : public lanes::LaneFleet<LandingLanes<W>, W, LandingLaneRun,
   }
 
   // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the
-  // step, the outputs, the step's record; a restart is left to CompleteRestart.
+  // step, the outputs, the step's record; a restart is left to CompleteRestart. The step's states
+  // other than its end are taken out of the arrays only when the interpolant is wanted inside the
+  // step (an event, an output between its ends).
   void CompleteStep(int i) {
     Run& lane = lane_[i];
     Run::Problem& problem = *lane.problem;
     lane.result.rhs_calls += 4;
-    const Step step{lane.t, a_.t_to[i], Lane(a_.x, i), Lane(a_.f, i), Lane(a_.x_new, i), Lane(a_.f_new, i)};
-    if (!integrator_detail::AllFinite<N>(step.x_new)) return Finish(i, IntegrationStatus::kNonFinite);
+    const double t = lane.t;
+    const double t_new = a_.t_to[i];
+    const State x_new = Lane(a_.x_new, i);
+    if (!integrator_detail::AllFinite<N>(x_new)) return Finish(i, IntegrationStatus::kNonFinite);
     ++lane.result.accepted_steps;
-    auto interpolate = [&](double tau, State& out) { Interpolate(step, tau, out); };
+    std::optional<Step> step;
+    auto interpolate = [&](double tau, State& out) {
+      if (tau == t_new) {
+        out = x_new;
+        return;
+      }
+      if (!step) step.emplace(Step{t, t_new, Lane(a_.x, i), Lane(a_.f, i), x_new, Lane(a_.f_new, i)});
+      Interpolate(*step, tau, out);
+    };
     const int segment = lane.segment;
     Run::Events g_new;
-    problem.EventValues(step.t_new, step.x_new, segment, g_new);
+    problem.EventValues(t_new, x_new, segment, g_new);
     integrator_detail::StepCut<N> cut;
     const bool cut_here = integrator_detail::FireEvents<N>(
-        problem, lane.g_previous, g_new, step.t, step.t_new, lane.options.event_time_tolerance_s, interpolate,
+        problem, lane.g_previous, g_new, t, t_new, lane.options.event_time_tolerance_s, interpolate,
         [segment](double) { return segment; },
         [&](double t_through, auto&& through) { EmitOutputsThrough(i, t_through, through); },
         lane.result.events_fired, cut);
     if (!cut_here) {
-      EmitOutputsThrough(i, step.t_new, interpolate);
-      problem.OnStep(step.t_new, step.x_new, segment);
-      lane.t = step.t_new;
-      SetLane(a_.x, i, step.x_new);
-      SetLane(a_.f, i, step.f_new);
+      EmitOutputsThrough(i, t_new, interpolate);
+      problem.OnStep(t_new, x_new, segment);
+      lane.t = t_new;
+      for (int c = 0; c < N; ++c) {
+        a_.x[c][i] = x_new[static_cast<std::size_t>(c)];
+        a_.f[c][i] = a_.f_new[c][i];
+      }
       lane.g_previous = g_new;
       if (lane.next_breakpoint < lane.breakpoints.size() &&
           lane.breakpoints[lane.next_breakpoint] <= lane.t) {

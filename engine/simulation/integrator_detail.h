@@ -84,6 +84,16 @@ FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::
   return fired;
 }
 
+/// Whether any event value crossed from positive to at most zero (LocateEvents' test): without one,
+/// LocateEvents fires nothing.
+template <std::size_t E>
+bool AnyEventCrossing(const std::array<double, E>& g_previous, const std::array<double, E>& g_new) {
+  for (std::size_t i = 0; i < E; ++i) {
+    if (g_previous[i] > 0.0 && g_new[i] <= 0.0) return true;
+  }
+  return false;
+}
+
 /// Where an event cut a step: the first event whose OnEvent did not continue.
 template <int N>
 struct StepCut {

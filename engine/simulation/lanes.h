@@ -13,6 +13,7 @@
 /// in every instantiation's name keeps the linker from merging one architecture's copy into
 /// another's. Only those translation units instantiate these templates (open_loop_lanes_kernel.h).
 
+#include <new>
 #include <type_traits>
 #include <xsimd/xsimd.hpp>
 
@@ -63,6 +64,21 @@ template <class Arch, class V, class F>
   alignas(64) double lanes[kChunkWidth<V>];
   for (int i = 0; i < kChunkWidth<V>; ++i) lanes[i] = value(i);
   return Load<Arch, V>(lanes);
+}
+
+/// The kernels' per-chunk objects of type T (a LinearDerivativeTable::LanesGathered: the chunk's
+/// gathered table values), kept in the arrays' storage `a.gathered` from one kernel call to the next
+/// and made, value-initialised, by the first (`a.gathered_made`). Entry c is chunk c's. Whatever a
+/// kept object holds is valid while the lanes' tables are: it says which segments it came from.
+template <class T, int kChunks, class Arrays>
+[[gnu::always_inline]] inline T* KeptChunks(Arrays& a) {
+  static_assert(sizeof(T) * kChunks <= sizeof(a.gathered) && alignof(T) <= 64 &&
+                std::is_trivially_destructible_v<T>);
+  if (!a.gathered_made) {
+    for (int c = 0; c < kChunks; ++c) new (a.gathered + c * sizeof(T)) T();
+    a.gathered_made = true;
+  }
+  return std::launder(reinterpret_cast<T*>(a.gathered));
 }
 
 /// `pick.template operator()<Arch>()` for the xsimd architecture of `isa`: the kernels of one

@@ -53,6 +53,10 @@ struct RkKernels {
   void (*derivatives)(Arrays&) = nullptr;
 };
 
+/// Bytes per lane of a kind's arrays' `gathered` storage: where the kernels keep their chunks'
+/// gathered table values across calls (KeptChunks, lanes.h).
+inline constexpr int kGatheredBytesPerLane = 384;
+
 /// The kernels of Kind for W lanes on `isa`. Defined in lanes.h and instantiated for each kind and
 /// width in the kind's dispatch file (GESWEEP_INSTANTIATE_KERNELS_FOR), which names each instruction
 /// set's kernels without instantiating them. Precondition: LanesIsaSupported(isa) (GESWEEP_DEMAND).

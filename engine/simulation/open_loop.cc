@@ -487,16 +487,15 @@ class OpenLoopLanes
   // For LaneFleet: an idle lane flies zeros.
   void Idle(int i) {
     for (int c = 0; c < 5; ++c) a_.x[c][i] = a_.f[c][i] = 0.0;
-    a_.h[i] = a_.half_h[i] = a_.sixth_h[i] = a_.elevator[i] = 0.0;
+    a_.t[i] = a_.t_to[i] = a_.elevator[i] = 0.0;
   }
 
-  // For LaneFleet: Rk4Method::Advance up to the stages.
+  // For LaneFleet: Rk4Method::Advance up to the stages (the step's length and its fractions are the
+  // kernel's).
   void PrepareStep(int i) {
     LaneRun& lane = lane_[i];
-    t_to_[i] = this->StepEnd(i, lane.schedule.breakpoints_s, lane.step_s);
-    a_.h[i] = t_to_[i] - lane.t;
-    a_.half_h[i] = 0.5 * a_.h[i];
-    a_.sixth_h[i] = a_.h[i] / 6.0;
+    a_.t[i] = lane.t;
+    a_.t_to[i] = this->StepEnd(i, lane.schedule.breakpoints_s, lane.step_s);
     a_.elevator[i] = lane.schedule.elevator_rad[static_cast<std::size_t>(lane.segment)];
   }
 
@@ -509,25 +508,29 @@ class OpenLoopLanes
   }
 
   // IntegrateWith's step after Advance for lane i: the finiteness check, the events located in the
-  // step (StopAtEvent), the step's record and a breakpoint's restart (AcceptStep).
+  // step (StopAtEvent), the step's record and a breakpoint's restart (AcceptStep). The step's four
+  // states are taken out of the arrays only when an event may have fired (a value crossed from
+  // positive to at most zero: LocateEvents' test); otherwise FireEvents would find none, and the
+  // lane's values are read and written in place.
   void CompleteStep(int i) {
     LaneRun& lane = lane_[i];
     lane.result.rhs_calls += 4;
-    const Step step{lane.t, t_to_[i], Lane(a_.x, i), Lane(a_.f, i), Lane(a_.x_new, i), Lane(a_.f_new, i)};
-    if (!integrator_detail::AllFinite<5>(step.x_new)) return Finish(i, IntegrationStatus::kNonFinite);
+    const State x_new = Lane(a_.x_new, i);
+    if (!integrator_detail::AllFinite<5>(x_new)) return Finish(i, IntegrationStatus::kNonFinite);
     ++lane.result.accepted_steps;
     LaneRun::Events g_new;
-    lane.problem->EventValues(step.t_new, step.x_new, lane.segment, g_new);
-    if (StopAtEvent(i, step, g_new)) return;
-    AcceptStep(i, step, g_new);
+    lane.problem->EventValues(a_.t_to[i], x_new, lane.segment, g_new);
+    if (integrator_detail::AnyEventCrossing(lane.g_previous, g_new) && StopAtEvent(i, g_new)) return;
+    AcceptStep(i, x_new, g_new);
   }
 
   // The events fired in lane i's step, in time order: one that records is recorded; one that stops
   // ends the run at its time (true).
-  bool StopAtEvent(int i, const Step& step, const LaneRun::Events& g_new) {
+  bool StopAtEvent(int i, const LaneRun::Events& g_new) {
     LaneRun& lane = lane_[i];
     LaneRun::Problem& problem = *lane.problem;
     const int segment = lane.segment;
+    const Step step{lane.t, a_.t_to[i], Lane(a_.x, i), Lane(a_.f, i), Lane(a_.x_new, i), Lane(a_.f_new, i)};
     integrator_detail::StepCut<5> cut;
     if (!integrator_detail::FireEvents<5>(
             problem, lane.g_previous, g_new, step.t, step.t_new,
@@ -545,13 +548,16 @@ class OpenLoopLanes
     return true;
   }
 
-  // Lane i's step recorded and taken; at a breakpoint, the next segment's start.
-  void AcceptStep(int i, const Step& step, const LaneRun::Events& g_new) {
+  // Lane i's step recorded and taken (x_new and f_new become the lane's x and f); at a breakpoint,
+  // the next segment's start.
+  void AcceptStep(int i, const State& x_new, const LaneRun::Events& g_new) {
     LaneRun& lane = lane_[i];
-    lane.problem->OnStep(step.t_new, step.x_new, lane.segment);
-    lane.t = step.t_new;
-    SetLane(a_.x, i, step.x_new);
-    SetLane(a_.f, i, step.f_new);
+    lane.problem->OnStep(a_.t_to[i], x_new, lane.segment);
+    lane.t = a_.t_to[i];
+    for (int c = 0; c < 5; ++c) {
+      a_.x[c][i] = x_new[c];
+      a_.f[c][i] = a_.f_new[c][i];
+    }
     lane.g_previous = g_new;
     const std::vector<double>& breakpoints = lane.schedule.breakpoints_s;
     if (lane.next_breakpoint < breakpoints.size() && breakpoints[lane.next_breakpoint] <= lane.t) {
@@ -560,9 +566,9 @@ class OpenLoopLanes
         ++lane.segment;
       }
       State f_restart;
-      LaneDerivative(i, step.x_new, f_restart);
+      LaneDerivative(i, x_new, f_restart);
       SetLane(a_.f, i, f_restart);
-      lane.problem->EventValues(lane.t, step.x_new, lane.segment, lane.g_previous);
+      lane.problem->EventValues(lane.t, x_new, lane.segment, lane.g_previous);
       if (!integrator_detail::AllFinite<5>(f_restart)) return Finish(i, IntegrationStatus::kNonFinite);
     }
     if (!(lane.t < lane.end_s)) Finish(i, IntegrationStatus::kReachedEnd);
@@ -577,7 +583,6 @@ class OpenLoopLanes
   std::span<const OpenLoopBatchRun> runs_;
   const std::vector<const LinearDerivativeTable*>& run_tables_;
   lanes::RkKernels<lanes::StepArrays<W>> kernels_;
-  double t_to_[W]{};
 };
 
 template <int W>

@@ -21,11 +21,16 @@ struct StepArrays {
   alignas(64) double f[5][W]{};                          ///< the derivative there
   alignas(64) double x_new[5][W]{};                      ///< Rk4Stages: the state at the step's end
   alignas(64) double f_new[5][W]{};                      ///< Rk4Stages: the derivative there
-  alignas(64) double h[W]{}, half_h[W]{}, sixth_h[W]{};  ///< the step, h/2 and h/6, s
+  alignas(64) double t[W]{}, t_to[W]{};                 ///< the step's start and end, s
   alignas(64) double elevator[W]{};                      ///< δe over the step, rad
   alignas(64) double h0[W]{}, u0[W]{};                   ///< each lane's H0 (m) and u0 (m/s)
   const LinearDerivativeTable* table[W]{};               ///< each lane's table (never null)
   int hint[W]{};                                         ///< each lane's segment hint
+
+  /// The kernels' table values of the lanes' segments, kept across steps (lanes::KeptChunks); the
+  /// generic code never reads them.
+  alignas(64) unsigned char gathered[kGatheredBytesPerLane * W]{};
+  bool gathered_made = false;
 };
 
 /// The open loop's kernels (definitions in open_loop_lanes_kernel.h; KernelsFor<OpenLoopKernels, W>
@@ -34,7 +39,7 @@ struct OpenLoopKernels {
   template <int W>
   using Arrays = StepArrays<W>;
 
-  /// Rk4Method::Advance's stages for every lane: from x, f, h, half_h, sixth_h and elevator, x_new
+  /// Rk4Method::Advance's stages for every lane: from x, f, t, t_to and elevator, x_new
   /// and f_new = ẋ(x_new), lane i bit for bit what the scalar step of that lane's run computes.
   template <class Arch, int W>
   static void Rk4Stages(StepArrays<W>& lanes);

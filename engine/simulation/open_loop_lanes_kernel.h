@@ -23,16 +23,18 @@ template <class Arch, class V, int W>
 template <class Arch, int W>
 void OpenLoopKernels::Rk4Stages(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
+  LinearDerivativeTable::LanesGathered<Arch, V>* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
   for (int k = 0; k < W; k += kChunkWidth<V>) {
     V x[5], f[5], stage[5], k2[5], k3[5], k4[5], x_new[5], f_new[5];
-    LinearDerivativeTable::LanesGathered<Arch, V> gathered;
+    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < 5; ++c) {
       x[c] = Load<Arch, V>(&a.x[c][k]);
       f[c] = Load<Arch, V>(&a.f[c][k]);
     }
-    const V h = Load<Arch, V>(&a.h[k]);
-    const V half_h = Load<Arch, V>(&a.half_h[k]);
-    const V sixth_h = Load<Arch, V>(&a.sixth_h[k]);
+    // Rk4Method::Advance's step, h/2 and h/6, as it computes them.
+    const V h = Load<Arch, V>(&a.t_to[k]) - Load<Arch, V>(&a.t[k]);
+    const V half_h = V(0.5) * h;
+    const V sixth_h = h / V(6.0);
     const V elevator = Load<Arch, V>(&a.elevator[k]);
     // Rk4Method::Advance's arithmetic, in its order.
     for (int c = 0; c < 5; ++c) stage[c] = x[c] + half_h * f[c];
@@ -53,9 +55,10 @@ void OpenLoopKernels::Rk4Stages(StepArrays<W>& a) {
 template <class Arch, int W>
 void OpenLoopKernels::Derivatives(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
+  LinearDerivativeTable::LanesGathered<Arch, V>* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
   for (int k = 0; k < W; k += kChunkWidth<V>) {
     V x[5], f[5];
-    LinearDerivativeTable::LanesGathered<Arch, V> gathered;
+    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < 5; ++c) x[c] = Load<Arch, V>(&a.x[c][k]);
     ChunkDerivative<Arch>(a, k, x, Load<Arch, V>(&a.elevator[k]), f, gathered);
     for (int c = 0; c < 5; ++c) Store<Arch>(f[c], &a.f[c][k]);

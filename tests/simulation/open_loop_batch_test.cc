@@ -167,10 +167,12 @@ void ExpectKernelLanesAreTheScalarKernel(LanesIsa isa, const LinearDerivativeTab
   const lanes::RkKernels<lanes::StepArrays<W>> kernels = lanes::KernelsFor<lanes::OpenLoopKernels, W>(isa);
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  // One set of arrays for every trial: the kernel keeps the lanes' gathered segments across calls
+  // (StepArrays::gathered), and the lanes change tables and segments from trial to trial.
+  lanes::StepArrays<W> lanes;
   for (int trial = 0; trial < 200; ++trial) {
-    lanes::StepArrays<W> lanes;
     for (int i = 0; i < W; ++i) {
-      lanes.table[i] = (trial + i) % 2 == 0 ? &a : &b;
+      lanes.table[i] = (trial / 3 + i) % 2 == 0 ? &a : &b;  // kept for three trials
       lanes.h0[i] = (trial + i) % 17 == 0 ? 800.0 : 5.0 + 4.0 * unit(random);
       lanes.u0[i] = 32.0 + 5.0 * unit(random);
       for (int c = 0; c < 5; ++c) lanes.x[c][i] = (c == 4 ? 4.0 : 1.0) * unit(random);
