@@ -779,14 +779,18 @@ class LandingLanes : public lanes::LaneFleet<LandingLanes<W>, W, LandingLaneRun,
     const State x_new = Lane(a_.x_new, i);
     if (!integrator_detail::AllFinite<N>(x_new)) return Finish(i, IntegrationStatus::kNonFinite);
     ++lane.result.accepted_steps;
-    std::optional<Step> step;
+    Step step;  // filled on the first interpolation inside the step (no std::optional: it zeroes 472 bytes)
+    bool step_taken = false;
     auto interpolate = [&](double tau, State& out) {
       if (tau == t_new) {
         out = x_new;
         return;
       }
-      if (!step) step.emplace(Step{t, t_new, Lane(a_.x, i), Lane(a_.f, i), x_new, Lane(a_.f_new, i)});
-      Interpolate(*step, tau, out);
+      if (!step_taken) {
+        step = Step{t, t_new, Lane(a_.x, i), Lane(a_.f, i), x_new, Lane(a_.f_new, i)};
+        step_taken = true;
+      }
+      Interpolate(step, tau, out);
     };
     const int segment = lane.segment;
     Run::Events g_new;
