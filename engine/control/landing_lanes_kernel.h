@@ -214,10 +214,8 @@ template <class Arch, int W>
 void LandingKernels::Rk4Stages(LandingStepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   constexpr int N = kLandingLaneStates;
-  auto* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
-  for (int k = 0; k < W; k += kChunkWidth<V>) {
+  LinearDerivativeTable::ForEachChunk<Arch, W>(a, [&](int k, auto& gathered) GESWEEP_ALWAYS_INLINE_LAMBDA {
     V x[N], f[N], stage[N], k2[N], k3[N], k4[N], x_new[N], f_new[N];
-    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < N; ++c) {
       x[c] = Load<Arch, V>(&a.x[c][k]);
       f[c] = Load<Arch, V>(&a.f[c][k]);
@@ -238,21 +236,19 @@ void LandingKernels::Rk4Stages(LandingStepArrays<W>& a) {
       Store<Arch>(x_new[c], &a.x_new[c][k]);
       Store<Arch>(f_new[c], &a.f_new[c][k]);
     }
-  }
+  });
 }
 
 template <class Arch, int W>
 void LandingKernels::Derivatives(LandingStepArrays<W>& a) {
   using V = Chunk<Arch, W>;
   constexpr int N = kLandingLaneStates;
-  auto* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
-  for (int k = 0; k < W; k += kChunkWidth<V>) {
+  LinearDerivativeTable::ForEachChunk<Arch, W>(a, [&](int k, auto& gathered) GESWEEP_ALWAYS_INLINE_LAMBDA {
     V x[N], f[N];
-    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < N; ++c) x[c] = Load<Arch, V>(&a.x[c][k]);
     ChunkLandingDerivative<Arch>(a, k, &a.t[k], x, f, gathered);
     for (int c = 0; c < N; ++c) Store<Arch>(f[c], &a.f_new[c][k]);
-  }
+  });
 }
 
 }  // namespace gesweep::lanes

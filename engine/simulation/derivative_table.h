@@ -17,6 +17,9 @@
 /// Equation1Derivative out of line (called from five places), which measured 40 % of the
 /// frozen-A run.
 #define GESWEEP_ALWAYS_INLINE [[gnu::always_inline]] inline
+/// A lambda's body inlined into its caller (a kernel's ForEachChunk body):
+/// `[&](...) GESWEEP_ALWAYS_INLINE_LAMBDA {`.
+#define GESWEEP_ALWAYS_INLINE_LAMBDA __attribute__((always_inline))
 
 namespace gesweep {
 
@@ -268,6 +271,17 @@ class LinearDerivativeTable {
     V reference_m, slope[kReducedCount], value[kReducedCount];
     V density_center_m, density_coefficients[DensityPolynomial::kDegree + 1];
   };
+
+  /// A kernel's loop over the chunks of its W lanes (lanes::Chunk<Arch, W>): body(k, gathered) for
+  /// each chunk, k its first lane and `gathered` its table values kept in the arrays `a` from one
+  /// call to the next (lanes::KeptChunks).
+  template <class Arch, int W, class Arrays, class Body>
+  GESWEEP_ALWAYS_INLINE static void ForEachChunk(Arrays& a, Body&& body) {
+    using V = lanes::Chunk<Arch, W>;
+    constexpr int kWidth = lanes::kChunkWidth<V>;
+    LanesGathered<Arch, V>* kept = lanes::KeptChunks<LanesGathered<Arch, V>, W / kWidth>(a);
+    for (int k = 0; k < W; k += kWidth) body(k, kept[k / kWidth]);
+  }
 
  private:
   GESWEEP_ALWAYS_INLINE const Segment& SegmentFor(double height_m, int& segment_hint) const {

@@ -17,15 +17,15 @@ namespace lanes {
 /// What the kernels read and write for W lanes: component c of lane i at [c][i].
 template <int W>
 struct StepArrays {
-  alignas(64) double x[5][W]{};                          ///< the state at the step's start
-  alignas(64) double f[5][W]{};                          ///< the derivative there
-  alignas(64) double x_new[5][W]{};                      ///< Rk4Stages: the state at the step's end
-  alignas(64) double f_new[5][W]{};                      ///< Rk4Stages: the derivative there
-  alignas(64) double t[W]{}, t_to[W]{};                 ///< the step's start and end, s
-  alignas(64) double elevator[W]{};                      ///< δe over the step, rad
-  alignas(64) double h0[W]{}, u0[W]{};                   ///< each lane's H0 (m) and u0 (m/s)
-  const LinearDerivativeTable* table[W]{};               ///< each lane's table (never null)
-  int hint[W]{};                                         ///< each lane's segment hint
+  alignas(64) double x[5][W]{};             ///< the state at the step's start
+  alignas(64) double f[5][W]{};             ///< the derivative there
+  alignas(64) double x_new[5][W]{};         ///< Rk4Stages: the state at the step's end
+  alignas(64) double f_new[5][W]{};         ///< Rk4Stages: the derivative there
+  alignas(64) double t[W]{}, t_to[W]{};     ///< the step's start and end, s
+  alignas(64) double elevator[W]{};         ///< δe over the step, rad
+  alignas(64) double h0[W]{}, u0[W]{};      ///< each lane's H0 (m) and u0 (m/s)
+  const LinearDerivativeTable* table[W]{};  ///< each lane's table (never null)
+  int hint[W]{};                            ///< each lane's segment hint
 
   /// The kernels' table values of the lanes' segments, kept across steps (lanes::KeptChunks); the
   /// generic code never reads them.

@@ -23,10 +23,8 @@ template <class Arch, class V, int W>
 template <class Arch, int W>
 void OpenLoopKernels::Rk4Stages(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
-  LinearDerivativeTable::LanesGathered<Arch, V>* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
-  for (int k = 0; k < W; k += kChunkWidth<V>) {
+  LinearDerivativeTable::ForEachChunk<Arch, W>(a, [&](int k, auto& gathered) GESWEEP_ALWAYS_INLINE_LAMBDA {
     V x[5], f[5], stage[5], k2[5], k3[5], k4[5], x_new[5], f_new[5];
-    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < 5; ++c) {
       x[c] = Load<Arch, V>(&a.x[c][k]);
       f[c] = Load<Arch, V>(&a.f[c][k]);
@@ -49,20 +47,18 @@ void OpenLoopKernels::Rk4Stages(StepArrays<W>& a) {
       Store<Arch>(x_new[c], &a.x_new[c][k]);
       Store<Arch>(f_new[c], &a.f_new[c][k]);
     }
-  }
+  });
 }
 
 template <class Arch, int W>
 void OpenLoopKernels::Derivatives(StepArrays<W>& a) {
   using V = Chunk<Arch, W>;
-  LinearDerivativeTable::LanesGathered<Arch, V>* kept = KeptChunks<LinearDerivativeTable::LanesGathered<Arch, V>, W / kChunkWidth<V>>(a);
-  for (int k = 0; k < W; k += kChunkWidth<V>) {
+  LinearDerivativeTable::ForEachChunk<Arch, W>(a, [&](int k, auto& gathered) GESWEEP_ALWAYS_INLINE_LAMBDA {
     V x[5], f[5];
-    LinearDerivativeTable::LanesGathered<Arch, V>& gathered = kept[k / kChunkWidth<V>];
     for (int c = 0; c < 5; ++c) x[c] = Load<Arch, V>(&a.x[c][k]);
     ChunkDerivative<Arch>(a, k, x, Load<Arch, V>(&a.elevator[k]), f, gathered);
     for (int c = 0; c < 5; ++c) Store<Arch>(f[c], &a.f[c][k]);
-  }
+  });
 }
 
 }  // namespace gesweep::lanes
