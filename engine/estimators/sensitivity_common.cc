@@ -47,10 +47,6 @@ void ValidateRanges(const std::vector<ParameterRange>& ranges, const std::string
   }
 }
 
-std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text) {
-  return ParseEnum<FailedRunPolicy>(text);
-}
-
 ConfidenceInterval PercentileInterval(std::vector<double> statistics, double confidence_level) {
   GESWEEP_DEMAND(confidence_level > 0.0 && confidence_level < 1.0);
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -2,10 +2,8 @@
 /// Pieces shared by the global sensitivity estimators (docs/sensitivity.md): the range of a sampled
 /// parameter, the failed-run policy, the status of an analysis and bootstrap percentile intervals.
 
-#include <optional>
 #include <span>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "engine/common/enum_names.h"
@@ -42,8 +40,6 @@ enum class FailedRunPolicy {
   kError,       ///< stop: no indices, status kStoppedOnFailedRuns and a message naming the first failure
 };
 GESWEEP_ENUM_NAMES(FailedRunPolicy, {kDropBlocks, "drop_blocks"}, {kError, "error"});
-/// Parses "drop_blocks" / "error"; nullopt otherwise.
-std::optional<FailedRunPolicy> ParseFailedRunPolicy(std::string_view text);
 
 /// Outcome of an analysis. Anything but kOk leaves the indices NaN and says why in `message`; the
 /// CLI prints the message and exits with code 3 (runs failed) or 1 (degenerate output).

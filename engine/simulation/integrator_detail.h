@@ -50,6 +50,10 @@ inline constexpr std::uintmax_t kMaxEventIterations = 100;
 /// t_new, in time order. An event that is 0 at t_new fired there; one below 0 is located on the step's
 /// interpolant by TOMS 748 between t and t_new, to `tolerance` in time, and reported at the bracket's
 /// right end (past the crossing, g ≤ 0 there). g_at(i, tau): event i's value at tau in [t, t_new].
+/// Whether an event's value crossed in a step: from > 0 before it to ≤ 0 after (the one test of
+/// LocateEvents and AnyEventCrossing).
+inline bool EventCrossed(double g_previous, double g_new) { return g_previous > 0.0 && g_new <= 0.0; }
+
 template <std::size_t E>
 struct FiredEvents {
   std::array<double, E> time{};  ///< by event: when it fired (only the fired ones are set)
@@ -62,7 +66,7 @@ FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::
                             double t, double t_new, double tolerance, EventValueAt&& g_at) {
   FiredEvents<E> fired;
   for (int i = 0; i < static_cast<int>(E); ++i) {
-    if (!(g_previous[i] > 0.0 && g_new[i] <= 0.0)) continue;
+    if (!EventCrossed(g_previous[i], g_new[i])) continue;
     double t_event = t_new;
     if (g_new[i] < 0.0) {
       auto g_of = [&](double tau) { return g_at(i, tau); };
@@ -84,12 +88,11 @@ FiredEvents<E> LocateEvents(const std::array<double, E>& g_previous, const std::
   return fired;
 }
 
-/// Whether any event value crossed from positive to at most zero (LocateEvents' test): without one,
-/// LocateEvents fires nothing.
+/// Whether any event value crossed (EventCrossed): without one, LocateEvents fires nothing.
 template <std::size_t E>
 bool AnyEventCrossing(const std::array<double, E>& g_previous, const std::array<double, E>& g_new) {
   for (std::size_t i = 0; i < E; ++i) {
-    if (g_previous[i] > 0.0 && g_new[i] <= 0.0) return true;
+    if (EventCrossed(g_previous[i], g_new[i])) return true;
   }
   return false;
 }

@@ -264,9 +264,9 @@ TEST(PercentileInterval, IsTheType7QuantilePair) {
 }
 
 TEST(FailedRunPolicy, ParsesItsNames) {
-  EXPECT_EQ(ParseFailedRunPolicy("drop_blocks"), FailedRunPolicy::kDropBlocks);
-  EXPECT_EQ(ParseFailedRunPolicy("error"), FailedRunPolicy::kError);
-  EXPECT_FALSE(ParseFailedRunPolicy("drop").has_value());
+  EXPECT_EQ(ParseEnum<FailedRunPolicy>("drop_blocks"), FailedRunPolicy::kDropBlocks);
+  EXPECT_EQ(ParseEnum<FailedRunPolicy>("error"), FailedRunPolicy::kError);
+  EXPECT_FALSE(ParseEnum<FailedRunPolicy>("drop").has_value());
   EXPECT_EQ(ToString(FailedRunPolicy::kDropBlocks), "drop_blocks");
 }
 
