@@ -1,6 +1,76 @@
 #include "engine/control/landing_design.h"
 
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
 namespace gesweep {
+namespace {
+
+/// Everything the LQR solution of a landing design is computed from: the design model's A, B and C,
+/// the weights Q (diagonal) and R. Compared byte for byte, so equal keys mean the same solution.
+struct LqrKey {
+  double a[kDesignStateCount * kDesignStateCount];
+  double b[kDesignStateCount];
+  double c[kLandingStateCount * kDesignStateCount];
+  double q[kLandingStateCount];
+  double r;
+
+  bool operator==(const LqrKey& other) const { return std::memcmp(this, &other, sizeof(LqrKey)) == 0; }
+};
+static_assert(sizeof(LqrKey) ==
+              sizeof(double) * (kDesignStateCount * (kDesignStateCount + 1 + kLandingStateCount) +
+                                kLandingStateCount + 1));  // no padding: memcmp compares values only
+
+LqrKey KeyOf(const LandingDesignModel& model, const LandingConfig& config) {
+  LqrKey key;
+  std::memcpy(key.a, model.A.data(), sizeof(key.a));
+  std::memcpy(key.b, model.B.data(), sizeof(key.b));
+  std::memcpy(key.c, model.C.data(), sizeof(key.c));
+  std::copy(config.q_weights.begin(), config.q_weights.end(), key.q);
+  key.r = config.r_weight;
+  return key;
+}
+
+/// The LQR solutions of this thread's last few designs (LandingDesignCacheSize): a sweep over the glide
+/// slope, the flare or the disturbance at one design point, and every landing of a risk study, designs
+/// the same gain again for every landing; Lqry is a pure function of the key, so a solution found here
+/// is the one it would compute, bit for bit.
+class LqrCache {
+ public:
+  const LqrResult* Find(const LqrKey& key) const {
+    for (const Entry& e : entries_)
+      if (e.key && *e.key == key) return &e.result;
+    return nullptr;
+  }
+  void Add(const LqrKey& key, const LqrResult& result) {
+    Entry& e = entries_[next_];
+    e.key = key;
+    e.result = result;
+    next_ = (next_ + 1) % entries_.size();
+  }
+
+ private:
+  struct Entry {
+    std::optional<LqrKey> key;
+    LqrResult result;
+  };
+  std::array<Entry, kLandingDesignCacheSize> entries_;
+  std::size_t next_ = 0;
+};
+
+LqrResult SolveDesign(const LandingDesignModel& model, const LandingConfig& config) {
+  StateSpace system;
+  system.A = model.A;
+  system.B = model.B;
+  system.C = model.C;
+  system.D = Eigen::MatrixXd::Zero(kLandingStateCount, 1);
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(kLandingStateCount, kLandingStateCount);
+  for (int i = 0; i < kLandingStateCount; ++i) Q(i, i) = config.q_weights[i];
+  return Lqry(system, Q, Eigen::MatrixXd::Constant(1, 1, config.r_weight));
+}
+
+}  // namespace
 
 LandingDesignModel BuildLandingDesignModel(const DimensionalDerivatives& d, double u0,
                                            double actuator_pole_per_s, double compensator_pole_per_s) {
@@ -48,7 +118,8 @@ void BuildAugmentedSystem(const DimensionalDerivatives& d, double u0, double act
   A(kEps, kD) = -1.0;
 }
 
-LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config) {
+LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config,
+                                      DesignCache cache) {
   LandingDesign design;
   design.design_height_m = SetOr(config.design_height_m, model.aircraft().wheel_contact_height_m);
   design.design_speed_mps = SetOr(config.design_speed_mps, config.start_speed_mps);
@@ -61,14 +132,19 @@ LandingDesign DesignLandingController(const LongitudinalModel& model, const Land
   design.model = BuildLandingDesignModel(d, design.design_speed_mps, config.actuator_pole_per_s,
                                          config.compensator_pole_per_s);
 
-  StateSpace system;
-  system.A = design.model.A;
-  system.B = design.model.B;
-  system.C = design.model.C;
-  system.D = Eigen::MatrixXd::Zero(kLandingStateCount, 1);
-  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(kLandingStateCount, kLandingStateCount);
-  for (int i = 0; i < kLandingStateCount; ++i) Q(i, i) = config.q_weights[i];
-  const LqrResult lqr = Lqry(system, Q, Eigen::MatrixXd::Constant(1, 1, config.r_weight));
+  LqrResult lqr;
+  if (cache == DesignCache::kUse) {
+    thread_local LqrCache solutions;
+    const LqrKey key = KeyOf(design.model, config);
+    if (const LqrResult* found = solutions.Find(key)) {
+      lqr = *found;
+    } else {
+      lqr = SolveDesign(design.model, config);
+      solutions.Add(key, lqr);
+    }
+  } else {
+    lqr = SolveDesign(design.model, config);
+  }
   design.status = lqr.status;
   design.message = lqr.message;
   if (!lqr.ok()) return design;

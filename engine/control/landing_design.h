@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 #include <limits>
 #include <string>
 
@@ -85,9 +86,18 @@ struct LandingDesign {
   bool ok() const { return status == RiccatiStatus::kOk; }
 };
 
+/// How many LQR solutions a thread keeps (DesignCache::kUse): the designs of a sweep's few design points.
+inline constexpr std::size_t kLandingDesignCacheSize = 8;
+
+/// Whether a design may take the LQR solution of an earlier one of the same thread with the same
+/// design model and weights, byte for byte (the solution is a pure function of them, so it is the one
+/// Lqry would compute): kSolve always solves (the tests' reference).
+enum class DesignCache { kUse, kSolve };
+
 /// Designs K with Lqry on the design model at (design height, design speed) of `model`'s aircraft, with
 /// the h-derivatives as config.design_h_derivatives says (whatever model.options() says). Never throws on
 /// a numerical failure: the status says it. Precondition: config valid (ValidateLandingConfig).
-LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config);
+LandingDesign DesignLandingController(const LongitudinalModel& model, const LandingConfig& config,
+                                      DesignCache cache = DesignCache::kUse);
 
 }  // namespace gesweep

@@ -92,7 +92,7 @@ class LandingProblem {
         fixed_reference_(config.plant_height_reference == PlantHeightReference::kFixedHeight),
         fixed_reference_height_m_(result.plant_fixed_reference_height_m),
         gain_(design.gain) {
-    if (kAir && plant.options().interpolation == Interpolation::kLinear) {
+    if (plant.options().interpolation == Interpolation::kLinear) {
       table_ = std::make_unique<LinearDerivativeTable>(plant);
       table_hint_ = table_->SegmentOf(config.start_height_m);
     }
@@ -194,7 +194,10 @@ class LandingProblem {
       command = Command(t, x, x[kSimDu] - air.u_g_mps, x[kSimDw] - air.w_g_mps);
     } else {
       (void)segment;
-      const Equation1Entries entries = EntriesFromDerivatives(plant_.DerivativesAt(height_m, speed_mps), u0_);
+      const Equation1Entries entries =
+          EntriesFromDerivatives(table_ != nullptr ? table_->DerivativesAt(height_m, speed_mps, table_hint_)
+                                                   : plant_.DerivativesAt(height_m, speed_mps),
+                                 u0_);
       const double x5[5] = {x[kSimDu], x[kSimDw], x[kSimQ], x[kSimTheta], delta_h};
       double dx5[5];
       Equation1Derivative(entries, u0_, x5, x[kSimElevator], dx5);
@@ -375,7 +378,9 @@ class LandingProblem {
   }
 
   const LongitudinalModel& plant_;
-  // In a moving atmosphere with linear interpolation: the derivatives' per-segment table.
+  // With linear interpolation: the derivatives' per-segment table (derivative_table.h), in still air
+  // as in a moving atmosphere (the model's own evaluation, 13 divides and a pow a call, made a
+  // still-air landing 1.6x slower).
   std::unique_ptr<LinearDerivativeTable> table_;
   mutable int table_hint_ = 0;
   const DisturbanceField* field_;

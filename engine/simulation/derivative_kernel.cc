@@ -94,33 +94,6 @@ std::array<double, LinearDerivativeTable::kReducedCount> LinearDerivativeTable::
   return r;
 }
 
-DimensionalDerivatives LinearDerivativeTable::DerivativesAt(double height_m, double speed_mps,
-                                                            int& segment_hint) const {
-  const Segment& seg = SegmentFor(height_m, segment_hint);
-  const double y = height_m - seg.reference_m;
-  std::array<double, kReducedCount> r;
-  for (int j = 0; j < kReducedCount; ++j) r[j] = seg.slope[j] * y + seg.value[j];
-  const double rho = density_.At(height_m);
-  const double rho_u = rho * speed_mps;
-  const double rho_u2 = rho_u * speed_mps;
-  DimensionalDerivatives d;
-  d.Xu = rho_u * r[kXu];
-  d.Xw = rho_u * r[kXw];
-  d.Xh = rho_u2 * r[kXh];
-  d.Xde = rho_u2 * r[kXde];
-  d.Zu = rho_u * r[kZu];
-  d.Zw = rho_u * r[kZw];
-  d.Zh = rho_u2 * r[kZh];
-  d.Zde = rho_u2 * r[kZde];
-  d.Mu = rho_u * r[kMu];
-  d.Mw = rho_u * r[kMw];
-  d.Mq = rho_u * r[kMq];
-  d.Mh = rho_u2 * r[kMh];
-  d.Mde = rho_u2 * r[kMde];
-  d.Mw_dot = rho * r[kMwDot];
-  return d;
-}
-
 int LinearDerivativeTable::SegmentOf(double height_m) const { return Locate(height_m, 0); }
 
 int LinearDerivativeTable::Locate(double height_m, int start) const {

@@ -110,7 +110,10 @@ class LinearDerivativeTable {
   /// Derivatives at height H (m) and speed u (m/s); Xh = Zh = Mh = 0 without h-derivatives.
   /// Same values as model.DerivativesAt(H, u) to rounding, with ρ from DensityPolynomial.
   /// segment_hint: any segment index on entry (the previous call's is best); on return, H's.
-  DimensionalDerivatives DerivativesAt(double height_m, double speed_mps, int& segment_hint) const;
+  /// Defined in derivative_kernel.h (DimensionalDerivatives is complete there), inlined into the
+  /// landing's right-hand side.
+  GESWEEP_ALWAYS_INLINE DimensionalDerivatives DerivativesAt(double height_m, double speed_mps,
+                                                             int& segment_hint) const;
 
   /// ẋ of Eq. (1) at x = [Δu, Δw, q, Δθ, ΔH] (SI) and elevator δe (rad), with H = H0 + ΔH and
   /// u = u0 + Δu for the derivatives and the reference u0 (m/s) in the kinematic entries. The hot

@@ -5,6 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/aircraft/aircraft.h"
 #include "tests/testing/test_paths.h"
@@ -120,6 +126,58 @@ TEST(LandingDesign, DesignHeightDerivativesFollowTheDesignOptionNotThePlant) {
   EXPECT_NE(zh, 0.0);
   EXPECT_NEAR(with_h.model.A(kDesignDeltaW, kDesignTrackingError), zh, kStructureTolerance);
   EXPECT_EQ(without_h.model.A(kDesignDeltaW, kDesignTrackingError), 0.0);
+}
+
+// The thread's cache of LQR solutions (DesignCache::kUse) returns what Lqry computes, bit for bit, and
+// never a stale one: each input of the design changed alone (with designs in between that fill and
+// cycle the cache) gives the solution solved afresh. The oracle is the uncached design (kSolve).
+void ExpectSameDesign(const LandingDesign& cached, const LandingDesign& solved, const std::string& what) {
+  ASSERT_EQ(cached.status, solved.status) << what;
+  EXPECT_EQ(cached.message, solved.message) << what;
+  for (std::size_t i = 0; i < cached.gain.size(); ++i)
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(cached.gain[i]), std::bit_cast<std::uint64_t>(solved.gain[i]))
+        << what << ": gain " << i;
+  EXPECT_EQ(cached.riccati_solution, solved.riccati_solution) << what;
+  EXPECT_EQ(cached.closed_loop_eigenvalues, solved.closed_loop_eigenvalues) << what;
+  EXPECT_EQ(std::bit_cast<std::uint64_t>(cached.closed_loop_max_real_per_s),
+            std::bit_cast<std::uint64_t>(solved.closed_loop_max_real_per_s))
+      << what;
+}
+
+TEST(LandingDesign, TheCachedSolutionIsTheSolvedOneForEveryInput) {
+  const LongitudinalModel with_h = Ance(true);
+  const LongitudinalModel without_h = Ance(false);
+  std::vector<std::pair<std::string, LandingConfig>> configs;
+  configs.emplace_back("default", LandingConfig{});
+  auto changed = [&](const std::string& what, auto&& change) {
+    LandingConfig c;
+    change(c);
+    configs.emplace_back(what, c);
+  };
+  changed("start speed", [](LandingConfig& c) { c.start_speed_mps = 55.0; });
+  changed("design speed", [](LandingConfig& c) { c.design_speed_mps = 50.0; });
+  changed("design height", [](LandingConfig& c) { c.design_height_m = 2.0; });
+  changed("design without h-derivatives", [](LandingConfig& c) { c.design_h_derivatives = false; });
+  changed("actuator pole", [](LandingConfig& c) { c.actuator_pole_per_s = 12.0; });
+  changed("compensator pole", [](LandingConfig& c) { c.compensator_pole_per_s = 8.0; });
+  changed("r", [](LandingConfig& c) { c.r_weight = 2.0; });
+  for (std::size_t i = 0; i < kLandingStateCount; ++i)
+    changed("q " + std::to_string(i), [i](LandingConfig& c) { c.q_weights[i] = 3.0; });
+  changed("no q (a failed design)", [](LandingConfig& c) { c.q_weights.fill(0.0); });
+  changed("start speed by one ulp",
+          [](LandingConfig& c) { c.start_speed_mps = std::nextafter(c.start_speed_mps, 100.0); });
+  ASSERT_GT(configs.size(), 2 * kLandingDesignCacheSize);  // the cache is filled and cycled
+  // Twice over, so the second round finds designs that were cached and some that were evicted.
+  for (int round = 0; round < 2; ++round) {
+    for (const auto& [what, config] : configs) {
+      for (const LongitudinalModel* model : {&with_h, &without_h}) {
+        const std::string where = what + (model == &with_h ? "" : ", plant without h-derivatives") +
+                                  ", round " + std::to_string(round);
+        ExpectSameDesign(DesignLandingController(*model, config),
+                         DesignLandingController(*model, config, DesignCache::kSolve), where);
+      }
+    }
+  }
 }
 
 }  // namespace
