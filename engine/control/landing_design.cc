@@ -32,7 +32,7 @@ LqrKey KeyOf(const LandingDesignModel& model, const LandingConfig& config) {
   return key;
 }
 
-/// The LQR solutions of this thread's last few designs (LandingDesignCacheSize): a sweep over the glide
+/// The LQR solutions of this thread's last few designs (kLandingDesignCacheSize): a sweep over the glide
 /// slope, the flare or the disturbance at one design point, and every landing of a risk study, designs
 /// the same gain again for every landing; Lqry is a pure function of the key, so a solution found here
 /// is the one it would compute, bit for bit.

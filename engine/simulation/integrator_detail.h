@@ -46,14 +46,14 @@ inline constexpr int kMaxConsecutiveRejections = 200;
 /// TOMS 748 iterations allowed per event; it converges in well under 20 on a smooth interpolant.
 inline constexpr std::uintmax_t kMaxEventIterations = 100;
 
-/// The events that fired in a step from t to t_new: those whose value fell from > 0 at t to ≤ 0 at
-/// t_new, in time order. An event that is 0 at t_new fired there; one below 0 is located on the step's
-/// interpolant by TOMS 748 between t and t_new, to `tolerance` in time, and reported at the bracket's
-/// right end (past the crossing, g ≤ 0 there). g_at(i, tau): event i's value at tau in [t, t_new].
 /// Whether an event's value crossed in a step: from > 0 before it to ≤ 0 after (the one test of
 /// LocateEvents and AnyEventCrossing).
 inline bool EventCrossed(double g_previous, double g_new) { return g_previous > 0.0 && g_new <= 0.0; }
 
+/// The events that fired in a step from t to t_new: those whose value fell from > 0 at t to ≤ 0 at
+/// t_new, in time order. An event that is 0 at t_new fired there; one below 0 is located on the step's
+/// interpolant by TOMS 748 between t and t_new, to `tolerance` in time, and reported at the bracket's
+/// right end (past the crossing, g ≤ 0 there). g_at(i, tau): event i's value at tau in [t, t_new].
 template <std::size_t E>
 struct FiredEvents {
   std::array<double, E> time{};  ///< by event: when it fired (only the fired ones are set)
@@ -219,7 +219,8 @@ class Rk4Method {
 /// h / min(5, err^(1/5 − 0.75β) / 0.9). err_prev is the last accepted step's (at least 1e-4). Odeint's
 /// own controller (0.9 · err^−1/5, and no growth while 0.5 ≤ err ≤ 1) rejects about 30 % of the
 /// trials of a landing, whose steps are bounded by the stability of its fast poles rather than by
-/// accuracy; this one about 20 % (docs/simulation.md). A model of odeint's StepAdjuster.
+/// accuracy; this one about 20 % (docs/simulation.md). A model of odeint's StepAdjuster; the
+/// controller's state (err_prev, the last trial's rejection) is one integration's.
 class PiStepAdjuster : public boost::numeric::odeint::default_step_adjuster<double, double> {
  public:
   explicit PiStepAdjuster(double max_dt) : default_step_adjuster(max_dt) {}

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <numbers>
@@ -193,6 +194,45 @@ TEST(Dopri5Test, DecayMeetsItsTolerance) {
   EXPECT_NEAR(result.final_state[0], exact, kGlobalRelativeTolerance * exact);
   EXPECT_GT(result.accepted_steps, 5);
   EXPECT_LT(result.accepted_steps, 200);
+}
+
+// The step control is the PI controller of Hairer's DOPRI5 (Hairer, Norsett & Wanner, Solving ODEs I,
+// 2nd ed., II.4; the code's defaults safe = 0.9, fac1 = 0.2, fac2 = 10, beta = 0.04), written here
+// from the published formula with pow, against the engine's log/exp form: after an accepted step
+// h_new = h / max(1/fac2, min(1/fac1, err^(0.2 - 0.75 beta) / err_prev^beta / safe)), no larger than
+// h after a rejection; after a rejection h_new = h / min(1/fac1, err^(0.2 - 0.75 beta) / safe).
+TEST(Dopri5Test, StepControlIsHairersPiController) {
+  constexpr double kBeta = 0.04, kSafety = 0.9, kFac1 = 0.2, kFac2 = 10.0;
+  const double exponent = 0.2 - 0.75 * kBeta;
+  // log/exp against pow: a few ulp.
+  constexpr double kRelativeTolerance = 1e-14;
+  integrator_detail::PiStepAdjuster adjuster(0.0);
+  double previous = 1.0;  // err_prev before the first step
+  bool rejected = false;
+  double h = 0.1;
+  // Errors of accepted (<= 1) and rejected (> 1) trials, with the clamps at both ends reached.
+  for (double error : {0.3, 0.8, 1e-9, 2.5, 40.0, 0.9, 1.0, 0.05, 3.0, 0.6}) {
+    double expected;
+    if (error > 1.0) {
+      expected = h / std::min(1.0 / kFac1, std::pow(error, exponent) / kSafety);
+      const double got = adjuster.decrease_step(h, error, 4);
+      EXPECT_NEAR(got, expected, kRelativeTolerance * expected) << "rejected at err = " << error;
+      rejected = true;
+      h = got;
+    } else {
+      const double fac = std::pow(error, exponent) / std::pow(previous, kBeta) / kSafety;
+      expected = h / std::max(1.0 / kFac2, std::min(1.0 / kFac1, fac));
+      if (rejected) expected = std::min(expected, h);
+      const double got = adjuster.increase_step(h, error, 5);
+      EXPECT_NEAR(got, expected, kRelativeTolerance * expected) << "accepted at err = " << error;
+      previous = std::max(error, 1e-4);
+      rejected = false;
+      h = got;
+    }
+  }
+  // The largest step bounds every proposal.
+  integrator_detail::PiStepAdjuster bounded(0.05);
+  EXPECT_EQ(bounded.increase_step(0.04, 1e-6, 5), 0.05);
 }
 
 TEST(Dopri5Test, TighterToleranceGivesSmallerError) {
