@@ -25,25 +25,30 @@ namespace {
 using namespace gesweep::rare;
 using namespace gesweep::rare::testing;
 
+enum class Kind { kLinear, kChiSquare, kSeries };
+
 struct Case {
   std::string name;
   int dimension;
-  bool linear;       // else chi-square
-  double parameter;  // beta for the linear state, the target probability for the chi-square one
+  Kind kind;
+  double parameter;  // beta for the linear and series states, the target probability for the chi-square one
   int samples;       // N per level
   ConditionalSampler sampler;
+  int windows = 0;  // series: K windows of dimension / K coordinates
 };
 
 const std::vector<Case>& Cases() {
   static const std::vector<Case> cases = {
-      {"linear_b3.0_d10", 10, true, 3.0, 1000, ConditionalSampler::kCrankNicolson},
-      {"linear_b5.2_d10", 10, true, 5.2, 1000, ConditionalSampler::kCrankNicolson},
-      {"linear_b5.2_d1000", 1000, true, 5.2, 1000, ConditionalSampler::kCrankNicolson},
-      {"linear_b5.2_d10000", 10000, true, 5.2, 1000, ConditionalSampler::kCrankNicolson},
-      {"linear_b5.2_d1000_mma", 1000, true, 5.2, 1000, ConditionalSampler::kModifiedMetropolis},
-      {"chi2_p1e-6_d10", 10, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
-      {"chi2_p1e-6_d1000", 1000, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
-      {"chi2_p1e-6_d10000", 10000, false, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
+      {"linear_b3.0_d10", 10, Kind::kLinear, 3.0, 1000, ConditionalSampler::kCrankNicolson},
+      {"linear_b5.2_d10", 10, Kind::kLinear, 5.2, 1000, ConditionalSampler::kCrankNicolson},
+      {"linear_b5.2_d1000", 1000, Kind::kLinear, 5.2, 1000, ConditionalSampler::kCrankNicolson},
+      {"linear_b5.2_d10000", 10000, Kind::kLinear, 5.2, 1000, ConditionalSampler::kCrankNicolson},
+      {"linear_b5.2_d1000_mma", 1000, Kind::kLinear, 5.2, 1000, ConditionalSampler::kModifiedMetropolis},
+      {"chi2_p1e-6_d10", 10, Kind::kChiSquare, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
+      {"chi2_p1e-6_d1000", 1000, Kind::kChiSquare, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
+      {"chi2_p1e-6_d10000", 10000, Kind::kChiSquare, 1e-6, 1000, ConditionalSampler::kCrankNicolson},
+      {"series_k20_b4.5_d1000", 1000, Kind::kSeries, 4.5, 1000, ConditionalSampler::kCrankNicolson, 20},
+      {"series_k100_b5_d10000", 10000, Kind::kSeries, 5.0, 1000, ConditionalSampler::kCrankNicolson, 100},
   };
   return cases;
 }
@@ -65,9 +70,14 @@ int main(int argc, char** argv) {
     if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), c.name) == wanted.end()) continue;
     double truth = 0;
     std::function<double(std::span<const double>)> g;
-    if (c.linear) {
+    if (c.kind == Kind::kLinear) {
       truth = LinearTruth(c.parameter);
       g = [beta = c.parameter](std::span<const double> u) { return LinearLimitState(u, beta); };
+    } else if (c.kind == Kind::kSeries) {
+      truth = SeriesTruth(c.windows, c.parameter);
+      g = [beta = c.parameter, k = c.windows, length = c.dimension / c.windows](std::span<const double> u) {
+        return SeriesLimitState(u, k, length, beta);
+      };
     } else {
       const double threshold = ChiSquareThreshold(c.dimension, c.parameter);
       truth = ChiSquareTruth(c.dimension, threshold);
