@@ -34,6 +34,7 @@
 #include <cstdlib>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -63,7 +64,6 @@ class Splitting {
   Splitting(const gesweep::SweepPlan& series_plan, const gesweep::risk::RiskSpec& spec, int limit,
             double lookahead)
       : plan_(series_plan),
-        spec_(spec),
         limit_(spec.limits[static_cast<std::size_t>(limit)]),
         lookahead_(lookahead),
         workspaces_([this] { return Slot(plan_); }) {
@@ -140,7 +140,6 @@ class Splitting {
     gesweep::ResultBlock block;
   };
   const gesweep::SweepPlan& plan_;
-  const gesweep::risk::RiskSpec& spec_;
   gesweep::risk::RiskLimit limit_;
   double lookahead_;
   tbb::enumerable_thread_specific<Slot> workspaces_;
