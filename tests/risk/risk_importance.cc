@@ -38,6 +38,7 @@
 #include "engine/risk/landing_risk.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"
+#include "tests/risk/risk_program_columns.h"
 
 namespace {
 
@@ -90,13 +91,7 @@ int Run(const std::string& study_path, int limit, double window_s, double delta,
   const std::int64_t cell = 0;
   const auto d = static_cast<std::size_t>(gesweep::risk::CellDimension(plan, cell));
   const double dt = gesweep::risk::CellSampleInterval(plan, cell);
-  const std::vector<int> columns = gesweep::risk::RiskColumns(plan);
-  int final_time = -1;
-  for (std::size_t i = 0; i < columns.size(); ++i) {
-    const std::string& path = plan.schema().columns[static_cast<std::size_t>(columns[i])].path;
-    if (path.size() >= 12 && path.compare(path.size() - 12, 12, "final_time_s") == 0)
-      final_time = static_cast<int>(i);
-  }
+  const int final_time = gesweep::risk::programs::EvaluationColumn(plan, "final_time_s");
   if (final_time < 0) {
     std::fprintf(stderr, "%s: no final_time_s column\n", study_path.c_str());
     return 2;

@@ -24,6 +24,7 @@
 #include "engine/risk/landing_risk.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"
+#include "tests/risk/risk_program_columns.h"
 
 int main(int argc, char** argv) {
   if (argc != 6 && argc != 7) {
@@ -44,13 +45,7 @@ int main(int argc, char** argv) {
     const gesweep::SweepPlan plan(std::move(study), gesweep::ShardSpec{});
     const gesweep::risk::RiskSpec spec = gesweep::risk::ReadRiskSpec(plan);
     const auto d = static_cast<std::size_t>(gesweep::risk::CellDimension(plan, 0));
-    const std::vector<int> columns = gesweep::risk::RiskColumns(plan);
-    int final_time = -1;
-    for (std::size_t i = 0; i < columns.size(); ++i) {
-      const std::string& path = plan.schema().columns[static_cast<std::size_t>(columns[i])].path;
-      if (path.size() >= 12 && path.compare(path.size() - 12, 12, "final_time_s") == 0)
-        final_time = static_cast<int>(i);
-    }
+    const int final_time = gesweep::risk::programs::EvaluationColumn(plan, "final_time_s");
     std::mt19937_64 engine(seed);
     std::normal_distribution<double> normal;
     std::vector<double> u0(d), xi(d);
