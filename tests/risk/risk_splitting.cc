@@ -86,8 +86,7 @@ class Splitting {
     sample_interval_ = gesweep::risk::CellSampleInterval(plan_, 0);
     Replica still;
     still.u.assign(dimension_, 0.0);
-    h_touch_ = std::numeric_limits<double>::quiet_NaN();
-    Fly(still, &h_touch_);
+    Fly(still, &h_touch_);  // sets H_touch before its own score is formed
   }
 
   std::size_t dimension() const { return dimension_; }
@@ -112,7 +111,6 @@ class Splitting {
     if (std::isfinite(sink)) r.xi.push_back(sink);
     r.score = kMinusInfinity;
     for (const double x : r.xi) r.score = std::max(r.score, x);
-    if (std::isnan(h_touch_)) r.score = kMinusInfinity;  // the still-air landing, flown first
   }
 
   // The first series index whose xi exceeds z (the last entry is the touchdown's).
