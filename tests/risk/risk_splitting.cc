@@ -261,6 +261,14 @@ int main(int argc, char** argv) {
                    spec.limits.size());
       return 2;
     }
+    // The score is a sink rate, climbing towards the limit: only an upper limit on it is estimated.
+    const auto& chosen = spec.limits[static_cast<std::size_t>(limit)];
+    if (chosen.column != "touchdown_sink_rate_mps" || !chosen.above) {
+      std::fprintf(stderr,
+                   "risk_splitting: %s: LIMIT = %d (%s): expected a limit touchdown_sink_rate_mps > value\n",
+                   argv[1], limit, chosen.text.c_str());
+      return 2;
+    }
     Splitting splitting(plan, spec, limit, lookahead);
     std::printf("# %s, %s: N = %d, K = %d, lookahead %g /s, dimension %zu, still-air touchdown H = %.4f m\n",
                 argv[1], spec.limits[static_cast<std::size_t>(limit)].text.c_str(), n, k, lookahead,
