@@ -39,33 +39,13 @@
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"
+#include "tests/risk/risk_program_columns.h"
 
 namespace {
 
+using gesweep::risk::programs::SchemaColumn;
+
 constexpr double kBonus = 100;
-
-// The study's plan with its series on the noise's sample grid; with `wheels_m` finite, the aircraft's
-// wheel-contact height set to it.
-gesweep::SweepPlan SeriesPlan(const std::string& path, double wheels_m) {
-  double interval = 0;
-  {
-    const gesweep::SweepPlan probe(gesweep::LoadStudy(path), gesweep::ShardSpec{});
-    interval = gesweep::risk::CellSampleInterval(probe, 0);
-  }
-  gesweep::Study study = gesweep::LoadStudy(path);
-  if (std::isfinite(wheels_m)) study.aircraft->wheel_contact_height_m = wheels_m;
-  study.storage.time_series = true;
-  study.storage.output_dt_s = interval;
-  return gesweep::SweepPlan(std::move(study), gesweep::ShardSpec{});
-}
-
-int Column(const gesweep::SweepPlan& plan, const std::string& path) {
-  const auto& columns = plan.schema().columns;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    if (columns[c].path == path) return static_cast<int>(c);
-  }
-  throw std::runtime_error("no column " + path);
-}
 
 struct Score {
   double z = -INFINITY, s_first = NAN, t_first = NAN, touchdown_s = NAN, touchdown_sink = NAN;
@@ -75,10 +55,10 @@ class Scorer {
  public:
   Scorer(const gesweep::SweepPlan& plan, double h_t, double a)
       : plan_(plan), h_t_(h_t), a_(a), slots_([this] { return Slot(plan_); }) {
-    height_ = Column(plan_, "series/landing/height_m");
-    sink_ = Column(plan_, "series/landing/sink_rate_mps");
-    touchdown_ = Column(plan_, "results/landing/touchdown_time_s");
-    touchdown_sink_ = Column(plan_, "results/landing/touchdown_sink_rate_mps");
+    height_ = SchemaColumn(plan_, "series/landing/height_m");
+    sink_ = SchemaColumn(plan_, "series/landing/sink_rate_mps");
+    touchdown_ = SchemaColumn(plan_, "results/landing/touchdown_time_s");
+    touchdown_sink_ = SchemaColumn(plan_, "results/landing/touchdown_sink_rate_mps");
     for (const auto& axis : plan_.schema().axes) {
       if (axis.path == "series/landing/time_s") times_ = axis.times_s;
     }
@@ -146,8 +126,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const gesweep::SweepPlan real = SeriesPlan(argv[1], NAN);
-    const gesweep::SweepPlan proxy = SeriesPlan(argv[1], wheels);
+    const gesweep::SweepPlan real = gesweep::risk::programs::SeriesPlanOnNoiseGrid(argv[1]);
+    const gesweep::SweepPlan proxy = gesweep::risk::programs::SeriesPlanOnNoiseGrid(
+        argv[1], [&](gesweep::Study& study) { study.aircraft->wheel_contact_height_m = wheels; });
     const auto d = gesweep::risk::CellDimension(real, 0);
     if (gesweep::risk::CellDimension(proxy, 0) != d) {
       throw std::runtime_error("the proxy's noise dimension differs from the landing's (its time limit?)");
@@ -161,7 +142,7 @@ int main(int argc, char** argv) {
       block.Allocate(real);
       block.Reset(real, 0);
       gesweep::risk::ExecuteCellRun(real, 0, workspace, block, origin);
-      h_t = block.results[static_cast<std::size_t>(Column(real, "results/landing/final_height_m"))][0];
+      h_t = block.results[static_cast<std::size_t>(SchemaColumn(real, "results/landing/final_height_m"))][0];
     }
     if (!(wheels < h_t)) {
       std::fprintf(stderr,
@@ -204,8 +185,7 @@ int main(int argc, char** argv) {
         "| repetition | P | stated CoV | levels | landings | ancestors at the last level | status |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
     std::fflush(stdout);
-    double sum = 0, sum2 = 0;
-    long landings = 0;
+    gesweep::risk::programs::RepetitionTally tally;
     for (int r = 0; r < repetitions; ++r) {
       gesweep::rare::SubsetOptions options;
       options.level_probability = 0.1;
@@ -232,16 +212,9 @@ int main(int argc, char** argv) {
       for (const auto& level : result.levels) std::printf(" %lld", static_cast<long long>(level.ancestors));
       std::printf("\n");
       std::fflush(stdout);
-      sum += result.probability;
-      sum2 += result.probability * result.probability;
-      landings += result.evaluations;
+      tally.Add(result.probability, result.evaluations);
     }
-    const double mean = sum / repetitions;
-    if (repetitions > 1) {
-      const double sd = std::sqrt(std::max(0.0, (sum2 - repetitions * mean * mean) / (repetitions - 1)));
-      std::printf("# mean %.4g, one run's measured CoV %.3f, CoV of the mean %.3f, %ld landings\n", mean,
-                  sd / mean, sd / mean / std::sqrt(repetitions), landings);
-    }
+    tally.Print();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "risk_proxy_subset: %s\n", e.what());
     return 2;

@@ -43,6 +43,7 @@
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"
+#include "tests/risk/risk_program_columns.h"
 
 namespace {
 
@@ -276,23 +277,15 @@ int main(int argc, char** argv) {
     std::printf(
         "| repetition | P | iterations | final past the limit | landings | clones not above the level |\n");
     std::printf("|---|---|---|---|---|---|\n");
-    double sum = 0, sum2 = 0;
-    long landings = 0;
+    gesweep::risk::programs::RepetitionTally tally;
     for (int r = 0; r < repetitions; ++r) {
       const Estimate e = Run(splitting, n, k, seed, r);
       std::printf("| %d | %.4g | %d | %d | %ld | %ld |\n", r, e.probability, e.iterations, e.final_failures,
                   e.landings, e.mismatched_clones);
       std::fflush(stdout);
-      sum += e.probability;
-      sum2 += e.probability * e.probability;
-      landings += e.landings;
+      tally.Add(e.probability, e.landings);
     }
-    const double mean = sum / repetitions;
-    if (repetitions > 1) {
-      const double sd = std::sqrt(std::max(0.0, (sum2 - repetitions * mean * mean) / (repetitions - 1)));
-      std::printf("# mean %.4g, one run's measured CoV %.3f, CoV of the mean %.3f, %ld landings\n", mean,
-                  sd / mean, sd / mean / std::sqrt(repetitions), landings);
-    }
+    tally.Print();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "risk_splitting: %s\n", e.what());
     return 2;

@@ -25,19 +25,14 @@
 #include "engine/sweep/runner.h"
 #include "engine/sweep/study.h"
 #include "engine/sweep/sweep_plan.h"
+#include "tests/risk/risk_program_columns.h"
 
 namespace {
 
+using gesweep::risk::programs::SchemaColumn;
+
 constexpr double kTimesToGo[] = {0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0};
 constexpr int kOffsets = sizeof(kTimesToGo) / sizeof(kTimesToGo[0]);
-
-int Column(const gesweep::SweepPlan& plan, const std::string& path) {
-  const auto& columns = plan.schema().columns;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    if (columns[c].path == path) return static_cast<int>(c);
-  }
-  throw std::runtime_error("no column " + path);
-}
 
 struct Landing {
   double touchdown_s = NAN, sink = NAN;
@@ -58,18 +53,11 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    double interval = 0;
-    {
-      const gesweep::SweepPlan probe(gesweep::LoadStudy(argv[1]), gesweep::ShardSpec{});
-      interval = gesweep::risk::CellSampleInterval(probe, 0);
-    }
-    gesweep::Study study = gesweep::LoadStudy(argv[1]);
-    study.storage.time_series = true;
-    study.storage.output_dt_s = interval;
-    const gesweep::SweepPlan plan(std::move(study), gesweep::ShardSpec{});
-    const int sink_series = Column(plan, "series/landing/sink_rate_mps");
-    const int touchdown = Column(plan, "results/landing/touchdown_time_s");
-    const int touchdown_sink = Column(plan, "results/landing/touchdown_sink_rate_mps");
+    const gesweep::SweepPlan plan = gesweep::risk::programs::SeriesPlanOnNoiseGrid(argv[1]);
+    const double interval = gesweep::risk::CellSampleInterval(plan, 0);
+    const int sink_series = SchemaColumn(plan, "series/landing/sink_rate_mps");
+    const int touchdown = SchemaColumn(plan, "results/landing/touchdown_time_s");
+    const int touchdown_sink = SchemaColumn(plan, "results/landing/touchdown_sink_rate_mps");
     std::vector<double> times;
     for (const auto& axis : plan.schema().axes) {
       if (axis.path == "series/landing/time_s") times = axis.times_s;
