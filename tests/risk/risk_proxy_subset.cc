@@ -1,5 +1,5 @@
 // Subset simulation of a touchdown sink-rate limit on a score that is continuous in the noise
-// (docs/dispersion.md, "Subset simulation on a continuous score"). Not a test: minutes of CPU.
+// (docs/dispersion.md, "What the hard landing is made of"). Not a test: minutes of CPU.
 //
 //   risk_proxy_subset STUDY LOWERED_WHEELS_M LIMIT_MPS A_PER_S N SEED REPETITIONS [CHECKS]
 //
@@ -13,8 +13,10 @@
 //   s_first = the sink rate at the first downward crossing of H_t, interpolated linearly in H between
 //             the two samples around it: the real touchdown's sink rate (up to that interpolation);
 //   Z       = the largest of s - A |H - H_t| over the samples and of the sink rate at every crossing
-//             of H_t: a maximum over a fixed set of times of functions continuous in the noise,
-//             which does not jump when a dip of the flare grazes H_t (the path goes on either way);
+//             of H_t: a maximum of functions continuous in the noise, which does not jump when a dip
+//             of the flare grazes H_t (the path goes on either way). It can still jump where a dip
+//             grazes the lowered wheels, which end the flight, but there s - A |H - H_t| is
+//             A (H_t - LOWERED_WHEELS_M) below the sink rate (2.4 m/s at A = 5 /s and 0.3 m);
 //   F       = s_first > LIMIT_MPS, the real event; F implies Z >= s_first > LIMIT_MPS.
 // The limit state is g = LIMIT_MPS + 100 - (Z + 100 * 1{F}): its intermediate levels climb on Z, and
 // its failure set {g <= 0} is F. Subset simulation (engine/rare/subset_simulation.h, p0 = 0.1, N per
