@@ -9,6 +9,7 @@
 // - for each time-to-go T, over the landings: the correlation of the sink rate at T before touchdown
 //   with the touchdown sink rate, and the standard deviation left about their least-squares line (the
 //   touchdown sink rate's spread once the state at T is known, through its sink rate).
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -64,10 +65,17 @@ int main(int argc, char** argv) {
     }
     const auto d = static_cast<std::size_t>(gesweep::risk::CellDimension(plan, 0));
     std::vector<Landing> landings(static_cast<std::size_t>(n));
-    tbb::parallel_for(0, n, [&](int i) {
-      gesweep::RunWorkspace workspace(plan);
+    // One workspace and result block per thread, reused by its landings.
+    struct Slot {
+      explicit Slot(const gesweep::SweepPlan& p) : workspace(p) { block.Allocate(p); }
+      gesweep::RunWorkspace workspace;
       gesweep::ResultBlock block;
-      block.Allocate(plan);
+    };
+    tbb::enumerable_thread_specific<Slot> slots([&] { return Slot(plan); });
+    tbb::parallel_for(0, n, [&](int i) {
+      Slot& slot = slots.local();
+      gesweep::RunWorkspace& workspace = slot.workspace;
+      gesweep::ResultBlock& block = slot.block;
       block.Reset(plan, 0);
       std::mt19937_64 engine(seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(i));
       std::normal_distribution<double> normal;
@@ -89,6 +97,12 @@ int main(int argc, char** argv) {
     std::vector<const Landing*> landed;
     for (const auto& l : landings) {
       if (std::isfinite(l.touchdown_s) && std::isfinite(l.sink)) landed.push_back(&l);
+    }
+    if (landed.size() < 3) {
+      std::fprintf(stderr,
+                   "risk_touchdown_memory: %s: %zu of %d landings touched down; expected at least 3\n",
+                   argv[1], landed.size(), n);
+      return 2;
     }
     std::vector<double> t;
     double mean = 0, m2 = 0, largest = -INFINITY;
