@@ -24,6 +24,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Extremes are monitored at this interval when no series is requested: fine enough to catch the peak of
 /// a 20 rad/s closed-loop short-period oscillation to a few per cent.
 constexpr double kMonitorInterval_s = 0.05;
+/// A resumed landing (ResumeLanding) without a series is integrated in windows this long.
+constexpr double kResumeWindow_s = 2.0;
 
 /// Simulation state: the plant's [Δu, Δw, q, Δθ] and the absolute height H (Ḣ = u0·Δθ − Δw, the ΔH row
 /// of Eq. (1)), the actuator δe and the compensator. The tracking error e (d or H − H_ref) is not a
@@ -261,7 +263,42 @@ class LandingProblem {
     }
   }
 
-  void OnStep(double t, const State& x, int segment) { Monitor(t, x, segment); }
+  void OnStep(double t, const State& x, int segment) {
+    Monitor(t, x, segment);
+    if (observer_ == nullptr) return;
+    const StepContext context{this, t, &x};
+    (*observer_)(LandingStep(t, x[kSimH], SinkRate(x), phase_, &SaveStep, &context));
+  }
+
+  /// The observer OnStep calls (may be null).
+  void Observe(const LandingObserver* observer) { observer_ = observer; }
+
+  /// The landing at (t, x): the part flown and the bookkeeping (LandingCheckpoint).
+  LandingCheckpoint Save(double t, const State& x) const {
+    LandingCheckpoint c;
+    c.time_s = t;
+    c.result = result_;
+    c.state.assign(x.begin(), x.end());
+    c.phase = phase_;
+    c.flare_start_s = flare_start_s_;
+    c.compensator_at_flare = compensator_at_flare_;
+    c.integral_at_flare = integral_at_flare_;
+    c.saturated = saturated_;
+    c.saturated_since_s = saturated_since_s_;
+    return c;
+  }
+
+  /// Takes the bookkeeping of a saved landing (its state is the integration's start, its result the
+  /// caller's).
+  void Restore(const LandingCheckpoint& c) {
+    phase_ = c.phase;
+    flare_start_s_ = c.flare_start_s;
+    compensator_at_flare_ = c.compensator_at_flare;
+    integral_at_flare_ = c.integral_at_flare;
+    saturated_ = c.saturated;
+    saturated_since_s_ = c.saturated_since_s;
+    if (table_ != nullptr && !c.state.empty()) table_hint_ = table_->SegmentOf(c.state[kSimH]);
+  }
 
   void OnOutput(double t, const State& x, int segment) {
     Monitor(t, x, segment);
@@ -344,6 +381,16 @@ class LandingProblem {
   }
 
  private:
+  struct StepContext {
+    const LandingProblem* problem;
+    double t;
+    const State* x;
+  };
+  static LandingCheckpoint SaveStep(const void* context) {
+    const auto* c = static_cast<const StepContext*>(context);
+    return c->problem->Save(c->t, *c->x);
+  }
+
   bool IsSaturated(double command) const {
     return command > elevator_max_rad_ || command < elevator_min_rad_;
   }
@@ -411,6 +458,7 @@ class LandingProblem {
   double integral_at_flare_ = 0.0;
   bool saturated_ = false;
   double saturated_since_s_ = 0.0;
+  const LandingObserver* observer_ = nullptr;
 };
 
 std::string Format(double value, int precision = 4) {
@@ -424,30 +472,39 @@ template <bool kAir>
 void Conclude(LandingProblem<kAir>& problem, const IntegrationResult<LandingProblem<kAir>::kDimension>& run,
               const LandingConfig& config, LandingResult& result);
 
+// Flies the landing from its start, or on from `from` (ResumeLanding).
 template <bool kAir>
 void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingResult& result,
-         bool store_series, const DisturbanceField* field, const std::atomic<bool>* cancel) {
+         bool store_series, const DisturbanceField* field, const std::atomic<bool>* cancel,
+         const LandingObserver* observer = nullptr, const LandingCheckpoint* from = nullptr) {
+  const double start_s = from != nullptr ? from->time_s : 0.0;
   std::vector<double> breakpoints;
   std::vector<DisturbanceField::Segment> field_segments;
   if constexpr (kAir) {
     // SIGINT/SIGTERM are read while the noise table is built (up to kMaximumNoiseSamplesPerRun
     // instants): a stop empties it and Integrate stops before its first step.
-    breakpoints = field->Breakpoints(0.0, result.time_limit_s, cancel);
-    field_segments = field->SegmentTable(breakpoints, 0.0, cancel);
+    breakpoints = field->Breakpoints(start_s, result.time_limit_s, cancel);
+    field_segments = field->SegmentTable(breakpoints, start_s, cancel);
     if (cancel != nullptr && cancel->load()) breakpoints.clear();
   }
   LandingProblem<kAir> problem(plant, config, result.design, result, store_series, field, &field_segments);
+  problem.Observe(observer);
   typename LandingProblem<kAir>::State x0{};
-  x0[kSimTheta] = config.start_pitch_deg * kRadiansPerDegree;
-  x0[kSimH] = config.start_height_m;
-  if constexpr (kAir) {
-    // At airspeed start_speed_mps in the mean wind (docs/model.md §9).
-    x0[kSimDu] =
-        MeanWindAt(field->options().wind_20ft_mps, config.start_height_m, field->options().wind_shear);
-    const DisturbanceField::State field_start = field->InitialState();
-    std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
+  if (from != nullptr) {
+    std::copy(from->state.begin(), from->state.end(), x0.begin());
+    problem.Restore(*from);
+  } else {
+    x0[kSimTheta] = config.start_pitch_deg * kRadiansPerDegree;
+    x0[kSimH] = config.start_height_m;
+    if constexpr (kAir) {
+      // At airspeed start_speed_mps in the mean wind (docs/model.md §9).
+      x0[kSimDu] =
+          MeanWindAt(field->options().wind_20ft_mps, config.start_height_m, field->options().wind_shear);
+      const DisturbanceField::State field_start = field->InitialState();
+      std::copy(field_start.begin(), field_start.end(), x0.begin() + kSimField);
+    }
+    problem.Start(0.0, x0);
   }
-  problem.Start(0.0, x0);
 
   IntegratorOptions options = config.integrator;
   options.kind = IntegratorKind::kDopri5;
@@ -463,8 +520,35 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
       options.step_s = d.turbulence_sample_interval_s;
     }
   }
-  const auto run = Integrate(problem, x0, 0.0, result.time_limit_s, breakpoints, options);
-  Conclude(problem, run, config, result);
+  if (from == nullptr || store_series) {
+    const auto run = Integrate(problem, x0, start_s, result.time_limit_s, breakpoints, options);
+    Conclude(problem, run, config, result);
+    return;
+  }
+  // Resumed: in windows of kResumeWindow_s, each with its own noise table, so that a branch that ends
+  // soon (most do) builds the table of a few seconds, not of the rest of the time limit.
+  double t = start_s;
+  long accepted = 0, rejected = 0, rhs_calls = 0;
+  for (;;) {
+    const double end_s = std::min(result.time_limit_s, t + kResumeWindow_s);
+    if constexpr (kAir) {
+      breakpoints = field->Breakpoints(t, end_s, cancel);
+      field_segments = field->SegmentTable(breakpoints, t, cancel);
+    }
+    auto run = Integrate(problem, x0, t, end_s, breakpoints, options);
+    accepted += run.accepted_steps;
+    rejected += run.rejected_steps;
+    rhs_calls += run.rhs_calls;
+    if (run.status != IntegrationStatus::kReachedEnd || end_s >= result.time_limit_s) {
+      run.accepted_steps = accepted;
+      run.rejected_steps = rejected;
+      run.rhs_calls = rhs_calls;
+      Conclude(problem, run, config, result);
+      return;
+    }
+    t = run.end_time_s;
+    x0 = run.final_state;
+  }
 }
 
 // The result from how the integration ended (Fly's, and each lane's of a batch).
@@ -921,7 +1005,8 @@ std::uint64_t LandingNoiseDimension(const Aircraft& aircraft, const LandingConfi
 }
 
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
-                              const std::atomic<bool>* cancel, std::span<const double> noise_point) {
+                              const std::atomic<bool>* cancel, std::span<const double> noise_point,
+                              const LandingObserver* observer) {
   ValidateLandingConfig(config, plant.aircraft(), "landing config");
   LandingResult result = BeginLanding(plant, config);
   if (!result.design.ok()) return result;
@@ -929,9 +1014,31 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
   const DisturbanceField field = LandingField(plant, config, noise_point);
   const bool store_series = config.output_interval_s > 0.0;
   if (field.active()) {
-    Fly<true>(plant, config, result, store_series, &field, cancel);
+    Fly<true>(plant, config, result, store_series, &field, cancel, observer);
   } else {
-    Fly<false>(plant, config, result, store_series, nullptr, cancel);
+    Fly<false>(plant, config, result, store_series, nullptr, cancel, observer);
+  }
+  EndLanding(result);
+  return result;
+}
+
+LandingResult ResumeLanding(const LongitudinalModel& plant, const LandingConfig& config,
+                            const LandingCheckpoint& from, const std::atomic<bool>* cancel,
+                            std::span<const double> noise_point, const LandingObserver* observer) {
+  ValidateLandingConfig(config, plant.aircraft(), "landing config");
+  CheckNoisePoint(plant, config, noise_point);
+  const DisturbanceField field = LandingField(plant, config, noise_point);
+  const std::size_t dimension = static_cast<std::size_t>(field.active() ? kSimAirDimension : kSimDimension);
+  if (from.state.size() != dimension || !from.result.design.ok()) {
+    throw InputError("landing checkpoint", "state", std::to_string(from.state.size()) + " values",
+                     std::to_string(dimension) + " from a landing of this config that was flown");
+  }
+  LandingResult result = from.result;
+  const bool store_series = config.output_interval_s > 0.0;
+  if (field.active()) {
+    Fly<true>(plant, config, result, store_series, &field, cancel, observer, &from);
+  } else {
+    Fly<false>(plant, config, result, store_series, nullptr, cancel, observer, &from);
   }
   EndLanding(result);
   return result;

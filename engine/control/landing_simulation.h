@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -228,6 +229,55 @@ struct LandingResult {
 /// `result` used (flare time constant, time limit, design height and speed, plant reference height).
 LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& result);
 
+/// A landing in flight, saved between two steps: what ResumeLanding needs to fly it on. The design, the
+/// extremes and the flare so far are in `result` (the part flown); the rest is the integrator's state
+/// and the flare's and the saturation's bookkeeping, opaque to a caller.
+struct LandingCheckpoint {
+  double time_s = 0;
+  LandingResult result;
+  std::vector<double> state;
+  LandingPhase phase = LandingPhase::kGlideSlope;
+  double flare_start_s = 0;
+  double compensator_at_flare = 0;
+  double integral_at_flare = 0;
+  bool saturated = false;
+  double saturated_since_s = 0;
+};
+
+/// What an observer of a landing sees after each accepted step (and at the start): the time, the
+/// height, the sink rate and the phase, and a checkpoint on demand (a copy of the landing so far).
+class LandingStep {
+ public:
+  using Save = LandingCheckpoint (*)(const void* context);
+  LandingStep(double time_s, double height_m, double sink_rate_mps, LandingPhase phase, Save save,
+              const void* context)
+      : time_s_(time_s),
+        height_m_(height_m),
+        sink_rate_mps_(sink_rate_mps),
+        phase_(phase),
+        save_(save),
+        context_(context) {}
+  double time_s() const { return time_s_; }
+  double height_m() const { return height_m_; }
+  double sink_rate_mps() const { return sink_rate_mps_; }
+  LandingPhase phase() const { return phase_; }
+  /// The landing at this step, to fly on from with ResumeLanding.
+  LandingCheckpoint Checkpoint() const { return save_(context_); }
+
+ private:
+  double time_s_;
+  double height_m_;
+  double sink_rate_mps_;
+  LandingPhase phase_;
+  Save save_;
+  const void* context_;
+};
+
+/// Called after every accepted step of a landing (RK4: every grid point of the noise), at its start
+/// and at the touchdown or other stopping event. A splitting estimator reads the state here, saves
+/// checkpoints and stops a run through the cancellation flag it passed.
+using LandingObserver = std::function<void(const LandingStep&)>;
+
 /// Designs the gain (DesignLandingController) and flies the landing on `plant`. Validates `config`
 /// (throws InputError with source "landing config"); numerical outcomes are in the result, never thrown.
 /// `cancel` (may be null) is read before every integration step: once true the run stops there with
@@ -235,9 +285,24 @@ LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& res
 /// `noise_point` (may be empty): the run's noise as a point of the standard-normal space
 /// (RunNoise(point), engine/disturbance/run_noise.h) instead of RunNoise(seed, run_index); it must
 /// hold at least LandingNoiseDimension values (InputError otherwise). A subset simulation flies it.
+/// `observer` (may be null) sees every step (LandingObserver).
 LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfig& config,
                               const std::atomic<bool>* cancel = nullptr,
-                              std::span<const double> noise_point = {});
+                              std::span<const double> noise_point = {},
+                              const LandingObserver* observer = nullptr);
+
+/// Flies on the landing saved in `from` (LandingStep::Checkpoint of a landing of the same plant and
+/// config, but for the seed, run index and noise point) to its end, with the noise of `config`'s
+/// (seed, run index) or of `noise_point` from the checkpoint's time on: the noise held before it is
+/// not read, so a landing resumed with other noise is a branch of the saved one (docs/dispersion.md,
+/// "Splitting with restarts"). With the saved landing's own noise it flies the same landing; the RK4
+/// grid restarts at the checkpoint's time, so the path agrees with the unbroken one to rounding, not
+/// bit for bit. Throws InputError for a config SimulateLanding refuses, or for a checkpoint whose
+/// state does not fit the config (still air against a moving atmosphere).
+LandingResult ResumeLanding(const LongitudinalModel& plant, const LandingConfig& config,
+                            const LandingCheckpoint& from, const std::atomic<bool>* cancel = nullptr,
+                            std::span<const double> noise_point = {},
+                            const LandingObserver* observer = nullptr);
 
 /// The dimension of a landing's noise point: the initial state and every held sample up to the
 /// landing's time limit (LandingTimeLimit) and one more; 0 without turbulence (the landing then draws
