@@ -103,7 +103,7 @@ class LandingProblem {
   /// Height of the reference trajectory: the glide path (over time in still air; over the ground
   /// position in a moving atmosphere), or the flare's exponential towards its asymptote.
   double ReferenceHeight(double t, const State& x) const {
-    if (phase_ == LandingPhase::kGlideSlope) {
+    if (flight_.phase == LandingPhase::kGlideSlope) {
       if constexpr (kAir) {
         return path_start_m_ + gamma_r_rad_ * x[kSimGround];
       } else {
@@ -111,7 +111,7 @@ class LandingProblem {
       }
     }
     return flare_asymptote_m_ +
-           (flare_height_m_ - flare_asymptote_m_) * std::exp(-(t - flare_start_s_) / tau_s_);
+           (flare_height_m_ - flare_asymptote_m_) * std::exp(-(t - flight_.flare_start_s) / tau_s_);
   }
 
   /// ηe = −K·z with z the states of Eq. (14) (K_ΔH = 0 by design). In a moving atmosphere the
@@ -130,13 +130,13 @@ class LandingProblem {
     const double e = x[kSimH] - ReferenceHeight(t, x);
     double compensator = x[kSimCompensator];
     double integral = x[kSimIntegral];
-    if (reset_at_flare_ && phase_ == LandingPhase::kFlare) {
+    if (reset_at_flare_ && flight_.phase == LandingPhase::kFlare) {
       // The free response from the values at the switch (ε̇ = 0, ẋ_c = −S·x_c + ε), removed: what is
       // left started from zero at the switch and obeys the same equations.
-      const double settled = integral_at_flare_ / compensator_pole_;
-      compensator -=
-          settled + (compensator_at_flare_ - settled) * std::exp(-compensator_pole_ * (t - flare_start_s_));
-      integral -= integral_at_flare_;
+      const double settled = flight_.integral_at_flare / compensator_pole_;
+      compensator -= settled + (flight_.compensator_at_flare - settled) *
+                                   std::exp(-compensator_pole_ * (t - flight_.flare_start_s));
+      integral -= flight_.integral_at_flare;
     }
     return -(gain_[0] * delta_u_mps + gain_[1] * delta_w_mps + gain_[2] * x[kSimQ] + gain_[3] * x[kSimTheta] +
              gain_[5] * x[kSimElevator] + gain_[6] * e + gain_[7] * compensator + gain_[8] * integral);
@@ -214,7 +214,7 @@ class LandingProblem {
   }
 
   void EventValues(double t, const State& x, int segment, std::array<double, kEventCount>& g) const {
-    g[kFlareEvent] = phase_ == LandingPhase::kGlideSlope ? x[kSimH] - flare_height_m_ : 1.0;
+    g[kFlareEvent] = flight_.phase == LandingPhase::kGlideSlope ? x[kSimH] - flare_height_m_ : 1.0;
     g[kTouchdownEvent] = x[kSimH] - touchdown_height_m_;
     double command = 0.0;
     if constexpr (kAir) {
@@ -239,10 +239,10 @@ class LandingProblem {
       case kFlareEvent:
         result_.flare_start_time_s = t;
         result_.glide_path_error_at_flare_m = x[kSimH] - ReferenceHeight(t, x);
-        phase_ = LandingPhase::kFlare;
-        flare_start_s_ = t;
-        compensator_at_flare_ = x[kSimCompensator];
-        integral_at_flare_ = x[kSimIntegral];
+        flight_.phase = LandingPhase::kFlare;
+        flight_.flare_start_s = t;
+        flight_.compensator_at_flare = x[kSimCompensator];
+        flight_.integral_at_flare = x[kSimIntegral];
         // The tracking error jumps from d to H − H_ref = 0, and with it the command: re-read saturation.
         UpdateSaturation(t, IsSaturated(Command(t, x, segment)));
         return EventAction::kRestart;
@@ -267,7 +267,7 @@ class LandingProblem {
     Monitor(t, x, segment);
     if (observer_ == nullptr) return;
     const StepContext context{this, t, &x};
-    (*observer_)(LandingStep(t, x[kSimH], SinkRate(x), phase_, &SaveStep, &context));
+    (*observer_)(LandingStep(t, x[kSimH], SinkRate(x), flight_.phase, &SaveStep, &context));
   }
 
   /// The observer OnStep calls (may be null).
@@ -279,24 +279,14 @@ class LandingProblem {
     c.time_s = t;
     c.result = result_;
     c.state.assign(x.begin(), x.end());
-    c.phase = phase_;
-    c.flare_start_s = flare_start_s_;
-    c.compensator_at_flare = compensator_at_flare_;
-    c.integral_at_flare = integral_at_flare_;
-    c.saturated = saturated_;
-    c.saturated_since_s = saturated_since_s_;
+    c.flight = flight_;
     return c;
   }
 
   /// Takes the bookkeeping of a saved landing (its state is the integration's start, its result the
   /// caller's).
   void Restore(const LandingCheckpoint& c) {
-    phase_ = c.phase;
-    flare_start_s_ = c.flare_start_s;
-    compensator_at_flare_ = c.compensator_at_flare;
-    integral_at_flare_ = c.integral_at_flare;
-    saturated_ = c.saturated;
-    saturated_since_s_ = c.saturated_since_s;
+    flight_ = c.flight;
     if (table_ != nullptr && !c.state.empty()) table_hint_ = table_->SegmentOf(c.state[kSimH]);
   }
 
@@ -305,7 +295,7 @@ class LandingProblem {
     if (!store_series_) return;
     LandingSample s;
     s.time_s = t;
-    s.phase = phase_;
+    s.phase = flight_.phase;
     s.height_m = x[kSimH];
     s.reference_height_m = ReferenceHeight(t, x);
     s.tracking_error_m = s.height_m - s.reference_height_m;
@@ -333,15 +323,15 @@ class LandingProblem {
 
   /// Starts the saturation bookkeeping at the initial state.
   void Start(double t, const State& x) {
-    saturated_ = IsSaturated(Command(t, x, 0));
-    saturated_since_s_ = t;
+    flight_.saturated = IsSaturated(Command(t, x, 0));
+    flight_.saturated_since_s = t;
   }
 
   /// Closes an open saturation interval at the end of the run.
   void Finish(double t) { UpdateSaturation(t, false); }
 
   double SinkRate(const State& x) const { return x[kSimDw] - u0_ * x[kSimTheta]; }
-  LandingPhase phase() const { return phase_; }
+  LandingPhase phase() const { return flight_.phase; }
 
   /// Lane i of a batch (landing_lanes.h): this landing's constants, its table and its field.
   template <int W>
@@ -374,10 +364,10 @@ class LandingProblem {
   /// The phase of lane i (after a flare switch).
   template <int W>
   void PhaseToLane(lanes::LandingStepArrays<W>& a, int i) const {
-    a.flare[i] = phase_ == LandingPhase::kFlare;
-    a.flare_start[i] = flare_start_s_;
-    a.compensator_at_flare[i] = compensator_at_flare_;
-    a.integral_at_flare[i] = integral_at_flare_;
+    a.flare[i] = flight_.phase == LandingPhase::kFlare;
+    a.flare_start[i] = flight_.flare_start_s;
+    a.compensator_at_flare[i] = flight_.compensator_at_flare;
+    a.integral_at_flare[i] = flight_.integral_at_flare;
   }
 
  private:
@@ -396,14 +386,14 @@ class LandingProblem {
   }
 
   void UpdateSaturation(double t, bool saturated) {
-    if (saturated == saturated_) return;
-    if (saturated_) {
-      const double length = t - saturated_since_s_;
+    if (saturated == flight_.saturated) return;
+    if (flight_.saturated) {
+      const double length = t - flight_.saturated_since_s;
       result_.saturated_time_s += length;
       result_.longest_saturation_s = std::max(result_.longest_saturation_s, length);
     }
-    saturated_ = saturated;
-    saturated_since_s_ = t;
+    flight_.saturated = saturated;
+    flight_.saturated_since_s = t;
   }
 
   void Monitor(double t, const State& x, int segment) {
@@ -416,7 +406,7 @@ class LandingProblem {
     const double speed = u0_ + x[kSimDu];
     result_.min_speed_mps = std::min(result_.min_speed_mps, speed);
     result_.max_speed_mps = std::max(result_.max_speed_mps, speed);
-    if (phase_ == LandingPhase::kFlare) {
+    if (flight_.phase == LandingPhase::kFlare) {
       result_.flare_max_abs_elevator_deg =
           std::max(result_.flare_max_abs_elevator_deg, std::abs(x[kSimElevator]) * kDegreesPerRadian);
       result_.flare_max_abs_pitch_rate_degps =
@@ -452,12 +442,7 @@ class LandingProblem {
   bool fixed_reference_;
   double fixed_reference_height_m_;
   std::array<double, kLandingStateCount> gain_;
-  LandingPhase phase_ = LandingPhase::kGlideSlope;
-  double flare_start_s_ = 0.0;
-  double compensator_at_flare_ = 0.0;
-  double integral_at_flare_ = 0.0;
-  bool saturated_ = false;
-  double saturated_since_s_ = 0.0;
+  LandingCheckpoint::Flight flight_;
   const LandingObserver* observer_ = nullptr;
 };
 

@@ -233,15 +233,19 @@ LandingConfig SettingsUsed(const LandingConfig& config, const LandingResult& res
 /// extremes and the flare so far are in `result` (the part flown); the rest is the integrator's state
 /// and the flare's and the saturation's bookkeeping, opaque to a caller.
 struct LandingCheckpoint {
+  /// The phase, and what the flare switch and the saturation bookkeeping keep, of a landing in flight.
+  struct Flight {
+    LandingPhase phase = LandingPhase::kGlideSlope;
+    double flare_start_s = 0;
+    double compensator_at_flare = 0;
+    double integral_at_flare = 0;
+    bool saturated = false;
+    double saturated_since_s = 0;
+  };
   double time_s = 0;
   LandingResult result;
   std::vector<double> state;
-  LandingPhase phase = LandingPhase::kGlideSlope;
-  double flare_start_s = 0;
-  double compensator_at_flare = 0;
-  double integral_at_flare = 0;
-  bool saturated = false;
-  double saturated_since_s = 0;
+  Flight flight;
 };
 
 /// What an observer of a landing sees after each accepted step (and at the start): the time, the
@@ -295,9 +299,12 @@ LandingResult SimulateLanding(const LongitudinalModel& plant, const LandingConfi
 /// config, but for the seed, run index and noise point) to its end, with the noise of `config`'s
 /// (seed, run index) or of `noise_point` from the checkpoint's time on: the noise held before it is
 /// not read, so a landing resumed with other noise is a branch of the saved one (docs/dispersion.md,
-/// "Splitting with restarts"). With the saved landing's own noise it flies the same landing; the RK4
-/// grid restarts at the checkpoint's time, so the path agrees with the unbroken one to rounding, not
-/// bit for bit. Throws InputError for a config SimulateLanding refuses, or for a checkpoint whose
+/// "Splitting with restarts"). With the saved landing's own noise a turbulent RK4 landing is the
+/// unbroken one bit for bit: its steps end on the noise's breakpoints whatever time they start from
+/// (the extremes, also read on an output grid that restarts at the checkpoint, may differ in the last
+/// digits; a dopri5 landing restarts its step control). Without a series it is integrated in windows
+/// of a few seconds, each with its own noise table. Steps and right-hand sides count the part flown
+/// here. Throws InputError for a config SimulateLanding refuses, or for a checkpoint whose
 /// state does not fit the config (still air against a moving atmosphere).
 LandingResult ResumeLanding(const LongitudinalModel& plant, const LandingConfig& config,
                             const LandingCheckpoint& from, const std::atomic<bool>* cancel = nullptr,

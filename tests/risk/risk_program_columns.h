@@ -1,7 +1,7 @@
 #pragma once
 /// What the programs of tests/risk (risk_importance, risk_roughness, risk_splitting,
-/// risk_proxy_subset, risk_touchdown_memory, risk_restart) share: finding a column, a plan whose series lie on the
-/// noise's sample grid, and the summary of independent repetitions.
+/// risk_proxy_subset, risk_touchdown_memory, risk_restart) share: finding a column, a plan whose series lie
+/// on the noise's sample grid, and the summary of independent repetitions.
 
 #include <algorithm>
 #include <cmath>
