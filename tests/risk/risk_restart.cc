@@ -3,7 +3,7 @@
 // of the landing (ResumeLanding), not from the start (docs/dispersion.md, "Splitting with restarts").
 // Not a test: minutes of CPU.
 //
-//   risk_restart STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]
+//   risk_restart [--threads T] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]
 //
 // LIMITS "3.05" or "1.83,2.43,3.05" (sink rates, m/s, each estimated from the same landings),
 // THRESHOLDS "T1,T2,...,TM" (ascending, m/s) and SPLITS "R1,R2,...,RM" (integers >= 1).
@@ -21,11 +21,14 @@
 // itself is one of them), and the N landings' Y are independent: the estimate is their mean, its standard
 // error their standard deviation / sqrt(N), measured, not stated. The landings' own touchdowns are plain
 // Monte Carlo on the same N.
+// A landing's tree is a function of (SEED, its index) alone, so the estimates are the same on any
+// number of threads (tests/risk/risk_restart_threads_test.py).
 // Cost: the flown time of every path and retrial in units of the landings' mean flown time
 // ("landings"), and the wall time beside that of the N landings alone.
 // Checks first that the program's landing is the study's: the first 3 landings flown through the
 // study (ExecuteCellRun) and here touch down at the same time and sink rate bit for bit, or exit 2.
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -177,8 +180,20 @@ class Restart {
 }  // namespace
 
 int main(int argc, char** argv) {
+  int threads = 0;  // 0: every core
+  if (argc > 2 && std::string(argv[1]) == "--threads") {
+    threads = std::atoi(argv[2]);
+    if (threads < 1) {
+      std::fprintf(stderr, "risk_restart: --threads %s: expected an integer >= 1\n", argv[2]);
+      return 2;
+    }
+    argv += 2;
+    argc -= 2;
+  }
   if (argc != 8 && argc != 9) {
-    std::fprintf(stderr, "usage: risk_restart STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]\n");
+    std::fprintf(
+        stderr,
+        "usage: risk_restart [--threads T] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]\n");
     return 2;
   }
   Design d;
@@ -267,14 +282,17 @@ int main(int argc, char** argv) {
     std::printf("# levels:");
     for (int l = 1; l <= d.levels(); ++l) std::printf(" T%d = %g (R = %d)", l, d.threshold[l], d.split[l]);
     std::printf("\n");
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     gesweep::risk::programs::RepetitionTally tally;
     for (int rep = 0; rep < repetitions; ++rep) {
       const std::uint64_t rep_seed = seed + static_cast<std::uint64_t>(rep) * 1'000'003ULL;
       const Restart restart(plant, config, d, rep_seed);
       std::vector<Tree> trees(static_cast<std::size_t>(n));
       const auto started = std::chrono::steady_clock::now();
-      tbb::parallel_for(0, n, [&](int i) {
-        trees[static_cast<std::size_t>(i)] = restart.Fly(static_cast<std::uint64_t>(i));
+      arena.execute([&] {
+        tbb::parallel_for(0, n, [&](int i) {
+          trees[static_cast<std::size_t>(i)] = restart.Fly(static_cast<std::uint64_t>(i));
+        });
       });
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
       double landing_s = 0, flown_s = 0;
