@@ -3,9 +3,11 @@
 // of the landing (ResumeLanding), not from the start (docs/dispersion.md, "Splitting with restarts").
 // Not a test: minutes of CPU.
 //
-//   risk_restart [--threads T] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]
+//   risk_restart [--threads T] [--cell C] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]
 //
 // LIMITS "3.05" or "1.83,2.43,3.05" (sink rates, m/s, each estimated from the same landings),
+// C: the cell of the study's design (default 0; studies/paper/landing_risk.toml: 0 with the
+// h-derivatives, 1 without).
 // THRESHOLDS "T1,T2,...,TM" (ascending, m/s) and SPLITS "R1,R2,...,RM" (integers >= 1).
 //
 // The importance function of a landing at a step is xi = sink rate - A_PER_S * (H - H_touch), the
@@ -180,20 +182,28 @@ class Restart {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int threads = 0;  // 0: every core
-  if (argc > 2 && std::string(argv[1]) == "--threads") {
-    threads = std::atoi(argv[2]);
-    if (threads < 1) {
-      std::fprintf(stderr, "risk_restart: --threads %s: expected an integer >= 1\n", argv[2]);
+  int threads = 0;        // 0: every core
+  std::int64_t cell = 0;  // of the study's design
+  while (argc > 2 && (std::string(argv[1]) == "--threads" || std::string(argv[1]) == "--cell")) {
+    const bool is_threads = std::string(argv[1]) == "--threads";
+    const long long value = std::atoll(argv[2]);
+    if (value < (is_threads ? 1 : 0)) {
+      std::fprintf(stderr, "risk_restart: %s %s: expected an integer >= %d\n", argv[1], argv[2],
+                   is_threads ? 1 : 0);
       return 2;
+    }
+    if (is_threads) {
+      threads = static_cast<int>(value);
+    } else {
+      cell = value;
     }
     argv += 2;
     argc -= 2;
   }
   if (argc != 8 && argc != 9) {
-    std::fprintf(
-        stderr,
-        "usage: risk_restart [--threads T] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS [REPETITIONS]\n");
+    std::fprintf(stderr,
+                 "usage: risk_restart [--threads T] [--cell C] STUDY LIMITS A_PER_S N SEED THRESHOLDS SPLITS "
+                 "[REPETITIONS]\n");
     return 2;
   }
   Design d;
@@ -229,7 +239,12 @@ int main(int argc, char** argv) {
   try {
     const gesweep::SweepPlan plan(gesweep::LoadStudy(argv[1]), gesweep::ShardSpec{});
     gesweep::RunWorkspace workspace(plan);
-    workspace.parameters = gesweep::risk::CellParameters(plan, 0);
+    if (cell >= gesweep::risk::CellCount(plan)) {
+      std::fprintf(stderr, "risk_restart: %s: --cell %lld: the study has %lld cells\n", argv[1],
+                   static_cast<long long>(cell), static_cast<long long>(gesweep::risk::CellCount(plan)));
+      return 2;
+    }
+    workspace.parameters = gesweep::risk::CellParameters(plan, cell);
     const LongitudinalModel& plant = workspace.Model(plan);
     d.wheels_m = plant.aircraft().wheel_contact_height_m;
     // The study's landing (studies/bench/landing_risk_hard.toml and its kind): the start, the wind,
@@ -254,14 +269,14 @@ int main(int argc, char** argv) {
       const int time = gesweep::risk::programs::SchemaColumn(plan, "results/landing/touchdown_time_s");
       gesweep::ResultBlock block;
       block.Allocate(plan);
-      const auto dimension = gesweep::risk::CellDimension(plan, 0);
+      const auto dimension = gesweep::risk::CellDimension(plan, cell);
       for (std::uint64_t k = 0; k < 3; ++k) {
         std::vector<double> u(dimension);
         const gesweep::RunNoise noise(seed, k);
         for (std::uint64_t j = 0; j < dimension; ++j)
           u[j] = noise.StandardNormal(gesweep::NoiseStream::kInitialState, 1000 + j);
         block.Reset(plan, 0);
-        gesweep::risk::ExecuteCellRun(plan, 0, workspace, block, u);
+        gesweep::risk::ExecuteCellRun(plan, cell, workspace, block, u);
         const LandingResult r = gesweep::SimulateLanding(plant, config, nullptr, u);
         const double s = block.results[static_cast<std::size_t>(sink)][0];
         const double t = block.results[static_cast<std::size_t>(time)][0];
@@ -277,8 +292,10 @@ int main(int argc, char** argv) {
     }
 
     std::printf(
-        "# %s: P(touchdown sink rate > %s m/s), xi = sink rate - %g /s (H - %.4g m), N = %d, seed %llu\n",
-        argv[1], argv[2], d.a, d.wheels_m, n, static_cast<unsigned long long>(seed));
+        "# %s, cell %lld (%s): P(touchdown sink rate > %s m/s), xi = sink rate - %g /s (H - %.4g m), N = %d, "
+        "seed %llu\n",
+        argv[1], static_cast<long long>(cell), gesweep::risk::CellLabel(plan, cell).c_str(), argv[2], d.a,
+        d.wheels_m, n, static_cast<unsigned long long>(seed));
     std::printf("# levels:");
     for (int l = 1; l <= d.levels(); ++l) std::printf(" T%d = %g (R = %d)", l, d.threshold[l], d.split[l]);
     std::printf("\n");

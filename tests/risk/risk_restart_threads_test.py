@@ -1,6 +1,7 @@
 """tests/risk/risk_restart: splitting with restarts gives the same estimates on 1 and 2 threads, digit for
 digit (each landing's tree is a function of the seed and its index), with retrials flown and a landing
-scored, so the comparison is not empty; bad arguments are one line and exit 2.
+scored, so the comparison is not empty; bad arguments (no thread, a cell the study lacks, lists of
+different lengths, thresholds not ascending, a split below 1, too few arguments) are one line and exit 2.
 
     /usr/bin/python3 tests/risk/risk_restart_threads_test.py BUILD/tests/risk/risk_restart
 """
@@ -43,7 +44,7 @@ class RestartThreads(unittest.TestCase):
         self.assertGreater(p, 0.0, one.stdout)
 
     def test_bad_arguments_are_one_line_and_exit_2(self):
-        for args in (["--threads", "0", *ARGS], [*ARGS[:5], "1.0,1.5", "3"], [*ARGS[:5], "1.5,1.0", "3,6"],
+        for args in (["--threads", "0", *ARGS], ["--cell", "1", *ARGS], [*ARGS[:5], "1.0,1.5", "3"], [*ARGS[:5], "1.5,1.0", "3,6"],
                      [*ARGS[:5], "1.0,1.5", "3,0.5"], [STUDY]):
             result = run(*args)
             self.assertEqual(result.returncode, 2, (args, result.stdout, result.stderr))
