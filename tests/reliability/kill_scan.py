@@ -158,7 +158,13 @@ def main():
             clear(stopped)
             process = tools.start_gesweep(scan.binary, ["run", str(stoppable), "-o", str(stopped), "-q", "--threads",
                                                         "2"], work / "stderr.txt")
-            time.sleep(fraction * stoppable_s)
+            # The signal handler is in place once the archive exists (gesweep run installs it before it
+            # opens the archive). Under a sanitizer the study's loading takes half the reference time, so
+            # a moment counted from the start could fall before it (the process then dies of the signal).
+            launched = time.monotonic()
+            while not stopped.exists() and process.poll() is None:
+                time.sleep(0.001)
+            time.sleep(fraction * max(0.0, stoppable_s - (time.monotonic() - launched)))
             process.send_signal(signal.SIGTERM)
             if process.wait() == 128 + signal.SIGTERM:
                 break
