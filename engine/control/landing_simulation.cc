@@ -462,16 +462,26 @@ template <bool kAir>
 void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingResult& result,
          bool store_series, const DisturbanceField* field, const std::atomic<bool>* cancel,
          const LandingObserver* observer = nullptr, const LandingCheckpoint* from = nullptr) {
-  const double start_s = from != nullptr ? from->time_s : 0.0;
+  // A resumed landing without a series is integrated in windows of kResumeWindow_s, each with its own
+  // noise table, so that a branch that ends soon (most do) builds the table of a few seconds, not of
+  // the rest of the time limit; any other in one piece.
+  const bool windowed = from != nullptr && !store_series;
+  const double limit_s = result.time_limit_s;
+  auto window_end = [&](double t) { return windowed ? std::min(limit_s, t + kResumeWindow_s) : limit_s; };
+  double t = from != nullptr ? from->time_s : 0.0;
+  double end_s = window_end(t);
   std::vector<double> breakpoints;
   std::vector<DisturbanceField::Segment> field_segments;
-  if constexpr (kAir) {
-    // SIGINT/SIGTERM are read while the noise table is built (up to kMaximumNoiseSamplesPerRun
-    // instants): a stop empties it and Integrate stops before its first step.
-    breakpoints = field->Breakpoints(start_s, result.time_limit_s, cancel);
-    field_segments = field->SegmentTable(breakpoints, start_s, cancel);
-    if (cancel != nullptr && cancel->load()) breakpoints.clear();
-  }
+  auto build_table = [&] {
+    if constexpr (kAir) {
+      // SIGINT/SIGTERM are read while the noise table is built (up to kMaximumNoiseSamplesPerRun
+      // instants): a stop empties it and Integrate stops before its first step.
+      breakpoints = field->Breakpoints(t, end_s, cancel);
+      field_segments = field->SegmentTable(breakpoints, t, cancel);
+      if (cancel != nullptr && cancel->load()) breakpoints.clear();
+    }
+  };
+  build_table();
   LandingProblem<kAir> problem(plant, config, result.design, result, store_series, field, &field_segments);
   problem.Observe(observer);
   typename LandingProblem<kAir>::State x0{};
@@ -505,26 +515,13 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
       options.step_s = d.turbulence_sample_interval_s;
     }
   }
-  if (from == nullptr || store_series) {
-    const auto run = Integrate(problem, x0, start_s, result.time_limit_s, breakpoints, options);
-    Conclude(problem, run, config, result);
-    return;
-  }
-  // Resumed: in windows of kResumeWindow_s, each with its own noise table, so that a branch that ends
-  // soon (most do) builds the table of a few seconds, not of the rest of the time limit.
-  double t = start_s;
   long accepted = 0, rejected = 0, rhs_calls = 0;
   for (;;) {
-    const double end_s = std::min(result.time_limit_s, t + kResumeWindow_s);
-    if constexpr (kAir) {
-      breakpoints = field->Breakpoints(t, end_s, cancel);
-      field_segments = field->SegmentTable(breakpoints, t, cancel);
-    }
     auto run = Integrate(problem, x0, t, end_s, breakpoints, options);
     accepted += run.accepted_steps;
     rejected += run.rejected_steps;
     rhs_calls += run.rhs_calls;
-    if (run.status != IntegrationStatus::kReachedEnd || end_s >= result.time_limit_s) {
+    if (run.status != IntegrationStatus::kReachedEnd || end_s >= limit_s) {
       run.accepted_steps = accepted;
       run.rejected_steps = rejected;
       run.rhs_calls = rhs_calls;
@@ -533,6 +530,8 @@ void Fly(const LongitudinalModel& plant, const LandingConfig& config, LandingRes
     }
     t = run.end_time_s;
     x0 = run.final_state;
+    end_s = window_end(t);
+    build_table();
   }
 }
 
